@@ -1,0 +1,1 @@
+"""Gating, hypotheses, assignment and mixture reduction (separate, swappable stages)."""

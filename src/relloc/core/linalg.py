@@ -1,0 +1,69 @@
+"""PSD-safe linear algebra shared by every estimator.
+
+All functions are pure and accept a leading batch dimension where stated.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from relloc.errors import ModelError
+
+Array = NDArray[np.float64]
+
+
+def symmetrise(P: Array) -> Array:
+    """Return ``(P + Pᵀ)/2`` (works on a stack ``(..., n, n)``)."""
+    return 0.5 * (P + np.swapaxes(P, -1, -2))
+
+
+def cholesky(P: Array, *, where: str = "") -> Array:
+    """Lower Cholesky factor of ``P``; raises :class:`ModelError` naming ``where`` if not PD."""
+    try:
+        return np.linalg.cholesky(symmetrise(P))
+    except np.linalg.LinAlgError as exc:
+        eig = np.linalg.eigvalsh(symmetrise(P)) if np.all(np.isfinite(P)) else "non-finite"
+        raise ModelError(
+            f"covariance is not positive definite{' at ' + where if where else ''}; "
+            f"eigenvalues: {eig}"
+        ) from exc
+
+
+def is_psd(P: Array, *, tol: float = 1e-9) -> bool:
+    """True when ``P`` is symmetric with eigenvalues ≥ −tol·max(1, ‖P‖)."""
+    if not np.allclose(P, np.swapaxes(P, -1, -2), atol=1e-9 * max(1.0, float(np.abs(P).max()))):
+        return False
+    eig = np.linalg.eigvalsh(symmetrise(P))
+    return bool(np.all(eig >= -tol * max(1.0, float(np.abs(eig).max()))))
+
+
+def joseph_update(P: Array, K: Array, H: Array, R: Array) -> Array:
+    """Joseph-form covariance update, stable and PSD-preserving for any gain K.
+
+    ``P⁺ = (I − K H) P (I − K H)ᵀ + K R Kᵀ``  (works on stacks ``(..., n, n)``).
+    """
+    n = P.shape[-1]
+    A = np.eye(n) - K @ H
+    return symmetrise(A @ P @ np.swapaxes(A, -1, -2) + K @ R @ np.swapaxes(K, -1, -2))
+
+
+def solve_psd(S: Array, B: Array, *, where: str = "") -> Array:
+    """Solve ``S X = B`` for symmetric positive definite ``S`` (``ModelError`` if not PD)."""
+    L = cholesky(S, where=where)
+    Y = np.linalg.solve(L, B)
+    return np.linalg.solve(np.swapaxes(L, -1, -2), Y)
+
+
+def mahalanobis_sq(residual: Array, S: Array, *, where: str = "") -> float:
+    """Squared Mahalanobis distance ``νᵀ S⁻¹ ν`` (NIS/NEES building block)."""
+    nu = np.asarray(residual, dtype=float).reshape(-1)
+    return float(nu @ solve_psd(S, nu, where=where))
+
+
+def condition_log10(M: Array) -> float:
+    """Covariance conditioning ``log10(λmax/λmin)`` of a symmetric matrix (inf if λmin ≤ 0)."""
+    eig = np.linalg.eigvalsh(symmetrise(np.asarray(M, dtype=float)))
+    if eig[0] <= 0.0:
+        return float("inf")
+    return float(np.log10(eig[-1] / eig[0]))

@@ -1,0 +1,1 @@
+"""Loaders turning recorded data into relloc's types (MRCLAM layout, UWB csv, ...)."""

@@ -1,0 +1,1 @@
+"""Estimators: pure predict/update functions first, thin stateful wrappers second."""

@@ -1,0 +1,1 @@
+"""Seed reproductions and the Monte-Carlo runner (one module per experiment)."""

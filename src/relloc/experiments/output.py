@@ -1,0 +1,95 @@
+"""Writing the machine-checkable outputs every experiment produces (DESIGN.md §4).
+
+``summary.json`` (numbers, each beside the paper's value where there is one), ``report.md``
+(the same as tables, figures inline) and ``*.png`` figures, all inside one output folder.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from relloc.errors import ConfigError
+
+
+def to_jsonable(value: Any) -> Any:
+    """Convert numpy scalars/arrays, tuples and paths to JSON types; NaN/inf become None."""
+    if isinstance(value, Mapping):
+        return {str(k): to_jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [to_jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return to_jsonable(value.tolist())
+    if isinstance(value, np.generic):
+        return to_jsonable(value.item())
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, Path):
+        return str(value)
+    return value
+
+
+def prepare_out_dir(out_dir: Path | str) -> Path:
+    """Create the output folder (and parents); raise ConfigError if a file is in the way."""
+    path = Path(out_dir)
+    if path.exists() and not path.is_dir():
+        raise ConfigError(f"--out: {path} exists and is not a folder")
+    path.mkdir(parents=True, exist_ok=True)
+    return path
+
+
+def write_summary(out_dir: Path, summary: Mapping[str, Any]) -> Path:
+    """Write ``summary.json`` (sorted keys kept in insertion order, 2-space indent)."""
+    path = prepare_out_dir(out_dir) / "summary.json"
+    path.write_text(json.dumps(to_jsonable(summary), indent=2, allow_nan=False) + "\n")
+    return path
+
+
+def write_report(out_dir: Path, markdown: str) -> Path:
+    """Write ``report.md``."""
+    path = prepare_out_dir(out_dir) / "report.md"
+    path.write_text(markdown.rstrip() + "\n")
+    return path
+
+
+def save_figure(fig: Any, out_dir: Path, name: str, *, dpi: int = 110) -> str:
+    """Save a matplotlib figure as ``name.png`` in ``out_dir``, close it, return the file name."""
+    filename = f"{name}.png"
+    fig.savefig(prepare_out_dir(out_dir) / filename, dpi=dpi, bbox_inches="tight")
+    import matplotlib.pyplot as plt
+
+    plt.close(fig)
+    return filename
+
+
+def fmt(value: Any, digits: int = 4) -> str:
+    """Format a number for a markdown table (``—`` for None/NaN)."""
+    if value is None:
+        return "—"
+    if isinstance(value, (bool, np.bool_)):
+        return "yes" if value else "no"
+    if isinstance(value, (int, np.integer)):
+        return str(int(value))
+    if isinstance(value, (float, np.floating)):
+        if not math.isfinite(float(value)):
+            return "—"
+        return f"{float(value):.{digits}g}"
+    return str(value)
+
+
+def markdown_table(headers: Sequence[str], rows: Sequence[Sequence[Any]], digits: int = 4) -> str:
+    """A GitHub-flavoured markdown table."""
+    head = "| " + " | ".join(headers) + " |"
+    sep = "|" + "|".join("---" for _ in headers) + "|"
+    body = ["| " + " | ".join(fmt(c, digits) for c in row) + " |" for row in rows]
+    return "\n".join([head, sep, *body])
+
+
+def figure_md(filename: str, caption: str) -> str:
+    """Inline a figure in report.md."""
+    return f"![{caption}]({filename})\n\n*{caption}*\n"

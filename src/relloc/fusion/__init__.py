@@ -1,0 +1,1 @@
+"""Fusion of beliefs between robots: pose composition, covariance intersection, de-correlation."""

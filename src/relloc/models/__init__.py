@@ -1,0 +1,1 @@
+"""Motion and measurement models only (no filter logic)."""

@@ -1,0 +1,1 @@
+"""Observability: Lie derivatives, rank tests, RPMG graph tests, PCRLB."""

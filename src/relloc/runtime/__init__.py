@@ -1,0 +1,1 @@
+"""Robot node processes over Zenoh (extra runtime)."""

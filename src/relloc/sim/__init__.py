@@ -1,0 +1,1 @@
+"""Team simulator: scenarios, trajectories, sensors, simulate(scenario, rng) -> Log."""
