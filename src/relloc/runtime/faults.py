@@ -1,0 +1,251 @@
+"""Fault injection for the robot runtime: loss, delay/jitter, duplicates, reordering, partitions,
+and robot kills/restarts.
+
+Network faults are applied by each *receiving* node to the robot-to-robot data streams
+(``odom``, ``meas``, ``eqm``) through its own :class:`LinkEmulator`, so every link loses, delays
+and reorders independently — like a shared wireless channel heard by several robots. Clock ticks,
+acknowledgements and the collector's monitoring streams are infrastructure and are never faulted.
+All times are **simulated** seconds (the clock process may run faster than real time, so a delay
+in wall-clock milliseconds would mean nothing to the estimators):
+
+- ``drop`` p: each message is lost with probability p;
+- ``delay_ms`` d and ``jitter_ms`` j: a message is released ``max(0, d + j·n)`` ms of simulated
+  time after it arrived, ``n ~ N(0, 1)`` (jitter alone reorders messages too);
+- ``duplicate`` p: a message is delivered twice (the receiver must recognise the copy);
+- ``reorder`` p: a message is held back and released only after the next message from the same
+  sender (or after ``reorder_hold_s``), i.e. swapped with its successor;
+- ``partitions``: during ``[start, end)`` the listed robots and the rest of the team cannot hear
+  each other (the side lists are robot ids; everyone not listed is on the other side). Liveliness
+  is not cut — the processes are alive — so the estimators see silence, not a departure;
+- ``kills``/``restarts``: the clock process asks the launcher to SIGKILL a robot's process at a
+  simulated time and to start it again later (``ROBOT@SECONDS``); the node's liveliness token
+  vanishes with the process, which is how teammates notice.
+
+Randomness comes only from the ``np.random.Generator`` given to the emulator.
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from relloc.errors import ConfigError
+from relloc.runtime.keys import check_id
+
+FAULTED_KINDS = frozenset({"odom", "meas", "eqm"})
+
+
+@dataclass(frozen=True, kw_only=True)
+class Partition:
+    """Robots ``side`` are cut off from the rest of the team during ``[start_s, end_s)``."""
+
+    side: tuple[str, ...]
+    start_s: float
+    end_s: float
+
+    def __post_init__(self) -> None:
+        if not self.side:
+            raise ConfigError("partition.side: list at least one robot")
+        for r in self.side:
+            check_id(r, "partition.side")
+        if not (0 <= self.start_s < self.end_s) or not math.isfinite(self.end_s):
+            raise ConfigError(f"partition: need 0 ≤ start < end, got {self.start_s}–{self.end_s} s")
+
+    def separates(self, a: str, b: str, t: float) -> bool:
+        """True if ``a`` and ``b`` cannot hear each other at simulated time ``t``."""
+        return self.start_s <= t < self.end_s and ((a in self.side) != (b in self.side))
+
+
+@dataclass(frozen=True, kw_only=True)
+class RobotEvent:
+    """A robot process killed or restarted at simulated time ``at_s``."""
+
+    robot: str
+    at_s: float
+
+    def __post_init__(self) -> None:
+        check_id(self.robot, "robot event")
+        if not (math.isfinite(self.at_s) and self.at_s >= 0):
+            raise ConfigError(f"robot event {self.robot}: time {self.at_s} must be ≥ 0 s")
+
+
+@dataclass(frozen=True, kw_only=True)
+class FaultSettings:
+    """Every fault of one run (all zero/empty: a perfect network)."""
+
+    drop: float = 0.0
+    delay_ms: float = 0.0
+    jitter_ms: float = 0.0
+    duplicate: float = 0.0
+    reorder: float = 0.0
+    reorder_hold_s: float = 0.5
+    partitions: tuple[Partition, ...] = ()
+    kills: tuple[RobotEvent, ...] = ()
+    restarts: tuple[RobotEvent, ...] = ()
+
+    def __post_init__(self) -> None:
+        for name in ("drop", "duplicate", "reorder"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and 0.0 <= value < 1.0):
+                raise ConfigError(f"faults.{name}: probability {value!r} outside [0, 1)")
+        for name in ("delay_ms", "jitter_ms"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
+                raise ConfigError(f"faults.{name}: {value!r} must be a finite number ≥ 0")
+        if not (0 < self.reorder_hold_s <= 60):
+            raise ConfigError(f"faults.reorder_hold_s: {self.reorder_hold_s} outside (0, 60] s")
+        for restart in self.restarts:
+            before = [k.at_s for k in self.kills if k.robot == restart.robot]
+            if not any(k < restart.at_s for k in before):
+                raise ConfigError(
+                    f"faults.restarts: {restart.robot}@{restart.at_s:g} has no earlier "
+                    f"--kill {restart.robot}@T"
+                )
+
+    @property
+    def network_faulty(self) -> bool:
+        return bool(
+            self.drop or self.delay_ms or self.jitter_ms or self.duplicate or self.reorder
+        ) or bool(self.partitions)
+
+    def check_robots(self, roster: tuple[str, ...]) -> None:
+        """Every robot named by an event or partition must be on the team."""
+        named = [e.robot for e in (*self.kills, *self.restarts)]
+        named += [r for p in self.partitions for r in p.side]
+        for robot in named:
+            if robot not in roster:
+                raise ConfigError(
+                    f"faults: unknown robot {robot!r}; the team is {', '.join(roster)}"
+                )
+
+    def to_dict(self) -> dict[str, object]:
+        """Plain form for summary.json."""
+        return {
+            "drop": self.drop,
+            "delay_ms": self.delay_ms,
+            "jitter_ms": self.jitter_ms,
+            "duplicate": self.duplicate,
+            "reorder": self.reorder,
+            "partitions": [
+                {"side": list(p.side), "start_s": p.start_s, "end_s": p.end_s}
+                for p in self.partitions
+            ],
+            "kills": [{"robot": e.robot, "at_s": e.at_s} for e in self.kills],
+            "restarts": [{"robot": e.robot, "at_s": e.at_s} for e in self.restarts],
+        }
+
+
+def parse_robot_event(text: str, flag: str) -> RobotEvent:
+    """``ROBOT@SECONDS`` → :class:`RobotEvent` (ConfigError naming ``flag`` otherwise)."""
+    robot, sep, at = text.partition("@")
+    try:
+        if not sep:
+            raise ValueError
+        return RobotEvent(robot=robot, at_s=float(at))
+    except (ValueError, ConfigError) as exc:
+        raise ConfigError(f"{flag}: expected ROBOT@SECONDS, got {text!r} ({exc})") from None
+
+
+def parse_partition(text: str) -> Partition:
+    """``A,B@T1-T2`` → robots A and B cut off from the rest during [T1, T2) s."""
+    side, sep, span = text.partition("@")
+    start, dash, end = span.partition("-")
+    try:
+        if not (sep and dash):
+            raise ValueError("missing '@' or '-'")
+        return Partition(
+            side=tuple(s.strip() for s in side.split(",") if s.strip()),
+            start_s=float(start),
+            end_s=float(end),
+        )
+    except (ValueError, ConfigError) as exc:
+        raise ConfigError(f"--partition: expected A,B@T1-T2, got {text!r} ({exc})") from None
+
+
+@dataclass
+class LinkCounters:
+    """What the emulator did to the messages it saw."""
+
+    seen: int = 0
+    dropped: int = 0
+    partitioned: int = 0
+    duplicated: int = 0
+    reordered: int = 0
+    delayed: int = 0
+
+    def as_dict(self) -> dict[str, int]:
+        return dict(self.__dict__)
+
+
+@dataclass(order=True)
+class _Pending:
+    release_s: float
+    order: int
+    sender: str = field(compare=False)
+    payload: bytes = field(compare=False)
+
+
+class LinkEmulator:
+    """The receive side of an imperfect network, in simulated time (see module docstring).
+
+    ``admit(payload, sender, now_s)`` takes a message as it arrives; ``release(now_s)`` returns the
+    payloads due by ``now_s`` in release order. With :class:`FaultSettings()` every message is
+    released at once, unchanged and in order.
+    """
+
+    def __init__(self, owner: str, settings: FaultSettings, rng: np.random.Generator) -> None:
+        self.owner = owner
+        self.settings = settings
+        self.rng = rng
+        self.counters = LinkCounters()
+        self._heap: list[_Pending] = []
+        self._held: dict[str, tuple[float, bytes]] = {}
+        self._order = 0
+
+    def admit(self, payload: bytes, sender: str, now_s: float) -> None:
+        s = self.settings
+        self.counters.seen += 1
+        if any(p.separates(self.owner, sender, now_s) for p in s.partitions):
+            self.counters.partitioned += 1
+            return
+        if s.drop and self.rng.random() < s.drop:
+            self.counters.dropped += 1
+            return
+        copies = 2 if (s.duplicate and self.rng.random() < s.duplicate) else 1
+        self.counters.duplicated += copies - 1
+        for _ in range(copies):
+            delay_s = 0.0
+            if s.delay_ms or s.jitter_ms:
+                delay_s = max(0.0, s.delay_ms + s.jitter_ms * self.rng.standard_normal()) / 1e3
+                self.counters.delayed += 1
+            if s.reorder and sender not in self._held and self.rng.random() < s.reorder:
+                self.counters.reordered += 1
+                self._held[sender] = (now_s + delay_s + s.reorder_hold_s, payload)
+                continue
+            self._push(now_s + delay_s, sender, payload)
+
+    def _push(self, release_s: float, sender: str, payload: bytes) -> None:
+        self._order += 1
+        heapq.heappush(self._heap, _Pending(release_s, self._order, sender, payload))
+
+    def release(self, now_s: float) -> list[bytes]:
+        """Payloads due by ``now_s``; a held (reordered) message follows its sender's next one."""
+        for sender, (deadline, payload) in list(self._held.items()):
+            if deadline <= now_s:
+                del self._held[sender]
+                self._push(deadline, sender, payload)
+        out: list[bytes] = []
+        while self._heap and self._heap[0].release_s <= now_s:
+            item = heapq.heappop(self._heap)
+            out.append(item.payload)
+            held = self._held.pop(item.sender, None)
+            if held is not None:
+                out.append(held[1])
+        return out
+
+    @property
+    def pending(self) -> int:
+        return len(self._heap) + len(self._held)

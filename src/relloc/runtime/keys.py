@@ -1,0 +1,74 @@
+"""Zenoh key expressions of a relloc team (the documented wire layout).
+
+| key expression                          | payload (see :mod:`relloc.runtime.messages`) |
+|-----------------------------------------|----------------------------------------------|
+| ``relloc/<team>/robot/<id>/odom``       | ``odom``: the robot's body velocities        |
+| ``relloc/<team>/robot/<id>/meas``       | ``meas``: its range/azimuth/elevation of a teammate |
+| ``relloc/<team>/robot/<id>/eqm``        | ``eqm``: its belief of a teammate (1 Hz broadcast) |
+| ``relloc/<team>/robot/<id>/est``        | ``est``: its estimates, for the collector    |
+| ``relloc/<team>/robot/<id>/stats``      | ``stats``: its message and estimate counters |
+| ``relloc/<team>/robot/<id>/ack``        | ``ack``: it finished a clock tick            |
+| ``relloc/<team>/clock/tick``            | ``tick``: simulated time from the clock      |
+| ``relloc/<team>/clock/ctl``             | ``ctl``: kill / restart / end events         |
+| ``relloc/<team>/alive/<id>`` (liveliness) | token held while the process lives          |
+
+Robot and team ids are restricted to ``[A-Za-z0-9_-]`` so they can never inject the wildcard or
+separator characters of a key expression.
+"""
+
+from __future__ import annotations
+
+import re
+
+from relloc.errors import ConfigError
+
+ROBOT_KINDS = ("odom", "meas", "eqm", "est", "stats", "ack")
+_ID = re.compile(r"^[A-Za-z0-9_-]{1,64}$")
+
+
+def check_id(value: str, field: str) -> str:
+    """Return ``value`` if it is a valid team/robot id, else raise ConfigError naming ``field``."""
+    if not isinstance(value, str) or not _ID.match(value):
+        raise ConfigError(f"{field}: {value!r} is not a valid id (letters, digits, '_', '-')")
+    return value
+
+
+def robot_key(team: str, robot: str, kind: str) -> str:
+    """``relloc/<team>/robot/<robot>/<kind>``."""
+    if kind not in ROBOT_KINDS:
+        raise ConfigError(f"robot_key: unknown kind {kind!r}")
+    return f"relloc/{team}/robot/{robot}/{kind}"
+
+
+def robot_wildcard(team: str, kind: str) -> str:
+    """Every robot's ``kind`` stream: ``relloc/<team>/robot/*/<kind>``."""
+    return robot_key(team, "*", kind)
+
+
+def clock_key(team: str, kind: str) -> str:
+    """``relloc/<team>/clock/tick`` or ``relloc/<team>/clock/ctl``."""
+    if kind not in ("tick", "ctl"):
+        raise ConfigError(f"clock_key: unknown kind {kind!r}")
+    return f"relloc/{team}/clock/{kind}"
+
+
+def alive_key(team: str, member: str) -> str:
+    """Liveliness token of one team member (a robot id or ``clock``)."""
+    return f"relloc/{team}/alive/{member}"
+
+
+def alive_wildcard(team: str) -> str:
+    return f"relloc/{team}/alive/*"
+
+
+def parse_robot_key(key: str) -> tuple[str, str] | None:
+    """``(robot, kind)`` of a robot key expression, or None if it is not one."""
+    parts = key.split("/")
+    if len(parts) == 5 and parts[0] == "relloc" and parts[2] == "robot":
+        return parts[3], parts[4]
+    return None
+
+
+def member_of_alive_key(key: str) -> str:
+    """The member id at the end of a liveliness key."""
+    return key.rsplit("/", 1)[-1]

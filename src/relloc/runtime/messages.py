@@ -1,0 +1,292 @@
+"""Wire messages of the robot runtime: msgpack with an explicit schema and version.
+
+Every message is one msgpack map with the common header
+
+    ``{"v": SCHEMA_VERSION, "type": <kind>, "sender": <robot id>, "seq": <int ≥ 0>,
+    "t": <simulated/robot time, s>, "wall_ns": <sender's wall clock at send, ns>}``
+
+plus the fields of its kind (:data:`SCHEMA`). Arrays travel as (nested) lists of numbers and are
+checked against their declared shape, ``-1`` meaning "any length". Kinds:
+
+- ``odom`` — a batch of the sender's own body-velocity samples ``u = (v_x, v_y, v_z, ω_z)``
+  (seed 000 Eq. 1 inputs; seed 001 robots exchange velocity and turn rate the same way):
+  ``stamps`` (n,), ``u`` (n, 4).
+- ``meas`` — one inter-robot measurement the sender made of ``target``: ``z`` = (range, azimuth,
+  elevation) (seed 000 Eqs. 2–3) with standard deviations ``sigma`` (3,).
+- ``eqm`` — an *equivalent measurement* (seed 002 §III-6 "broadcast"): the sender's belief of
+  ``target`` relative to itself, ``mean`` (4,) = (x, y, z, φ) and ``cov`` (4, 4), sent at the
+  low broadcast rate (1 Hz in seed 002).
+- ``est`` — a batch of the sender's estimates for the collector (monitoring, not fusion):
+  ``stamps`` (n,), ``targets`` (n,) robot ids, ``means`` (n, 4), ``covs`` (n, 4, 4).
+- ``stats`` — the sender's counters (messages sent/received/rejected, estimates, tracks).
+- ``tick`` — the clock process' simulated time step ``k`` (header ``t`` is the time).
+- ``ack`` — a node finished tick ``k``.
+- ``ctl`` — a control event from the clock process: ``action`` in ``{"kill", "restart",
+  "end"}`` and the ``robot`` it concerns (``""`` for ``end``).
+
+:func:`decode` validates *everything* a receiver relies on — size limit before unpacking, map
+layout, version, kind, field types, array shapes, finite numbers, a symmetric covariance, and a
+sender that is on the team roster and matches the key expression it arrived on. Anything else
+raises :class:`MessageRejected` whose ``reason`` is a short stable code the node counts (a bad
+message is dropped and counted, never crashes a node). Pickle is never used for network input.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Collection, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import msgpack
+import numpy as np
+
+from relloc.errors import DataError
+
+SCHEMA_VERSION = 1
+DEFAULT_MAX_BYTES = 65_536
+"""Default size limit of one encoded message (bytes); larger payloads are rejected unread."""
+
+STATE_DIM = 4
+"""Relative state (x, y, z, φ) of seed 000 carried by ``eqm`` and ``est``."""
+
+Shape = tuple[int, ...]
+HEADER: dict[str, str] = {
+    "v": "int",
+    "type": "str",
+    "sender": "str",
+    "seq": "int",
+    "t": "float",
+    "wall_ns": "int",
+}
+SCHEMA: dict[str, dict[str, str | Shape]] = {
+    "odom": {"stamps": (-1,), "u": (-1, 4)},
+    "meas": {"target": "str", "z": (3,), "sigma": (3,)},
+    "eqm": {"target": "str", "mean": (STATE_DIM,), "cov": (STATE_DIM, STATE_DIM)},
+    "est": {
+        "stamps": (-1,),
+        "targets": "strlist",
+        "means": (-1, STATE_DIM),
+        "covs": (-1, STATE_DIM, STATE_DIM),
+    },
+    "stats": {"counters": "intmap"},
+    "tick": {"k": "int", "dt": "float"},
+    "ack": {"k": "int"},
+    "ctl": {"action": "str", "robot": "str"},
+}
+"""Fields of each kind: a type name or an array shape (``-1`` = any length)."""
+
+CTL_ACTIONS = frozenset({"kill", "restart", "end"})
+INFRASTRUCTURE_SENDERS = frozenset({"clock"})
+"""Senders that are not robots but are allowed on the team's keys."""
+
+
+class MessageRejected(DataError):
+    """A received message failed validation; ``reason`` is the counter it is filed under."""
+
+    def __init__(self, reason: str, detail: str) -> None:
+        super().__init__(f"message rejected ({reason}): {detail}")
+        self.reason = reason
+
+
+@dataclass(frozen=True, kw_only=True)
+class Message:
+    """A validated message: the header plus its kind's fields (arrays as float64 numpy arrays)."""
+
+    kind: str
+    sender: str
+    seq: int
+    t: float
+    wall_ns: int
+    body: Mapping[str, Any]
+
+
+def encode(
+    kind: str,
+    sender: str,
+    seq: int,
+    t: float,
+    body: Mapping[str, Any],
+    *,
+    wall_ns: int | None = None,
+    max_bytes: int = DEFAULT_MAX_BYTES,
+) -> bytes:
+    """Pack one message (numpy arrays become nested lists). The result is what :func:`decode`
+    accepts; the sender's own output is validated too so a bug never reaches the network."""
+    if kind not in SCHEMA:
+        raise DataError(f"encode: unknown message kind {kind!r}")
+    payload: dict[str, Any] = {
+        "v": SCHEMA_VERSION,
+        "type": kind,
+        "sender": sender,
+        "seq": int(seq),
+        "t": float(t),
+        "wall_ns": int(time.time_ns() if wall_ns is None else wall_ns),
+    }
+    for name in SCHEMA[kind]:
+        if name not in body:
+            raise DataError(f"encode {kind}: missing field {name!r}")
+        value = body[name]
+        if isinstance(value, np.ndarray):
+            value = value.astype(float).tolist()
+        elif isinstance(value, np.generic):
+            value = value.item()
+        payload[name] = value
+    data: bytes = msgpack.packb(payload, use_bin_type=True)
+    _validate(payload, kind)
+    if len(data) > max_bytes:
+        raise DataError(f"encode {kind}: {len(data)} bytes exceed the limit {max_bytes}")
+    return data
+
+
+def decode(
+    data: bytes,
+    *,
+    roster: Collection[str],
+    key_sender: str | None = None,
+    max_bytes: int = DEFAULT_MAX_BYTES,
+) -> Message:
+    """Validate and unpack a received payload.
+
+    ``roster`` are the robot ids of the team (plus :data:`INFRASTRUCTURE_SENDERS`); ``key_sender``
+    is the robot id taken from the key expression the message arrived on (a message claiming to
+    be from someone else is rejected). Raises :class:`MessageRejected`.
+    """
+    if len(data) > max_bytes:
+        raise MessageRejected("oversized", f"{len(data)} bytes > limit {max_bytes}")
+    try:
+        payload = msgpack.unpackb(
+            data,
+            raw=False,
+            strict_map_key=True,
+            max_str_len=1024,
+            max_array_len=max_bytes,
+            max_map_len=256,
+        )
+    except (ValueError, TypeError, msgpack.ExtraData, msgpack.FormatError, msgpack.StackError):
+        raise MessageRejected("malformed", "not a msgpack document") from None
+    if not isinstance(payload, dict):
+        raise MessageRejected("malformed", f"top level is {type(payload).__name__}, not a map")
+    for name, kind_name in HEADER.items():
+        if name not in payload:
+            raise MessageRejected("malformed", f"header field {name!r} missing")
+        _check_scalar(payload[name], kind_name, name)
+    if payload["v"] != SCHEMA_VERSION:
+        raise MessageRejected(
+            "version", f"schema version {payload['v']} (this node speaks {SCHEMA_VERSION})"
+        )
+    kind = payload["type"]
+    if kind not in SCHEMA:
+        raise MessageRejected("unknown_type", f"message type {kind!r}")
+    sender = payload["sender"]
+    if sender not in roster and sender not in INFRASTRUCTURE_SENDERS:
+        raise MessageRejected("unknown_sender", f"sender {sender!r} is not on the team roster")
+    if key_sender is not None and sender != key_sender:
+        raise MessageRejected(
+            "spoofed", f"sender field {sender!r} differs from key expression robot {key_sender!r}"
+        )
+    body = _validate(payload, kind)
+    if "target" in body and body["target"] not in roster:
+        raise MessageRejected("unknown_target", f"target {body['target']!r} is not on the roster")
+    if kind == "est":
+        unknown = sorted(set(body["targets"]) - set(roster))
+        if unknown:
+            raise MessageRejected("unknown_target", f"targets {unknown} are not on the roster")
+    return Message(
+        kind=kind,
+        sender=sender,
+        seq=payload["seq"],
+        t=float(payload["t"]),
+        wall_ns=payload["wall_ns"],
+        body=body,
+    )
+
+
+def _check_scalar(value: Any, type_name: str, where: str) -> None:
+    ok = {
+        "int": isinstance(value, int) and not isinstance(value, bool),
+        "str": isinstance(value, str),
+        "float": isinstance(value, (int, float)) and not isinstance(value, bool),
+    }[type_name]
+    if not ok:
+        raise MessageRejected("malformed", f"field {where!r}: expected {type_name}")
+    if type_name == "float" and not math.isfinite(value):
+        raise MessageRejected("non_finite", f"field {where!r} is not finite")
+    if type_name == "int" and value < 0:
+        raise MessageRejected("malformed", f"field {where!r} is negative")
+
+
+def _validate(payload: Mapping[str, Any], kind: str) -> dict[str, Any]:
+    """Check the kind's fields; return them with arrays converted to float64."""
+    body: dict[str, Any] = {}
+    for name, spec in SCHEMA[kind].items():
+        if name not in payload:
+            raise MessageRejected("malformed", f"{kind}: field {name!r} missing")
+        value = payload[name]
+        where = f"{kind}.{name}"
+        if isinstance(spec, tuple):
+            body[name] = _as_array(value, spec, where)
+        elif spec == "strlist":
+            if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+                raise MessageRejected("malformed", f"{where}: expected a list of strings")
+            body[name] = list(value)
+        elif spec == "intmap":
+            if not isinstance(value, dict) or not all(
+                isinstance(k, str) and isinstance(v, int) and not isinstance(v, bool) and v >= 0
+                for k, v in value.items()
+            ):
+                raise MessageRejected("malformed", f"{where}: expected a map of str to int ≥ 0")
+            body[name] = dict(value)
+        else:
+            _check_scalar(value, spec, where)
+            body[name] = value
+    _check_consistency(kind, body)
+    return body
+
+
+def _as_array(value: Any, shape: Shape, where: str) -> np.ndarray:
+    if not isinstance(value, list):
+        got = type(value).__name__
+        raise MessageRejected("malformed", f"{where}: expected an array, got {got}")
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (ValueError, TypeError):
+        raise MessageRejected("malformed", f"{where}: not a rectangular numeric array") from None
+    if arr.size == 0 and shape[0] == -1:
+        arr = arr.reshape((0, *shape[1:]))
+    fits = arr.ndim == len(shape) and all(
+        s in (-1, a) for s, a in zip(shape, arr.shape, strict=True)
+    )
+    if not fits:
+        raise MessageRejected("shape", f"{where}: shape {arr.shape}, expected {shape}")
+    if not np.all(np.isfinite(arr)):
+        raise MessageRejected("non_finite", f"{where}: contains NaN or inf")
+    return arr
+
+
+def _check_consistency(kind: str, body: Mapping[str, Any]) -> None:
+    """Cross-field rules: equal batch lengths, increasing stamps, sane covariances/sigmas."""
+    if kind == "odom":
+        if body["stamps"].shape[0] != body["u"].shape[0]:
+            raise MessageRejected("shape", "odom: stamps and u lengths differ")
+        if np.any(np.diff(body["stamps"]) <= 0):
+            raise MessageRejected("malformed", "odom: stamps not strictly increasing")
+    elif kind == "meas":
+        if np.any(body["sigma"] <= 0) or body["z"][0] < 0:
+            raise MessageRejected("malformed", "meas: sigma must be > 0 and range ≥ 0")
+    elif kind == "est":
+        n = body["stamps"].shape[0]
+        if not (len(body["targets"]) == body["means"].shape[0] == body["covs"].shape[0] == n):
+            raise MessageRejected("shape", "est: batch lengths differ")
+    elif kind == "ctl" and body["action"] not in CTL_ACTIONS:
+        raise MessageRejected("malformed", f"ctl: unknown action {body['action']!r}")
+    covs = body.get("cov")
+    if kind == "est":
+        covs = body["covs"]
+    if covs is not None:
+        covs = np.asarray(covs).reshape(-1, STATE_DIM, STATE_DIM)
+        asym = np.abs(covs - np.swapaxes(covs, -1, -2)).max(initial=0.0)
+        scale = max(1.0, float(np.abs(covs).max(initial=0.0)))
+        if asym > 1e-9 * scale or np.any(np.diagonal(covs, axis1=-2, axis2=-1) < 0):
+            raise MessageRejected("bad_covariance", f"{kind}: covariance not symmetric PSD-like")

@@ -1,0 +1,178 @@
+"""Zenoh sessions on explicit endpoints, one inbox per process, liveliness-based presence.
+
+Topology used by ``relloc team up``: the clock process opens a ``peer`` session that *listens* on
+one explicit loopback endpoint (``tcp/127.0.0.1:<port>``); every robot process opens a ``peer``
+session that *connects* to it and listens on an ephemeral loopback port, so Zenoh's gossip can
+link peers directly. Multicast scouting is off unless asked for, so nothing leaves loopback and
+two teams on one machine never meet. Any Zenoh JSON5 configuration file (TLS, access control,
+other transports) can be loaded first with ``config_file``; the explicit fields override it.
+
+Each process has a single :class:`Inbox`: Zenoh callbacks (run on Zenoh's threads) only append
+``(key, payload)`` records to a bounded thread-safe queue; the process' main loop consumes it, so
+all estimator work is single-threaded and deterministic given the arrival order. A full inbox
+drops the record and counts it (``overflow``) instead of blocking Zenoh.
+
+Presence: each member declares a liveliness token ``relloc/<team>/alive/<id>``; a liveliness
+subscriber with ``history=True`` reports the members already there and then every appearance
+and disappearance (a killed process' token vanishes when its transport closes or its lease
+expires). No home-made discovery.
+"""
+
+from __future__ import annotations
+
+import json
+import queue
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+from relloc.errors import ConfigError, require
+
+Mode = Literal["peer", "client", "router"]
+
+
+@dataclass(frozen=True, kw_only=True)
+class TransportSettings:
+    """How one process joins the Zenoh network.
+
+    ``listen``/``connect`` are Zenoh endpoints such as ``tcp/127.0.0.1:7447`` (``tls/...`` with a
+    TLS ``config_file``). ``lease_s`` is how long a silent peer is kept before its liveliness
+    tokens are dropped (a clean kill is noticed at once because the TCP link closes).
+    """
+
+    mode: Mode = "peer"
+    listen: tuple[str, ...] = ()
+    connect: tuple[str, ...] = ()
+    multicast_scouting: bool = False
+    lease_s: float = 3.0
+    config_file: Path | None = None
+
+    def __post_init__(self) -> None:
+        if self.mode not in ("peer", "client", "router"):
+            raise ConfigError(f"transport.mode: {self.mode!r} is not peer, client or router")
+        for name in ("listen", "connect"):
+            endpoints = getattr(self, name)
+            if not isinstance(endpoints, tuple) or not all(
+                isinstance(e, str) and "/" in e for e in endpoints
+            ):
+                raise ConfigError(f"transport.{name}: expected endpoints like 'tcp/127.0.0.1:7447'")
+        if self.mode == "client" and not self.connect:
+            raise ConfigError("transport.connect: a client needs at least one endpoint")
+        if not (0.1 <= self.lease_s <= 600):
+            raise ConfigError(f"transport.lease_s: {self.lease_s} outside [0.1, 600] s")
+        if self.config_file is not None and not Path(self.config_file).is_file():
+            raise ConfigError(f"transport.config_file: {self.config_file} does not exist")
+
+    def zenoh_config(self) -> Any:
+        """The ``zenoh.Config`` these settings describe."""
+        zenoh = require("zenoh", "runtime")
+        if self.config_file is not None:
+            try:
+                conf = zenoh.Config.from_file(str(self.config_file))
+            except zenoh.ZError as exc:
+                raise ConfigError(f"transport.config_file: {self.config_file}: {exc}") from exc
+        else:
+            conf = zenoh.Config()
+        conf.insert_json5("mode", json.dumps(self.mode))
+        if self.listen:
+            conf.insert_json5("listen/endpoints", json.dumps(list(self.listen)))
+        if self.connect:
+            conf.insert_json5("connect/endpoints", json.dumps(list(self.connect)))
+        conf.insert_json5("scouting/multicast/enabled", json.dumps(self.multicast_scouting))
+        conf.insert_json5("transport/link/tx/lease", str(int(self.lease_s * 1000)))
+        return conf
+
+
+def loopback_endpoint(port: int) -> str:
+    """``tcp/127.0.0.1:<port>``."""
+    if not (0 <= port <= 65535):
+        raise ConfigError(f"port: {port} outside 0–65535")
+    return f"tcp/127.0.0.1:{port}"
+
+
+def free_loopback_port() -> int:
+    """A TCP port on 127.0.0.1 that is free right now (for tests and the team launcher)."""
+    import socket
+
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def open_session(settings: TransportSettings) -> Any:
+    """Open a Zenoh session; a bad endpoint or a port in use becomes a ConfigError."""
+    zenoh = require("zenoh", "runtime")
+    try:
+        return zenoh.open(settings.zenoh_config())
+    except zenoh.ZError as exc:
+        raise ConfigError(f"transport: cannot open a Zenoh session ({settings}): {exc}") from exc
+
+
+@dataclass(frozen=True)
+class Incoming:
+    """One record in the inbox: a data sample or a presence change."""
+
+    key: str
+    payload: bytes
+    presence: Literal["data", "joined", "left"] = "data"
+    recv_wall_ns: int = field(default_factory=time.time_ns)
+
+
+class Inbox:
+    """The single, bounded message queue of a process (see module docstring)."""
+
+    def __init__(self, capacity: int = 100_000) -> None:
+        if capacity < 1:
+            raise ConfigError(f"inbox capacity: {capacity} < 1")
+        self._queue: queue.Queue[Incoming] = queue.Queue(maxsize=capacity)
+        self.overflow = 0
+        self._handles: list[Any] = []
+
+    def _push(self, item: Incoming) -> None:
+        try:
+            self._queue.put_nowait(item)
+        except queue.Full:
+            self.overflow += 1
+
+    def subscribe(self, session: Any, key_expr: str) -> None:
+        """Deliver every sample on ``key_expr`` to this inbox."""
+
+        def on_sample(sample: Any) -> None:
+            self._push(Incoming(str(sample.key_expr), sample.payload.to_bytes()))
+
+        self._handles.append(session.declare_subscriber(key_expr, on_sample))
+
+    def watch_presence(self, session: Any, key_expr: str) -> None:
+        """Deliver liveliness appearances/disappearances on ``key_expr`` (history included)."""
+        zenoh = require("zenoh", "runtime")
+
+        def on_token(sample: Any) -> None:
+            kind = "joined" if sample.kind == zenoh.SampleKind.PUT else "left"
+            self._push(Incoming(str(sample.key_expr), b"", kind))
+
+        self._handles.append(
+            session.liveliness().declare_subscriber(key_expr, on_token, history=True)
+        )
+
+    def get(self, timeout: float | None) -> Incoming | None:
+        """Next record, waiting up to ``timeout`` seconds (None = forever); None if none came."""
+        try:
+            return self._queue.get(timeout=timeout)
+        except queue.Empty:
+            return None
+
+    def drain(self) -> list[Incoming]:
+        """Every record waiting now, without blocking."""
+        items: list[Incoming] = []
+        while True:
+            try:
+                items.append(self._queue.get_nowait())
+            except queue.Empty:
+                return items
+
+    def close(self) -> None:
+        """Undeclare the subscribers (before the session closes)."""
+        for handle in self._handles:
+            handle.undeclare()
+        self._handles.clear()

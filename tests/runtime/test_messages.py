@@ -1,0 +1,105 @@
+"""Message schema: round trips, and every kind of bad input rejected with its counter reason."""
+
+from __future__ import annotations
+
+import math
+
+import msgpack
+import numpy as np
+import pytest
+
+from relloc.errors import DataError
+from relloc.runtime.messages import (
+    DEFAULT_MAX_BYTES,
+    SCHEMA_VERSION,
+    MessageRejected,
+    decode,
+    encode,
+)
+
+ROSTER = ("obs", "air1", "gnd1")
+
+
+def _odom(n=3):
+    return {"stamps": np.arange(n) * 0.01, "u": np.tile([0.3, 0.0, 0.0, 0.1], (n, 1))}
+
+
+def test_round_trip_every_kind():
+    cov = np.diag([0.1, 0.2, 0.3, 0.04])
+    bodies = {
+        "odom": _odom(),
+        "meas": {"target": "air1", "z": [2.0, 0.1, 0.5], "sigma": [0.01, 0.004, 0.004]},
+        "eqm": {"target": "air1", "mean": [1.0, 2.0, 0.5, 0.1], "cov": cov},
+        "est": {
+            "stamps": [0.1, 0.1],
+            "targets": ["air1", "gnd1"],
+            "means": np.zeros((2, 4)),
+            "covs": np.stack([cov, cov]),
+        },
+        "stats": {"counters": {"sent.odom": 10, "rejected.malformed": 1}},
+        "tick": {"k": 5, "dt": 0.1},
+        "ack": {"k": 5},
+        "ctl": {"action": "kill", "robot": "air1"},
+    }
+    for kind, body in bodies.items():
+        sender = "clock" if kind in ("tick", "ctl") else "obs"
+        msg = decode(encode(kind, sender, 7, 1.5, body), roster=ROSTER, key_sender=sender)
+        assert (msg.kind, msg.sender, msg.seq, msg.t) == (kind, sender, 7, 1.5)
+    msg = decode(encode("odom", "obs", 0, 0.0, _odom(4)), roster=ROSTER)
+    np.testing.assert_array_equal(msg.body["u"], np.tile([0.3, 0.0, 0.0, 0.1], (4, 1)))
+    empty = {"stamps": [], "targets": [], "means": [], "covs": []}
+    assert decode(encode("est", "obs", 1, 0.0, empty), roster=ROSTER).body["means"].shape == (0, 4)
+
+
+def _raw(**overrides):
+    payload = {
+        "v": SCHEMA_VERSION,
+        "type": "eqm",
+        "sender": "obs",
+        "seq": 1,
+        "t": 0.5,
+        "wall_ns": 1,
+        "target": "air1",
+        "mean": [0.0, 0.0, 0.0, 0.0],
+        "cov": np.eye(4).tolist(),
+    }
+    payload.update(overrides)
+    return msgpack.packb(payload, use_bin_type=True)
+
+
+@pytest.mark.parametrize(
+    ("data", "reason"),
+    [
+        (b"\xc1\x00garbage", "malformed"),
+        (msgpack.packb([1, 2, 3]), "malformed"),
+        (_raw(v=99), "version"),
+        (_raw(type="teleport"), "unknown_type"),
+        (_raw(sender="mallory"), "unknown_sender"),
+        (_raw(target="ghost"), "unknown_target"),
+        (_raw(mean=[0.0, 0.0, 0.0]), "shape"),
+        (_raw(mean=[0.0, math.nan, 0.0, 0.0]), "non_finite"),
+        (_raw(t=math.inf), "non_finite"),
+        (_raw(mean="1,2,3,4"), "malformed"),
+        (_raw(seq=-1), "malformed"),
+        (_raw(cov=[[1, 5, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]), "bad_covariance"),
+        (_raw(cov=(-np.eye(4)).tolist()), "bad_covariance"),
+        (b"\x00" * (DEFAULT_MAX_BYTES + 1), "oversized"),
+    ],
+)
+def test_bad_messages_are_rejected_with_a_reason(data, reason):
+    with pytest.raises(MessageRejected) as info:
+        decode(data, roster=ROSTER)
+    assert info.value.reason == reason
+    assert isinstance(info.value, DataError)
+
+
+def test_spoofed_sender_and_inconsistent_batches():
+    with pytest.raises(MessageRejected, match="spoofed"):
+        decode(_raw(), roster=ROSTER, key_sender="air1")
+    bad_odom = {"stamps": [0.0, 0.0], "u": np.zeros((2, 4))}
+    with pytest.raises(DataError, match="strictly increasing"):
+        encode("odom", "obs", 0, 0.0, bad_odom)
+    with pytest.raises(DataError, match="lengths differ"):
+        encode("odom", "obs", 0, 0.0, {"stamps": [0.0], "u": np.zeros((2, 4))})
+    with pytest.raises(DataError, match="exceed the limit"):
+        encode("odom", "obs", 0, 0.0, _odom(50), max_bytes=200)
