@@ -1,0 +1,99 @@
+"""``simulate(scenario, rng) -> Log``: a team's truth, odometry and inter-robot measurements.
+
+1. Every robot's true motion is integrated exactly from its body-velocity commands on the
+   propagation grid ``t_k = k Δt`` (Δt = 1 / propagation_rate_hz, seed 000 §5: 100 Hz); a
+   trajectory that leaves the arena is a :class:`ConfigError` naming the robot and the time.
+2. Odometry = the held command plus white Gaussian noise of the robot's per-channel σ, one draw
+   per propagation step (the "noisy body velocities" the relative motion model consumes).
+3. Each observing robot measures each of its targets at its sensor's rate (seed 000: 10 Hz)
+   from the ground truth with additive noise; targets outside the field of view or range are
+   not reported, so robots leave and re-enter view.
+
+The random stream is consumed in a fixed order (odometry in robot order, then measurements in
+(observer, observed) pair order, noise drawn whether or not the target is visible), so a given
+``rng`` state always produces the same log.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from relloc.errors import ConfigError
+from relloc.sim.log import GroundTruth, Log, Measurements, Odometry
+from relloc.sim.scenario import Scenario
+from relloc.sim.sensors import measurement_times, sense
+from relloc.sim.trajectories import robot_motion
+
+
+def propagation_grid(scenario: Scenario) -> np.ndarray:
+    """The odometry/truth time grid ``0, Δt, …, T`` of a scenario."""
+    n = round(scenario.duration_s * scenario.propagation_rate_hz)
+    if n < 1:
+        raise ConfigError("duration_s: shorter than one propagation step")
+    return np.arange(n + 1) / scenario.propagation_rate_hz
+
+
+def _check_arena(scenario: Scenario, index: int, t: np.ndarray, poses: np.ndarray) -> None:
+    arena = scenario.arena
+    lo = np.array([arena.x[0], arena.y[0], arena.z[0]]) - 1e-9
+    hi = np.array([arena.x[1], arena.y[1], arena.z[1]]) + 1e-9
+    outside = np.any((poses[:, :3] < lo) | (poses[:, :3] > hi), axis=1)
+    if outside.any():
+        k = int(np.argmax(outside))
+        x, y, z = poses[k, :3]
+        raise ConfigError(
+            f"robots[{index}].motion: robot {scenario.robots[index].name!r} leaves the arena at "
+            f"t={t[k]:.2f} s (x={x:.2f}, y={y:.2f}, z={z:.2f}); arena x={arena.x}, y={arena.y}, "
+            f"z={arena.z}"
+        )
+
+
+def simulate(scenario: Scenario, rng: np.random.Generator) -> Log:
+    """Simulate ``scenario`` with randomness from ``rng`` (see module docstring)."""
+    t = propagation_grid(scenario)
+    truth: list[GroundTruth] = []
+    odometry: list[Odometry] = []
+    for i, spec in enumerate(scenario.robots):
+        poses, commands = robot_motion(spec, t)
+        _check_arena(scenario, i, t, poses)
+        truth.append(GroundTruth(t=t, pose=poses, where=f"truth[{spec.name}]"))
+        sigma = np.asarray(spec.odometry.sigma_for(spec.kind))
+        noisy = commands + sigma * rng.standard_normal(commands.shape)
+        odometry.append(
+            Odometry(t=t[:-1], velocity=noisy, sigma=sigma, where=f"odometry[{spec.name}]")
+        )
+
+    names = scenario.robot_names
+    rows_t, rows_obs, rows_tgt, rows_z, rows_sigma = [], [], [], [], []
+    for obs_name, tgt_name in scenario.pairs():
+        i, j = names.index(obs_name), names.index(tgt_name)
+        sensor = scenario.robots[i].sensor
+        if sensor is None:  # pairs() only lists robots with a sensor
+            raise ConfigError(f"robots[{i}].sensor: required to observe {tgt_name!r}")
+        tm = measurement_times(sensor.rate_hz, scenario.duration_s)
+        z, seen = sense(truth[i].at(tm), truth[j].at(tm), sensor, rng)
+        rows_t.append(tm[seen])
+        rows_obs.append(np.full(int(seen.sum()), i, dtype=np.int64))
+        rows_tgt.append(np.full(int(seen.sum()), j, dtype=np.int64))
+        rows_z.append(z[seen])
+        rows_sigma.append(np.tile(sensor.sigma, (int(seen.sum()), 1)))
+
+    mt = np.concatenate(rows_t)
+    mo = np.concatenate(rows_obs)
+    mc = np.concatenate(rows_tgt)
+    order = np.lexsort((mc, mo, mt))
+    measurements = Measurements(
+        t=mt[order],
+        observer=mo[order],
+        observed=mc[order],
+        z=np.concatenate(rows_z)[order],
+        sigma=np.concatenate(rows_sigma)[order],
+    )
+    return Log(
+        robots=names,
+        kinds=tuple(r.kind for r in scenario.robots),
+        truth=tuple(truth),
+        odometry=tuple(odometry),
+        measurements=measurements,
+        source=f"simulation of scenario {scenario.name!r}",
+    )
