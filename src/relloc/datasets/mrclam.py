@@ -693,3 +693,86 @@ def _map_barcodes(barcodes: IntArray, barcode_to_subject: Mapping[int, int]) -> 
     if len(barcodes) == 0:
         return np.zeros(0, dtype=np.int64)
     return np.asarray(subjects[np.searchsorted(codes, barcodes)], dtype=np.int64)
+
+
+# ----------------------------------------------------------------------------------------------
+# Odometry error model fitted against ground truth
+# ----------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class OdometryNoiseFit:
+    """Equivalent white-noise standard deviations of one robot's odometry channels.
+
+    ``sigma_v`` (forward speed), ``sigma_lateral`` (sideways speed a unicycle reports as 0) in
+    m/s and ``sigma_w`` (yaw rate) in rad/s, for noise drawn independently at every step of a
+    ``rate_hz`` propagation; ``bias_v``, ``bias_w`` are the mean errors (true − reported).
+    """
+
+    sigma_v: float
+    sigma_lateral: float
+    sigma_w: float
+    bias_v: float
+    bias_w: float
+    rate_hz: float
+    window_s: float
+    n_windows: int
+
+
+def fit_odometry_noise(
+    robot: RobotData,
+    *,
+    t_start: float,
+    t_end: float,
+    rate_hz: float = 100.0,
+    window_s: float = 1.0,
+) -> OdometryNoiseFit:
+    """Fit the white-noise level that explains the odometry's drift over ``window_s`` seconds.
+
+    On a ``rate_hz`` grid the reported commands (zero-order hold) are integrated over windows of
+    length ``W = window_s`` and compared with the ground-truth motion over the same window
+    (body-frame increments ``cos θ Δx + sin θ Δy``, ``−sin θ Δx + cos θ Δy`` and ``Δθ``).
+    White noise of standard deviation σ held over each step ``dt`` accumulates a displacement
+    variance ``σ² dt W``, so the equivalent σ is ``sqrt(mean(D²) / (dt W))`` with ``D`` the
+    windowed error (bias included, which makes the fit conservative). The real errors are
+    correlated over seconds (command lag, scale errors), so a σ fitted for one window length
+    is only right at that time scale. Windows touching a ground-truth gap are left out.
+    """
+    if not (rate_hz > 0 and window_s > 0 and t_end > t_start):
+        raise ConfigError(
+            f"fit_odometry_noise: need rate_hz > 0, window_s > 0, t_end > t_start; got "
+            f"{rate_hz}, {window_s}, [{t_start}, {t_end}]"
+        )
+    dt = 1.0 / rate_hz
+    steps = max(round(window_s * rate_hz), 1)
+    n_windows = int((t_end - t_start) // (steps * dt))
+    if n_windows < 2:
+        raise DataError(
+            f"robot {robot.subject}: [{t_start:g}, {t_end:g}] s holds fewer than two "
+            f"{window_s:g} s windows for the odometry fit"
+        )
+    t = t_start + dt * np.arange(n_windows * steps + 1)
+    q = robot.groundtruth.at(t)
+    v_cmd, w_cmd = robot.odometry.at(t[:-1])
+    c, s = np.cos(q.theta[:-1]), np.sin(q.theta[:-1])
+    dx, dy = np.diff(q.x), np.diff(q.y)
+    dth = np.diff(np.unwrap(q.theta))
+    err = np.stack(
+        [c * dx + s * dy - v_cmd * dt, -s * dx + c * dy, dth - w_cmd * dt], axis=-1
+    ).reshape(n_windows, steps, 3)
+    ok = q.valid[:-1].reshape(n_windows, steps).all(axis=1) & q.valid[steps::steps]
+    if ok.sum() < 2:
+        raise DataError(f"robot {robot.subject}: ground truth has gaps in every fit window")
+    D = err[ok].sum(axis=1)
+    sigma = np.sqrt(np.mean(D * D, axis=0) / (dt * window_s))
+    bias = D.mean(axis=0) / window_s
+    return OdometryNoiseFit(
+        sigma_v=float(sigma[0]),
+        sigma_lateral=float(sigma[1]),
+        sigma_w=float(sigma[2]),
+        bias_v=float(bias[0]),
+        bias_w=float(bias[2]),
+        rate_hz=float(rate_hz),
+        window_s=float(window_s),
+        n_windows=int(ok.sum()),
+    )
