@@ -1,1 +1,43 @@
-"""Metrics: errors with angle wrapping, RMSE, NEES/NIS with chi-square bands, conditioning."""
+"""Metrics: errors with angle wrapping, RMSE, NEES/NIS with chi-square bands, conditioning,
+convergence time."""
+
+from relloc.metrics.conditioning import ILL_CONDITIONED_LOG10, condition_log10_batch
+from relloc.metrics.consistency import (
+    anees,
+    anees_band,
+    chi2_upper,
+    mean_chi2_band,
+    nees,
+    nis,
+    normalised_squared,
+    percent_beyond,
+)
+from relloc.metrics.convergence import (
+    FIXED_THRESHOLDS,
+    PAPER_MARGIN,
+    paper_thresholds,
+    updates_to_converge,
+    updates_to_converge_per_state,
+)
+from relloc.metrics.errors import RELPOSE4_ANGLES, rmse, state_errors
+
+__all__ = [
+    "FIXED_THRESHOLDS",
+    "ILL_CONDITIONED_LOG10",
+    "PAPER_MARGIN",
+    "RELPOSE4_ANGLES",
+    "anees",
+    "anees_band",
+    "chi2_upper",
+    "condition_log10_batch",
+    "mean_chi2_band",
+    "nees",
+    "nis",
+    "normalised_squared",
+    "paper_thresholds",
+    "percent_beyond",
+    "rmse",
+    "state_errors",
+    "updates_to_converge",
+    "updates_to_converge_per_state",
+]
