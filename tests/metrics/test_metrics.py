@@ -1,0 +1,90 @@
+"""Metrics on hand-made arrays: wrapping, RMSE, NEES/NIS, χ² bands, conditioning, convergence."""
+
+import numpy as np
+import pytest
+from scipy.stats import chi2
+
+from relloc.errors import ConfigError, DataError, ModelError
+from relloc.metrics import (
+    FIXED_THRESHOLDS,
+    anees,
+    anees_band,
+    chi2_upper,
+    condition_log10_batch,
+    mean_chi2_band,
+    nees,
+    nis,
+    paper_thresholds,
+    percent_beyond,
+    rmse,
+    state_errors,
+    updates_to_converge,
+    updates_to_converge_per_state,
+)
+
+
+def test_state_errors_wrap_only_the_yaw() -> None:
+    e = state_errors([[4.0, 0.0, 0.0, 3.1]], [[-4.0, 0.0, 0.0, -3.1]])
+    np.testing.assert_allclose(e, [[8.0, 0.0, 0.0, 6.2 - 2 * np.pi]])
+    with pytest.raises(DataError, match="shape"):
+        state_errors(np.zeros(4), np.zeros(3))
+
+
+def test_rmse_over_runs_ignores_missing_values() -> None:
+    errors = np.array([[[1.0, np.nan]], [[3.0, 2.0]]])  # (runs, time, states)
+    np.testing.assert_allclose(rmse(errors), [[np.sqrt(5.0), 2.0]])
+    np.testing.assert_allclose(rmse(errors, axis=(0, 1)), [np.sqrt(5.0), 2.0])
+
+
+def test_nees_and_nis_are_mahalanobis_distances() -> None:
+    P = np.array([[4.0, 0.0], [0.0, 0.25]])
+    assert float(nees(np.array([2.0, 0.5]), P)) == pytest.approx(2.0)
+    batch = nis(np.ones((3, 2)), np.tile(P, (3, 1, 1)))
+    np.testing.assert_allclose(batch, 0.25 + 4.0)
+    with pytest.raises(ModelError):
+        nees(np.ones(2), -np.eye(2))
+
+
+def test_chi2_bounds_and_bands() -> None:
+    assert chi2_upper(4) == pytest.approx(9.4877, abs=1e-4)  # seed 000 Eq. 34
+    assert chi2_upper(3) == pytest.approx(7.8147, abs=1e-4)  # seed 000 §7.2
+    lo, hi = mean_chi2_band(4, 50)
+    assert lo == pytest.approx(chi2.ppf(0.025, 200) / 50)
+    assert hi == pytest.approx(chi2.ppf(0.975, 200) / 50)
+    assert anees_band(4, 50) == pytest.approx((lo / 4, hi / 4))
+    with pytest.raises(ConfigError):
+        mean_chi2_band(4, 0)
+    with pytest.raises(ConfigError):
+        chi2_upper(4, p=1.5)
+
+
+def test_anees_of_true_chi2_samples_falls_in_its_band() -> None:
+    values = np.random.default_rng(8).chisquare(4, size=400)
+    lo, hi = anees_band(4, 400)
+    assert lo < anees(values, 4) < hi
+    assert anees([np.nan], 4) != anees([np.nan], 4)  # NaN when nothing is finite
+
+
+def test_percent_beyond() -> None:
+    assert percent_beyond([1.0, 10.0, 3.0, np.nan, 20.0], 9.4877) == pytest.approx(50.0)
+
+
+def test_conditioning_batched() -> None:
+    c = condition_log10_batch(np.stack([np.diag([1.0, 1e-3]), np.eye(2), np.diag([1.0, 0.0])]))
+    np.testing.assert_allclose(c, [3.0, 0.0, np.inf])
+
+
+def test_convergence_counts_updates_until_the_error_stays_below() -> None:
+    assert updates_to_converge([0.5, 0.2, 0.01, 0.3, 0.01, 0.02], 0.05) == 5
+    assert updates_to_converge([0.01, 0.02], 0.05) == 1
+    assert updates_to_converge([0.01, 0.2], 0.05) is None
+    assert updates_to_converge([-0.5, np.nan, -0.01], 0.05) == 3  # |error|; NaN = not converged
+    series = np.array([[0.3, 0.3, 0.3, 3.0], [0.01, 0.04, 0.01, 0.5], [0.01, 0.01, 0.01, 0.05]])
+    assert updates_to_converge_per_state(series, FIXED_THRESHOLDS) == [2, 2, 2, 3]
+
+
+def test_paper_thresholds_are_105_percent_of_the_known_init_max() -> None:
+    case1 = np.array([[0.01, 0.02, 0.03, 0.04], [0.02, 0.01, 0.01, 0.08]])
+    np.testing.assert_allclose(paper_thresholds(case1), 1.05 * np.array([0.02, 0.02, 0.03, 0.08]))
+    with pytest.raises(DataError):
+        paper_thresholds(np.zeros(4))
