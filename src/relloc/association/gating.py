@@ -1,0 +1,104 @@
+"""Validation gates for measurement-to-track association (seed 002 §II-D.2).
+
+A measurement ``z`` falls inside the gate of a track with predicted measurement ``ẑ`` and
+innovation covariance ``S`` when the squared Mahalanobis distance
+
+    d² = (z − ẑ)ᵀ S⁻¹ (z − ẑ)  ≤  γ,      γ = F⁻¹_{χ²(n_z)}(P_G),
+
+so that a correct measurement is kept with probability ``P_G`` (the *gate probability*). The
+threshold comes from ``scipy.stats.chi2``.
+
+Modified gate for tracks whose yaw is still (close to) uniform. A new track starts with yaw
+variance 4π (seed 002 Eq. 13), and the linearised prediction of such a track turns the
+yaw-induced position uncertainty into a thin ellipse tangent to the teammate's velocity, while
+the true set of positions reachable in ``τ`` seconds is a disc of radius ``|v_j| τ`` around the
+yaw-free prediction (seed 002 Fig. 3). For tracks whose yaw standard deviation exceeds a
+threshold the gate therefore adds the covariance of that disc, ``(|v_j| τ)²·I₂`` on the
+horizontal position, mapped into measurement space with the measurement Jacobian ``H``:
+
+    S_gate = S + H_xy (|v_j| τ)² H_xyᵀ.
+
+This enlarges the gate only where the linearisation is known to be wrong and leaves the
+Kalman update itself untouched.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.stats import chi2
+
+from relloc.errors import ConfigError
+
+Array = NDArray[np.float64]
+
+
+@lru_cache(maxsize=64)
+def chi2_gate(dim: int, p_gate: float) -> float:
+    """Gate threshold ``γ`` with ``P(χ²(dim) ≤ γ) = p_gate``."""
+    if dim < 1:
+        raise ConfigError(f"chi2_gate: dim must be ≥ 1, got {dim}")
+    if not 0.0 < p_gate < 1.0:
+        raise ConfigError(f"chi2_gate: p_gate must lie in (0, 1), got {p_gate}")
+    return float(chi2.ppf(p_gate, dim))
+
+
+@dataclass(frozen=True, kw_only=True)
+class GateSettings:
+    """Gate probability and the modified gate for uniform-yaw tracks.
+
+    Attributes:
+        p_gate: probability ``P_G`` that a correct measurement lies inside the gate.
+        yaw_sigma_uniform: yaw standard deviation (rad) above which a track counts as having
+            an (almost) uniform yaw and gets the modified gate.
+        horizon: time ``τ`` (s) over which the unknown yaw can displace the track (the
+            interval between direct-fusion scans).
+    """
+
+    p_gate: float = 0.95
+    yaw_sigma_uniform: float = 0.5
+    horizon: float = 0.1
+
+    def __post_init__(self) -> None:
+        if not 0.0 < self.p_gate < 1.0:
+            raise ConfigError(f"GateSettings.p_gate must lie in (0, 1), got {self.p_gate}")
+        if not (np.isfinite(self.yaw_sigma_uniform) and self.yaw_sigma_uniform > 0.0):
+            raise ConfigError(
+                f"GateSettings.yaw_sigma_uniform must be > 0, got {self.yaw_sigma_uniform}"
+            )
+        if not (np.isfinite(self.horizon) and self.horizon >= 0.0):
+            raise ConfigError(f"GateSettings.horizon must be ≥ 0, got {self.horizon}")
+
+
+def mahalanobis_batch(nu: Array, S: Array) -> Array:
+    """Squared Mahalanobis distances for stacks: ``nu`` (..., n), ``S`` (..., n, n) → (...)."""
+    sol = np.linalg.solve(S, nu[..., None])[..., 0]
+    return np.einsum("...i,...i->...", nu, sol)
+
+
+def modified_gate_covariance(
+    S: Array, H: Array, yaw_var: Array, speed: Array, settings: GateSettings
+) -> Array:
+    """Innovation covariance used for gating (module docstring).
+
+    Args:
+        S: innovation covariances (K, n_z, n_z).
+        H: measurement Jacobians (K, n_z, 4) with respect to (x, y, z, φ).
+        yaw_var: yaw variances of the tracks (K,).
+        speed: horizontal speed |v_j| of the tracked teammate (K,) in m/s.
+        settings: gate settings.
+    """
+    uniform = yaw_var > settings.yaw_sigma_uniform**2
+    if not np.any(uniform):
+        return S
+    radius2 = np.where(uniform, (speed * settings.horizon) ** 2, 0.0)
+    Hxy = H[..., :2]
+    return S + radius2[:, None, None] * (Hxy @ np.swapaxes(Hxy, -1, -2))
+
+
+def in_gate(d2: Array, dim: int, p_gate: float) -> NDArray[np.bool_]:
+    """Boolean mask ``d² ≤ γ(dim, p_gate)``."""
+    return np.asarray(d2 <= chi2_gate(dim, p_gate))

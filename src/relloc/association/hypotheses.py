@@ -1,0 +1,135 @@
+"""Track formation for one Gaussian-sum filter (seed 002 §II-D.3 and Eq. 13).
+
+Every track ``h`` (mixture component with weight ``w_h``) of the filter ``GSF^(i,j)`` that
+tracks teammate ``j`` branches, for one sensor's measurement set ``Z = {z_1 … z_m}``, into
+
+* a **false-alarm** track (association ``A_0``: none of the measurements is ``j``) with weight
+  ``w_h (1 − P_D P_G)``;
+* one **detected** track per measurement ``z_r`` inside the track's gate (association
+  ``A_r``), Kalman-updated, with the likelihood weight of Eq. 7 divided by the density ``κ``
+  of measurements that are *not* ``j`` (clutter and the other teammates)::
+
+      w_{h,r} = w_h · P_D · N(z_r; ẑ_h, S_h) / κ;
+
+  dividing by ``κ`` is Reid's single-target MHT weighting and makes the detected weight a
+  likelihood *ratio*, so it can be normalised together with the dimensionless false-alarm
+  and birth weights (Eq. 7 gives only the likelihood factor);
+* one **new** track per measurement that lies outside the gate of every track, with birth
+  probability ``P_B`` (Eq. 13).  Tracks are *not* born from in-gate measurements: every track of
+  ``GSF^(i,j)`` is the same robot ``j``, so that would only duplicate hypotheses. A new track's
+  prior over the measurement space is uniform, so its measurement likelihood is ``1/V``
+  (``V``: volume of the measurement space); like a detected track it is divided by ``κ``.
+
+Birth (Eq. 13), from range ``r`` (known correspondence), a bearing ``(α, β)`` of unknown
+correspondence and the height difference ``h``::
+
+    m = [r cos β cos α, r cos β sin α, r sin β, 0],   P = diag(0.1, 0.1, 0.05, 4π)
+    w = P_B · N(h; r sin β, P₃₃) · √(2π P₃₃) · P_D / (V κ)
+      = P_B exp(−(h − r sin β)² / (2 P₃₃)) · P_D / (V κ).
+
+The density of Eq. 13 is divided by its peak value ``1/√(2π P₃₃)`` (the height check becomes a
+dimensionless consistency factor) and multiplied by the uniform-prior likelihood ratio
+``P_D/(Vκ)``, so that birth, false-alarm and detected weights share one normalisation. The yaw,
+unobservable from one measurement, starts at 0 with variance 4π (almost uniform over a turn).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from relloc.errors import ConfigError
+
+Array = NDArray[np.float64]
+
+
+@dataclass(frozen=True, kw_only=True)
+class FormationSettings:
+    """Probabilities of track formation and the Eq. 13 birth covariance.
+
+    Attributes:
+        p_detect: detection probability ``P_D`` of the sensor.
+        p_gate: gate probability ``P_G``.
+        p_birth: birth probability ``P_B`` of a new track.
+        birth_variances: diagonal of the birth covariance ``(σ²_x, σ²_y, σ²_z, σ²_φ)``.
+    """
+
+    p_detect: float = 0.95
+    p_gate: float = 0.95
+    p_birth: float = 0.5
+    birth_variances: tuple[float, float, float, float] = (0.1, 0.1, 0.05, 4.0 * np.pi)
+
+    def __post_init__(self) -> None:
+        for name in ("p_detect", "p_gate", "p_birth"):
+            value = getattr(self, name)
+            if not 0.0 < value <= 1.0:
+                raise ConfigError(f"FormationSettings.{name} must lie in (0, 1], got {value}")
+        if self.p_gate >= 1.0:
+            raise ConfigError("FormationSettings.p_gate must be < 1 (a gate needs a threshold)")
+        bv = tuple(float(v) for v in self.birth_variances)
+        if len(bv) != 4 or not all(np.isfinite(v) and v > 0.0 for v in bv):
+            raise ConfigError(
+                f"FormationSettings.birth_variances needs 4 positive values, got {bv}"
+            )
+        object.__setattr__(self, "birth_variances", bv)
+
+
+def formation_weights(
+    weights: Array,
+    likelihood: Array,
+    gated: NDArray[np.bool_],
+    settings: FormationSettings,
+    false_density: float,
+) -> tuple[Array, Array]:
+    """Unnormalised weights of false-alarm and detected tracks (module docstring).
+
+    Args:
+        weights: prior track weights ``w_h`` (K,).
+        likelihood: ``N(z_r; ẑ_h, S_h)`` (K, m).
+        gated: ``True`` where measurement ``r`` is inside the gate of track ``h`` (K, m).
+        settings: formation probabilities.
+        false_density: density ``κ`` of measurements not originating from the target (> 0).
+
+    Returns:
+        ``(w_false_alarm (K,), w_detected (K, m))`` with zeros outside the gate.
+    """
+    if not (np.isfinite(false_density) and false_density > 0.0):
+        raise ConfigError(f"formation_weights: false_density must be > 0, got {false_density}")
+    w_fa = weights * (1.0 - settings.p_detect * settings.p_gate)
+    w_det = np.where(gated, weights[:, None] * settings.p_detect * likelihood / false_density, 0.0)
+    return w_fa, w_det
+
+
+def birth_tracks(
+    r: float,
+    alpha: Array,
+    beta: Array,
+    h: float,
+    settings: FormationSettings,
+    *,
+    volume: float,
+    false_density: float,
+) -> tuple[Array, Array, Array]:
+    """New tracks of Eq. 13 for bearings ``(α_r, β_r)`` with range ``r`` and height ``h``.
+
+    ``volume`` is the volume ``V`` of the bearing space and ``false_density`` the density ``κ``.
+    Returns ``(means (m, 4), covs (m, 4, 4), weights (m,))``.
+    """
+    if not (volume > 0.0 and false_density > 0.0):
+        raise ConfigError(
+            f"birth_tracks: volume and false_density must be > 0: {volume}, {false_density}"
+        )
+    alpha = np.asarray(alpha, dtype=float).reshape(-1)
+    beta = np.asarray(beta, dtype=float).reshape(-1)
+    cb = np.cos(beta)
+    means = np.stack(
+        [r * cb * np.cos(alpha), r * cb * np.sin(alpha), r * np.sin(beta), np.zeros_like(alpha)],
+        axis=-1,
+    )
+    covs = np.broadcast_to(np.diag(settings.birth_variances), (alpha.size, 4, 4)).copy()
+    var_z = settings.birth_variances[2]
+    consistency = np.exp(-0.5 * (h - r * np.sin(beta)) ** 2 / var_z)
+    weights = settings.p_birth * consistency * settings.p_detect / (volume * false_density)
+    return means, covs, weights

@@ -1,0 +1,800 @@
+"""Distributed multi-hypothesis relative localization: one fuser per sensing robot (seed 002).
+
+A sensing robot ``i`` runs a fuser ``FUS^(i)`` holding one Gaussian-sum filter ``GSF^(i,j)``
+per teammate ``j``; each mixture component is a *track* with mean ``m_h``, covariance
+``P_h``, weight ``w_h``, its last association and its ancestry (for N-scan pruning). The state
+is ``RelPose4 = (x, y, z, φ)`` of ``j`` in ``i``'s body frame. Seed 002's process model (Eq. 5)
+is the same 4-DOF relative kinematics as seed 000 Eq. 1 (``θ̇ = ω_j − ω_i``, ``ż = v_zj − v_zi``),
+so the prediction is engineer A's :func:`relloc.estimators.relative.predict_arrays`, applied to
+all tracks of all teammates in one batched call; the Kalman update is A's
+:func:`relloc.estimators.relative.kalman_update` (Joseph form).
+
+Measurements (seed 002 Eq. 6; the paper names azimuth α and elevation β, ``relloc.models``
+names them θ and α), processed **sensor by sensor** (gate → form → update), so that clutter on
+one sensor does not discard the others:
+
+1. height difference ``h = z + ν_h`` from the robots' absolute height references
+   (known correspondence, ``H = [0, 0, 1, 0]``);
+2. range ``r = ‖p‖ + ν_r`` (known correspondence);
+3. bearings ``(α, β)`` of *unknown* correspondence: every bearing the robot sees (teammates
+   and clutter) is a candidate for every teammate (``association.hypotheses``).
+
+Known-correspondence sensors do not branch: a track whose χ² gate holds the measurement is
+updated and weighted by the likelihood (Eq. 7, ``w ← w N(z; ẑ, S)``); a track whose gate does
+not hold it keeps its state and gets the outlier weight ``w (1 − P_G) N_γ`` where
+``N_γ = e^{−γ/2}/√det(2πS)`` is the likelihood on the gate boundary (a measurement outside the
+gate is scored as if it lay on it, so an outlier cannot cost more than that).
+
+After the direct scan each filter is normalised and reduced (``association.mixture_reduction``
+and ``association.nscan``): prune by weight, N-scan prune track families, merge by Mahalanobis
+distance (moment preserving), and cap the number of components.
+
+Communication (Eq. 8): :meth:`GaussianSumFuser.broadcast` publishes every filter as an
+:class:`~relloc.fusion.messages.EquivalentMeasurement` holding the tracks and their
+previous-broadcast priors propagated to now. :meth:`GaussianSumFuser.fuse` takes a teammate's
+message: ``j``'s belief of ``i`` (mutual, inverted with ⊖, Eq. 9) or ``l``'s belief of another
+teammate (indirect, registered through this fuser's own belief of ``l`` with ⊕, Eq. 11), and
+fuses it track by track with the de-correlation of Eqs. 10/12 (or covariance intersection).
+Pairs inside the χ² gate of ``P_h + P_h'`` are fused with weight ``w_h w_h' N(Δ; 0, P_h + P_h')``
+(Eq. 10); a local track with no partner keeps weight ``w_h (1 − P_G) N_γ``; a received track
+that falls in no local gate is born with weight ``P_B w_h' N_γ``. The same increment is also
+fused into the local track's broadcast prior, so that a later broadcast forwards only this
+robot's own direct information (what was fused from others is never sent back to them).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from relloc.association.gating import (
+    GateSettings,
+    chi2_gate,
+    mahalanobis_batch,
+    modified_gate_covariance,
+)
+from relloc.association.hypotheses import FormationSettings, birth_tracks, formation_weights
+from relloc.association.mixture_reduction import (
+    align_angles,
+    cap_indices,
+    merge_groups,
+    merge_moments,
+    prune_mask,
+)
+from relloc.association.nscan import branch, family_keep_mask, new_history
+from relloc.core.angles import wrap_angle
+from relloc.core.gaussian import Gaussian, GaussianMixture
+from relloc.errors import ConfigError, DataError
+from relloc.estimators.relative import kalman_update, predict_arrays
+from relloc.fusion.covariance_intersection import covariance_intersection
+from relloc.fusion.decorrelation import decorrelated_fusion, pose_difference
+from relloc.fusion.messages import EquivalentMeasurement
+from relloc.fusion.pose_beliefs import compose_beliefs, invert_beliefs, register_prior
+from relloc.models.measurement import range_bearing, range_bearing_jacobian
+from relloc.models.motion import VelocityNoise
+
+Array = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+FusionMode = Literal["decorrelated", "ci"]
+FUSION_MODES: tuple[str, ...] = ("decorrelated", "ci")
+
+_YAW = 3
+_H_HEIGHT = np.array([[0.0, 0.0, 1.0, 0.0]])
+
+
+@dataclass(frozen=True, kw_only=True)
+class GaussianSumSettings:
+    """Everything a fuser needs (units: m, rad, s).
+
+    Attributes:
+        velocity_noise: body-velocity noise of observer and teammates (process noise).
+        sigma_height, sigma_range: noise of the height difference and of the range (m).
+        sigma_azimuth, sigma_elevation: bearing noise (rad).
+        use_elevation: bearings are (azimuth, elevation); ``False`` for azimuth-only sensors
+            (planar robots), where births place the teammate at the height reference.
+        expected_clutter: expected number of clutter bearings per scan (Poisson mean λV).
+        formation: P_D, P_G, P_B and the Eq. 13 birth covariance.
+        gate: gate probability and the modified gate for uniform-yaw tracks.
+        prune_weight: tracks below this normalised weight are deleted.
+        merge_threshold: squared Mahalanobis distance below which tracks are merged.
+        nscan_depth, nscan_weight: N of the N-scan pruning and the family-weight threshold.
+        max_components: cap on the tracks of one filter.
+        fusion: ``"decorrelated"`` (Eqs. 10/12) or ``"ci"`` (covariance intersection).
+        registration_weight: tracks of this fuser's belief of ``l`` below this weight are not
+            used to register ``l``'s messages (indirect fusion).
+        confirm_weight, confirm_position_sigma, confirm_yaw_sigma: a filter's dominant track is
+            *confirmed* when its weight and its position / yaw standard deviations pass these.
+    """
+
+    velocity_noise: VelocityNoise
+    sigma_height: float
+    sigma_range: float
+    sigma_azimuth: float
+    sigma_elevation: float
+    use_elevation: bool = True
+    expected_clutter: float = 0.0
+    formation: FormationSettings = field(default_factory=FormationSettings)
+    gate: GateSettings = field(default_factory=GateSettings)
+    prune_weight: float = 1e-3
+    merge_threshold: float = 4.0
+    nscan_depth: int = 3
+    nscan_weight: float = 1e-3
+    max_components: int = 8
+    fusion: FusionMode = "decorrelated"
+    registration_weight: float = 0.2
+    confirm_weight: float = 0.8
+    confirm_position_sigma: float = 0.3
+    confirm_yaw_sigma: float = 0.35
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.velocity_noise, VelocityNoise):
+            raise ConfigError("GaussianSumSettings.velocity_noise must be a VelocityNoise")
+        for name in (
+            "sigma_height",
+            "sigma_range",
+            "sigma_azimuth",
+            "sigma_elevation",
+            "confirm_position_sigma",
+            "confirm_yaw_sigma",
+        ):
+            value = getattr(self, name)
+            if not (np.isfinite(value) and value > 0.0):
+                raise ConfigError(f"GaussianSumSettings.{name} must be finite and > 0: {value}")
+        for name in ("expected_clutter", "merge_threshold"):
+            value = getattr(self, name)
+            if not (np.isfinite(value) and value >= 0.0):
+                raise ConfigError(f"GaussianSumSettings.{name} must be finite and ≥ 0: {value}")
+        for name in ("prune_weight", "nscan_weight", "registration_weight", "confirm_weight"):
+            value = getattr(self, name)
+            if not 0.0 <= value < 1.0:
+                raise ConfigError(f"GaussianSumSettings.{name} must lie in [0, 1): {value}")
+        if self.nscan_depth < 1:
+            raise ConfigError(f"GaussianSumSettings.nscan_depth must be ≥ 1: {self.nscan_depth}")
+        if self.max_components < 1:
+            raise ConfigError(
+                f"GaussianSumSettings.max_components must be ≥ 1: {self.max_components}"
+            )
+        if self.fusion not in FUSION_MODES:
+            raise ConfigError(f"GaussianSumSettings.fusion: one of {FUSION_MODES}: {self.fusion}")
+
+    @property
+    def bearing_rows(self) -> list[int]:
+        """Rows of ``relloc.models.measurement.range_bearing`` that the bearing sensor gives."""
+        return [1, 2] if self.use_elevation else [1]
+
+    @property
+    def bearing_noise(self) -> Array:
+        """Bearing noise covariance ``R_b``."""
+        sig = (
+            [self.sigma_azimuth, self.sigma_elevation]
+            if self.use_elevation
+            else [self.sigma_azimuth]
+        )
+        return np.diag(np.square(sig))
+
+    @property
+    def bearing_volume(self) -> float:
+        """Volume of the bearing space: 2π·π (azimuth × elevation) or 2π (azimuth only)."""
+        return 2.0 * np.pi * (np.pi if self.use_elevation else 1.0)
+
+
+@dataclass
+class Tracks:
+    """Mixture components of all filters of one fuser, stored as parallel arrays.
+
+    ``owner[k]`` is the local index of the teammate whose filter holds track ``k``.
+    ``prior_mean``/``prior_cov`` are the track at the previous broadcast, propagated (Eq. 8).
+    ``assoc[k]`` is the index of the bearing the track was last updated with (−1: none).
+    """
+
+    owner: IntArray
+    mean: Array
+    cov: Array
+    prior_mean: Array
+    prior_cov: Array
+    weight: Array
+    history: IntArray
+    assoc: IntArray
+
+    @staticmethod
+    def empty(depth: int) -> Tracks:
+        """No tracks."""
+        return Tracks(
+            owner=np.zeros(0, dtype=np.int64),
+            mean=np.zeros((0, 4)),
+            cov=np.zeros((0, 4, 4)),
+            prior_mean=np.zeros((0, 4)),
+            prior_cov=np.zeros((0, 4, 4)),
+            weight=np.zeros(0),
+            history=np.zeros((0, depth + 1), dtype=np.int64),
+            assoc=np.zeros(0, dtype=np.int64),
+        )
+
+    @property
+    def size(self) -> int:
+        """Number of tracks."""
+        return int(self.weight.size)
+
+    def take(self, idx: ArrayLike) -> Tracks:
+        """Sub-set (or repetition) of tracks by index."""
+        i = np.asarray(idx, dtype=np.int64)
+        return Tracks(
+            owner=self.owner[i],
+            mean=self.mean[i],
+            cov=self.cov[i],
+            prior_mean=self.prior_mean[i],
+            prior_cov=self.prior_cov[i],
+            weight=self.weight[i],
+            history=self.history[i],
+            assoc=self.assoc[i],
+        )
+
+    @staticmethod
+    def concat(parts: Sequence[Tracks]) -> Tracks:
+        """Tracks of all parts, in order."""
+        return Tracks(
+            owner=np.concatenate([p.owner for p in parts]),
+            mean=np.concatenate([p.mean for p in parts]),
+            cov=np.concatenate([p.cov for p in parts]),
+            prior_mean=np.concatenate([p.prior_mean for p in parts]),
+            prior_cov=np.concatenate([p.prior_cov for p in parts]),
+            weight=np.concatenate([p.weight for p in parts]),
+            history=np.concatenate([p.history for p in parts]),
+            assoc=np.concatenate([p.assoc for p in parts]),
+        )
+
+
+@dataclass(frozen=True)
+class TrackSummary:
+    """The dominant track of one filter: belief, weight, size of the mixture, confirmation."""
+
+    belief: Gaussian
+    weight: float
+    components: int
+    confirmed: bool
+    assoc: int
+
+
+def predict_fusers(
+    fusers: Sequence[GaussianSumFuser],
+    u_self: Sequence[ArrayLike],
+    u_team: Sequence[ArrayLike],
+    dt: float,
+) -> None:
+    """Predict the tracks of several fusers in one batched call of A's ``predict_arrays``.
+
+    ``u_self[n]`` and ``u_team[n]`` are the inputs of ``fusers[n]`` (see
+    :meth:`GaussianSumFuser.predict`). Identical to predicting each fuser on its own.
+    """
+    inputs = [f._predict_inputs(a, b, dt) for f, a, b in zip(fusers, u_self, u_team, strict=True)]
+    sizes = [x[0].shape[0] for x in inputs]
+    if sum(sizes) == 0:
+        return
+    m, P = predict_arrays(
+        np.concatenate([x[0] for x in inputs]),
+        np.concatenate([x[1] for x in inputs]),
+        np.concatenate([x[2] for x in inputs]),
+        np.concatenate([x[3] for x in inputs]),
+        dt,
+        fusers[0].settings.velocity_noise,
+        where=f"fusers {[f.robot for f in fusers]} t={fusers[0].time:.3f}",
+    )
+    start = 0
+    for f, size in zip(fusers, sizes, strict=True):
+        f._set_predicted(m[start : start + size], P[start : start + size])
+        start += size
+
+
+def _gaussian_density(nu: Array, S: Array) -> Array:
+    """``N(ν; 0, S)`` for stacks ``ν (..., n)``, ``S (..., n, n)``."""
+    n = nu.shape[-1]
+    d2 = mahalanobis_batch(nu, S)
+    return np.exp(-0.5 * d2) / np.sqrt(np.linalg.det(S) * (2.0 * np.pi) ** n)
+
+
+def _edge_density(S: Array, gamma: float) -> Array:
+    """Likelihood on the gate boundary ``e^{−γ/2}/√det(2πS)`` for stacks ``S (..., n, n)``."""
+    n = S.shape[-1]
+    return np.exp(-0.5 * gamma) / np.sqrt(np.linalg.det(S) * (2.0 * np.pi) ** n)
+
+
+class GaussianSumFuser:
+    """``FUS^(i)``: the Gaussian-sum filters of robot ``robot`` for each of its ``teammates``."""
+
+    def __init__(self, robot: int, teammates: Sequence[int], settings: GaussianSumSettings) -> None:
+        team = [int(t) for t in teammates]
+        if robot in team or len(set(team)) != len(team) or not team:
+            raise ConfigError(
+                f"GaussianSumFuser({robot}): teammates must be distinct, non-empty and exclude "
+                f"the robot itself: {team}"
+            )
+        self.robot = int(robot)
+        self.teammates = tuple(team)
+        self.settings = settings
+        self._index = {t: k for k, t in enumerate(team)}
+        self.tracks = Tracks.empty(settings.nscan_depth)
+        self._next_id = 0
+        self.time = 0.0
+        #: horizontal speed of each teammate at the last prediction (for the modified gate)
+        self._speed = np.zeros(len(team))
+
+    # ------------------------------------------------------------------ bookkeeping helpers
+
+    def _ids(self, n: int) -> IntArray:
+        ids = np.arange(self._next_id, self._next_id + n, dtype=np.int64)
+        self._next_id += n
+        return ids
+
+    def teammate_index(self, robot: int) -> int:
+        """Local filter index of teammate ``robot`` (DataError if unknown)."""
+        try:
+            return self._index[int(robot)]
+        except KeyError as exc:
+            raise DataError(
+                f"fuser {self.robot}: robot {robot} is not a teammate {self.teammates}"
+            ) from exc
+
+    def _normalise(self) -> None:
+        t = self.tracks
+        if t.size == 0:
+            return
+        totals = np.bincount(t.owner, weights=t.weight, minlength=len(self.teammates))
+        t.weight = t.weight / np.where(totals > 0.0, totals, 1.0)[t.owner]
+
+    def _per_teammate(self, values: ArrayLike, what: str) -> Array:
+        arr = np.asarray(values, dtype=float).reshape(-1)
+        if arr.size != len(self.teammates):
+            raise DataError(
+                f"fuser {self.robot}: {what} needs one value per teammate "
+                f"({len(self.teammates)}), got {arr.size}"
+            )
+        if np.isinf(arr).any():
+            raise DataError(f"fuser {self.robot}: {what} contains inf (use NaN for missing)")
+        return arr
+
+    # ------------------------------------------------------------------ prediction
+
+    def predict(self, u_self: ArrayLike, u_team: ArrayLike, dt: float) -> None:
+        """Propagate every track (and its broadcast prior) by ``dt`` (seed 002 §II-D.1).
+
+        ``u_self`` (4,) is this robot's body velocity, ``u_team`` (n_teammates, 4) the
+        teammates' (communicated with known correspondence).
+        """
+        predict_fusers([self], [u_self], [u_team], dt)
+
+    def _predict_inputs(
+        self, u_self: ArrayLike, u_team: ArrayLike, dt: float
+    ) -> tuple[Array, Array, Array, Array]:
+        """Stacked (tracks, priors), their inputs, for one batched prediction."""
+        u_self = np.asarray(u_self, dtype=float).reshape(4)
+        u_team = np.asarray(u_team, dtype=float).reshape(len(self.teammates), 4)
+        if not (np.isfinite(u_self).all() and np.isfinite(u_team).all()):
+            raise DataError(f"fuser {self.robot} at t={self.time:.3f}: non-finite velocity")
+        if not (np.isfinite(dt) and dt >= 0.0):
+            raise DataError(f"fuser {self.robot} at t={self.time:.3f}: bad time step {dt}")
+        self.time += float(dt)
+        self._speed = np.hypot(u_team[:, 0], u_team[:, 1])
+        t = self.tracks
+        means = np.concatenate([t.mean, t.prior_mean])
+        covs = np.concatenate([t.cov, t.prior_cov])
+        u_c = np.concatenate([u_team[t.owner], u_team[t.owner]])
+        u_l = np.broadcast_to(u_self, u_c.shape)
+        return means, covs, u_l, u_c
+
+    def _set_predicted(self, m: Array, P: Array) -> None:
+        t = self.tracks
+        k = t.size
+        t.mean, t.prior_mean = m[:k], m[k:]
+        t.cov, t.prior_cov = P[:k], P[k:]
+
+    # ------------------------------------------------------------------ direct fusion
+
+    def update_known(self, kind: Literal["height", "range"], values: ArrayLike) -> None:
+        """Update with a known-correspondence sensor (``values`` per teammate, NaN = none)."""
+        vals = self._per_teammate(values, kind)
+        t = self.tracks
+        if t.size == 0:
+            return
+        z = vals[t.owner]
+        sel = np.flatnonzero(np.isfinite(z))
+        if sel.size == 0:
+            return
+        mean, cov = t.mean[sel], t.cov[sel]
+        if kind == "height":
+            H = np.broadcast_to(_H_HEIGHT, (sel.size, 1, 4))
+            pred = mean[:, 2:3]
+            var = self.settings.sigma_height**2
+        elif kind == "range":
+            H = range_bearing_jacobian(mean)[:, :1, :]
+            pred = range_bearing(mean)[:, :1]
+            var = self.settings.sigma_range**2
+        else:
+            raise ConfigError(f"update_known: kind must be 'height' or 'range', got {kind!r}")
+        R = np.full((sel.size, 1, 1), var)
+        nu = z[sel, None] - pred
+        S = H @ cov @ np.swapaxes(H, -1, -2) + R
+        gamma = chi2_gate(1, self.settings.gate.p_gate)
+        d2 = mahalanobis_batch(nu, S)
+        inside = d2 <= gamma
+        new_m, new_P, _ = kalman_update(
+            mean, cov, nu, H, R, where=f"fuser {self.robot} {kind} t={self.time:.3f}"
+        )
+        t.mean[sel] = np.where(inside[:, None], new_m, mean)
+        t.cov[sel] = np.where(inside[:, None, None], new_P, cov)
+        lik = np.where(
+            inside,
+            _gaussian_density(nu, S),
+            (1.0 - self.settings.gate.p_gate) * _edge_density(S, gamma),
+        )
+        t.weight[sel] = t.weight[sel] * lik
+        self._normalise()
+
+    def update_bearings(self, bearings: ArrayLike, ranges: ArrayLike, heights: ArrayLike) -> None:
+        """Gate, form and update with a bearing set of unknown correspondence.
+
+        ``bearings`` (m, 2) or (m, 1) (azimuth[, elevation]); ``ranges`` and ``heights`` per
+        teammate (NaN: not measured this scan) are used to initialise new tracks (Eq. 13).
+        """
+        st = self.settings
+        nb = len(st.bearing_rows)
+        Z = np.asarray(bearings, dtype=float).reshape(-1, nb)
+        if not np.isfinite(Z).all():
+            raise DataError(f"fuser {self.robot} t={self.time:.3f}: non-finite bearing")
+        r = self._per_teammate(ranges, "ranges")
+        h = self._per_teammate(heights, "heights")
+        m = Z.shape[0]
+        n_team = len(self.teammates)
+        kappa = (
+            st.expected_clutter + st.formation.p_detect * max(n_team - 1, 0)
+        ) / st.bearing_volume
+        kappa = max(kappa, 1.0 / st.bearing_volume)
+        t = self.tracks
+        k = t.size
+        gated = np.zeros((k, m), dtype=bool)
+        parts: list[Tracks] = []
+        if k and m:
+            hz = range_bearing(t.mean)[:, st.bearing_rows]
+            H = range_bearing_jacobian(t.mean)[:, st.bearing_rows, :]
+            R = st.bearing_noise
+            S = H @ t.cov @ np.swapaxes(H, -1, -2) + R
+            nu = Z[None, :, :] - hz[:, None, :]
+            nu[..., 0] = wrap_angle(nu[..., 0])
+            S_gate = modified_gate_covariance(
+                S, H, t.cov[:, _YAW, _YAW], self._speed[t.owner], st.gate
+            )
+            d2 = mahalanobis_batch(nu, S_gate[:, None, :, :])
+            gated = d2 <= chi2_gate(nb, st.gate.p_gate)
+            lik = _gaussian_density(nu, np.broadcast_to(S[:, None], (k, m, nb, nb)))
+            w_fa, w_det = formation_weights(t.weight, lik, gated, st.formation, kappa)
+            fa = t.take(np.arange(k))
+            fa.weight = w_fa
+            fa.assoc = np.full(k, -1, dtype=np.int64)
+            fa.history = branch(t.history, np.arange(k), self._ids(k))
+            parts.append(fa)
+            hi, ri = np.nonzero(gated)
+            if hi.size:
+                det = t.take(hi)
+                new_m, new_P, _ = kalman_update(
+                    t.mean[hi],
+                    t.cov[hi],
+                    nu[hi, ri],
+                    H[hi],
+                    np.broadcast_to(R, (hi.size, nb, nb)),
+                    where=f"fuser {self.robot} bearings t={self.time:.3f}",
+                )
+                det.mean, det.cov = new_m, new_P
+                det.weight = w_det[hi, ri]
+                det.assoc = ri.astype(np.int64)
+                det.history = branch(t.history, hi, self._ids(hi.size))
+                parts.append(det)
+        elif k:
+            # no bearing at all: every track is a false-alarm branch with the same factor
+            # (1 − P_D P_G), which normalisation cancels; only the associations change
+            t.assoc[:] = -1
+            return
+        if m:
+            parts.extend(self._births(Z, r, h, gated, kappa))
+        if parts:
+            self.tracks = Tracks.concat(parts)
+            self._normalise()
+
+    def _births(
+        self, Z: Array, r: Array, h: Array, gated: NDArray[np.bool_], kappa: float
+    ) -> list[Tracks]:
+        """New tracks (Eq. 13) from bearings outside every gate of each teammate's filter."""
+        st = self.settings
+        t = self.tracks
+        out: list[Tracks] = []
+        for j in range(len(self.teammates)):
+            if not (np.isfinite(r[j]) and r[j] > 0.0 and np.isfinite(h[j])):
+                continue
+            mine = t.owner == j
+            free = ~gated[mine].any(axis=0) if mine.any() else np.ones(Z.shape[0], dtype=bool)
+            idx = np.flatnonzero(free)
+            if idx.size == 0:
+                continue
+            alpha = Z[idx, 0]
+            beta = (
+                Z[idx, 1]
+                if st.use_elevation
+                else np.full(idx.size, np.arcsin(np.clip(h[j] / r[j], -1.0, 1.0)))
+            )
+            means, covs, w = birth_tracks(
+                r[j],
+                alpha,
+                beta,
+                h[j],
+                st.formation,
+                volume=st.bearing_volume,
+                false_density=kappa,
+            )
+            ids = self._ids(idx.size)
+            out.append(
+                Tracks(
+                    owner=np.full(idx.size, j, dtype=np.int64),
+                    mean=means,
+                    cov=covs,
+                    prior_mean=means.copy(),
+                    prior_cov=covs.copy(),
+                    weight=w,
+                    history=new_history(ids, st.nscan_depth),
+                    assoc=idx.astype(np.int64),
+                )
+            )
+        return out
+
+    def direct_scan(self, heights: ArrayLike, ranges: ArrayLike, bearings: ArrayLike) -> None:
+        """One direct-fusion scan: height, range, then bearings, then reduction."""
+        self.update_known("height", heights)
+        self.update_known("range", ranges)
+        self.update_bearings(bearings, ranges, heights)
+        self.reduce()
+
+    # ------------------------------------------------------------------ reduction
+
+    def reduce(self) -> None:
+        """Prune, N-scan prune, merge and cap every filter (seed 002 §II-D.5)."""
+        st = self.settings
+        t = self.tracks
+        if t.size == 0:
+            return
+        self._normalise()
+        keep = prune_mask(t.weight, st.prune_weight, t.owner)
+        t = t.take(np.flatnonzero(keep))
+        t = t.take(np.flatnonzero(family_keep_mask(t.history, t.weight, st.nscan_weight, t.owner)))
+        counts = np.bincount(t.owner, minlength=len(self.teammates))
+        if np.any(counts > 1):
+            parts = []
+            for j in range(len(self.teammates)):
+                sub = t.take(np.flatnonzero(t.owner == j))
+                if sub.size > 1:
+                    sub = sub.take(cap_indices(sub.weight, 4 * st.max_components))
+                    sub = self._merge(sub)
+                    sub = sub.take(cap_indices(sub.weight, st.max_components))
+                parts.append(sub)
+            t = Tracks.concat(parts)
+        self.tracks = t
+        self._normalise()
+
+    def _merge(self, sub: Tracks) -> Tracks:
+        groups = merge_groups(
+            sub.mean, sub.cov, sub.weight, self.settings.merge_threshold, angle_index=_YAW
+        )
+        if len(groups) == sub.size:
+            return sub
+        out = sub.take([g[0] for g in groups])
+        for n, g in enumerate(groups):
+            if g.size == 1:
+                continue
+            out.mean[n], out.cov[n], out.weight[n] = merge_moments(
+                sub.mean, sub.cov, sub.weight, g, angle_index=_YAW
+            )
+            out.prior_mean[n], out.prior_cov[n], _ = merge_moments(
+                sub.prior_mean, sub.prior_cov, sub.weight, g, angle_index=_YAW
+            )
+        return out
+
+    # ------------------------------------------------------------------ queries
+
+    def mixture(self, robot: int) -> GaussianMixture | None:
+        """``GSF^(i,robot)`` as a :class:`GaussianMixture` (``None`` while it has no track)."""
+        j = self.teammate_index(robot)
+        sel = np.flatnonzero(self.tracks.owner == j)
+        if sel.size == 0:
+            return None
+        t = self.tracks
+        return GaussianMixture(
+            means=t.mean[sel],
+            covs=t.cov[sel],
+            weights=t.weight[sel],
+            labels=tuple(int(x) for x in t.history[sel, -1]),
+        )
+
+    def summary(self, robot: int) -> TrackSummary | None:
+        """The dominant track of ``GSF^(i,robot)`` and whether it is confirmed."""
+        j = self.teammate_index(robot)
+        sel = np.flatnonzero(self.tracks.owner == j)
+        if sel.size == 0:
+            return None
+        t = self.tracks
+        best = sel[int(np.argmax(t.weight[sel]))]
+        P = t.cov[best]
+        st = self.settings
+        confirmed = bool(
+            t.weight[best] >= st.confirm_weight
+            and np.sqrt(np.trace(P[:3, :3])) <= st.confirm_position_sigma
+            and np.sqrt(P[_YAW, _YAW]) <= st.confirm_yaw_sigma
+        )
+        return TrackSummary(
+            belief=Gaussian(mean=t.mean[best], cov=P),
+            weight=float(t.weight[best]),
+            components=int(sel.size),
+            confirmed=confirmed,
+            assoc=int(t.assoc[best]),
+        )
+
+    # ------------------------------------------------------------------ communication
+
+    def broadcast(self) -> list[EquivalentMeasurement]:
+        """Equivalent measurements of every filter (Eq. 8); resets the broadcast priors."""
+        t = self.tracks
+        out = []
+        for j, robot in enumerate(self.teammates):
+            sel = np.flatnonzero(t.owner == j)
+            if sel.size == 0:
+                continue
+            out.append(
+                EquivalentMeasurement(
+                    sender=self.robot,
+                    subject=robot,
+                    time=self.time,
+                    means=t.mean[sel],
+                    covs=t.cov[sel],
+                    prior_means=t.prior_mean[sel],
+                    prior_covs=t.prior_cov[sel],
+                    weights=t.weight[sel],
+                )
+            )
+        t.prior_mean = t.mean.copy()
+        t.prior_cov = t.cov.copy()
+        return out
+
+    def fuse(self, msg: EquivalentMeasurement) -> str:
+        """Fuse a teammate's message; returns ``"mutual"``, ``"indirect"`` or ``"skipped"``.
+
+        Mutual (Eq. 9–10): ``msg`` is ``j``'s belief of this robot, inverted with ⊖.
+        Indirect (Eq. 11–12): ``msg`` is ``l``'s belief of a teammate ``j``, composed with this
+        fuser's tracks of ``l`` (those above ``registration_weight``, weight ``w'_{il} w_{lj}``).
+        A message about a robot this fuser does not track, or from a sender it has no track of
+        yet, is skipped.
+        """
+        if msg.sender == self.robot:
+            raise DataError(f"fuser {self.robot}: received its own message")
+        if msg.subject == self.robot:
+            j = self.teammate_index(msg.sender)
+            means, covs = invert_beliefs(msg.means, msg.covs)
+            pmeans, pcovs = invert_beliefs(msg.prior_means, msg.prior_covs)
+            self._fuse_tracks(j, means, covs, pmeans, pcovs, msg.weights)
+            return "mutual"
+        if msg.subject not in self._index or msg.sender not in self._index:
+            return "skipped"
+        j = self._index[msg.subject]
+        l_idx = self._index[msg.sender]
+        t = self.tracks
+        reg = np.flatnonzero((t.owner == l_idx) & (t.weight >= self.settings.registration_weight))
+        if reg.size == 0:
+            return "skipped"
+        parts_m, parts_P, parts_pm, parts_pP, parts_w = [], [], [], [], []
+        for k in reg:
+            m, P, from_a = compose_beliefs(t.mean[k], t.cov[k], msg.means, msg.covs)
+            pm, pP = register_prior(t.mean[k], msg.prior_means, msg.prior_covs, from_a)
+            parts_m.append(m)
+            parts_P.append(P)
+            parts_pm.append(pm)
+            parts_pP.append(pP)
+            parts_w.append(t.weight[k] * msg.weights)
+        self._fuse_tracks(
+            j,
+            np.concatenate(parts_m),
+            np.concatenate(parts_P),
+            np.concatenate(parts_pm),
+            np.concatenate(parts_pP),
+            np.concatenate(parts_w),
+        )
+        return "indirect"
+
+    def _fuse_tracks(
+        self,
+        j: int,
+        means: Array,
+        covs: Array,
+        prior_means: Array,
+        prior_covs: Array,
+        weights: Array,
+    ) -> None:
+        """Gate, form, fuse and reduce received tracks into ``GSF^(i,j)`` (module docstring)."""
+        st = self.settings
+        t = self.tracks
+        mine = np.flatnonzero(t.owner == j)
+        others = t.take(np.flatnonzero(t.owner != j))
+        gamma = chi2_gate(4, st.gate.p_gate)
+        local = t.take(mine)
+        n_loc, n_rx = local.size, weights.size
+        parts: list[Tracks] = [others]
+        gated = np.zeros((n_loc, n_rx), dtype=bool)
+        if n_loc:
+            rx_aligned = align_angles(
+                np.broadcast_to(means[None], (n_loc, n_rx, 4)), local.mean[:, None, :], _YAW
+            )
+            diff = rx_aligned - local.mean[:, None, :]
+            S = local.cov[:, None] + covs[None, :]
+            d2 = mahalanobis_batch(diff, S)
+            gated = d2 <= gamma
+            dens = _gaussian_density(diff, S)
+            S_mean = local.cov + np.einsum("k,kij->ij", weights, covs)[None]
+            keep = local.take(np.arange(n_loc))
+            keep.weight = local.weight * (1.0 - st.gate.p_gate) * _edge_density(S_mean, gamma)
+            keep.history = branch(local.history, np.arange(n_loc), self._ids(n_loc))
+            parts.append(keep)
+            hi, ri = np.nonzero(gated)
+            if hi.size:
+                fused = local.take(hi)
+                for n, (a, b) in enumerate(zip(hi, ri, strict=True)):
+                    fused.mean[n], fused.cov[n] = self._fuse_pair(
+                        local.mean[a],
+                        local.cov[a],
+                        means[b],
+                        covs[b],
+                        prior_means[b],
+                        prior_covs[b],
+                    )
+                    fused.prior_mean[n], fused.prior_cov[n] = self._fuse_pair(
+                        local.prior_mean[a],
+                        local.prior_cov[a],
+                        means[b],
+                        covs[b],
+                        prior_means[b],
+                        prior_covs[b],
+                    )
+                fused.weight = local.weight[hi] * weights[ri] * dens[hi, ri]
+                fused.history = branch(local.history, hi, self._ids(hi.size))
+                parts.append(fused)
+        free = np.flatnonzero(~gated.any(axis=0)) if n_loc else np.arange(n_rx)
+        if free.size:
+            ids = self._ids(free.size)
+            parts.append(
+                Tracks(
+                    owner=np.full(free.size, j, dtype=np.int64),
+                    mean=means[free].copy(),
+                    cov=covs[free].copy(),
+                    prior_mean=means[free].copy(),
+                    prior_cov=covs[free].copy(),
+                    weight=st.formation.p_birth
+                    * weights[free]
+                    * _edge_density(covs[free] + np.diag(st.formation.birth_variances), gamma),
+                    history=new_history(ids, st.nscan_depth),
+                    assoc=np.full(free.size, -1, dtype=np.int64),
+                )
+            )
+        self.tracks = Tracks.concat(parts)
+        self._normalise()
+        self.reduce()
+
+    def _fuse_pair(
+        self,
+        x: Array,
+        P: Array,
+        x_post: Array,
+        P_post: Array,
+        x_prior: Array,
+        P_prior: Array,
+    ) -> tuple[Array, Array]:
+        if self.settings.fusion == "ci":
+            x_rx = x + pose_difference(x_post, x, _YAW)
+            fused_x, fused_P, _ = covariance_intersection(x, P, x_rx, P_post)
+            return fused_x, fused_P
+        return decorrelated_fusion(x, P, x_post, P_post, x_prior, P_prior, angle_index=_YAW)

@@ -1,0 +1,71 @@
+"""Equivalent-measurement messages broadcast between fusers (seed 002 Eq. 8).
+
+At the communication rate a fuser ``i`` broadcasts, for every teammate ``j`` it tracks, the
+tracks of ``GSF^(i,j)``::
+
+    ^{eq}Z^{ij} = ⋃_h { m_h(k|k), P_h(k|k), m_h(k|k−f), P_h(k|k−f), w_h(k|k) },
+
+where ``m_h(k|k−f), P_h(k|k−f)`` is the track as it was at the previous broadcast, propagated
+to now by the prediction only; the receiver uses the pair to remove the information it already
+holds (information de-correlation, Eqs. 10 and 12).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from relloc.errors import DataError
+
+Array = NDArray[np.float64]
+
+
+@dataclass(frozen=True, kw_only=True)
+class EquivalentMeasurement:
+    """The tracks of ``GSF^(sender, subject)`` at ``time`` (Eq. 8).
+
+    ``means``/``prior_means`` (K, 4) and ``covs``/``prior_covs`` (K, 4, 4) are the current and
+    the previous-broadcast-propagated tracks; ``weights`` (K,) sum to one.
+    """
+
+    sender: int
+    subject: int
+    time: float
+    means: Array
+    covs: Array
+    prior_means: Array
+    prior_covs: Array
+    weights: Array
+
+    def __post_init__(self) -> None:
+        where = f"EquivalentMeasurement({self.sender}→{self.subject} at t={self.time})"
+        if self.sender == self.subject:
+            raise DataError(f"{where}: sender and subject must differ")
+        if not np.isfinite(self.time):
+            raise DataError(f"{where}: time must be finite")
+        means = np.atleast_2d(np.asarray(self.means, dtype=float))
+        k, n = means.shape
+        arrays = {
+            "means": (means, (k, n)),
+            "covs": (np.asarray(self.covs, dtype=float), (k, n, n)),
+            "prior_means": (np.atleast_2d(np.asarray(self.prior_means, dtype=float)), (k, n)),
+            "prior_covs": (np.asarray(self.prior_covs, dtype=float), (k, n, n)),
+            "weights": (np.asarray(self.weights, dtype=float).reshape(-1), (k,)),
+        }
+        for name, (arr, shape) in arrays.items():
+            if arr.shape != shape:
+                raise DataError(f"{where}: {name} has shape {arr.shape}, expected {shape}")
+            if not np.all(np.isfinite(arr)):
+                raise DataError(f"{where}: {name} holds non-finite values")
+            object.__setattr__(self, name, arr)
+        w = arrays["weights"][0]
+        if k == 0 or np.any(w < 0.0) or w.sum() <= 0.0:
+            raise DataError(f"{where}: needs ≥ 1 track with non-negative weights summing > 0")
+        object.__setattr__(self, "weights", w / w.sum())
+
+    @property
+    def size(self) -> int:
+        """Number of tracks in the message."""
+        return int(self.weights.size)

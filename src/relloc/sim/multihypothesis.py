@@ -1,0 +1,280 @@
+"""Seed-002 scenario: two leaders and three pods with unknown bearing correspondence.
+
+De Silva, Mann & Gosine §III: a group of two *leaders* (the sensing robots, here ground robots
+at z = 0) and three *pods* (aerial robots hovering at different heights) moves along a common
+path. Each leader measures, at the direct-fusion rate (paper: 10 Hz),
+
+* the height difference ``h = z_j − z_i`` of every teammate from absolute height references
+  (known correspondence, always available);
+* the range ``r`` to every teammate (known correspondence), detected with probability ``P_D``;
+* a *set* of bearings ``(α, β)`` with unknown correspondence: each teammate within
+  ``max_range`` is seen with probability ``P_D``, plus Poisson clutter uniform over the
+  measurement space; the set is shuffled.
+
+Units of the paper's settings (as read here). Measurement variances
+``[ν_α, ν_β, ν_h, ν_r] = [0.0036 rad², 0.0036 rad², 5 mm², 8 mm²]`` are taken literally:
+σ_α = σ_β = 0.06 rad, σ_h = √5 mm ≈ 2.2 mm, σ_r = √8 mm ≈ 2.8 mm. The clutter *spatial density*
+λ = 10⁻⁷ is read per unit volume of the relative-measurement space ``(α, β, r)`` in the units
+the paper states its noise in (rad × rad × mm): ``V = 2π · π · r_max[mm]``, so the expected
+number of clutter bearings per scan is ``λV`` (≈ 0.02 at λ = 10⁻⁷ and r_max = 10 m; the
+λ × 100 setting gives ≈ 2 and λ × 1000 ≈ 20 false bearings per scan, against 4 true ones).
+The clutter's range coordinate is not observed (ranges have known correspondence), so a
+clutter point contributes a false bearing only. The stochastic model's velocity variance
+(0.05 (m/s)², 0.01 (rad/s)²) is the noise on every measured body velocity (v_x, v_y, v_z; ω_z)
+of every robot at the filter rate; the filter uses the same values as its process noise.
+
+The path (Fig. 4 of the paper is not given numerically): the group drives a wide arc (0.3 m/s,
+0.04 rad/s) and every robot adds its own zero-mean speed and turn-rate oscillations (so the
+relative poses keep changing, which makes the relative yaw observable), pods also oscillate in
+height. A *kidnap* moves one robot's true pose by a fixed offset at a given time.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from relloc.core.angles import wrap_angle
+from relloc.core.poses import compose, relative
+from relloc.errors import ConfigError
+from relloc.fusion.team import CLUTTER, DirectScan, TeamData
+
+Array = NDArray[np.float64]
+
+#: Robot names in index order: leaders first (the sensing robots), then pods.
+ROBOT_NAMES: tuple[str, ...] = ("L1", "L2", "P1", "P2", "P3")
+#: Formation offsets (x, y, z) of each robot in the group frame (m).
+_OFFSET = np.array(
+    [
+        [0.0, 0.0, 0.0],
+        [-2.0, 2.5, 0.0],
+        [2.0, 1.5, 1.0],
+        [1.5, -2.0, 1.5],
+        [-1.5, -2.5, 2.0],
+    ]
+)
+#: Per-robot oscillation of the offset: amplitudes (x, y, z) in m, periods (x, y, z) in s,
+#: yaw-oscillation amplitude (rad, pods only) and period (s), phase (rad).
+_OSC = np.array(
+    [
+        [0.6, 0.8, 0.0, 23.0, 17.0, 10.0, 0.0, 10.0, 0.0],
+        [0.7, 0.6, 0.0, 19.0, 21.0, 10.0, 0.0, 10.0, 1.3],
+        [0.8, 0.9, 0.3, 17.0, 13.0, 9.0, 0.8, 11.0, 2.1],
+        [0.9, 0.7, 0.4, 15.0, 19.0, 11.0, 0.9, 9.0, 3.7],
+        [0.7, 1.0, 0.3, 21.0, 14.0, 8.0, 1.0, 12.0, 5.0],
+    ]
+)
+#: Robots whose heading follows their direction of travel (ground robots, v_y = 0).
+_NONHOLONOMIC = (0, 1)
+
+
+@dataclass(frozen=True, kw_only=True)
+class DeSilvaScenario:
+    """Settings of the seed-002 simulation (defaults: the paper's values, units above).
+
+    ``kidnap``: ``(robot index, time s, dx m, dy m, dψ rad)`` or ``None``.
+    """
+
+    duration: float = 60.0
+    filter_rate: float = 20.0
+    direct_rate: float = 10.0
+    velocity_variance: float = 0.05
+    angular_variance: float = 0.01
+    var_azimuth: float = 0.0036
+    var_elevation: float = 0.0036
+    var_height_mm2: float = 5.0
+    var_range_mm2: float = 8.0
+    p_detect: float = 0.95
+    clutter_density: float = 1e-7
+    max_range: float = 10.0
+    group_speed: float = 0.3
+    group_turn_rate: float = 0.04
+    kidnap: tuple[int, float, float, float, float] | None = None
+
+    def __post_init__(self) -> None:
+        positive = (
+            "duration",
+            "filter_rate",
+            "direct_rate",
+            "velocity_variance",
+            "angular_variance",
+            "var_azimuth",
+            "var_elevation",
+            "var_height_mm2",
+            "var_range_mm2",
+            "max_range",
+        )
+        for name in positive:
+            value = getattr(self, name)
+            if not (np.isfinite(value) and value > 0.0):
+                raise ConfigError(f"DeSilvaScenario.{name} must be finite and > 0, got {value}")
+        if not 0.0 < self.p_detect <= 1.0:
+            raise ConfigError(f"DeSilvaScenario.p_detect must lie in (0, 1]: {self.p_detect}")
+        if not (np.isfinite(self.clutter_density) and self.clutter_density >= 0.0):
+            raise ConfigError(
+                f"DeSilvaScenario.clutter_density must be ≥ 0: {self.clutter_density}"
+            )
+        ratio = self.filter_rate / self.direct_rate
+        if self.direct_rate > self.filter_rate or abs(ratio - round(ratio)) > 1e-9:
+            raise ConfigError(
+                "DeSilvaScenario.direct_rate must divide filter_rate "
+                f"({self.direct_rate} vs {self.filter_rate})"
+            )
+        if self.kidnap is not None:
+            robot, time = int(self.kidnap[0]), float(self.kidnap[1])
+            if not 0 <= robot < len(ROBOT_NAMES) or not 0.0 < time < self.duration:
+                raise ConfigError(f"DeSilvaScenario.kidnap: bad robot or time {self.kidnap}")
+
+    @property
+    def sensing(self) -> tuple[int, ...]:
+        """Indices of the leaders (sensing robots)."""
+        return (0, 1)
+
+    @property
+    def sigma_height(self) -> float:
+        """σ_h in metres."""
+        return float(np.sqrt(self.var_height_mm2) * 1e-3)
+
+    @property
+    def sigma_range(self) -> float:
+        """σ_r in metres."""
+        return float(np.sqrt(self.var_range_mm2) * 1e-3)
+
+    @property
+    def expected_clutter(self) -> float:
+        """Poisson mean ``λV`` of clutter bearings per scan, ``V = 2π·π·r_max[mm]``."""
+        return float(self.clutter_density * 2.0 * np.pi * np.pi * self.max_range * 1e3)
+
+    @property
+    def velocity_sigmas(self) -> tuple[float, float, float, float]:
+        """``(σ_vx, σ_vy, σ_vz, σ_ω)`` of every robot's measured body velocity."""
+        sv = float(np.sqrt(self.velocity_variance))
+        return (sv, sv, sv, float(np.sqrt(self.angular_variance)))
+
+
+def path_poses(scenario: DeSilvaScenario, times: Array) -> Array:
+    """World poses ``(T, 5, 4)`` of the group path (module docstring).
+
+    The group frame moves on an arc (speed ``group_speed``, turn rate ``group_turn_rate``);
+    each robot sits at its oscillating offset in that frame. Ground robots head along their
+    velocity; pods (holonomic) yaw with the group plus their own oscillation.
+    """
+    t = times[:, None]
+    psi_g = scenario.group_turn_rate * t
+    radius = scenario.group_speed / scenario.group_turn_rate
+    cx, cy = radius * np.sin(psi_g), radius * (1.0 - np.cos(psi_g))
+    osc = _OSC
+    q = _OFFSET[None] + osc[None, :, 0:3] * np.sin(
+        2.0 * np.pi * t[..., None] / osc[None, :, 3:6] + osc[None, :, 8:9]
+    )
+    c, s = np.cos(psi_g), np.sin(psi_g)
+    x = cx + c * q[..., 0] - s * q[..., 1]
+    y = cy + s * q[..., 0] + c * q[..., 1]
+    yaw = psi_g + osc[:, 6] * np.sin(2.0 * np.pi * t / osc[:, 7] + osc[:, 8])
+    for k in _NONHOLONOMIC:
+        heading = np.arctan2(np.gradient(y[:, k], times), np.gradient(x[:, k], times))
+        yaw[:, k] = np.unwrap(heading)
+    return np.stack([x, y, q[..., 2], yaw], axis=-1)
+
+
+def zoh_velocities(poses: Array, dt: float) -> Array:
+    """Body velocities held over each step that carry ``poses[k]`` exactly to ``poses[k+1]``.
+
+    Inverts the exact zero-order-hold step of :func:`relloc.models.motion.relative_step`:
+    ``ω = Δψ/dt``, ``v_xy = R(ψ + Δψ/2)ᵀ Δp / (dt sinc(Δψ/2))``, ``v_z = Δz/dt``. The last row
+    repeats the previous one.
+    """
+    d = np.diff(poses, axis=0)
+    half = 0.5 * d[..., 3]
+    sinc = np.where(np.abs(half) < 1e-9, 1.0, np.sin(half) / np.where(half == 0.0, 1.0, half))
+    mid = poses[:-1, :, 3] + half
+    c, s = np.cos(mid), np.sin(mid)
+    vx = (c * d[..., 0] + s * d[..., 1]) / (dt * sinc)
+    vy = (-s * d[..., 0] + c * d[..., 1]) / (dt * sinc)
+    u = np.stack([vx, vy, d[..., 2] / dt, d[..., 3] / dt], axis=-1)
+    return np.concatenate([u, u[-1:]], axis=0)
+
+
+def simulate(scenario: DeSilvaScenario, rng: np.random.Generator) -> TeamData:
+    """Simulate one run: truth, noisy velocities and the leaders' direct scans."""
+    dt = 1.0 / scenario.filter_rate
+    n_steps = round(scenario.duration * scenario.filter_rate) + 1
+    times = np.arange(n_steps) * dt
+    truth = path_poses(scenario, times)
+    u_true = zoh_velocities(truth, dt)
+    if scenario.kidnap is not None:
+        truth = _kidnap(truth, times, scenario.kidnap)
+    u_meas = u_true + rng.normal(size=u_true.shape) * np.array(scenario.velocity_sigmas)
+    every = round(scenario.filter_rate / scenario.direct_rate)
+    scans = []
+    for k in range(every, n_steps, every):
+        for i in scenario.sensing:
+            scans.append(_scan(scenario, truth[k], i, float(times[k]), rng))
+    return TeamData(
+        times=times,
+        velocities=u_meas,
+        sensing=scenario.sensing,
+        scans=tuple(scans),
+        truth=truth,
+    )
+
+
+def _kidnap(truth: Array, times: Array, kidnap: tuple[int, float, float, float, float]) -> Array:
+    """Move robot ``kidnap[0]`` at ``kidnap[1]`` by ``(dx, dy, dψ)``; it then keeps moving
+    rigidly as before (same body velocities): ``pose(t) = (b₀ + δ) ⊕ (⊖b₀ ⊕ b(t))``."""
+    robot, when, dx, dy, dpsi = kidnap
+    out = np.array(truth, copy=True)
+    after = np.flatnonzero(times >= when)
+    base0 = truth[after[0], int(robot)]
+    moved0 = base0 + np.array([dx, dy, 0.0, dpsi])
+    for k in after:
+        motion, _, _ = relative(base0, truth[k, int(robot)])
+        out[k, int(robot)], _, _ = compose(moved0, motion)
+    return out
+
+
+def relative_truth(truth: Array, observer: int) -> Array:
+    """True ``RelPose4`` of every robot in ``observer``'s frame: ``(T, n, 4)``, yaw wrapped."""
+    out = np.full(truth.shape, np.nan)
+    for k in range(truth.shape[0]):
+        for j in range(truth.shape[1]):
+            if j != observer:
+                out[k, j], _, _ = relative(truth[k, observer], truth[k, j])
+    out[..., 3] = wrap_angle(out[..., 3])
+    return out
+
+
+def _scan(
+    scenario: DeSilvaScenario, poses: Array, i: int, time: float, rng: np.random.Generator
+) -> DirectScan:
+    n = poses.shape[0]
+    heights = np.full(n, np.nan)
+    ranges = np.full(n, np.nan)
+    bearings: list[tuple[float, float]] = []
+    origins: list[int] = []
+    sa, se = np.sqrt(scenario.var_azimuth), np.sqrt(scenario.var_elevation)
+    for j in range(n):
+        if j == i:
+            continue
+        rel, _, _ = relative(poses[i], poses[j])
+        heights[j] = rel[2] + scenario.sigma_height * rng.normal()
+        r = float(np.linalg.norm(rel[:3]))
+        if r > scenario.max_range:
+            continue
+        if rng.random() < scenario.p_detect:
+            ranges[j] = r + scenario.sigma_range * rng.normal()
+        if rng.random() < scenario.p_detect:
+            az = np.arctan2(rel[1], rel[0]) + sa * rng.normal()
+            el = np.arctan2(rel[2], np.hypot(rel[0], rel[1])) + se * rng.normal()
+            bearings.append((float(wrap_angle(az)), float(el)))
+            origins.append(j)
+    n_clutter = rng.poisson(scenario.expected_clutter)
+    for _ in range(n_clutter):
+        bearings.append((rng.uniform(-np.pi, np.pi), rng.uniform(-0.5 * np.pi, 0.5 * np.pi)))
+        origins.append(CLUTTER)
+    order = rng.permutation(len(bearings))
+    b = np.array(bearings, dtype=float).reshape(-1, 2)[order]
+    o = np.array(origins, dtype=np.int64)[order]
+    return DirectScan(time=time, observer=i, heights=heights, ranges=ranges, bearings=b, origins=o)
