@@ -38,6 +38,7 @@ Every array function broadcasts over a leading batch dimension (``mean (..., 4)`
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Literal
@@ -45,25 +46,29 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from relloc.core.angles import wrap_angle
 from relloc.core.gaussian import Gaussian
 from relloc.errors import ConfigError, DataError, ModelError
+from relloc.estimators.kernels import (
+    ARRAY_OPS,
+    SCALAR_OPS,
+    Ops,
+    Vec,
+    join_symmetric,
+    join_vector,
+    plkf_bias_kernel,
+    plkf_terms,
+    predict_kernel,
+    split_cov4,
+    split_vector,
+    tekf_terms,
+    update_kernel,
+)
 from relloc.models.measurement import (
     PSEUDO_LINEAR_COVARIANCES,
     PseudoLinearCovariance,
     RangeBearingNoise,
-    pseudo_linear_covariance,
-    pseudo_linear_matrix,
-    pseudo_linear_measurement,
-    range_bearing,
-    range_bearing_jacobian,
 )
-from relloc.models.motion import (
-    VelocityNoise,
-    process_noise,
-    relative_jacobians,
-    relative_step,
-)
+from relloc.models.motion import VelocityNoise
 
 Array = NDArray[np.float64]
 UpdateKind = Literal["plkf", "plkf_bc", "tekf"]
@@ -128,6 +133,22 @@ def kalman_update(
 
 
 # --------------------------------------------------------------------------- array (batched) API
+#
+# The functions below run the hand-unrolled kernels of :mod:`relloc.estimators.kernels` on
+# Python floats (one pair) or on numpy arrays holding one entry for every pair. They equal the
+# general matrix composition ``relative_step`` / ``relative_jacobians`` / ``process_noise`` and
+# :func:`kalman_update` with the models' ``h``, ``H``, ``R`` (tests/estimators/test_kernels.py).
+
+
+def _check_cov(cov: ArrayLike, where: str) -> Array:
+    P = np.asarray(cov, dtype=float)
+    if P.ndim < 2 or P.shape[-2:] != (4, 4):
+        raise DataError(
+            f"{where or 'relative filter'}: covariance must be (..., 4, 4), got {P.shape}"
+        )
+    if not np.all(np.isfinite(P)):
+        raise DataError(f"{where or 'relative filter'}: covariance contains NaN or inf")
+    return P
 
 
 def predict_arrays(
@@ -140,14 +161,27 @@ def predict_arrays(
     *,
     where: str = "",
 ) -> tuple[Array, Array]:
-    """Shared predict ``x⁻ = f_d(x, u)``, ``P⁻ = F P Fᵀ + G Σ_u Gᵀ`` (batched)."""
+    """Shared predict ``x⁻ = f_d(x, u)``, ``P⁻ = F P Fᵀ + G Σ_u Gᵀ`` (batched, broadcasting)."""
     mean = _check_finite("mean", mean, 4, where)
-    cov = np.asarray(cov, dtype=float)
+    cov = _check_cov(cov, where)
     u_l = _check_finite("observer input u_l", u_l, 4, where)
     u_c = _check_finite("observed input u_c", u_c, 4, where)
-    F, G = relative_jacobians(mean, u_l, u_c, dt)
-    new_cov = F @ cov @ _swap(F) + process_noise(G, noise)
-    return relative_step(mean, u_l, u_c, dt), 0.5 * (new_cov + _swap(new_cov))
+    dt = float(dt)
+    if not (np.isfinite(dt) and dt >= 0.0):
+        raise ConfigError(f"{where or 'relative filter'}: dt must be finite and ≥ 0, got {dt}")
+    single = mean.ndim == 1 and cov.ndim == 2 and u_l.ndim == 1 and u_c.ndim == 1
+    ops = SCALAR_OPS if single else ARRAY_OPS
+    var = tuple(np.square(noise.observer + noise.observed).tolist())
+    new_mean, new_cov = predict_kernel(
+        split_vector(mean, single),
+        split_cov4(cov, single),
+        split_vector(u_l, single),
+        split_vector(u_c, single),
+        dt,
+        var,
+        ops,
+    )
+    return join_vector(new_mean), join_symmetric(new_cov)
 
 
 def _check_measurement(z: ArrayLike, where: str) -> Array:
@@ -157,18 +191,62 @@ def _check_measurement(z: ArrayLike, where: str) -> Array:
     return z
 
 
+Terms = Callable[[Vec, Vec, Ops], tuple[Vec, Vec, Vec]]
+
+
+def _kernel_update(
+    mean: ArrayLike,
+    cov: ArrayLike,
+    z: ArrayLike,
+    terms: Terms,
+    where: str,
+    bias: Callable[[Vec, Vec, Vec, Ops], Vec | None] | None = None,
+) -> tuple[Array, Array, Innovation]:
+    """Validate, run ``terms`` (``A``, ``ν``, ``R``) and the Joseph update kernel, re-assemble."""
+    mean = _check_finite("mean", mean, 4, where)
+    cov = _check_cov(cov, where)
+    z = _check_measurement(z, where)
+    single = mean.ndim == 1 and cov.ndim == 2 and z.ndim == 1
+    ops = SCALAR_OPS if single else ARRAY_OPS
+    m = split_vector(mean, single)
+    P = split_cov4(cov, single)
+    A, nu, R = terms(m, split_vector(z, single), ops)
+    out = update_kernel(m, P, A, nu, R, ops)
+    correction = None
+    if out is not None and bias is not None:
+        correction = bias(m, P, out[0], ops)
+        out = None if correction is None else out
+    if out is None:
+        raise ModelError(
+            f"innovation covariance is not positive definite{' at ' + where if where else ''}"
+        )
+    new_mean, new_cov, S, nis = out
+    if correction is not None:
+        new_mean = tuple(a - b for a, b in zip(new_mean, correction, strict=True))
+    S_full = join_symmetric(S)
+    innovation = Innovation(
+        residual=join_vector(nu),
+        cov=S_full,
+        nis=float(nis) if single else np.asarray(nis, dtype=float),
+        meas_cov=np.broadcast_to(join_symmetric(R), S_full.shape).copy(),
+    )
+    return join_vector(new_mean), join_symmetric(new_cov), innovation
+
+
 def update_tekf_arrays(
     mean: ArrayLike, cov: ArrayLike, z: ArrayLike, noise: RangeBearingNoise, *, where: str = ""
 ) -> tuple[Array, Array, Innovation]:
     """TEKF update with ``h(x) = (r, θ, α)`` linearised at the prior (batched)."""
-    mean = _check_finite("mean", mean, 4, where)
-    cov = np.asarray(cov, dtype=float)
-    z = _check_measurement(z, where)
-    residual = z - range_bearing(mean)
-    residual[..., 1:] = wrap_angle(residual[..., 1:])
-    H = range_bearing_jacobian(mean)
-    R = np.broadcast_to(noise.covariance, (*H.shape[:-2], 3, 3))
-    return kalman_update(mean, cov, residual, H, R, where=where)
+    var = tuple(noise.variances.tolist())
+    return _kernel_update(mean, cov, z, lambda m, zz, ops: tekf_terms(m, zz, var, ops), where)
+
+
+def _check_covariance_kind(kind: str) -> bool:
+    if kind not in PSEUDO_LINEAR_COVARIANCES:
+        raise ConfigError(
+            f"pseudo-linear covariance: one of {PSEUDO_LINEAR_COVARIANCES}, got {kind!r}"
+        )
+    return kind == "full"
 
 
 def update_plkf_arrays(
@@ -181,47 +259,15 @@ def update_plkf_arrays(
     where: str = "",
 ) -> tuple[Array, Array, Innovation]:
     """PLKF update with ``H_pmo`` from the measured bearings and ``y = [r̃, 0, 0]`` (batched)."""
-    mean = _check_finite("mean", mean, 4, where)
-    cov = np.asarray(cov, dtype=float)
-    z = _check_measurement(z, where)
-    H = pseudo_linear_matrix(z)
-    residual = pseudo_linear_measurement(z) - np.einsum("...ij,...j->...i", H, mean)
-    R = pseudo_linear_covariance(mean, z, noise, covariance)
-    return kalman_update(mean, cov, residual, H, R, where=where)
-
-
-def _cubature_offsets(noise: RangeBearingNoise) -> Array:
-    """The 6 points ``±√3 σ_i e_i`` of the third-degree spherical cubature rule (weights 1/6)."""
-    scaled = np.sqrt(3.0) * np.sqrt(noise.variances)
-    return np.concatenate([np.diag(scaled), -np.diag(scaled)])
-
-
-def plkf_bias_estimate(
-    prior_mean: Array,
-    prior_cov: Array,
-    posterior_mean: Array,
-    z: Array,
-    noise: RangeBearingNoise,
-    covariance: PseudoLinearCovariance,
-) -> Array:
-    """``b̂ = E_ν[K ν_pm]`` of one PLKF update, evaluated at ``posterior_mean`` (batched).
-
-    The gain of each cubature point uses the same prior (and the same state-dependent ``R_pmo``
-    recipe) as the PLKF update; only the sensor noise is integrated out.
-    """
-    z_hat = range_bearing(posterior_mean)
-    offsets = _cubature_offsets(noise)  # (6, 3)
-    zs = z_hat[..., None, :] + offsets  # (..., 6, 3)
-    H = pseudo_linear_matrix(zs)  # (..., 6, 3, 4)
-    R = pseudo_linear_covariance(prior_mean[..., None, :], zs, noise, covariance)
-    P = prior_cov[..., None, :, :]
-    PHt = P @ _swap(H)
-    S = H @ PHt + R
-    K = _swap(np.linalg.solve(S, _swap(PHt)))  # S symmetric
-    nu = pseudo_linear_measurement(zs) - np.einsum(
-        "...ij,...j->...i", H, posterior_mean[..., None, :]
+    var = tuple(noise.variances.tolist())
+    full = _check_covariance_kind(covariance)
+    return _kernel_update(
+        mean,
+        cov,
+        z,
+        lambda m, zz, ops: plkf_terms(m, zz, var, ops, full_covariance=full),
+        where,
     )
-    return np.einsum("...kij,...kj->...i", K, nu) / offsets.shape[0]
 
 
 def update_plkf_bc_arrays(
@@ -233,15 +279,19 @@ def update_plkf_bc_arrays(
     covariance: PseudoLinearCovariance = "simplified",
     where: str = "",
 ) -> tuple[Array, Array, Innovation]:
-    """Bias-compensated PLKF update: the PLKF update minus its estimated bias (batched)."""
-    mean = _check_finite("mean", mean, 4, where)
-    cov = np.asarray(cov, dtype=float)
-    z = _check_measurement(z, where)
-    new_mean, new_cov, innovation = update_plkf_arrays(
-        mean, cov, z, noise, covariance=covariance, where=where
+    """Bias-compensated PLKF update: the PLKF update minus its estimated bias ``b̂`` (batched)."""
+    var = tuple(noise.variances.tolist())
+    full = _check_covariance_kind(covariance)
+    return _kernel_update(
+        mean,
+        cov,
+        z,
+        lambda m, zz, ops: plkf_terms(m, zz, var, ops, full_covariance=full),
+        where,
+        bias=lambda prior, P, post, ops: plkf_bias_kernel(
+            prior, P, post, var, ops, full_covariance=full
+        ),
     )
-    bias = plkf_bias_estimate(mean, cov, new_mean, z, noise, covariance)
-    return new_mean - bias, new_cov, innovation
 
 
 # --------------------------------------------------------------------------- single-pair API
@@ -350,35 +400,93 @@ class FilterSettings:
         )
 
 
-class RelativeTracker:
-    """Thin stateful wrapper: holds one pair's :class:`Gaussian` and applies the pure functions.
+def _floats(value: ArrayLike, n: int, name: str, where: str) -> tuple[float, ...]:
+    """A length-``n`` vector as a tuple of finite floats (the tracker's fast input path)."""
+    seq = value.tolist() if isinstance(value, np.ndarray) else value
+    try:
+        out = tuple(float(v) for v in seq)  # type: ignore[union-attr]
+    except (TypeError, ValueError) as exc:
+        raise DataError(f"{where or 'relative tracker'}: {name} must be {n} numbers") from exc
+    if len(out) != n:
+        raise DataError(
+            f"{where or 'relative tracker'}: {name} must have {n} entries, got {len(out)}"
+        )
+    if not all(math.isfinite(v) for v in out):
+        raise DataError(f"{where or 'relative tracker'}: {name} contains NaN or inf: {out}")
+    return out
 
+
+class RelativeTracker:
+    """Thin stateful wrapper around the kernels for one observer–observed pair.
+
+    Holds the belief as plain floats (mean and the upper triangle of ``P``) and applies
+    :func:`~relloc.estimators.kernels.predict_kernel` / ``update_kernel`` directly, so one
+    predict + update costs microseconds; :attr:`belief` returns it as a :class:`Gaussian`. The
+    results equal the pure functions of this module (tests/estimators/test_relative.py).
     ``label`` names the pair in error messages (e.g. ``"l1->c3"``).
     """
 
     def __init__(self, belief: Gaussian, settings: FilterSettings, *, label: str = "") -> None:
         if belief.dim != 4:
             raise ModelError(f"RelativeTracker {label}: belief must be a RelPose4 (4 states)")
-        self._belief = belief
         self.settings = settings
         self.label = label
+        self._mean: Vec = tuple(belief.mean.tolist())
+        self._cov: Vec = split_cov4(belief.cov, True)
+        self._cached: Gaussian | None = belief
+        self._var_u = tuple(
+            np.square(settings.motion_noise.observer + settings.motion_noise.observed).tolist()
+        )
+        self._var_z = tuple(settings.sensor_noise.variances.tolist())
+        self._full = settings.pseudo_linear_covariance == "full"
 
     @property
     def belief(self) -> Gaussian:
         """Current belief over ``(x, y, z, φ)``."""
-        return self._belief
+        if self._cached is None:
+            self._cached = Gaussian(mean=join_vector(self._mean), cov=join_symmetric(self._cov))
+        return self._cached
 
-    def predict(self, u_l: ArrayLike, u_c: ArrayLike, dt: float) -> Gaussian:
-        """Propagate by ``dt`` with both robots' body velocities; returns the new belief."""
-        self._belief = predict(
-            self._belief, u_l, u_c, dt, self.settings.motion_noise, where=self.label
+    def predict(self, u_l: ArrayLike, u_c: ArrayLike, dt: float) -> None:
+        """Propagate by ``dt`` with both robots' body velocities (shared predict)."""
+        ul = _floats(u_l, 4, "observer input u_l", self.label)
+        uc = _floats(u_c, 4, "observed input u_c", self.label)
+        dt = float(dt)
+        if not (math.isfinite(dt) and dt >= 0.0):
+            raise ConfigError(f"{self.label or 'relative tracker'}: dt must be finite and ≥ 0")
+        self._mean, self._cov = predict_kernel(
+            self._mean, self._cov, ul, uc, dt, self._var_u, SCALAR_OPS
         )
-        return self._belief
+        self._cached = None
 
     def update(self, z: ArrayLike) -> Innovation:
-        """Fuse one measurement ``z = (r, θ, α)``; returns the innovation."""
-        mean, cov, innovation = self.settings.update_arrays(
-            self._belief.mean, self._belief.cov, z, where=self.label
+        """Fuse one measurement ``z = (r, θ, α)`` with the configured update; returns the
+        innovation (residual, ``S``, NIS, ``R``)."""
+        zz = _floats(z, 3, "measurement z", self.label)
+        if zz[0] <= 0.0:
+            raise DataError(f"{self.label or 'relative tracker'}: measured range must be > 0: {zz}")
+        kind = self.settings.kind
+        if kind == "tekf":
+            A, nu, R = tekf_terms(self._mean, zz, self._var_z, SCALAR_OPS)
+        else:
+            A, nu, R = plkf_terms(
+                self._mean, zz, self._var_z, SCALAR_OPS, full_covariance=self._full
+            )
+        out = update_kernel(self._mean, self._cov, A, nu, R, SCALAR_OPS)
+        bias = None
+        if out is not None and kind == "plkf_bc":
+            bias = plkf_bias_kernel(
+                self._mean, self._cov, out[0], self._var_z, SCALAR_OPS, full_covariance=self._full
+            )
+        if out is None or (kind == "plkf_bc" and bias is None):
+            raise ModelError(
+                f"innovation covariance is not positive definite at {self.label or 'tracker'}"
+            )
+        mean, self._cov, S, nis = out
+        if bias is not None:
+            mean = tuple(a - b for a, b in zip(mean, bias, strict=True))
+        self._mean = mean
+        self._cached = None
+        return Innovation(
+            residual=join_vector(nu), cov=join_symmetric(S), nis=nis, meas_cov=join_symmetric(R)
         )
-        self._belief, innovation = _single((mean, cov, innovation))
-        return innovation

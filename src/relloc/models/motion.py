@@ -81,7 +81,7 @@ def _rot(angle: Array) -> Array:
     return np.stack([np.stack([c, -s], axis=-1), np.stack([s, c], axis=-1)], axis=-2)
 
 
-def _sinc_and_derivative(a: Array) -> tuple[Array, Array]:
+def sinc_and_derivative(a: ArrayLike) -> tuple[Array, Array]:
     """``sinc(a) = sin(a)/a`` and ``d sinc/da = (a cos a − sin a)/a²``, series near 0."""
     a = np.asarray(a, dtype=float)
     small = np.abs(a) < _SINC_SERIES_LIMIT
@@ -134,8 +134,8 @@ def relative_step(x: ArrayLike, u_l: ArrayLike, u_c: ArrayLike, dt: float) -> Ar
     u_c = np.asarray(u_c, dtype=float)
     x, u_l, u_c = np.broadcast_arrays(x, u_l, u_c)
     w_l, w_c = u_l[..., 3], u_c[..., 3]
-    sinc_l, _ = _sinc_and_derivative(0.5 * w_l * dt)
-    sinc_c, _ = _sinc_and_derivative(0.5 * w_c * dt)
+    sinc_l, _ = sinc_and_derivative(0.5 * w_l * dt)
+    sinc_c, _ = sinc_and_derivative(0.5 * w_c * dt)
     d_c = (dt * sinc_c)[..., None] * _mv(_rot(x[..., 3] + 0.5 * w_c * dt), u_c[..., :2])
     d_l = (dt * sinc_l)[..., None] * _mv(_rot(0.5 * w_l * dt), u_l[..., :2])
     out = np.empty_like(x)
@@ -166,8 +166,8 @@ def relative_jacobians(
     x, u_l, u_c = np.broadcast_arrays(x, u_l, u_c)
     batch = x.shape[:-1]
     w_l, w_c = u_l[..., 3], u_c[..., 3]
-    sinc_l, dsinc_l = _sinc_and_derivative(0.5 * w_l * dt)
-    sinc_c, dsinc_c = _sinc_and_derivative(0.5 * w_c * dt)
+    sinc_l, dsinc_l = sinc_and_derivative(0.5 * w_l * dt)
+    sinc_c, dsinc_c = sinc_and_derivative(0.5 * w_c * dt)
     R_lstep = _rot(-w_l * dt)
     Rv_c = _mv(_rot(x[..., 3] + 0.5 * w_c * dt), u_c[..., :2])  # R(φ + ω_c dt/2) v_c
     Rv_l = _mv(_rot(0.5 * w_l * dt), u_l[..., :2])  # R(ω_l dt/2) v_l
