@@ -1,0 +1,171 @@
+"""PCRLB wrappers for relloc's models (the recursion itself is in :mod:`.pcrlb`).
+
+Both wrappers build, from the *true* trajectory(ies), the per-step transition Jacobian ``F_k``,
+process noise ``Q_k`` and measurement information ``Σ Hᵀ R⁻¹ H`` with the very numeric models
+the estimators use, and return the bound ``J_k⁻¹`` for every step.
+
+``relative_pair_pcrlb(true_states, u_obs, u_tgt, dt, measurement_mask, *, sigma_r,
+sigma_theta, sigma_alpha, velocity_noise, P0, measured=("range", "azimuth", "elevation"))``
+    Seed-000 4-DOF relative pair (state ``(x, y, z, φ)`` of the observed robot in the observer's
+    body frame). Shapes: ``true_states (T, 4)``, ``u_obs (T, 4)``, ``u_tgt (T, 4)`` body
+    velocities ``(v_x, v_y, v_z, ω_z)`` (``u[k]`` drives step k → k+1; the last row is unused),
+    ``dt`` a float or ``(T−1,)`` step lengths, ``measurement_mask (T,)`` bool (True where a
+    range/azimuth/elevation measurement was taken at step k). A leading Monte-Carlo dimension
+    ``(M, T, ...)`` on states, inputs and mask averages the expectations over M true
+    trajectories. ``velocity_noise`` is a :class:`relloc.models.motion.VelocityNoise`
+    (``Q_k = G_k Σ_u G_kᵀ``, :func:`relloc.models.motion.relative_jacobians`); the measurement
+    information uses the nonlinear range/azimuth/elevation Jacobian
+    (:func:`relloc.models.measurement.range_bearing_jacobian`) with
+    ``R = diag(σ_r², σ_θ², σ_α²)`` restricted to ``measured``. The pseudo-linear filter sees the
+    same raw measurements, so this one bound serves the PLKF and the EKF alike. ``P0 (4, 4)`` is
+    the prior covariance. Returns ``(T, 4, 4)`` bounds; ``sqrt(diag)`` is the smallest RMSE any
+    unbiased estimator can reach per state.
+
+``unicycle_team_pcrlb(true_poses, u, dt, rows, *, input_sigma, P0)``
+    Cooperative team of ``n`` unicycles (seed 001): ``true_poses (T, n, 3)`` (or ``(M, T, n,
+    3)``), ``u (T, n, 2)`` speeds ``(v, ω)`` (same leading dims), ``dt`` float or ``(T−1,)``,
+    ``rows``: a sequence of T :class:`relloc.models.planar_measurement.ScalarRows` (bearing,
+    range, GPS-pose rows taken at each step; their ``z`` values are not used, ``sigma`` is),
+    ``input_sigma`` ``(2,)`` or ``(n, 2)`` odometry noise σ of ``(v, ω)``, ``P0 (3n, 3n)``.
+    Returns ``(T, 3n, 3n)``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from relloc.errors import DataError
+from relloc.models.measurement import MEASUREMENT_NAMES, range_bearing_jacobian
+from relloc.models.motion import VelocityNoise, process_noise, relative_jacobians
+from relloc.models.planar_measurement import ScalarRows, linearise_rows
+from relloc.models.unicycle import unicycle_jacobians
+from relloc.observability.pcrlb import (
+    measurement_information,
+    pcrlb_covariance,
+    pcrlb_information,
+)
+
+Array = NDArray[np.float64]
+
+
+def _step_lengths(dt: float | ArrayLike, T: int) -> Array:
+    d = np.asarray(dt, dtype=float)
+    d = np.full(T - 1, float(d)) if d.ndim == 0 else d.reshape(-1)
+    if d.shape != (T - 1,) or not np.all(np.isfinite(d)) or np.any(d < 0):
+        raise DataError(f"PCRLB: dt must be a float or {T - 1} finite step lengths ≥ 0")
+    return d
+
+
+def _with_runs(a: ArrayLike, tail: tuple[int, ...], name: str) -> Array:
+    arr = np.asarray(a, dtype=float)
+    if arr.ndim == len(tail) + 1:
+        arr = arr[None]
+    if arr.ndim != len(tail) + 2 or arr.shape[2:] != tail:
+        raise DataError(f"PCRLB: {name} has shape {arr.shape}, expected (T, *{tail}) or (M, T, …)")
+    if not np.all(np.isfinite(arr)):
+        raise DataError(f"PCRLB: {name} contains NaN or inf")
+    return arr
+
+
+def _prior_information(P0: ArrayLike, n: int) -> Array:
+    P = np.asarray(P0, dtype=float)
+    if P.shape != (n, n):
+        raise DataError(f"PCRLB: P0 has shape {P.shape}, expected {(n, n)}")
+    return measurement_information(np.eye(n), P)
+
+
+def relative_pair_pcrlb(
+    true_states: ArrayLike,
+    u_obs: ArrayLike,
+    u_tgt: ArrayLike,
+    dt: float | ArrayLike,
+    measurement_mask: ArrayLike,
+    *,
+    sigma_r: float,
+    sigma_theta: float,
+    sigma_alpha: float,
+    velocity_noise: VelocityNoise,
+    P0: ArrayLike,
+    measured: Sequence[str] = MEASUREMENT_NAMES,
+) -> Array:
+    """PCRLB ``(T, 4, 4)`` of the seed-000 relative pair (see the module docstring)."""
+    X = _with_runs(true_states, (4,), "true_states")
+    M, T = X.shape[:2]
+    U_l = _with_runs(u_obs, (4,), "u_obs")
+    U_c = _with_runs(u_tgt, (4,), "u_tgt")
+    if U_l.shape != X.shape or U_c.shape != X.shape:
+        raise DataError(f"PCRLB: inputs {U_l.shape}/{U_c.shape} must match states {X.shape}")
+    mask = np.asarray(measurement_mask, dtype=bool)
+    if mask.shape not in ((T,), (M, T)):
+        raise DataError(f"PCRLB: measurement_mask has shape {mask.shape}, expected {(T,)}")
+    mask = np.broadcast_to(mask, (M, T))
+    unknown = [m for m in measured if m not in MEASUREMENT_NAMES]
+    if unknown or not measured:
+        raise DataError(f"PCRLB: measured must be a non-empty subset of {MEASUREMENT_NAMES}")
+    rows = [MEASUREMENT_NAMES.index(m) for m in measured]
+    sig = np.array([sigma_r, sigma_theta, sigma_alpha], dtype=float)
+    if not np.all(np.isfinite(sig) & (sig > 0)):
+        raise DataError(f"PCRLB: sensor sigmas must be finite and > 0, got {sig}")
+    steps = _step_lengths(dt, T)
+
+    F = np.empty((M, T - 1, 4, 4))
+    Q = np.empty((M, T - 1, 4, 4))
+    for k in range(T - 1):
+        F[:, k], G = relative_jacobians(X[:, k], U_l[:, k], U_c[:, k], float(steps[k]))
+        Q[:, k] = process_noise(G, velocity_noise)
+    H = range_bearing_jacobian(X)[..., rows, :]
+    R = np.diag(sig[rows] ** 2)
+    info = measurement_information(H, np.broadcast_to(R, (*H.shape[:-2], len(rows), len(rows))))
+    info = np.where(mask[..., None, None], info, 0.0)
+    J = pcrlb_information(F, Q, info, _prior_information(P0, 4))
+    return pcrlb_covariance(J)
+
+
+def unicycle_team_pcrlb(
+    true_poses: ArrayLike,
+    u: ArrayLike,
+    dt: float | ArrayLike,
+    rows: Sequence[ScalarRows],
+    *,
+    input_sigma: ArrayLike,
+    P0: ArrayLike,
+) -> Array:
+    """PCRLB ``(T, 3n, 3n)`` of a cooperative unicycle team (see the module docstring)."""
+    X = np.asarray(true_poses, dtype=float)
+    if X.ndim == 3:
+        X = X[None]
+    if X.ndim != 4 or X.shape[-1] != 3 or not np.all(np.isfinite(X)):
+        raise DataError(f"PCRLB: true_poses has shape {X.shape}, expected finite (T, n, 3)")
+    M, T, n, _ = X.shape
+    U = np.asarray(u, dtype=float)
+    U = U[None] if U.ndim == 3 else U
+    if U.shape != (M, T, n, 2) or not np.all(np.isfinite(U)):
+        raise DataError(f"PCRLB: u has shape {U.shape}, expected finite {(M, T, n, 2)}")
+    if len(rows) != T:
+        raise DataError(f"PCRLB: rows has {len(rows)} entries, expected one per step ({T})")
+    sig = np.broadcast_to(np.asarray(input_sigma, dtype=float), (n, 2))
+    if not np.all(np.isfinite(sig) & (sig >= 0)):
+        raise DataError("PCRLB: input_sigma must be finite and ≥ 0")
+    steps = _step_lengths(dt, T)
+
+    N = 3 * n
+    F = np.zeros((M, T - 1, N, N))
+    Q = np.zeros((M, T - 1, N, N))
+    for k in range(T - 1):
+        Fi, Gi = unicycle_jacobians(X[:, k], U[:, k], float(steps[k]))  # (M, n, 3, 3), (M, n, 3, 2)
+        Qi = (Gi * sig[None, :, None, :] ** 2) @ np.swapaxes(Gi, -1, -2)
+        for i in range(n):
+            F[:, k, 3 * i : 3 * i + 3, 3 * i : 3 * i + 3] = Fi[:, i]
+            Q[:, k, 3 * i : 3 * i + 3, 3 * i : 3 * i + 3] = Qi[:, i]
+    info = np.zeros((M, T, N, N))
+    for k, batch in enumerate(rows):
+        if batch.size == 0:
+            continue
+        for m in range(M):
+            Hk = linearise_rows(X[m, k], batch).dense_jacobian(n)
+            info[m, k] = measurement_information(Hk, np.diag(np.asarray(batch.sigma) ** 2))
+    J = pcrlb_information(F, Q, info, _prior_information(P0, N))
+    return pcrlb_covariance(J)
