@@ -1,119 +1,157 @@
-"""PCRLB: equals the Kalman covariance on linear-Gaussian models; the two forms agree."""
+"""PCRLB wrappers on relloc's numeric models: known closed-form answers and wiring checks."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from relloc.errors import DataError, ModelError
-from relloc.observability.pcrlb import (
-    measurement_information,
-    pcrlb_covariance,
-    pcrlb_information,
-    pcrlb_ratio,
-)
+from relloc.errors import DataError
+from relloc.models.measurement import range_bearing_jacobian
+from relloc.models.motion import VelocityNoise
+from relloc.models.planar_measurement import RowKind, ScalarRows, empty_rows
+from relloc.observability.pcrlb import relative_pair_pcrlb, unicycle_team_pcrlb
+
+SIG = {"sigma_r": 0.1, "sigma_theta": 0.05, "sigma_alpha": 0.04}
 
 
-def _linear_model(rng: np.random.Generator, T: int = 30):
-    n = 3
-    dt = 0.1
-    F = np.array([[1.0, dt, 0.5 * dt * dt], [0.0, 1.0, dt], [0.0, 0.0, 1.0]])
-    A = rng.normal(size=(n, n))
-    Q = 0.01 * A @ A.T + 1e-3 * np.eye(n)
-    H = np.array([[1.0, 0.0, 0.0]])
-    R = np.array([[0.25]])
-    P0 = np.diag([4.0, 1.0, 0.5])
-    mask = rng.random(T) < 0.6
-    return F, Q, H, R, P0, mask
-
-
-def _kalman_covariances(F, Q, H, R, P0, mask):
-    T = mask.size
-    out = np.empty((T, F.shape[0], F.shape[0]))
-    P = P0.copy()
+def test_static_pair_bound_is_batch_information_of_all_measurements() -> None:
+    """No motion and no process noise: J_k = P0⁻¹ + (number of fixes so far)·HᵀR⁻¹H."""
+    T = 12
+    x = np.array([2.0, -1.0, 0.5, 0.3])
+    states = np.tile(x, (T, 1))
+    zeros = np.zeros((T, 4))
+    mask = np.arange(T) % 3 == 0
+    P0 = np.diag([4.0, 4.0, 1.0, 0.5])
+    quiet = VelocityNoise(observer=(0.0,) * 4, observed=(0.0,) * 4)
+    bound = relative_pair_pcrlb(states, zeros, zeros, 0.1, mask, velocity_noise=quiet, P0=P0, **SIG)
+    H = range_bearing_jacobian(x)
+    info = H.T @ np.diag(1 / np.array([0.1, 0.05, 0.04]) ** 2) @ H
     for k in range(T):
-        if k > 0:
-            P = F @ P @ F.T + Q
-        if mask[k]:
-            S = H @ P @ H.T + R
-            K = P @ H.T @ np.linalg.inv(S)
-            P = (np.eye(P.shape[0]) - K @ H) @ P
-        out[k] = P
-    return out
+        expected = np.linalg.inv(np.linalg.inv(P0) + np.count_nonzero(mask[: k + 1]) * info)
+        np.testing.assert_allclose(bound[k], expected, rtol=1e-9, atol=1e-14)
 
 
-def _stacks(F, Q, H, R, mask):
-    T = mask.size
-    Fs = np.broadcast_to(F, (T - 1, *F.shape)).copy()
-    Qs = np.broadcast_to(Q, (T - 1, *Q.shape)).copy()
-    info = measurement_information(H, R)
-    I = np.where(mask[:, None, None], info, 0.0)
-    return Fs, Qs, I
+def _moving_pair(rng: np.random.Generator, T: int):
+    from relloc.models.motion import relative_step
+
+    u_l = np.column_stack([np.full(T, 0.3), np.zeros(T), np.zeros(T), np.full(T, 0.1)])
+    u_c = np.column_stack([np.full(T, 0.5), np.full(T, 0.1), np.zeros(T), np.full(T, -0.2)])
+    X = np.empty((T, 4))
+    X[0] = [3.0, 1.0, 0.8, 0.2]
+    for k in range(T - 1):
+        X[k + 1] = relative_step(X[k], u_l[k], u_c[k], 0.1)
+    return X, u_l, u_c
 
 
-def test_pcrlb_equals_kalman_covariance_on_linear_gaussian_model() -> None:
-    rng = np.random.default_rng(7)
-    F, Q, H, R, P0, mask = _linear_model(rng)
-    Fs, Qs, I = _stacks(F, Q, H, R, mask)
-    bound = pcrlb_covariance(pcrlb_information(Fs, Qs, I, np.linalg.inv(P0)))
-    np.testing.assert_allclose(bound, _kalman_covariances(F, Q, H, R, P0, mask), rtol=1e-9)
+def test_pair_bound_grows_with_sensor_noise_and_averaging_matches_single() -> None:
+    rng = np.random.default_rng(0)
+    T = 40
+    X, u_l, u_c = _moving_pair(rng, T)
+    noise = VelocityNoise(observer=(0.05, 0.05, 0.02, 0.02), observed=(0.05, 0.05, 0.02, 0.02))
+    mask = np.ones(T, dtype=bool)
+    P0 = np.eye(4)
+    fine = relative_pair_pcrlb(X, u_l, u_c, 0.1, mask, velocity_noise=noise, P0=P0, **SIG)
+    coarse_sig = {k: 3 * v for k, v in SIG.items()}
+    coarse = relative_pair_pcrlb(X, u_l, u_c, 0.1, mask, velocity_noise=noise, P0=P0, **coarse_sig)
+    assert np.all(np.linalg.eigvalsh(coarse[-1] - fine[-1]) > -1e-12)
+    stacked = relative_pair_pcrlb(
+        np.stack([X, X]),
+        np.stack([u_l, u_l]),
+        np.stack([u_c, u_c]),
+        0.1,
+        mask,
+        velocity_noise=noise,
+        P0=P0,
+        **SIG,
+    )
+    np.testing.assert_allclose(stacked, fine, rtol=1e-7)
+    bearing_only = relative_pair_pcrlb(
+        X,
+        u_l,
+        u_c,
+        0.1,
+        mask,
+        velocity_noise=noise,
+        P0=P0,
+        measured=("azimuth", "elevation"),
+        **SIG,
+    )
+    assert np.all(np.diag(bearing_only[-1]) >= np.diag(fine[-1]) - 1e-12)
 
 
-def test_averaged_information_form_equals_riccati_form() -> None:
-    rng = np.random.default_rng(11)
-    F, Q, H, R, P0, mask = _linear_model(rng)
-    Fs, Qs, I = _stacks(F, Q, H, R, mask)
-    J0 = np.linalg.inv(P0)
-    single = pcrlb_information(Fs, Qs, I, J0)
-    M = 3
-    averaged = pcrlb_information(np.stack([Fs] * M), np.stack([Qs] * M), np.stack([I] * M), J0)
-    np.testing.assert_allclose(averaged, single, rtol=1e-8)
-
-
-def test_singular_process_noise_single_trajectory_and_error_when_averaged() -> None:
-    rng = np.random.default_rng(3)
-    F, _, H, R, P0, mask = _linear_model(rng, T=10)
-    G = np.array([[0.0], [0.0], [0.1]])
-    Q = G @ G.T  # rank one
-    Fs, Qs, I = _stacks(F, Q, H, R, mask)
-    bound = pcrlb_covariance(pcrlb_information(Fs, Qs, I, np.linalg.inv(P0)))
-    np.testing.assert_allclose(bound, _kalman_covariances(F, Q, H, R, P0, mask), rtol=1e-9)
-    with pytest.raises(ModelError, match="trajectory 0 at step 0"):
-        pcrlb_information(np.stack([Fs] * 2), np.stack([Qs] * 2), np.stack([I] * 2), P0)
-
-
-def test_averaging_over_trajectories_matches_mean_of_terms() -> None:
-    """With two different Jacobians the D-terms are means (Tichavský Eq. 21), checked by hand."""
-    F1, F2 = np.array([[1.0, 0.2], [0.0, 1.0]]), np.array([[1.0, -0.3], [0.1, 0.9]])
-    Q = np.diag([0.1, 0.2])
-    Qi = np.linalg.inv(Q)
-    J0 = np.diag([2.0, 3.0])
-    I = np.zeros((2, 2, 2, 2))
-    I[:, 1] = np.diag([1.0, 0.0])
-    J = pcrlb_information(np.stack([F1, F2])[:, None], np.stack([Q, Q])[:, None], I, J0)
-    D11 = 0.5 * (F1.T @ Qi @ F1 + F2.T @ Qi @ F2)
-    D12 = -0.5 * (F1.T + F2.T) @ Qi
-    expected = Qi + np.diag([1.0, 0.0]) - D12.T @ np.linalg.inv(J0 + D11) @ D12
-    np.testing.assert_allclose(J[1], expected, rtol=1e-12)
-
-
-def test_ratio_is_one_for_errors_drawn_from_the_bound() -> None:
-    rng = np.random.default_rng(5)
-    T, n, runs = 20, 2, 4000
-    B = np.broadcast_to(np.diag([0.5, 2.0]), (T, n, n)).copy()
-    errors = rng.normal(size=(runs, T, n)) * np.sqrt(np.array([0.5, 2.0]))
-    ratio = pcrlb_ratio(errors, B)
-    # pooled over T·runs = 80 000 samples: the ratio's std is about 1/sqrt(2·80000) ≈ 0.0025
-    np.testing.assert_allclose(ratio, 1.0, atol=0.02)
-
-
-def test_bad_shapes_and_nan_are_reported() -> None:
-    F = np.broadcast_to(np.eye(2), (4, 2, 2))
-    with pytest.raises(DataError, match="meas_info"):
-        pcrlb_information(F, F, np.zeros((4, 2, 2)), np.eye(2))
-    bad = np.zeros((5, 2, 2))
-    bad[2, 0, 0] = np.nan
+def test_pair_bad_input_is_reported() -> None:
+    X = np.zeros((5, 4))
+    X[:, 0] = 1.0
+    noise = VelocityNoise(observer=(0.1,) * 4, observed=(0.1,) * 4)
+    with pytest.raises(DataError, match="measurement_mask"):
+        relative_pair_pcrlb(
+            X, X, X, 0.1, np.ones(4, bool), velocity_noise=noise, P0=np.eye(4), **SIG
+        )
+    with pytest.raises(DataError, match="measured"):
+        relative_pair_pcrlb(
+            X,
+            X,
+            X,
+            0.1,
+            np.ones(5, bool),
+            velocity_noise=noise,
+            P0=np.eye(4),
+            measured=("heading",),
+            **SIG,
+        )
+    X[2, 1] = np.nan
     with pytest.raises(DataError, match="NaN"):
-        pcrlb_information(F, F, bad, np.eye(2))
-    with pytest.raises(DataError, match="do not match"):
-        pcrlb_ratio(np.zeros((3, 5, 2)), np.zeros((4, 2, 2)))
+        relative_pair_pcrlb(
+            X, X, X, 0.1, np.ones(5, bool), velocity_noise=noise, P0=np.eye(4), **SIG
+        )
+
+
+def _gps_rows(n: int, robot: int, sigma: float) -> ScalarRows:
+    kinds = [RowKind.POSE_X, RowKind.POSE_Y, RowKind.POSE_HEADING]
+    return ScalarRows(
+        kind=np.array(kinds, dtype=np.int64),
+        observer=np.full(3, robot, dtype=np.int64),
+        target=np.full(3, -1, dtype=np.int64),
+        landmark_xy=np.zeros((3, 2)),
+        z=np.zeros(3),
+        sigma=np.full(3, sigma),
+        group=np.zeros(3, dtype=np.int64),
+    )
+
+
+def test_team_bound_with_gps_on_a_static_robot_is_batch_information() -> None:
+    T, n = 6, 2
+    poses = np.tile(np.array([[0.0, 0.0, 0.1], [5.0, 1.0, -0.4]]), (T, 1, 1))
+    u = np.zeros((T, n, 2))
+    rows = [_gps_rows(n, 0, 0.5) for _ in range(T)]
+    P0 = 9.0 * np.eye(3 * n)
+    bound = unicycle_team_pcrlb(poses, u, 0.1, rows, input_sigma=[0.0, 0.0], P0=P0)
+    for k in range(T):
+        np.testing.assert_allclose(bound[k, :3, :3], np.eye(3) / (1 / 9 + (k + 1) / 0.25))
+        np.testing.assert_allclose(bound[k, 3:, 3:], P0[3:, 3:])
+
+
+def test_team_bearing_bound_reduces_uncertainty_and_rejects_bad_rows() -> None:
+    T, n = 20, 2
+    poses = np.zeros((T, n, 3))
+    poses[:, 1, 0] = 10.0
+    poses[:, 0, 0] = np.linspace(0, 2, T)
+    u = np.zeros((T, n, 2))
+    u[:, 0, 0] = 1.0
+    bearing = ScalarRows(
+        kind=np.array([RowKind.BEARING], dtype=np.int64),
+        observer=np.array([0]),
+        target=np.array([1]),
+        landmark_xy=np.zeros((1, 2)),
+        z=np.zeros(1),
+        sigma=np.array([0.05]),
+        group=np.zeros(1, dtype=np.int64),
+    )
+    P0 = np.eye(6)
+    bound = unicycle_team_pcrlb(poses, u, 0.1, [bearing] * T, input_sigma=[0.05, 0.02], P0=P0)
+    blind = unicycle_team_pcrlb(poses, u, 0.1, [empty_rows()] * T, input_sigma=[0.05, 0.02], P0=P0)
+    gain = np.linalg.eigvalsh(blind[-1] - bound[-1])
+    assert gain.min() > -1e-10  # measurements never increase the bound
+    assert gain.max() > 0.1  # and the bearings do inform some direction
+    with pytest.raises(DataError, match="one per step"):
+        unicycle_team_pcrlb(poses, u, 0.1, [bearing], input_sigma=[0.05, 0.02], P0=P0)

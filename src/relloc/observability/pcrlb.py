@@ -1,171 +1,198 @@
-"""Posterior Cramér–Rao lower bound (PCRLB), recursive information form.
+"""Posterior Cramér–Rao lower bound (PCRLB) for relloc's scenarios — the public API.
 
-Tichavský, Muravchik & Nehorai (1998), "Posterior Cramér–Rao bounds for discrete-time
-nonlinear filtering", IEEE TSP 46(5). For a system with additive Gaussian noise
+How well can *any* estimator do? The PCRLB ``B_k = J_k⁻¹`` bounds the MSE matrix of every
+unbiased estimator, ``E[(x̂_k − x_k)(x̂_k − x_k)ᵀ] ⪰ B_k``. ``J_k`` follows the recursion of
+Tichavský, Muravchik & Nehorai (1998), implemented generically in
+:mod:`relloc.observability.pcrlb_recursion` (see there for the equations, the Monte-Carlo
+averaging and the single-trajectory Riccati form used for singular process noise). This module
+builds its inputs (``F_k``, ``Q_k``, ``Σ HᵀR⁻¹H``) from the *true* trajectory with the very
+numeric models the estimators use, and re-exports the generic functions.
 
-    x_{k+1} = f_k(x_k) + w_k,  w_k ~ N(0, Q_k);      z_k = h_k(x_k) + v_k,  v_k ~ N(0, R_k)
-
-the Fisher information ``J_k`` of the state (its inverse bounds the MSE matrix of *any*
-estimator, ``E[(x̂_k − x_k)(x̂_k − x_k)ᵀ] ⪰ J_k⁻¹``) obeys their Eq. (21):
-
-    J_{k+1} = D22_k − D21_k (J_k + D11_k)⁻¹ D12_k
-    D11_k = E[F_kᵀ Q_k⁻¹ F_k],   D12_k = −E[F_kᵀ] Q_k⁻¹ = D21_kᵀ,
-    D22_k = Q_k⁻¹ + E[H_{k+1}ᵀ R_{k+1}⁻¹ H_{k+1}],
-
-with ``F_k = ∂f_k/∂x`` and ``H_k = ∂h_k/∂x`` evaluated at the *true* states and the
-expectations taken over the true-trajectory distribution, approximated here by the mean over
-``M`` Monte-Carlo true trajectories (``Q_k`` may differ per trajectory; the D-terms then
-average ``F_kᵀQ_k⁻¹F_k``, ``F_kᵀQ_k⁻¹`` and ``Q_k⁻¹``). ``J_0 = P_0⁻¹ + E[H_0ᵀR_0⁻¹H_0]``
-(information of the prior plus any measurement at step 0). Steps without a measurement
-contribute zero measurement information.
-
-With a single trajectory (``M = 1``) the expectations are point evaluations and the
-recursion is algebraically identical (matrix inversion lemma) to the Riccati form
-
-    J_{k+1} = (F_k J_k⁻¹ F_kᵀ + Q_k)⁻¹ + H_{k+1}ᵀ R_{k+1}⁻¹ H_{k+1},
-
-i.e. the EKF covariance recursion evaluated on the true trajectory. That form is used for
-``M = 1`` because it also holds for a *singular* ``Q_k`` (process noise entering through an
-input matrix ``G`` of lower rank, e.g. a unicycle's two input noises on three states, or a
-ground robot with noiseless vertical speed). The averaged information form needs every
-``Q_k`` positive definite and says so (:class:`~relloc.errors.ModelError` naming the
-trajectory and step) otherwise.
-
-Public API (all arrays float64; ``n`` states, ``T`` steps, ``M`` true trajectories)
-----------------------------------------------------------------------------------
-``measurement_information(H, R) -> (..., n, n)``
-    ``Hᵀ R⁻¹ H`` for stacks ``H (..., m, n)``, ``R (..., m, m)``.
-``pcrlb_information(F, Q, meas_info, J0) -> (T, n, n)``
-    The generic recursion. ``F, Q``: ``(T−1, n, n)`` or ``(M, T−1, n, n)``;
-    ``meas_info``: ``(T, n, n)`` or ``(M, T, n, n)`` (zeros where nothing was measured);
-    ``J0``: ``(n, n)`` prior information ``P_0⁻¹``. Returns ``J_k`` for ``k = 0..T−1``.
-``pcrlb_covariance(J) -> (T, n, n)``
-    The bound ``J_k⁻¹`` (PSD-checked inversion).
+Functions
+---------
+``relative_pair_pcrlb(true_states, u_obs, u_tgt, dt, measurement_mask, *, sigma_r,
+sigma_theta, sigma_alpha, velocity_noise, P0, measured=("range", "azimuth", "elevation"))
+-> (T, 4, 4)``
+    Seed-000 4-DOF relative pair, state ``(x, y, z, φ)`` of the observed robot in the
+    observer's body frame. ``true_states (T, 4)``; ``u_obs``, ``u_tgt (T, 4)`` body velocities
+    ``(v_x, v_y, v_z, ω_z)`` of observer and observed robot (``u[k]`` drives step k → k+1, the
+    last row is unused); ``dt`` a float or ``(T−1,)`` step lengths; ``measurement_mask (T,)``
+    bool, True where a range/azimuth/elevation measurement was taken at step k. A leading
+    Monte-Carlo dimension ``(M, T, …)`` on states, inputs and (optionally) the mask averages the
+    expectations over M true trajectories. ``velocity_noise``:
+    :class:`relloc.models.motion.VelocityNoise` (``Q_k = G_k Σ_u G_kᵀ`` via
+    :func:`relloc.models.motion.relative_jacobians`); the measurement information uses the
+    nonlinear Jacobian :func:`relloc.models.measurement.range_bearing_jacobian` with
+    ``R = diag(σ_r², σ_θ², σ_α²)`` restricted to ``measured``. The pseudo-linear filter sees
+    the same raw measurements, so one bound serves the PLKF and the EKF. ``P0 (4, 4)`` is the
+    prior covariance (the filter's initial covariance). Returns the bound ``B_k`` per step;
+    ``sqrt(diag B_k)`` is the smallest RMSE reachable per state.
+``unicycle_team_pcrlb(true_poses, u, dt, rows, *, input_sigma, P0) -> (T, 3n, 3n)``
+    Cooperative team of ``n`` unicycles (seed 001): ``true_poses (T, n, 3)`` (or ``(M, T, n,
+    3)``), ``u (T, n, 2)`` = ``(v, ω)`` per robot, ``dt`` float or ``(T−1,)``, ``rows``: T
+    :class:`relloc.models.planar_measurement.ScalarRows` (bearing / range / GPS-pose rows taken
+    at each step; only their structure and ``sigma`` are used), ``input_sigma`` ``(2,)`` or
+    ``(n, 2)`` odometry σ of ``(v, ω)``, ``P0 (3n, 3n)``.
 ``pcrlb_ratio(errors, bound, *, start=0) -> (n,)``
-    RMSE / sqrt(bound) per state: ``sqrt(Σ_k mean_runs e_k,i² / Σ_k B_k,ii)`` over steps
-    ``k ≥ start``; ``errors (R, T, n)`` (angles already wrapped by the caller), ``bound
-    (T, n, n)``. 1.0 is the physical limit; an efficient estimator approaches it from above.
+    RMSE / sqrt(bound) per state, ``sqrt(Σ_k mean_runs e²_{k,i} / Σ_k B_{k,ii})`` over steps
+    ``k ≥ start``; ``errors (R, T, n)`` with angles already wrapped. 1.0 is the physical limit.
+``pcrlb_information``, ``pcrlb_covariance``, ``measurement_information``
+    The generic recursion (re-exported from :mod:`.pcrlb_recursion`).
 
-Model wrappers live beside this module: :mod:`relloc.observability.pcrlb_models`
-(``relative_pair_pcrlb`` for the seed-000 4-DOF pair and ``unicycle_team_pcrlb`` for a
-cooperative unicycle team with bearing / range / pose measurements).
+Example (seed-000 reproduction)::
+
+    from relloc.observability.pcrlb import relative_pair_pcrlb, pcrlb_ratio
+    B = relative_pair_pcrlb(X_true, u_l, u_c, dt, has_meas, sigma_r=σr, sigma_theta=σθ,
+                            sigma_alpha=σα, velocity_noise=noise, P0=P0)
+    ratio = pcrlb_ratio(errors, B, start=burn_in)   # per (x, y, z, φ)
 """
 
 from __future__ import annotations
 
-import numpy as np
-from numpy.typing import NDArray
+from collections.abc import Sequence
 
-from relloc.core.linalg import cholesky, symmetrise
-from relloc.errors import DataError, ModelError
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from relloc.errors import DataError
+from relloc.models.measurement import MEASUREMENT_NAMES, range_bearing_jacobian
+from relloc.models.motion import VelocityNoise, process_noise, relative_jacobians
+from relloc.models.planar_measurement import ScalarRows, linearise_rows
+from relloc.models.unicycle import unicycle_jacobians
+from relloc.observability.pcrlb_recursion import (
+    measurement_information,
+    pcrlb_covariance,
+    pcrlb_information,
+    pcrlb_ratio,
+)
+
+__all__ = [
+    "measurement_information",
+    "pcrlb_covariance",
+    "pcrlb_information",
+    "pcrlb_ratio",
+    "relative_pair_pcrlb",
+    "unicycle_team_pcrlb",
+]
 
 Array = NDArray[np.float64]
 
 
-def measurement_information(H: Array, R: Array) -> Array:
-    """``Hᵀ R⁻¹ H`` for stacks ``H (..., m, n)`` and ``R (..., m, m)`` (R must be PD)."""
-    H = np.asarray(H, dtype=float)
-    R = np.asarray(R, dtype=float)
-    if H.ndim < 2 or R.shape[-2:] != (H.shape[-2], H.shape[-2]):
-        raise DataError(f"measurement_information: H {H.shape} and R {R.shape} do not match")
-    L = cholesky(R, where="measurement noise R")
-    W = np.linalg.solve(L, H)  # L⁻¹ H, so Hᵀ R⁻¹ H = Wᵀ W
-    return symmetrise(np.swapaxes(W, -1, -2) @ W)
+def _step_lengths(dt: float | ArrayLike, T: int) -> Array:
+    d = np.asarray(dt, dtype=float)
+    d = np.full(T - 1, float(d)) if d.ndim == 0 else d.reshape(-1)
+    if d.shape != (T - 1,) or not np.all(np.isfinite(d)) or np.any(d < 0):
+        raise DataError(f"PCRLB: dt must be a float or {T - 1} finite step lengths ≥ 0")
+    return d
 
 
-def _inverse_pd(A: Array, where: str) -> Array:
-    L = cholesky(A, where=where)
-    Linv = np.linalg.solve(L, np.broadcast_to(np.eye(A.shape[-1]), A.shape))
-    return symmetrise(np.swapaxes(Linv, -1, -2) @ Linv)
+def _with_runs(a: ArrayLike, tail: tuple[int, ...], name: str) -> Array:
+    arr = np.asarray(a, dtype=float)
+    if arr.ndim == len(tail) + 1:
+        arr = arr[None]
+    if arr.ndim != len(tail) + 2 or arr.shape[2:] != tail:
+        raise DataError(f"PCRLB: {name} has shape {arr.shape}, expected (T, *{tail}) or (M, T, …)")
+    if not np.all(np.isfinite(arr)):
+        raise DataError(f"PCRLB: {name} contains NaN or inf")
+    return arr
 
 
-def _check_inputs(F: Array, Q: Array, meas_info: Array, J0: Array) -> tuple[Array, ...]:
-    F = np.asarray(F, dtype=float)
-    Q = np.asarray(Q, dtype=float)
-    I = np.asarray(meas_info, dtype=float)
-    J0 = np.asarray(J0, dtype=float)
-    if F.ndim == 3:
-        F, Q, I = F[None], Q[None] if Q.ndim == 3 else Q, I[None] if I.ndim == 3 else I
-    if F.ndim != 4 or Q.shape != F.shape:
-        raise DataError(f"pcrlb: F {F.shape} and Q {Q.shape} must both be (M, T-1, n, n)")
-    M, Tm1, n, _ = F.shape
-    if F.shape[-1] != n or I.shape != (M, Tm1 + 1, n, n):
-        raise DataError(
-            f"pcrlb: meas_info has shape {I.shape}, expected {(M, Tm1 + 1, n, n)} "
-            f"(one information matrix per step, F has {Tm1} transitions)"
-        )
-    if J0.shape != (n, n):
-        raise DataError(f"pcrlb: J0 has shape {J0.shape}, expected {(n, n)}")
-    for name, arr in (("F", F), ("Q", Q), ("meas_info", I), ("J0", J0)):
-        if not np.all(np.isfinite(arr)):
-            raise DataError(f"pcrlb: {name} contains NaN or inf")
-    return F, symmetrise(Q), symmetrise(I), symmetrise(J0)
+def _prior_information(P0: ArrayLike, n: int) -> Array:
+    P = np.asarray(P0, dtype=float)
+    if P.shape != (n, n):
+        raise DataError(f"PCRLB: P0 has shape {P.shape}, expected {(n, n)}")
+    return measurement_information(np.eye(n), P)
 
 
-def pcrlb_information(F: Array, Q: Array, meas_info: Array, J0: Array) -> Array:
-    """Fisher information ``J_k`` (``(T, n, n)``) by the Tichavský recursion (module doc).
+def relative_pair_pcrlb(
+    true_states: ArrayLike,
+    u_obs: ArrayLike,
+    u_tgt: ArrayLike,
+    dt: float | ArrayLike,
+    measurement_mask: ArrayLike,
+    *,
+    sigma_r: float,
+    sigma_theta: float,
+    sigma_alpha: float,
+    velocity_noise: VelocityNoise,
+    P0: ArrayLike,
+    measured: Sequence[str] = MEASUREMENT_NAMES,
+) -> Array:
+    """PCRLB ``(T, 4, 4)`` of the seed-000 relative pair (see the module docstring)."""
+    X = _with_runs(true_states, (4,), "true_states")
+    M, T = X.shape[:2]
+    U_l = _with_runs(u_obs, (4,), "u_obs")
+    U_c = _with_runs(u_tgt, (4,), "u_tgt")
+    if U_l.shape != X.shape or U_c.shape != X.shape:
+        raise DataError(f"PCRLB: inputs {U_l.shape}/{U_c.shape} must match states {X.shape}")
+    mask = np.asarray(measurement_mask, dtype=bool)
+    if mask.shape not in ((T,), (M, T)):
+        raise DataError(f"PCRLB: measurement_mask has shape {mask.shape}, expected {(T,)}")
+    mask = np.broadcast_to(mask, (M, T))
+    unknown = [m for m in measured if m not in MEASUREMENT_NAMES]
+    if unknown or not measured:
+        raise DataError(f"PCRLB: measured must be a non-empty subset of {MEASUREMENT_NAMES}")
+    rows = [MEASUREMENT_NAMES.index(m) for m in measured]
+    sig = np.array([sigma_r, sigma_theta, sigma_alpha], dtype=float)
+    if not np.all(np.isfinite(sig) & (sig > 0)):
+        raise DataError(f"PCRLB: sensor sigmas must be finite and > 0, got {sig}")
+    steps = _step_lengths(dt, T)
 
-    ``F``/``Q`` hold the transition Jacobian and process noise from step k to k+1 at the true
-    state(s); ``meas_info[k]`` is ``H_kᵀR_k⁻¹H_k`` (summed over the measurements at step k, zero
-    when none); ``J0`` is the prior information ``P_0⁻¹``.
-    """
-    F, Q, I, J0 = _check_inputs(F, Q, meas_info, J0)
-    M, Tm1, n, _ = F.shape
-    J = np.empty((Tm1 + 1, n, n))
-    J[0] = J0 + I[:, 0].mean(axis=0)
-    if M == 1:
-        # Riccati form: exact for one trajectory and valid for singular Q (module doc).
-        for k in range(Tm1):
-            P = _inverse_pd(J[k], where=f"PCRLB information at step {k}")
-            P_pred = F[0, k] @ P @ F[0, k].T + Q[0, k]
-            J[k + 1] = (
-                _inverse_pd(P_pred, where=f"PCRLB predicted bound at step {k + 1}") + I[0, k + 1]
-            )
-        return J
-    for k in range(Tm1):
-        Qinv = np.empty_like(Q[:, k])
+    F = np.empty((M, T - 1, 4, 4))
+    Q = np.empty((M, T - 1, 4, 4))
+    for k in range(T - 1):
+        F[:, k], G = relative_jacobians(X[:, k], U_l[:, k], U_c[:, k], float(steps[k]))
+        Q[:, k] = process_noise(G, velocity_noise)
+    H = range_bearing_jacobian(X)[..., rows, :]
+    R = np.diag(sig[rows] ** 2)
+    info = measurement_information(H, np.broadcast_to(R, (*H.shape[:-2], len(rows), len(rows))))
+    info = np.where(mask[..., None, None], info, 0.0)
+    J = pcrlb_information(F, Q, info, _prior_information(P0, 4))
+    return pcrlb_covariance(J)
+
+
+def unicycle_team_pcrlb(
+    true_poses: ArrayLike,
+    u: ArrayLike,
+    dt: float | ArrayLike,
+    rows: Sequence[ScalarRows],
+    *,
+    input_sigma: ArrayLike,
+    P0: ArrayLike,
+) -> Array:
+    """PCRLB ``(T, 3n, 3n)`` of a cooperative unicycle team (see the module docstring)."""
+    X = np.asarray(true_poses, dtype=float)
+    if X.ndim == 3:
+        X = X[None]
+    if X.ndim != 4 or X.shape[-1] != 3 or not np.all(np.isfinite(X)):
+        raise DataError(f"PCRLB: true_poses has shape {X.shape}, expected finite (T, n, 3)")
+    M, T, n, _ = X.shape
+    U = np.asarray(u, dtype=float)
+    U = U[None] if U.ndim == 3 else U
+    if U.shape != (M, T, n, 2) or not np.all(np.isfinite(U)):
+        raise DataError(f"PCRLB: u has shape {U.shape}, expected finite {(M, T, n, 2)}")
+    if len(rows) != T:
+        raise DataError(f"PCRLB: rows has {len(rows)} entries, expected one per step ({T})")
+    sig = np.broadcast_to(np.asarray(input_sigma, dtype=float), (n, 2))
+    if not np.all(np.isfinite(sig) & (sig >= 0)):
+        raise DataError("PCRLB: input_sigma must be finite and ≥ 0")
+    steps = _step_lengths(dt, T)
+
+    N = 3 * n
+    F = np.zeros((M, T - 1, N, N))
+    Q = np.zeros((M, T - 1, N, N))
+    for k in range(T - 1):
+        Fi, Gi = unicycle_jacobians(X[:, k], U[:, k], float(steps[k]))  # (M, n, 3, 3), (M, n, 3, 2)
+        Qi = (Gi * sig[None, :, None, :] ** 2) @ np.swapaxes(Gi, -1, -2)
+        for i in range(n):
+            F[:, k, 3 * i : 3 * i + 3, 3 * i : 3 * i + 3] = Fi[:, i]
+            Q[:, k, 3 * i : 3 * i + 3, 3 * i : 3 * i + 3] = Qi[:, i]
+    info = np.zeros((M, T, N, N))
+    for k, batch in enumerate(rows):
+        if batch.size == 0:
+            continue
         for m in range(M):
-            Qinv[m] = _inverse_pd(
-                Q[m, k],
-                where=f"process noise Q of trajectory {m} at step {k} (the averaged "
-                "PCRLB needs Q positive definite; use one trajectory for singular Q)",
-            )
-        Ft = np.swapaxes(F[:, k], -1, -2)
-        D11 = (Ft @ Qinv @ F[:, k]).mean(axis=0)
-        D12 = -(Ft @ Qinv).mean(axis=0)
-        D22 = Qinv.mean(axis=0) + I[:, k + 1].mean(axis=0)
-        S = symmetrise(J[k] + D11)
-        L = cholesky(S, where=f"PCRLB J + D11 at step {k}")
-        W = np.linalg.solve(L, D12)
-        J[k + 1] = symmetrise(D22 - W.T @ W)
-    return J
-
-
-def pcrlb_covariance(J: Array) -> Array:
-    """The bound ``J_k⁻¹`` for every step of ``J (T, n, n)``; ModelError if J is not PD."""
-    J = np.asarray(J, dtype=float)
-    out = np.empty_like(J)
-    for k in range(J.shape[0]):
-        out[k] = _inverse_pd(J[k], where=f"PCRLB information at step {k}")
-    return out
-
-
-def pcrlb_ratio(errors: Array, bound: Array, *, start: int = 0) -> Array:
-    """RMSE over sqrt(PCRLB) per state, pooled over steps ``k ≥ start`` (module doc).
-
-    ``errors``: ``(R, T, n)`` estimation errors of R Monte-Carlo runs (or ``(T, n)`` for one),
-    angles already wrapped; ``bound``: ``(T, n, n)`` from :func:`pcrlb_covariance`.
-    """
-    e = np.asarray(errors, dtype=float)
-    if e.ndim == 2:
-        e = e[None]
-    B = np.asarray(bound, dtype=float)
-    if e.ndim != 3 or B.shape != (e.shape[1], e.shape[2], e.shape[2]):
-        raise DataError(f"pcrlb_ratio: errors {e.shape} and bound {B.shape} do not match")
-    if not 0 <= start < e.shape[1]:
-        raise DataError(f"pcrlb_ratio: start={start} outside 0..{e.shape[1] - 1}")
-    mse = np.nanmean(e[:, start:] ** 2, axis=0).sum(axis=0)
-    var = np.diagonal(B[start:], axis1=-2, axis2=-1).sum(axis=0)
-    if np.any(var <= 0):
-        raise ModelError("pcrlb_ratio: the bound has a non-positive diagonal")
-    return np.sqrt(mse / var)
+            Hk = linearise_rows(X[m, k], batch).dense_jacobian(n)
+            info[m, k] = measurement_information(Hk, np.diag(np.asarray(batch.sigma) ** 2))
+    J = pcrlb_information(F, Q, info, _prior_information(P0, N))
+    return pcrlb_covariance(J)
