@@ -375,6 +375,11 @@ def plkf_bias_kernel(
 
 _UPPER4 = ((0, 0), (0, 1), (0, 2), (0, 3), (1, 1), (1, 2), (1, 3), (2, 2), (2, 3), (3, 3))
 _UPPER3 = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))
+#: For each entry of the row-major full matrix, its index in the upper-triangle tuple.
+_FULL_FROM_UPPER = {
+    n: tuple(upper.index((min(i, j), max(i, j))) for i in range(n) for j in range(n))
+    for n, upper in ((3, _UPPER3), (4, _UPPER4))
+}
 
 
 def split_vector(v: np.ndarray, single: bool) -> Vec:
@@ -404,10 +409,7 @@ def join_symmetric(parts: Vec) -> np.ndarray:
     upper = _UPPER4 if len(parts) == 10 else _UPPER3
     n = 4 if len(parts) == 10 else 3
     if all(isinstance(p, float) for p in parts):
-        full = [[0.0] * n for _ in range(n)]
-        for (i, j), value in zip(upper, parts, strict=True):
-            full[i][j] = full[j][i] = value
-        return np.array(full)
+        return np.array([parts[k] for k in _FULL_FROM_UPPER[n]]).reshape(n, n)
     arrays = np.broadcast_arrays(*(np.asarray(p, dtype=float) for p in parts))
     out = np.empty((*arrays[0].shape, n, n))
     for (i, j), value in zip(upper, arrays, strict=True):

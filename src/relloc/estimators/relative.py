@@ -404,7 +404,7 @@ def _floats(value: ArrayLike, n: int, name: str, where: str) -> tuple[float, ...
     """A length-``n`` vector as a tuple of finite floats (the tracker's fast input path)."""
     seq = value.tolist() if isinstance(value, np.ndarray) else value
     try:
-        out = tuple(float(v) for v in seq)  # type: ignore[union-attr]
+        out = tuple(map(float, seq))  # type: ignore[call-overload]
     except (TypeError, ValueError) as exc:
         raise DataError(f"{where or 'relative tracker'}: {name} must be {n} numbers") from exc
     if len(out) != n:
@@ -487,6 +487,11 @@ class RelativeTracker:
             mean = tuple(a - b for a, b in zip(mean, bias, strict=True))
         self._mean = mean
         self._cached = None
+        s00, s01, s02, s11, s12, s22 = S
+        r00, r01, r02, r11, r12, r22 = R
         return Innovation(
-            residual=join_vector(nu), cov=join_symmetric(S), nis=nis, meas_cov=join_symmetric(R)
+            residual=np.array(nu),
+            cov=np.array([s00, s01, s02, s01, s11, s12, s02, s12, s22]).reshape(3, 3),
+            nis=nis,
+            meas_cov=np.array([r00, r01, r02, r01, r11, r12, r02, r12, r22]).reshape(3, 3),
         )
