@@ -70,7 +70,7 @@ class BenchSize:
             raise ConfigError("BenchSize.batch_steps: must be smaller than steps")
 
 
-def _sequence(rng: np.random.Generator, steps: int) -> tuple[np.ndarray, ...]:
+def _sequence(rng: np.random.Generator, steps: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Odometry inputs and measurements of one pair (truth by the exact model)."""
     t = DT * np.arange(steps)
     u_l = np.stack([0.3 + 0.1 * np.sin(0.3 * t), 0 * t, 0 * t, 0.2 * np.sin(0.5 * t)], axis=-1)
@@ -110,7 +110,12 @@ def _run_tracker(kind: str, odo_l: np.ndarray, odo_c: np.ndarray, z: np.ndarray)
     return tracker.belief
 
 
-def _filterpy_ekf_runner() -> Callable[[np.ndarray, np.ndarray, np.ndarray], Gaussian]:
+def _constant(value: np.ndarray) -> Callable[..., np.ndarray]:
+    """A model function that returns a value recorded earlier (replay)."""
+    return lambda *_args: value
+
+
+def _filterpy_ekf_runner() -> Callable[..., Gaussian]:
     kalman = require("filterpy.kalman", "bench")
 
     class RelativeEKF(kalman.ExtendedKalmanFilter):  # type: ignore[misc, name-defined]
@@ -144,6 +149,8 @@ def _filterpy_ekf_runner() -> Callable[[np.ndarray, np.ndarray, np.ndarray], Gau
         ekf = RelativeEKF(dim_x=4, dim_z=3)
         ekf.x = prior.mean.copy()
         ekf.P = prior.cov.copy()
+        h_jac: Callable[..., np.ndarray]
+        h_fun: Callable[..., np.ndarray]
         for k in range(len(z)):
             if recorded is None:
                 F, G = relative_jacobians(ekf.x, odo_l[k], odo_c[k], DT)
@@ -151,7 +158,8 @@ def _filterpy_ekf_runner() -> Callable[[np.ndarray, np.ndarray, np.ndarray], Gau
                 h_jac, h_fun = range_bearing_jacobian, range_bearing
             else:
                 ekf.F, ekf.Q, H, hx, ekf.replay_x = recorded[k]
-                h_jac, h_fun = (lambda _x, H=H: H), (lambda _x, hx=hx: hx)
+                h_jac, h_fun = _constant(H), _constant(hx)
+
             ekf.predict(u=(odo_l[k], odo_c[k]))
             if record is not None:
                 record.append((ekf.F, ekf.Q, h_jac(ekf.x), h_fun(ekf.x), ekf.x.copy()))
@@ -163,7 +171,7 @@ def _filterpy_ekf_runner() -> Callable[[np.ndarray, np.ndarray, np.ndarray], Gau
 
 def _batched(
     odo_l: np.ndarray, odo_c: np.ndarray, z: np.ndarray, size: BenchSize
-) -> tuple[np.ndarray, ...]:
+) -> tuple[np.ndarray, np.ndarray]:
     """``size.pairs`` pairs (each offset along the sequence) updated together."""
     prior = _prior()
     mean = np.tile(prior.mean, (size.pairs, 1))
@@ -178,7 +186,7 @@ def _batched(
 
 def _loop(
     odo_l: np.ndarray, odo_c: np.ndarray, z: np.ndarray, size: BenchSize
-) -> tuple[np.ndarray, ...]:
+) -> tuple[np.ndarray, np.ndarray]:
     """The same pairs as :func:`_batched`, one tracker at a time."""
     n = len(z) - size.batch_steps
     means, covs = [], []
@@ -196,14 +204,17 @@ def _loop(
 
 
 def _check_same(
-    a: Gaussian | tuple[np.ndarray, ...], b: Gaussian | tuple[np.ndarray, ...], what: str
+    a: tuple[np.ndarray, np.ndarray], b: tuple[np.ndarray, np.ndarray], what: str
 ) -> float:
-    ma, mb = (a.mean, b.mean) if isinstance(a, Gaussian) else (a[0], b[0])  # type: ignore[union-attr]
-    ca, cb = (a.cov, b.cov) if isinstance(a, Gaussian) else (a[1], b[1])  # type: ignore[union-attr]
-    diff = float(max(np.abs(ma - mb).max(), np.abs(ca - cb).max()))
+    """Largest difference of two ``(mean, cov)`` results; ModelError if they disagree."""
+    diff = float(max(np.abs(a[0] - b[0]).max(), np.abs(a[1] - b[1]).max()))
     if diff > 1e-8:
         raise ModelError(f"bench filters: {what} disagree by {diff:.3g}; timings would be unfair")
     return diff
+
+
+def _moments(g: Gaussian) -> tuple[np.ndarray, np.ndarray]:
+    return g.mean, g.cov
 
 
 def run(quiet: bool = False, *, size: BenchSize | None = None) -> dict[str, Any]:
@@ -212,7 +223,9 @@ def run(quiet: bool = False, *, size: BenchSize | None = None) -> dict[str, Any]
     odo_l, odo_c, z = _sequence(np.random.default_rng(0), size.steps)
     filterpy_run = _filterpy_ekf_runner()
     agreement = _check_same(
-        _run_tracker("tekf", odo_l, odo_c, z), filterpy_run(odo_l, odo_c, z), "TEKF and filterpy"
+        _moments(_run_tracker("tekf", odo_l, odo_c, z)),
+        _moments(filterpy_run(odo_l, odo_c, z)),
+        "TEKF and filterpy",
     )
     batch_agreement = _check_same(
         _batched(odo_l, odo_c, z, size), _loop(odo_l, odo_c, z, size), "batched and loop"
@@ -221,8 +234,8 @@ def run(quiet: bool = False, *, size: BenchSize | None = None) -> dict[str, Any]
     recorded: list[tuple[np.ndarray, ...]] = []
     filterpy_run(odo_l, odo_c, z, record=recorded)
     _check_same(
-        filterpy_run(odo_l, odo_c, z, recorded=recorded),
-        filterpy_run(odo_l, odo_c, z),
+        _moments(filterpy_run(odo_l, odo_c, z, recorded=recorded)),
+        _moments(filterpy_run(odo_l, odo_c, z)),
         "filterpy with replayed and evaluated model",
     )
 

@@ -41,7 +41,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -402,9 +402,9 @@ class FilterSettings:
 
 def _floats(value: ArrayLike, n: int, name: str, where: str) -> tuple[float, ...]:
     """A length-``n`` vector as a tuple of finite floats (the tracker's fast input path)."""
-    seq = value.tolist() if isinstance(value, np.ndarray) else value
+    seq: Any = value.tolist() if isinstance(value, np.ndarray) else value
     try:
-        out = tuple(map(float, seq))  # type: ignore[call-overload]
+        out = tuple(map(float, seq))
     except (TypeError, ValueError) as exc:
         raise DataError(f"{where or 'relative tracker'}: {name} must be {n} numbers") from exc
     if len(out) != n:
