@@ -1,0 +1,303 @@
+"""A bank of relative-yaw hypotheses: relloc's initialisation for an unknown relative yaw.
+
+Why. The relative yaw φ of seed 000 Eq. 1 is observed only through the observed robot's
+motion: the predicted displacement ``R(φ̂) v_c dt`` is compared with the measured one. The
+correction a single Kalman filter makes is, to first order, proportional to ``sin(φ − φ̂)``,
+which vanishes at an error of π. From a yaw guess near the wrong side of the circle both the
+TEKF and the PLKF therefore sit near this unstable equilibrium for a long time (seed 000
+Table 1 reports 263 TEKF updates in case 4; single runs can take far longer).
+
+What. The prior over φ is replaced by a Gaussian sum whose ``K`` components sit evenly on the
+circle, ``φ_k = φ̂₀ + 2πk/K`` (``k = 0 … K−1``), each with standard deviation
+``σ_c = π/K`` (half the spacing) and the prior's position block. Every component is a full
+relative filter run with the shared predict and the configured update of
+:mod:`relloc.estimators.relative` (the PLKF by default). After each measurement the weights
+follow Bayes' rule with the component's innovation likelihood (a Gaussian-sum filter,
+Alspach & Sorenson, IEEE TAC 17(4), 1972)::
+
+    w_k ← w_k · N(ν_k; 0, S_k),   log w_k ← log w_k − ½ (ν_kᵀ S_k⁻¹ ν_k + log det S_k)
+
+(the constant ``−(m/2) log 2π`` is common to all components and dropped), then
+
+* **pruning**: a component whose weight falls below ``prune_ratio`` times the largest weight
+  is dropped;
+* **merging**: neighbouring hypotheses that have converged onto the best one (yaw within
+  ``merge_sigmas`` standard deviations of the difference, ``|φ_k − φ_best| ≤ n √(P_k,φφ +
+  P_best,φφ)``) are absorbed into it (their weights added), so duplicates of the winning
+  hypothesis do not keep the bank from collapsing;
+* **collapse**: once one component holds at least ``collapse_weight`` of the total weight the
+  bank keeps only that component and is an ordinary single filter from then on.
+
+The estimate is the highest-weight component (its mean and covariance); a moment-matched
+mean would average headings that are far apart on the circle and sit between the modes.
+
+Batching. Banks are arrays with any leading batch shape: ``means (..., K, 4)``,
+``covs (..., K, 4, 4)``, ``log_weights (..., K)``. A dropped component keeps its slot (the
+arrays stay rectangular so many banks update in one numpy call): its log-weight is ``−∞`` and
+its state is overwritten with the surviving best component, so it costs arithmetic but can
+never be chosen, revived or make an update fail.
+
+A prior whose yaw standard deviation is below ``spread_above`` is not spread: the bank is that
+single filter (``K = 1``), so known-yaw cases run unchanged.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from relloc.core.gaussian import Gaussian
+from relloc.errors import ConfigError, ModelError
+from relloc.estimators.relative import FilterSettings, Innovation, predict_arrays
+from relloc.models.motion import VelocityNoise
+
+Array = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+
+YAW = 3
+
+
+@dataclass(frozen=True, kw_only=True)
+class YawBankSettings:
+    """How the bank is spread and reduced.
+
+    Attributes:
+        n_components: hypotheses ``K`` spread evenly over the circle.
+        spread_above: a prior yaw σ (rad) below this is kept as one component.
+        prune_ratio: drop components with weight < ``prune_ratio`` × the largest weight.
+        merge_sigmas: absorb components whose yaw is this many σ of the difference from the
+            best one.
+        collapse_weight: keep only the best component once its weight reaches this fraction.
+    """
+
+    n_components: int = 12
+    spread_above: float = 0.5
+    prune_ratio: float = 1e-3
+    merge_sigmas: float = 1.0
+    collapse_weight: float = 0.99
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.n_components, int) or not 2 <= self.n_components <= 64:
+            raise ConfigError(
+                f"YawBankSettings.n_components: an integer in [2, 64], got {self.n_components!r}"
+            )
+        if not (math.isfinite(self.spread_above) and self.spread_above > 0):
+            raise ConfigError(f"YawBankSettings.spread_above: > 0, got {self.spread_above!r}")
+        if not 0.0 < self.prune_ratio < 1.0:
+            raise ConfigError(f"YawBankSettings.prune_ratio: in (0, 1), got {self.prune_ratio!r}")
+        if not (math.isfinite(self.merge_sigmas) and self.merge_sigmas >= 0):
+            raise ConfigError(f"YawBankSettings.merge_sigmas: ≥ 0, got {self.merge_sigmas!r}")
+        if not 0.5 < self.collapse_weight <= 1.0:
+            raise ConfigError(
+                f"YawBankSettings.collapse_weight: in (0.5, 1], got {self.collapse_weight!r}"
+            )
+
+    @property
+    def component_sigma(self) -> float:
+        """σ_c = π/K: half the spacing 2π/K between neighbouring hypotheses."""
+        return math.pi / self.n_components
+
+
+@dataclass(frozen=True)
+class YawBank:
+    """Gaussian sum over relative yaw (see module docstring); dead slots have weight ``−∞``."""
+
+    means: Array
+    covs: Array
+    log_weights: Array
+
+    def __post_init__(self) -> None:
+        m = np.asarray(self.means, dtype=float)
+        P = np.asarray(self.covs, dtype=float)
+        lw = np.asarray(self.log_weights, dtype=float)
+        if m.ndim < 2 or m.shape[-1] != 4 or P.shape != (*m.shape, 4) or lw.shape != m.shape[:-1]:
+            raise ModelError(
+                f"YawBank: shapes means {m.shape}, covs {P.shape}, log_weights {lw.shape} "
+                "must be (..., K, 4), (..., K, 4, 4), (..., K)"
+            )
+        if not np.all(np.isfinite(lw).any(axis=-1)):
+            raise ModelError("YawBank: every bank needs at least one live component")
+        object.__setattr__(self, "means", m)
+        object.__setattr__(self, "covs", P)
+        object.__setattr__(self, "log_weights", lw)
+
+    @property
+    def n_components(self) -> int:
+        """Slots ``K`` per bank (live or dropped)."""
+        return int(self.means.shape[-2])
+
+    @property
+    def alive(self) -> BoolArray:
+        """Which slots still hold a hypothesis, ``(..., K)``."""
+        return np.asarray(np.isfinite(self.log_weights))
+
+    @property
+    def weights(self) -> Array:
+        """Normalised weights ``(..., K)`` (0 for dropped slots)."""
+        lw = self.log_weights - np.max(self.log_weights, axis=-1, keepdims=True)
+        w = np.exp(lw)
+        return np.asarray(w / w.sum(axis=-1, keepdims=True))
+
+    @property
+    def best_index(self) -> NDArray[np.int64]:
+        """Index of the highest-weight component of each bank, ``(...)``."""
+        return np.asarray(np.argmax(self.log_weights, axis=-1))
+
+    def estimate(self) -> tuple[Array, Array]:
+        """Mean ``(..., 4)`` and covariance ``(..., 4, 4)`` of each bank's best component."""
+        k = self.best_index[..., None, None]
+        mean = np.take_along_axis(self.means, k, axis=-2)[..., 0, :]
+        cov = np.take_along_axis(self.covs, k[..., None], axis=-3)[..., 0, :, :]
+        return mean, cov
+
+
+def spread_yaw_bank(
+    prior_mean: ArrayLike, prior_cov: ArrayLike, settings: YawBankSettings
+) -> YawBank:
+    """Bank for a prior ``N(prior_mean, prior_cov)`` over ``(x, y, z, φ)`` (batched).
+
+    If every prior yaw σ is at least ``spread_above`` the bank has ``K`` components at
+    ``φ̂₀ + 2πk/K`` with σ_c = π/K, the yaw–position cross-covariance removed (each component
+    fixes φ) and equal weights; otherwise it is the prior as a single component.
+    """
+    mean = np.asarray(prior_mean, dtype=float)
+    cov = np.asarray(prior_cov, dtype=float)
+    if mean.shape[-1:] != (4,) or cov.shape != (*mean.shape, 4):
+        raise ModelError(f"spread_yaw_bank: prior shapes {mean.shape}, {cov.shape}")
+    sigma_yaw = np.sqrt(cov[..., YAW, YAW])
+    if np.all(sigma_yaw < settings.spread_above):
+        return YawBank(mean[..., None, :], cov[..., None, :, :], np.zeros((*mean.shape[:-1], 1)))
+    if np.any(sigma_yaw < settings.spread_above):
+        raise ModelError(
+            "spread_yaw_bank: a batch must be all unknown-yaw or all known-yaw priors "
+            f"(yaw σ {sigma_yaw.min():.3g} … {sigma_yaw.max():.3g}, threshold "
+            f"{settings.spread_above})"
+        )
+    K = settings.n_components
+    offsets = 2.0 * math.pi * np.arange(K) / K
+    means = np.repeat(mean[..., None, :], K, axis=-2)
+    yaw = mean[..., None, YAW] + offsets
+    means[..., YAW] = np.arctan2(np.sin(yaw), np.cos(yaw))  # construction, not a state wrap
+    covs = np.repeat(cov[..., None, :, :], K, axis=-3)
+    covs[..., YAW, :] = 0.0
+    covs[..., :, YAW] = 0.0
+    covs[..., YAW, YAW] = settings.component_sigma**2
+    return YawBank(means, covs, np.zeros((*mean.shape[:-1], K)))
+
+
+def predict_yaw_bank(
+    bank: YawBank, u_l: ArrayLike, u_c: ArrayLike, dt: float, noise: VelocityNoise
+) -> YawBank:
+    """Shared predict of every component (inputs broadcast over the component axis)."""
+    u_l = np.asarray(u_l, dtype=float)[..., None, :]
+    u_c = np.asarray(u_c, dtype=float)[..., None, :]
+    means, covs = predict_arrays(bank.means, bank.covs, u_l, u_c, dt, noise, where="yaw bank")
+    return YawBank(means, covs, bank.log_weights)
+
+
+def reweight(log_weights: Array, innovation: Innovation) -> Array:
+    """Bayes' rule on the weights: ``log w_k − ½ (NIS_k + log det S_k)``, max shifted to 0."""
+    _, logdet = np.linalg.slogdet(innovation.cov)
+    lw = log_weights - 0.5 * (np.asarray(innovation.nis) + logdet)
+    lw = np.where(np.isfinite(log_weights), lw, -np.inf)
+    return np.asarray(lw - np.max(lw, axis=-1, keepdims=True))
+
+
+def reduce_bank(bank: YawBank, settings: YawBankSettings) -> YawBank:
+    """Merge into the best component, prune below ``prune_ratio`` × best, collapse if dominant.
+
+    Dropped slots get weight ``−∞`` and the best component's state (see module docstring).
+    """
+    lw = bank.log_weights - np.max(bank.log_weights, axis=-1, keepdims=True)
+    best = np.argmax(lw, axis=-1)
+    is_best = np.arange(bank.n_components) == best[..., None]
+    mean, cov = bank.estimate()
+    d_yaw = bank.means[..., YAW] - mean[..., None, YAW]
+    d_yaw = np.abs(np.arctan2(np.sin(d_yaw), np.cos(d_yaw)))
+    spread = np.sqrt(bank.covs[..., YAW, YAW] + cov[..., None, YAW, YAW])
+    merged = np.isfinite(lw) & ~is_best & (d_yaw <= settings.merge_sigmas * spread)
+    w = np.where(np.isfinite(lw), np.exp(lw), 0.0)
+    w = np.where(is_best, w + np.sum(np.where(merged, w, 0.0), axis=-1, keepdims=True), w)
+    w = np.where(merged, 0.0, w)
+    keep = w >= settings.prune_ratio * np.max(w, axis=-1, keepdims=True)
+    w = np.where(keep, w, 0.0)
+    w = w / w.sum(axis=-1, keepdims=True)
+    dominant = np.max(w, axis=-1) >= settings.collapse_weight
+    keep = np.where(dominant[..., None], is_best, keep)
+    with np.errstate(divide="ignore"):
+        new_lw = np.where(keep, np.log(np.where(keep, w, 1.0)), -np.inf)
+    if keep.all():
+        return YawBank(bank.means, bank.covs, new_lw)
+    means = np.where(keep[..., None], bank.means, mean[..., None, :])
+    covs = np.where(keep[..., None, None], bank.covs, cov[..., None, :, :])
+    return YawBank(means, covs, new_lw)
+
+
+def update_yaw_bank(
+    bank: YawBank, z: ArrayLike, filter_settings: FilterSettings, settings: YawBankSettings
+) -> tuple[YawBank, Innovation]:
+    """Update every component with ``z (..., 3)``, reweight, prune and collapse.
+
+    Returns the new bank and the innovation of every component (shapes ``(..., K, ...)``).
+    """
+    z = np.asarray(z, dtype=float)[..., None, :]
+    means, covs, innovation = filter_settings.update_arrays(
+        bank.means, bank.covs, z, where="yaw bank"
+    )
+    updated = YawBank(means, covs, reweight(bank.log_weights, innovation))
+    return reduce_bank(updated, settings), innovation
+
+
+class YawBankTracker:
+    """Stateful single-pair wrapper around a :class:`YawBank` (same interface as
+    :class:`relloc.estimators.relative.RelativeTracker`): ``predict``, ``update``, ``belief``."""
+
+    def __init__(
+        self,
+        prior: Gaussian,
+        filter_settings: FilterSettings,
+        settings: YawBankSettings | None = None,
+        *,
+        label: str = "",
+    ) -> None:
+        if prior.dim != 4:
+            raise ModelError(f"YawBankTracker {label}: prior must be a RelPose4 (4 states)")
+        self.settings = settings or YawBankSettings()
+        self.filter_settings = filter_settings
+        self.label = label
+        self._bank = spread_yaw_bank(prior.mean, prior.cov, self.settings)
+
+    @property
+    def bank(self) -> YawBank:
+        """The current Gaussian sum."""
+        return self._bank
+
+    @property
+    def n_alive(self) -> int:
+        """Hypotheses still in the bank."""
+        return int(self._bank.alive.sum())
+
+    @property
+    def belief(self) -> Gaussian:
+        """The highest-weight hypothesis."""
+        mean, cov = self._bank.estimate()
+        return Gaussian(mean=mean, cov=cov)
+
+    def predict(self, u_l: ArrayLike, u_c: ArrayLike, dt: float) -> Gaussian:
+        """Propagate every hypothesis by ``dt``; returns the best one."""
+        self._bank = predict_yaw_bank(self._bank, u_l, u_c, dt, self.filter_settings.motion_noise)
+        return self.belief
+
+    def update(self, z: ArrayLike) -> Innovation:
+        """Fuse ``z = (r, θ, α)``; returns the innovation of the (new) best hypothesis."""
+        self._bank, innovation = update_yaw_bank(self._bank, z, self.filter_settings, self.settings)
+        k = int(self._bank.best_index)
+        return Innovation(
+            residual=innovation.residual[k],
+            cov=innovation.cov[k],
+            nis=float(np.asarray(innovation.nis)[k]),
+            meas_cov=innovation.meas_cov[k],
+        )
