@@ -3,6 +3,7 @@
 import numpy as np
 
 from relloc.estimators.relative import BATCH_UPDATES, predict_arrays
+from relloc.metrics import radial_errors
 from relloc.models.measurement import RangeBearingNoise, range_bearing
 from relloc.models.motion import VelocityNoise, relative_step
 
@@ -30,9 +31,7 @@ def radial_bias_and_rmse(kind: str, seed: int = 2024, pairs: int = 100, updates:
         z = range_bearing(truth) + rng.normal(size=(pairs, 3)) * sig_z
         mean, cov, _ = BATCH_UPDATES[kind](mean, cov, z, NOISY)
         if k >= 50:
-            radial.append(
-                np.linalg.norm(mean[:, :3], axis=1) - np.linalg.norm(truth[:, :3], axis=1)
-            )
+            radial.append(radial_errors(mean, truth))
             sq.append(np.sum((mean[:, :3] - truth[:, :3]) ** 2, axis=1))
     return float(np.mean(radial)), float(np.sqrt(np.mean(sq)))
 

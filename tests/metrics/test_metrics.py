@@ -16,6 +16,7 @@ from relloc.metrics import (
     nis,
     paper_thresholds,
     percent_beyond,
+    radial_errors,
     rmse,
     state_errors,
     updates_to_converge,
@@ -88,3 +89,11 @@ def test_paper_thresholds_are_105_percent_of_the_known_init_max() -> None:
     np.testing.assert_allclose(paper_thresholds(case1), 1.05 * np.array([0.02, 0.02, 0.03, 0.08]))
     with pytest.raises(DataError):
         paper_thresholds(np.zeros(4))
+
+
+def test_radial_errors() -> None:
+    est = np.array([[3.0, 4.0, 0.0, 1.0], [0.0, 0.0, 2.0, 0.0]])
+    tru = np.array([[0.0, 4.0, 0.0, 0.0], [0.0, 0.0, 2.5, 0.0]])
+    np.testing.assert_allclose(radial_errors(est, tru), [1.0, -0.5])
+    with pytest.raises(DataError):
+        radial_errors(np.zeros(2), np.zeros(2))

@@ -31,9 +31,12 @@ and differ only in the update (seed 000 Eq. 8), computed in Joseph form::
   noise axis, Arasaratnam & Haykin 2009), which is exact for the second-order terms that make
   up the bias. The covariance is the plain PLKF's.
 
-Every array function broadcasts over a leading batch dimension (``mean (..., 4)``,
-``cov (..., 4, 4)``, ``z (..., 3)``) so many pairs update in one numpy call; the
-:class:`~relloc.core.Gaussian` wrappers are the single-pair API.
+API: array functions (``predict_arrays``, ``update_*_arrays``) broadcast over a leading batch
+dimension (``mean (..., 4)``, ``cov (..., 4, 4)``, ``z (..., 3)``) so many pairs update in one
+numpy call; the :class:`~relloc.core.Gaussian` wrappers (``predict``, ``update_*``) are the
+single-pair API; :class:`RelativeTracker` is the thin stateful wrapper. All of them run the
+hand-unrolled kernels of :mod:`relloc.estimators.kernels`, which are tested to equal the general
+matrix form (the models' Jacobians and the generic Joseph-form :func:`kalman_update`).
 """
 
 from __future__ import annotations

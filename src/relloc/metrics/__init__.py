@@ -19,7 +19,7 @@ from relloc.metrics.convergence import (
     updates_to_converge,
     updates_to_converge_per_state,
 )
-from relloc.metrics.errors import RELPOSE4_ANGLES, rmse, state_errors
+from relloc.metrics.errors import RELPOSE4_ANGLES, radial_errors, rmse, state_errors
 
 __all__ = [
     "FIXED_THRESHOLDS",
@@ -36,6 +36,7 @@ __all__ = [
     "normalised_squared",
     "paper_thresholds",
     "percent_beyond",
+    "radial_errors",
     "rmse",
     "state_errors",
     "updates_to_converge",
