@@ -125,26 +125,38 @@ def _decorrelation_time(t: NDArray[np.float64], r: NDArray[np.float64]) -> float
     return None
 
 
-def fit_uwb_noise(rec: UwbRecording) -> UwbNoiseFit:
-    """Fit :class:`UwbNoiseModel` to a recording (see module docstring for the estimators)."""
-    err = rec.error
+def fitted_links(rec: UwbRecording) -> list[tuple[int, int]]:
+    """Links with enough readings to enter the fit (DataError if none)."""
     links = [link for link in rec.links() if int(rec.link_mask(link).sum()) >= MIN_LINK_ROWS]
     if not links:
         raise DataError(
             f"{rec.path}: no node pair has ≥ {MIN_LINK_ROWS} readings; cannot fit UWB noise"
         )
-    residuals: list[NDArray[np.float64]] = []
+    return links
+
+
+def within_link_residuals(rec: UwbRecording) -> NDArray[np.float64]:
+    """All within-link residuals ``e − median_link(e)`` of the fitted links, pooled."""
+    parts = []
+    for link in fitted_links(rec):
+        e = rec.error[rec.link_mask(link)]
+        parts.append(e - np.median(e))
+    return np.concatenate(parts)
+
+
+def fit_uwb_noise(rec: UwbRecording) -> UwbNoiseFit:
+    """Fit :class:`UwbNoiseModel` to a recording (see module docstring for the estimators)."""
+    links = fitted_links(rec)
     medians: dict[str, float] = {}
     rho: list[float] = []
     taus: list[float] = []
     periods: list[float] = []
     for link in links:
         mask = rec.link_mask(link)
-        e = err[mask]
+        e = rec.error[mask]
         med = float(np.median(e))
         medians[f"{link[0]}-{link[1]}"] = med
         r = e - med
-        residuals.append(r)
         t = rec.t[mask]
         if r.size > 2 and float(np.std(r)) > 0.0:
             rho.append(float(np.corrcoef(r[:-1], r[1:])[0, 1]))
@@ -153,7 +165,7 @@ def fit_uwb_noise(rec: UwbRecording) -> UwbNoiseFit:
             taus.append(tau_link)
         if t[-1] > t[0]:
             periods.append(float((t[-1] - t[0]) / (t.size - 1)))
-    pooled = np.concatenate(residuals)
+    pooled = within_link_residuals(rec)
     spread = _robust_sigma(pooled)
     threshold = OUTLIER_K * spread
     tail = pooled[np.abs(pooled) > threshold]
@@ -166,7 +178,7 @@ def fit_uwb_noise(rec: UwbRecording) -> UwbNoiseFit:
     period = float(np.median(periods)) if periods else 0.0
     tau = float(np.median(taus)) if taus else 0.0
     model = UwbNoiseModel(
-        bias=float(np.median(err)),
+        bias=float(np.median(rec.error)),
         spread=spread,
         outlier_rate=outlier_rate,
         outlier_excess_mean=excess,

@@ -1,0 +1,121 @@
+"""TIERS UWB loader (validated, counted skips) and the robust noise fit / sampler."""
+
+import numpy as np
+import pytest
+
+from relloc.datasets.paths import default_uwb_csv
+from relloc.datasets.uwb import load_uwb_csv
+from relloc.datasets.uwb_noise import UwbNoiseModel, fit_uwb_noise, sample_range_errors
+from relloc.errors import ConfigError, DataError
+
+HEADER = "timestamp,node1,node2,uwb_range,mocap_range,tb_node1_yaw,tb_node2_yaw,error\n"
+
+
+def _row(t, a, b, uwb, mocap):
+    return f"{t},{a}.0,{b}.0,{uwb},{mocap},0.1,0.2,{uwb - mocap}\n"
+
+
+def test_shared_tiers_recording_loads_and_fits():
+    path = default_uwb_csv()
+    if not path.is_file():
+        pytest.skip(f"shared UWB data not found at {path} (outside the workspace)")
+    rec = load_uwb_csv(path)
+    assert rec.n_rows == 8712 and rec.skipped.count == 0
+    assert rec.links() == [(1, 3), (1, 4), (1, 5), (3, 4), (3, 5), (4, 5)]
+    fit = fit_uwb_noise(rec)
+    m = fit.model
+    # the recording's UWB reads long: a positive bias of tens of cm, a few-cm core
+    assert 0.2 < m.bias < 0.5 and 0.03 < m.spread < 0.15
+    assert 0.0 < m.outlier_rate < 0.1 and m.outlier_positive_fraction > 0.5
+    assert m.correlation_time > 0.2  # consecutive errors are strongly correlated
+    assert set(fit.as_dict()) >= {"bias_m", "spread_m", "outlier_rate"}
+
+
+def test_malformed_rows_are_counted_with_reasons(tmp_path):
+    rows = [HEADER]
+    good = [_row(100.0 + 0.1 * k, 1, 3, 2.0 + 0.01 * k, 1.9 + 0.01 * k) for k in range(30)]
+    rows += good[:10]
+    rows.append("100.95,1.0,3.0,abc,1.9,0.1,0.2,0.1\n")  # not a number
+    rows.append("100.96,1.0,3.0,2.0,1.9,0.1\n")  # short row
+    rows.append("100.97,1.0,1.0,2.0,1.9,0.1,0.2,0.1\n")  # node with itself
+    rows.append("50.0,1.0,3.0,2.0,1.9,0.1,0.2,0.1\n")  # back in time
+    rows.append("100.98,1.0,3.0,nan,1.9,0.1,0.2,0.1\n")  # NaN
+    rows.append("100.99,1.0,3.0,2.0,1.9,0.1,0.2,0.5\n")  # inconsistent error column
+    rows.append("\n")  # blank line: ignored, not an error
+    rows += good[10:]
+    path = tmp_path / "bad.csv"
+    path.write_text("".join(rows))
+    rec = load_uwb_csv(path)
+    assert rec.n_rows == 30
+    assert rec.skipped.count == 6
+    text = " ".join(rec.skipped.examples)
+    for reason in ("not a number", "columns", "node1 = node2", "back in time"):
+        assert reason in text
+    assert "line 12" in rec.skipped.examples[0]
+    assert "6 rows skipped" in rec.skipped.describe()
+
+
+def test_unusable_files_raise_data_error_naming_the_file(tmp_path):
+    empty = tmp_path / "empty.csv"
+    empty.write_text("")
+    with pytest.raises(DataError, match=r"empty\.csv.*empty file"):
+        load_uwb_csv(empty)
+    nocol = tmp_path / "nocol.csv"
+    nocol.write_text("timestamp,node1,node2,uwb_range\n1,1,2,3\n")
+    with pytest.raises(DataError, match="mocap_range"):
+        load_uwb_csv(nocol)
+    allbad = tmp_path / "allbad.csv"
+    allbad.write_text(HEADER + "x,y,z,1,2,3,4,5\n")
+    with pytest.raises(DataError, match="no usable row"):
+        load_uwb_csv(allbad)
+    with pytest.raises(DataError, match="not found"):
+        load_uwb_csv(tmp_path / "missing.csv")
+
+
+def test_fit_recovers_a_known_model(tmp_path):
+    rng = np.random.default_rng(11)
+    truth = UwbNoiseModel(
+        bias=0.3,
+        spread=0.05,
+        outlier_rate=0.03,
+        outlier_excess_mean=0.2,
+        outlier_positive_fraction=1.0,
+    )
+    lines = [HEADER]
+    for link, (a, b) in enumerate([(1, 2), (1, 3), (2, 3)]):
+        err = sample_range_errors(truth, 2000, 1, 0.1, rng)[:, 0]
+        for k in range(2000):
+            mocap = 2.0 + link
+            lines.append(_row(1000.0 + 0.1 * k + 0.01 * link, a, b, mocap + err[k], mocap))
+    # rows must be time-ordered
+    body = sorted(lines[1:], key=lambda r: float(r.split(",")[0]))
+    path = tmp_path / "synthetic.csv"
+    path.write_text(HEADER + "".join(body))
+    m = fit_uwb_noise(load_uwb_csv(path)).model
+    assert m.bias == pytest.approx(0.3, abs=0.01)
+    assert m.spread == pytest.approx(0.05, rel=0.1)
+    # 6000 readings: the outlier fraction beyond 3σ is 0.03 + 0.0027 (Gaussian tail) ± ~0.007
+    assert 0.02 < m.outlier_rate < 0.045
+    assert m.correlation_time == pytest.approx(0.0, abs=0.15)  # white draws
+
+
+def test_sampler_statistics_and_validation():
+    m = UwbNoiseModel(
+        bias=0.35,
+        spread=0.075,
+        outlier_rate=0.04,
+        outlier_excess_mean=0.15,
+        outlier_positive_fraction=0.9,
+        correlation_time=1.2,
+    )
+    e = sample_range_errors(m, 20000, 3, 0.1, np.random.default_rng(5)) - m.bias
+    core = e[np.abs(e) < 3 * m.spread]
+    assert np.std(core) == pytest.approx(0.075, rel=0.1)
+    frac = np.mean(np.abs(e) > 3 * m.spread)
+    assert 0.03 < frac < 0.05
+    col = e[:, 0]
+    ok = (np.abs(col[:-1]) < 3 * m.spread) & (np.abs(col[1:]) < 3 * m.spread)
+    lag1 = np.corrcoef(col[:-1][ok], col[1:][ok])[0, 1]
+    assert lag1 > 0.8  # Gauss–Markov core: exp(−0.1/1.2) ≈ 0.92 (slightly less once truncated)
+    with pytest.raises(ConfigError, match="outlier_rate"):
+        UwbNoiseModel(bias=0.0, spread=0.1, outlier_rate=1.5, outlier_excess_mean=0.1)
