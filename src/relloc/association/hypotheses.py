@@ -103,17 +103,18 @@ def formation_weights(
 
 
 def birth_tracks(
-    r: float,
+    r: Array | float,
     alpha: Array,
     beta: Array,
-    h: float,
+    h: Array | float,
     settings: FormationSettings,
     *,
     volume: float,
     false_density: float,
 ) -> tuple[Array, Array, Array]:
-    """New tracks of Eq. 13 for bearings ``(α_r, β_r)`` with range ``r`` and height ``h``.
+    """New tracks of Eq. 13 for bearings ``(α_k, β_k)`` with ranges ``r_k`` and heights ``h_k``.
 
+    ``r`` and ``h`` are scalars or one value per bearing (several teammates at once).
     ``volume`` is the volume ``V`` of the bearing space and ``false_density`` the density ``κ``.
     Returns ``(means (m, 4), covs (m, 4, 4), weights (m,))``.
     """
@@ -123,6 +124,8 @@ def birth_tracks(
         )
     alpha = np.asarray(alpha, dtype=float).reshape(-1)
     beta = np.asarray(beta, dtype=float).reshape(-1)
+    r = np.broadcast_to(np.asarray(r, dtype=float), alpha.shape)
+    h = np.broadcast_to(np.asarray(h, dtype=float), alpha.shape)
     cb = np.cos(beta)
     means = np.stack(
         [r * cb * np.cos(alpha), r * cb * np.sin(alpha), r * np.sin(beta), np.zeros_like(alpha)],

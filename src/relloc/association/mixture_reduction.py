@@ -40,6 +40,17 @@ def align_angles(means: Array, reference: Array, angle_index: int | None) -> Arr
     return out
 
 
+def pairwise_mahalanobis(means: Array, covs: Array, *, angle_index: int | None = None) -> Array:
+    """``D[a, b] = max(d_abᵀ P_a⁻¹ d_ab, d_abᵀ P_b⁻¹ d_ab)`` with ``d_ab = m_b − m_a``."""
+    d = means[None, :, :] - means[:, None, :]
+    if angle_index is not None:
+        d[..., angle_index] = wrap_angle(d[..., angle_index])
+    inv = np.linalg.inv(covs)
+    d2_a = np.einsum("abi,aij,abj->ab", d, inv, d)
+    d2_b = np.einsum("abi,bij,abj->ab", d, inv, d)
+    return np.maximum(d2_a, d2_b)
+
+
 def merge_groups(
     means: Array,
     covs: Array,
@@ -47,22 +58,28 @@ def merge_groups(
     threshold: float,
     *,
     angle_index: int | None = None,
+    groups: IntArray | None = None,
 ) -> list[IntArray]:
-    """Greedy Mahalanobis grouping (module docstring); groups listed heaviest first."""
+    """Greedy Mahalanobis grouping (module docstring); groups listed heaviest first.
+
+    ``groups`` labels independent mixtures sharing the arrays: components of different
+    mixtures are never merged.
+    """
     if threshold < 0.0 or not np.isfinite(threshold):
         raise ModelError(f"merge_groups: threshold must be finite and ≥ 0, got {threshold}")
-    remaining = np.argsort(-weights, kind="stable")
-    groups: list[IntArray] = []
-    while remaining.size:
-        a = remaining[0]
-        d = align_angles(means[remaining], means[a], angle_index) - means[a]
-        d2_a = np.einsum("ki,ki->k", d, np.linalg.solve(covs[a], d.T).T)
-        d2_b = np.einsum("ki,ki->k", d, np.linalg.solve(covs[remaining], d[..., None])[..., 0])
-        close = np.maximum(d2_a, d2_b) <= threshold
-        close[0] = True
-        groups.append(remaining[close])
-        remaining = remaining[~close]
-    return groups
+    close = pairwise_mahalanobis(means, covs, angle_index=angle_index) <= threshold
+    if groups is not None:
+        close &= groups[:, None] == groups[None, :]
+    free = np.ones(weights.size, dtype=bool)
+    out: list[IntArray] = []
+    for a in np.argsort(-weights, kind="stable"):
+        if not free[a]:
+            continue
+        members = np.flatnonzero(close[a] & free)
+        members = np.concatenate([[a], members[members != a]]).astype(np.int64)
+        free[members] = False
+        out.append(members)
+    return out
 
 
 def merge_moments(

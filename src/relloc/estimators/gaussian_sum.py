@@ -60,7 +60,6 @@ from relloc.association.gating import (
 from relloc.association.hypotheses import FormationSettings, birth_tracks, formation_weights
 from relloc.association.mixture_reduction import (
     align_angles,
-    cap_indices,
     merge_groups,
     merge_moments,
     prune_mask,
@@ -289,6 +288,15 @@ def predict_fusers(
         start += size
 
 
+def _cap_per_owner(t: Tracks, max_components: int) -> IntArray:
+    """Indices (sorted) of the ``max_components`` heaviest tracks of every filter."""
+    order = np.lexsort((-t.weight, t.owner))
+    owners = t.owner[order]
+    start = np.searchsorted(owners, owners, side="left")
+    rank = np.arange(order.size) - start
+    return np.sort(order[rank < max_components])
+
+
 def _gaussian_density(nu: Array, S: Array) -> Array:
     """``N(ν; 0, S)`` for stacks ``ν (..., n)``, ``S (..., n, n)``."""
     n = nu.shape[-1]
@@ -508,44 +516,38 @@ class GaussianSumFuser:
         """New tracks (Eq. 13) from bearings outside every gate of each teammate's filter."""
         st = self.settings
         t = self.tracks
-        out: list[Tracks] = []
-        for j in range(len(self.teammates)):
-            if not (np.isfinite(r[j]) and r[j] > 0.0 and np.isfinite(h[j])):
-                continue
-            mine = t.owner == j
-            free = ~gated[mine].any(axis=0) if mine.any() else np.ones(Z.shape[0], dtype=bool)
-            idx = np.flatnonzero(free)
-            if idx.size == 0:
-                continue
-            alpha = Z[idx, 0]
-            beta = (
-                Z[idx, 1]
-                if st.use_elevation
-                else np.full(idx.size, np.arcsin(np.clip(h[j] / r[j], -1.0, 1.0)))
+        n_team = len(self.teammates)
+        # hit[j, b]: bearing b lies in the gate of some track of teammate j
+        hit = np.zeros((n_team, Z.shape[0]), dtype=bool)
+        if t.size:
+            np.logical_or.at(hit, t.owner, gated)
+        usable = np.isfinite(r) & (r > 0.0) & np.isfinite(h)
+        jj, bb = np.nonzero(~hit & usable[:, None])
+        if jj.size == 0:
+            return []
+        beta = Z[bb, 1] if st.use_elevation else np.arcsin(np.clip(h[jj] / r[jj], -1.0, 1.0))
+        means, covs, w = birth_tracks(
+            r[jj],
+            Z[bb, 0],
+            beta,
+            h[jj],
+            st.formation,
+            volume=st.bearing_volume,
+            false_density=kappa,
+        )
+        ids = self._ids(jj.size)
+        return [
+            Tracks(
+                owner=jj.astype(np.int64),
+                mean=means,
+                cov=covs,
+                prior_mean=means.copy(),
+                prior_cov=covs.copy(),
+                weight=w,
+                history=new_history(ids, st.nscan_depth),
+                assoc=bb.astype(np.int64),
             )
-            means, covs, w = birth_tracks(
-                r[j],
-                alpha,
-                beta,
-                h[j],
-                st.formation,
-                volume=st.bearing_volume,
-                false_density=kappa,
-            )
-            ids = self._ids(idx.size)
-            out.append(
-                Tracks(
-                    owner=np.full(idx.size, j, dtype=np.int64),
-                    mean=means,
-                    cov=covs,
-                    prior_mean=means.copy(),
-                    prior_cov=covs.copy(),
-                    weight=w,
-                    history=new_history(ids, st.nscan_depth),
-                    assoc=idx.astype(np.int64),
-                )
-            )
-        return out
+        ]
 
     def direct_scan(self, heights: ArrayLike, ranges: ArrayLike, bearings: ArrayLike) -> None:
         """One direct-fusion scan: height, range, then bearings, then reduction."""
@@ -566,23 +568,21 @@ class GaussianSumFuser:
         keep = prune_mask(t.weight, st.prune_weight, t.owner)
         t = t.take(np.flatnonzero(keep))
         t = t.take(np.flatnonzero(family_keep_mask(t.history, t.weight, st.nscan_weight, t.owner)))
-        counts = np.bincount(t.owner, minlength=len(self.teammates))
-        if np.any(counts > 1):
-            parts = []
-            for j in range(len(self.teammates)):
-                sub = t.take(np.flatnonzero(t.owner == j))
-                if sub.size > 1:
-                    sub = sub.take(cap_indices(sub.weight, 4 * st.max_components))
-                    sub = self._merge(sub)
-                    sub = sub.take(cap_indices(sub.weight, st.max_components))
-                parts.append(sub)
-            t = Tracks.concat(parts)
+        if t.size > 1:
+            t = self._merge(t.take(_cap_per_owner(t, 4 * st.max_components)))
+            t = t.take(_cap_per_owner(t, st.max_components))
         self.tracks = t
         self._normalise()
 
     def _merge(self, sub: Tracks) -> Tracks:
+        """Moment-preserving Mahalanobis merging within each filter (priors merged alike)."""
         groups = merge_groups(
-            sub.mean, sub.cov, sub.weight, self.settings.merge_threshold, angle_index=_YAW
+            sub.mean,
+            sub.cov,
+            sub.weight,
+            self.settings.merge_threshold,
+            angle_index=_YAW,
+            groups=sub.owner,
         )
         if len(groups) == sub.size:
             return sub
