@@ -89,8 +89,9 @@ class PairEstimates:
     """One pair's recorded beliefs and updates.
 
     ``t (K,)``, ``mean (K, 4)``, ``cov (K, 4, 4)`` on the recording grid while a track exists;
-    ``age (K,)`` seconds since the track was (re)created; ``update_t (U,)``, ``nis (U,)``,
-    ``cond_r (U,)``, ``cond_s (U,)`` at each measurement update.
+    ``age (K,)`` seconds since the track was (re)created; ``update_t (U,)``,
+    ``update_age (U,)``, ``nis (U,)``, ``cond_r (U,)``, ``cond_s (U,)`` at each measurement
+    update.
     """
 
     observer: str
@@ -100,6 +101,7 @@ class PairEstimates:
     cov: Array
     age: Array
     update_t: Array
+    update_age: Array
     nis: Array
     cond_r: Array
     cond_s: Array
@@ -140,6 +142,7 @@ class _Recorder:
     cov: list[Array] = field(default_factory=list)
     age: list[float] = field(default_factory=list)
     update_t: list[float] = field(default_factory=list)
+    update_age: list[float] = field(default_factory=list)
     nis: list[float] = field(default_factory=list)
     cond_r: list[float] = field(default_factory=list)
     cond_s: list[float] = field(default_factory=list)
@@ -270,6 +273,7 @@ class TrackManager:
         tr.mean, tr.cov, tr.last_update_t = mean, cov, self.t
         rec = self._records[key]
         rec.update_t.append(self.t)
+        rec.update_age.append(self.t - tr.created_t)
         rec.nis.append(float(inn.nis))
         cond = condition_log10_batch(np.stack([inn.meas_cov, inn.cov]))
         rec.cond_r.append(float(cond[0]))
@@ -312,6 +316,7 @@ class TrackManager:
                     cov=np.asarray(r.cov, dtype=float).reshape(-1, 4, 4),
                     age=np.asarray(r.age, dtype=float),
                     update_t=np.asarray(r.update_t, dtype=float),
+                    update_age=np.asarray(r.update_age, dtype=float),
                     nis=np.asarray(r.nis, dtype=float),
                     cond_r=np.asarray(r.cond_r, dtype=float),
                     cond_s=np.asarray(r.cond_s, dtype=float),

@@ -1,0 +1,103 @@
+"""``relloc run``: default scenario smoke test, a user's TOML, bad TOML → exit code 2."""
+
+import json
+import textwrap
+
+from relloc.cli import main
+
+SMALL = """
+name = "pair"
+duration_s = 8.0
+
+[[robots]]
+name = "leader"
+kind = "ground"
+initial_pose = [5.0, 2.0, 1.5707963267948966]
+[robots.motion]
+type = "velocity"
+mean = [0.1, 0.0, 0.0, 0.0]
+amplitude = [0.0, 0.0, 0.0, 0.1]
+[robots.sensor]
+fov_deg = 120.0
+max_range = 12.0
+
+[[robots]]
+name = "drone"
+kind = "aerial"
+height = 2.0
+[robots.motion]
+type = "waypoints"
+points = [[3.0, 8.0], [7.0, 8.0], [5.0, 11.0]]
+speed = 0.5
+"""
+
+
+def test_run_default_scenario_writes_summary_report_and_figures(tmp_path, capsys):
+    out = tmp_path / "out"
+    code = main(
+        [
+            "run",
+            "--out",
+            str(out),
+            "--runs",
+            "2",
+            "--seed",
+            "3",
+            "--duration",
+            "12",
+            "--executor",
+            "serial",
+        ]
+    )
+    assert code == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["seed"] == 3 and summary["runs"] == 2 and summary["filter"] == "plkf"
+    assert set(summary["pairs"]) == {
+        "observer->aerial1",
+        "observer->aerial2",
+        "observer->ground1",
+        "observer->ground2",
+    }
+    for s in summary["pairs"].values():
+        assert 0.0 < s["position_rmse_m"] < 0.2 and 0.0 < s["yaw_rmse_rad"] < 0.2
+        assert s["anees"] > 0.0 and 0.0 <= s["nees_percent_beyond"] <= 100.0
+    report = (out / "report.md").read_text()
+    pngs = sorted(p.name for p in out.glob("*.png"))
+    assert {"errors_all.png", "nees_nis.png", "conditioning.png", "trajectories.png"} <= set(pngs)
+    for name in pngs:
+        assert f"({name})" in report
+    assert "observer->aerial1" in capsys.readouterr().out
+
+
+def test_run_user_scenario_with_tekf(tmp_path):
+    path = tmp_path / "my.toml"
+    path.write_text(textwrap.dedent(SMALL))
+    out = tmp_path / "out"
+    code = main(
+        [
+            "run",
+            str(path),
+            "--out",
+            str(out),
+            "--runs",
+            "1",
+            "--filter",
+            "tekf",
+            "--executor",
+            "serial",
+            "--quiet",
+        ]
+    )
+    assert code == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["scenario"] == "pair" and summary["filter"] == "tekf"
+    assert list(summary["pairs"]) == ["leader->drone"]
+
+
+def test_bad_toml_exits_2_naming_the_field(tmp_path, capsys):
+    path = tmp_path / "bad.toml"
+    path.write_text(textwrap.dedent(SMALL.replace("fov_deg = 120.0", "fov_deg = 400.0")))
+    code = main(["run", str(path), "--out", str(tmp_path / "o"), "--runs", "1", "--quiet"])
+    assert code == 2
+    assert "robots[0].sensor.fov_deg: must be in (0, 360]" in capsys.readouterr().err
+    assert not (tmp_path / "o" / "summary.json").exists()
