@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 import sympy as sp
@@ -188,8 +189,10 @@ class ObservabilityMatrix:
     _fn: Callable[..., object]
 
     @classmethod
-    def build(cls, model: SymbolicModel, order: int) -> ObservabilityMatrix:
-        rows = tuple(lie_rows(model, order))
+    def build(cls, model: SymbolicModel, order: int, *, prune: bool = True) -> ObservabilityMatrix:
+        """Rows of :func:`lie_rows` (``prune=False`` keeps every word, needed to evaluate the
+        matrix at *special* states where the generic redundancy test does not apply)."""
+        rows = tuple(lie_rows(model, order, prune=prune))
         matrix = sp.Matrix([list(r.gradient) for r in rows]) if rows else sp.zeros(0, model.n)
         fn = sp.lambdify([list(model.states), list(model.parameters)], matrix, "numpy", cse=True)
         return cls(model=model, order=order, rows=rows, _fn=fn)
@@ -203,6 +206,25 @@ class ObservabilityMatrix:
             return np.zeros((0, n))
         out = np.asarray(self._fn(list(np.asarray(state, float)), list(params)), dtype=float)
         return out.reshape(len(self.rows), n)
+
+    @cached_property
+    def batch_evaluator(self) -> Callable[[Array, Array], Array]:
+        """Vectorised evaluator ``(states (E, n), params (E, p)) -> (E, rows, n)`` (built once)."""
+        n, k = self.model.n, len(self.rows)
+        flat = [g for r in self.rows for g in r.gradient]
+        fn = sp.lambdify(
+            [list(self.model.states), list(self.model.parameters)], flat, "numpy", cse=True
+        )
+
+        def evaluate(states: Array, params: Array) -> Array:
+            states = np.asarray(states, dtype=float)
+            params = np.asarray(params, dtype=float).reshape(states.shape[0], -1)
+            E = states.shape[0]
+            vals = fn(list(states.T), list(params.T))
+            out = np.stack([np.broadcast_to(np.asarray(v, float), (E,)) for v in vals], axis=-1)
+            return out.reshape(E, k, n)
+
+        return evaluate
 
     def row_mask(self, allowed_fields: frozenset[int]) -> NDArray[np.bool_]:
         """Rows whose word uses only ``allowed_fields`` (field indices, :data:`DRIFT` = 0)."""
