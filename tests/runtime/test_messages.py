@@ -28,14 +28,26 @@ def test_round_trip_every_kind():
     cov = np.diag([0.1, 0.2, 0.3, 0.04])
     bodies = {
         "odom": _odom(),
-        "meas": {"target": "air1", "z": [2.0, 0.1, 0.5], "sigma": [0.01, 0.004, 0.004]},
-        "eqm": {"target": "air1", "mean": [1.0, 2.0, 0.5, 0.1], "cov": cov},
-        "est": {
+        "meas": {
             "stamps": [0.1, 0.1],
             "targets": ["air1", "gnd1"],
+            "z": [[2.0, 0.1, 0.5], [3.0, -0.2, -0.05]],
+            "sigma": [[0.01, 0.004, 0.004]] * 2,
+        },
+        "eqm": {"target": "air1", "mean": [1.0, 2.0, 0.5, 0.1], "cov": cov},
+        "est": {
+            "target": "air1",
+            "stamps": [0.1, 0.2],
             "means": np.zeros((2, 4)),
             "covs": np.stack([cov, cov]),
+            "ages": [0.0, 0.1],
+            "update_stamps": [0.1],
+            "update_ages": [0.0],
+            "nis": [2.5],
+            "cond_r": [3.0],
+            "cond_s": [2.0],
         },
+        "evt": {"stamps": [0.1], "targets": ["air1"], "kinds": ["created"]},
         "stats": {"counters": {"sent.odom": 10, "rejected.malformed": 1}},
         "tick": {"k": 5, "dt": 0.1},
         "ack": {"k": 5},
@@ -47,7 +59,9 @@ def test_round_trip_every_kind():
         assert (msg.kind, msg.sender, msg.seq, msg.t) == (kind, sender, 7, 1.5)
     msg = decode(encode("odom", "obs", 0, 0.0, _odom(4)), roster=ROSTER)
     np.testing.assert_array_equal(msg.body["u"], np.tile([0.3, 0.0, 0.0, 0.1], (4, 1)))
-    empty = {"stamps": [], "targets": [], "means": [], "covs": []}
+    empty = {"target": "gnd1", "stamps": [], "means": [], "covs": [], "ages": []}
+    empty |= {"update_stamps": [0.5], "update_ages": [0.4], "nis": [1.0]}
+    empty |= {"cond_r": [1.0], "cond_s": [1.0]}
     assert decode(encode("est", "obs", 1, 0.0, empty), roster=ROSTER).body["means"].shape == (0, 4)
 
 
@@ -101,5 +115,8 @@ def test_spoofed_sender_and_inconsistent_batches():
         encode("odom", "obs", 0, 0.0, bad_odom)
     with pytest.raises(DataError, match="lengths differ"):
         encode("odom", "obs", 0, 0.0, {"stamps": [0.0], "u": np.zeros((2, 4))})
+    bad_evt = {"stamps": [0.0], "targets": ["air1"], "kinds": ["vanished"]}
+    with pytest.raises(DataError, match="kinds"):
+        encode("evt", "obs", 0, 0.0, bad_evt)
     with pytest.raises(DataError, match="exceed the limit"):
         encode("odom", "obs", 0, 0.0, _odom(50), max_bytes=200)

@@ -29,6 +29,7 @@ from __future__ import annotations
 import heapq
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -185,15 +186,15 @@ class _Pending:
     release_s: float
     order: int
     sender: str = field(compare=False)
-    payload: bytes = field(compare=False)
+    payload: Any = field(compare=False)
 
 
 class LinkEmulator:
     """The receive side of an imperfect network, in simulated time (see module docstring).
 
-    ``admit(payload, sender, now_s)`` takes a message as it arrives; ``release(now_s)`` returns the
-    payloads due by ``now_s`` in release order. With :class:`FaultSettings()` every message is
-    released at once, unchanged and in order.
+    ``admit(item, sender, now_s)`` takes a (decoded) message as it arrives; ``release(now_s)``
+    returns the items due by ``now_s`` in release order. With :class:`FaultSettings()` every
+    message is released at once, unchanged and in order.
     """
 
     def __init__(self, owner: str, settings: FaultSettings, rng: np.random.Generator) -> None:
@@ -202,10 +203,10 @@ class LinkEmulator:
         self.rng = rng
         self.counters = LinkCounters()
         self._heap: list[_Pending] = []
-        self._held: dict[str, tuple[float, bytes]] = {}
+        self._held: dict[str, tuple[float, Any]] = {}
         self._order = 0
 
-    def admit(self, payload: bytes, sender: str, now_s: float) -> None:
+    def admit(self, payload: Any, sender: str, now_s: float) -> None:
         s = self.settings
         self.counters.seen += 1
         if any(p.separates(self.owner, sender, now_s) for p in s.partitions):
@@ -227,17 +228,17 @@ class LinkEmulator:
                 continue
             self._push(now_s + delay_s, sender, payload)
 
-    def _push(self, release_s: float, sender: str, payload: bytes) -> None:
+    def _push(self, release_s: float, sender: str, payload: Any) -> None:
         self._order += 1
         heapq.heappush(self._heap, _Pending(release_s, self._order, sender, payload))
 
-    def release(self, now_s: float) -> list[bytes]:
+    def release(self, now_s: float) -> list[Any]:
         """Payloads due by ``now_s``; a held (reordered) message follows its sender's next one."""
         for sender, (deadline, payload) in list(self._held.items()):
             if deadline <= now_s:
                 del self._held[sender]
                 self._push(deadline, sender, payload)
-        out: list[bytes] = []
+        out: list[Any] = []
         while self._heap and self._heap[0].release_s <= now_s:
             item = heapq.heappop(self._heap)
             out.append(item.payload)

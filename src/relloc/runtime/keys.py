@@ -6,11 +6,13 @@
 | ``relloc/<team>/robot/<id>/meas``       | ``meas``: its range/azimuth/elevation of a teammate |
 | ``relloc/<team>/robot/<id>/eqm``        | ``eqm``: its belief of a teammate (1 Hz broadcast) |
 | ``relloc/<team>/robot/<id>/est``        | ``est``: its estimates, for the collector    |
+| ``relloc/<team>/robot/<id>/evt``        | ``evt``: its track events, for the collector |
 | ``relloc/<team>/robot/<id>/stats``      | ``stats``: its message and estimate counters |
 | ``relloc/<team>/robot/<id>/ack``        | ``ack``: it finished a clock tick            |
 | ``relloc/<team>/clock/tick``            | ``tick``: simulated time from the clock      |
 | ``relloc/<team>/clock/ctl``             | ``ctl``: kill / restart / end events         |
 | ``relloc/<team>/alive/<id>`` (liveliness) | token held while the process lives          |
+| ``relloc/<team>/ready/<id>`` (liveliness) | held once the robot has seen every teammate |
 
 Robot and team ids are restricted to ``[A-Za-z0-9_-]`` so they can never inject the wildcard or
 separator characters of a key expression.
@@ -22,7 +24,7 @@ import re
 
 from relloc.errors import ConfigError
 
-ROBOT_KINDS = ("odom", "meas", "eqm", "est", "stats", "ack")
+ROBOT_KINDS = ("odom", "meas", "eqm", "est", "evt", "stats", "ack")
 _ID = re.compile(r"^[A-Za-z0-9_-]{1,64}$")
 
 
@@ -61,6 +63,21 @@ def alive_wildcard(team: str) -> str:
     return f"relloc/{team}/alive/*"
 
 
+def ready_key(team: str, member: str) -> str:
+    """Liveliness token a robot declares once it has seen every teammate's ``alive`` token.
+
+    Zenoh propagates a session's declarations in order and a robot declares its subscribers
+    before its ``alive`` token, so a robot that has seen a teammate's token also knows that
+    teammate's subscriptions: once every robot is ready, no first message is lost to a
+    subscription still in flight.
+    """
+    return f"relloc/{team}/ready/{member}"
+
+
+def ready_wildcard(team: str) -> str:
+    return f"relloc/{team}/ready/*"
+
+
 def parse_robot_key(key: str) -> tuple[str, str] | None:
     """``(robot, kind)`` of a robot key expression, or None if it is not one."""
     parts = key.split("/")
@@ -69,6 +86,7 @@ def parse_robot_key(key: str) -> tuple[str, str] | None:
     return None
 
 
-def member_of_alive_key(key: str) -> str:
-    """The member id at the end of a liveliness key."""
-    return key.rsplit("/", 1)[-1]
+def parse_presence_key(key: str) -> tuple[str, str]:
+    """``(token kind, member)`` of a liveliness key: kind is ``alive`` or ``ready``."""
+    parts = key.split("/")
+    return parts[-2], parts[-1]

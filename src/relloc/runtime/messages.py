@@ -11,13 +11,18 @@ checked against their declared shape, ``-1`` meaning "any length". Kinds:
 - ``odom`` — a batch of the sender's own body-velocity samples ``u = (v_x, v_y, v_z, ω_z)``
   (seed 000 Eq. 1 inputs; seed 001 robots exchange velocity and turn rate the same way):
   ``stamps`` (n,), ``u`` (n, 4).
-- ``meas`` — one inter-robot measurement the sender made of ``target``: ``z`` = (range, azimuth,
-  elevation) (seed 000 Eqs. 2–3) with standard deviations ``sigma`` (3,).
+- ``meas`` — a batch of inter-robot measurements the sender made: ``stamps`` (m,), ``targets``
+  (m,), ``z`` (m, 3) = (range, azimuth, elevation) (seed 000 Eq. 2) and their standard
+  deviations ``sigma`` (m, 3).
 - ``eqm`` — an *equivalent measurement* (seed 002 §III-6 "broadcast"): the sender's belief of
   ``target`` relative to itself, ``mean`` (4,) = (x, y, z, φ) and ``cov`` (4, 4), sent at the
   low broadcast rate (1 Hz in seed 002).
-- ``est`` — a batch of the sender's estimates for the collector (monitoring, not fusion):
-  ``stamps`` (n,), ``targets`` (n,) robot ids, ``means`` (n, 4), ``covs`` (n, 4, 4).
+- ``est`` — the sender's new estimates of one ``target`` for the collector (monitoring, not
+  fusion): beliefs on the recording grid ``stamps`` (n,), ``means`` (n, 4), ``covs`` (n, 4, 4),
+  track ``ages`` (n,), and its measurement updates ``update_stamps`` (m,) with the track's
+  ``update_ages``, ``nis``, ``cond_r``, ``cond_s`` (m,) (NIS, log10 condition numbers of R, S).
+- ``evt`` — track events of the sender: ``stamps`` (e,), ``targets`` (e,), ``kinds`` (e,) in
+  ``{"created", "deleted", "recreated"}``.
 - ``stats`` — the sender's counters (messages sent/received/rejected, estimates, tracks).
 - ``tick`` — the clock process' simulated time step ``k`` (header ``t`` is the time).
 - ``ack`` — a node finished tick ``k``.
@@ -62,14 +67,21 @@ HEADER: dict[str, str] = {
 }
 SCHEMA: dict[str, dict[str, str | Shape]] = {
     "odom": {"stamps": (-1,), "u": (-1, 4)},
-    "meas": {"target": "str", "z": (3,), "sigma": (3,)},
+    "meas": {"stamps": (-1,), "targets": "strlist", "z": (-1, 3), "sigma": (-1, 3)},
     "eqm": {"target": "str", "mean": (STATE_DIM,), "cov": (STATE_DIM, STATE_DIM)},
     "est": {
+        "target": "str",
         "stamps": (-1,),
-        "targets": "strlist",
         "means": (-1, STATE_DIM),
         "covs": (-1, STATE_DIM, STATE_DIM),
+        "ages": (-1,),
+        "update_stamps": (-1,),
+        "update_ages": (-1,),
+        "nis": (-1,),
+        "cond_r": (-1,),
+        "cond_s": (-1,),
     },
+    "evt": {"stamps": (-1,), "targets": "strlist", "kinds": "strlist"},
     "stats": {"counters": "intmap"},
     "tick": {"k": "int", "dt": "float"},
     "ack": {"k": "int"},
@@ -78,6 +90,7 @@ SCHEMA: dict[str, dict[str, str | Shape]] = {
 """Fields of each kind: a type name or an array shape (``-1`` = any length)."""
 
 CTL_ACTIONS = frozenset({"kill", "restart", "end"})
+EVENT_KINDS = frozenset({"created", "deleted", "recreated"})
 INFRASTRUCTURE_SENDERS = frozenset({"clock"})
 """Senders that are not robots but are allowed on the team's keys."""
 
@@ -189,7 +202,7 @@ def decode(
     body = _validate(payload, kind)
     if "target" in body and body["target"] not in roster:
         raise MessageRejected("unknown_target", f"target {body['target']!r} is not on the roster")
-    if kind == "est":
+    if "targets" in body:
         unknown = sorted(set(body["targets"]) - set(roster))
         if unknown:
             raise MessageRejected("unknown_target", f"targets {unknown} are not on the roster")
@@ -273,12 +286,24 @@ def _check_consistency(kind: str, body: Mapping[str, Any]) -> None:
         if np.any(np.diff(body["stamps"]) <= 0):
             raise MessageRejected("malformed", "odom: stamps not strictly increasing")
     elif kind == "meas":
-        if np.any(body["sigma"] <= 0) or body["z"][0] < 0:
-            raise MessageRejected("malformed", "meas: sigma must be > 0 and range ≥ 0")
+        m = body["stamps"].shape[0]
+        if not (len(body["targets"]) == body["z"].shape[0] == body["sigma"].shape[0] == m):
+            raise MessageRejected("shape", "meas: batch lengths differ")
+        if np.any(body["sigma"] <= 0) or np.any(body["z"][:, 0] <= 0):
+            raise MessageRejected("malformed", "meas: sigma and range must be > 0")
     elif kind == "est":
         n = body["stamps"].shape[0]
-        if not (len(body["targets"]) == body["means"].shape[0] == body["covs"].shape[0] == n):
-            raise MessageRejected("shape", "est: batch lengths differ")
+        if not (body["means"].shape[0] == body["covs"].shape[0] == body["ages"].shape[0] == n):
+            raise MessageRejected("shape", "est: record batch lengths differ")
+        m = body["update_stamps"].shape[0]
+        lengths = {body[k].shape[0] for k in ("update_ages", "nis", "cond_r", "cond_s")}
+        if lengths != {m}:
+            raise MessageRejected("shape", "est: update batch lengths differ")
+    elif kind == "evt":
+        if not (len(body["targets"]) == len(body["kinds"]) == body["stamps"].shape[0]):
+            raise MessageRejected("shape", "evt: batch lengths differ")
+        if not set(body["kinds"]) <= EVENT_KINDS:
+            raise MessageRejected("malformed", f"evt: kinds must be in {sorted(EVENT_KINDS)}")
     elif kind == "ctl" and body["action"] not in CTL_ACTIONS:
         raise MessageRejected("malformed", f"ctl: unknown action {body['action']!r}")
     covs = body.get("cov")

@@ -1,0 +1,150 @@
+"""``relloc node --robot ID --scenario FILE|default`` — run one robot as its own process.
+
+The robot simulates the (seeded) scenario, keeps only its own sensor slice, joins the team over
+Zenoh on the given endpoints, and runs until the clock process ends the run (see
+:mod:`relloc.runtime.node`). Usually started by ``relloc team up``; by hand::
+
+    relloc team clock --team demo --roster observer,aerial1 --duration 20 \
+        --listen tcp/127.0.0.1:7447
+    relloc node --robot observer --scenario team.toml --team demo --connect tcp/127.0.0.1:7447
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+
+def add_network_fault_arguments(p: argparse.ArgumentParser) -> argparse._ArgumentGroup:
+    """Network fault options (applied by each receiving robot, in simulated time)."""
+    g = p.add_argument_group("network faults (see relloc.runtime.faults)")
+    g.add_argument("--drop", type=float, default=0.0, metavar="P", help="message loss probability")
+    g.add_argument("--delay", type=float, default=0.0, metavar="MS", help="delay, ms")
+    g.add_argument("--jitter", type=float, default=0.0, metavar="MS", help="delay std, ms")
+    g.add_argument("--duplicate", type=float, default=0.0, metavar="P", help="duplicate prob.")
+    g.add_argument("--reorder", type=float, default=0.0, metavar="P", help="reorder prob.")
+    g.add_argument(
+        "--partition",
+        action="append",
+        default=[],
+        metavar="A,B@T1-T2",
+        help="robots A,B cut off from the rest of the team from T1 to T2 s (repeatable)",
+    )
+    return g
+
+
+def network_faults_from_args(args: argparse.Namespace, **robot_events: object):  # type: ignore[no-untyped-def]
+    """:class:`FaultSettings` from the flags above (plus kills/restarts from ``team up``)."""
+    from relloc.runtime.faults import FaultSettings, parse_partition
+
+    return FaultSettings(
+        drop=args.drop,
+        delay_ms=args.delay,
+        jitter_ms=args.jitter,
+        duplicate=args.duplicate,
+        reorder=args.reorder,
+        partitions=tuple(parse_partition(p) for p in args.partition),
+        **robot_events,  # type: ignore[arg-type]
+    )
+
+
+def add_transport_arguments(p: argparse.ArgumentParser) -> None:
+    """Zenoh endpoint options shared by ``node`` and ``team clock``."""
+    g = p.add_argument_group("Zenoh transport")
+    g.add_argument("--team", default="team", help="team id: the key-expression prefix")
+    g.add_argument("--connect", action="append", default=[], metavar="ENDPOINT")
+    g.add_argument("--listen", action="append", default=[], metavar="ENDPOINT")
+    g.add_argument("--mode", choices=("peer", "client", "router"), default="peer")
+    g.add_argument(
+        "--zenoh-config",
+        default=None,
+        metavar="FILE",
+        help="Zenoh JSON5 config loaded first (TLS, access control); flags override it",
+    )
+    g.add_argument(
+        "--multicast-scouting",
+        action="store_true",
+        help="also discover peers by UDP multicast (off: only the explicit endpoints)",
+    )
+
+
+def transport_from_args(args: argparse.Namespace):  # type: ignore[no-untyped-def]
+    from pathlib import Path
+
+    from relloc.runtime.transport import TransportSettings
+
+    return TransportSettings(
+        mode=args.mode,
+        listen=tuple(args.listen),
+        connect=tuple(args.connect),
+        multicast_scouting=args.multicast_scouting,
+        config_file=Path(args.zenoh_config) if args.zenoh_config else None,
+    )
+
+
+def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    p = subparsers.add_parser(
+        "node",
+        help="run one robot as its own process over Zenoh",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("--robot", required=True, help="this robot's name in the scenario")
+    p.add_argument(
+        "--scenario", default="default", help="scenario TOML file, or 'default' (built-in team)"
+    )
+    p.add_argument("--seed", type=int, default=0, help="simulation seed (same for the team)")
+    p.add_argument("--filter", default="plkf", help="plkf | tekf | bcplkf")
+    p.add_argument("--init", default="measurement", help="track initialisation policy")
+    p.add_argument("--eqm-period", type=float, default=1.0, help="equivalent-measurement period, s")
+    p.add_argument("--max-bytes", type=int, default=65_536, help="message size limit")
+    p.add_argument(
+        "--clock-timeout", type=float, default=60.0, help="exit after this long without a tick"
+    )
+    add_transport_arguments(p)
+    add_network_fault_arguments(p)
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from relloc.errors import ConfigError
+    from relloc.estimators.initialisation import InitPolicy
+    from relloc.estimators.track_manager import TrackManagerSettings
+    from relloc.runtime.estimation import TrackManagerEstimator
+    from relloc.runtime.node import NodeSettings, RobotNode
+    from relloc.runtime.scenario import load_team_scenario, simulate_team
+    from relloc.runtime.sources import LogSource
+
+    scenario = load_team_scenario(args.scenario)
+    log = simulate_team(scenario, args.seed)
+    if args.robot not in log.robots:
+        raise ConfigError(f"--robot: {args.robot!r} is not in the scenario {log.robots}")
+    settings = NodeSettings(
+        team=args.team,
+        robot=args.robot,
+        roster=log.robots,
+        transport=transport_from_args(args),
+        faults=network_faults_from_args(args),
+        fault_seed=args.seed,
+        eqm_period_s=args.eqm_period,
+        max_bytes=args.max_bytes,
+        clock_timeout_s=args.clock_timeout,
+    )
+    index = log.index(args.robot)
+    estimator = TrackManagerEstimator(
+        TrackManagerSettings(filter=args.filter, init=InitPolicy(name=args.init)),
+        robot=args.robot,
+        roster=log.robots,
+        odometry_sigma=[od.sigma for od in log.odometry],
+        t0=log.span[0],
+        record_origin=log.span[0],
+        rng=np.random.default_rng(np.random.SeedSequence([args.seed, index])),
+        truth_fn=lambda i, j, t: log.relative_truth(i, j, t)[0],
+    )
+    counters = RobotNode(settings, LogSource(log, args.robot), estimator).run()
+    json.dump({"robot": args.robot, "counters": counters}, sys.stdout, sort_keys=True)
+    sys.stdout.write("\n")
+    return 0

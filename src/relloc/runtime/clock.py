@@ -1,0 +1,226 @@
+"""The clock/simulator process: drives simulated time for a team of robot processes.
+
+Protocol (key expressions in :mod:`relloc.runtime.keys`):
+
+1. Wait until every robot on the roster holds its ``ready`` liveliness token (declared once it has
+   seen every teammate's ``alive`` token, so all subscriptions are known everywhere — see
+   :func:`relloc.runtime.keys.ready_key`).
+2. For ``k = 1 … K``: apply the robot events due by ``t_k = k·Δt`` (a ``kill`` is published on
+   ``clock/ctl`` and the clock waits until the victim's token is gone; a ``restart`` is
+   published and the clock waits until the robot's token is back), publish ``tick(k, t_k)`` and
+   wait until every *present* robot has acknowledged ``k`` — a barrier, so the team runs as fast
+   as its slowest member. With ``realtime_factor > 0`` ticks are additionally paced to
+   ``Δt / realtime_factor`` of wall time (``1`` = real time; used by the benchmark to check that
+   robots keep their rates).
+3. Publish ``ctl(end)`` and wait (bounded) for the robots to leave, so none of them misses it.
+
+The barrier is what makes a distributed run comparable with the in-process run: everything a
+robot published for ``[t_{k−1}, t_k)`` left before its ``ack(k)``, and nodes filter one tick
+behind the clock, so in a perfect network every input has normally arrived before it is needed.
+A robot that does not acknowledge within ``ack_timeout_s`` of wall time is not waited for (the
+clock counts it); a robot that disappears is dropped from the barrier.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from relloc.errors import ConfigError, RellocError
+from relloc.runtime import keys
+from relloc.runtime.faults import RobotEvent
+from relloc.runtime.messages import MessageRejected, decode, encode
+from relloc.runtime.transport import Inbox, TransportSettings, open_session
+
+
+@dataclass(frozen=True, kw_only=True)
+class ClockSettings:
+    """One clock run. ``tick_s`` is the simulated period of a tick (the odometry/measurement
+    publication period of every robot); ``duration_s`` the simulated end time."""
+
+    team: str
+    roster: tuple[str, ...]
+    tick_s: float
+    duration_s: float
+    transport: TransportSettings
+    realtime_factor: float = 0.0
+    ack_timeout_s: float = 10.0
+    startup_timeout_s: float = 60.0
+    kills: tuple[RobotEvent, ...] = ()
+    restarts: tuple[RobotEvent, ...] = ()
+
+    def __post_init__(self) -> None:
+        keys.check_id(self.team, "clock.team")
+        if not self.roster:
+            raise ConfigError("clock.roster: no robots")
+        for r in self.roster:
+            keys.check_id(r, "clock.roster")
+        if not (0 < self.tick_s <= self.duration_s):
+            raise ConfigError(f"clock.tick_s: need 0 < tick_s ≤ duration_s, got {self.tick_s}")
+        if self.realtime_factor < 0:
+            raise ConfigError(f"clock.realtime_factor: {self.realtime_factor} < 0")
+        for name in ("ack_timeout_s", "startup_timeout_s"):
+            if getattr(self, name) <= 0:
+                raise ConfigError(f"clock.{name}: must be > 0")
+
+    @property
+    def n_ticks(self) -> int:
+        return int(np.rint(self.duration_s / self.tick_s))
+
+
+@dataclass
+class ClockReport:
+    """What the clock observed; written to ``clock.json`` by the launcher."""
+
+    ticks: int = 0
+    wall_s: float = 0.0
+    startup_wall_s: float = 0.0
+    ack_timeouts: dict[str, int] = field(default_factory=dict)
+    departures: list[dict[str, Any]] = field(default_factory=list)
+    arrivals: list[dict[str, Any]] = field(default_factory=list)
+    events: list[dict[str, Any]] = field(default_factory=list)
+    max_tick_lag_s: float = 0.0
+    rejected: int = 0
+
+    def as_dict(self) -> dict[str, Any]:
+        return dict(self.__dict__)
+
+
+class Clock:
+    """Runs the protocol of the module docstring over one Zenoh session."""
+
+    def __init__(self, settings: ClockSettings) -> None:
+        self.s = settings
+        self.report = ClockReport()
+        self.present: set[str] = set()
+        self.ready: set[str] = set()
+        self._acks: set[str] = set()
+        self._seq = 0
+        self._t = 0.0
+
+    def _publish(self, pub: Any, kind: str, body: dict[str, Any]) -> None:
+        pub.put(encode(kind, "clock", self._seq, self._t, body))
+        self._seq += 1
+
+    def _handle(self, item: Any, waiting_k: int | None) -> None:
+        if item.presence != "data":
+            token, member = keys.parse_presence_key(item.key)
+            if member not in self.s.roster:
+                return
+            joined = item.presence == "joined"
+            if token == "ready":
+                (self.ready.add if joined else self.ready.discard)(member)
+            elif joined:
+                self.present.add(member)
+                self.report.arrivals.append({"robot": member, "t": self._t})
+            else:
+                self.present.discard(member)
+                self.report.departures.append({"robot": member, "t": self._t})
+            return
+        parsed = keys.parse_robot_key(item.key)
+        if parsed is None:
+            return
+        try:
+            msg = decode(item.payload, roster=self.s.roster, key_sender=parsed[0])
+        except MessageRejected:
+            self.report.rejected += 1
+            return
+        if msg.kind == "ack" and msg.body["k"] == waiting_k:
+            self._acks.add(msg.sender)
+
+    def _wait(self, inbox: Inbox, done: Any, timeout_s: float, waiting_k: int | None) -> bool:
+        deadline = time.monotonic() + timeout_s
+        while not done():
+            left = deadline - time.monotonic()
+            if left <= 0:
+                return False
+            item = inbox.get(timeout=min(left, 0.5))
+            if item is not None:
+                self._handle(item, waiting_k)
+        return True
+
+    def run(self) -> ClockReport:
+        s = self.s
+        session = open_session(s.transport)
+        inbox = Inbox()
+        try:
+            inbox.watch_presence(session, keys.alive_wildcard(s.team))
+            inbox.watch_presence(session, keys.ready_wildcard(s.team))
+            inbox.subscribe(session, keys.robot_wildcard(s.team, "ack"))
+            tick_pub = session.declare_publisher(keys.clock_key(s.team, "tick"))
+            ctl_pub = session.declare_publisher(keys.clock_key(s.team, "ctl"))
+            token = session.liveliness().declare_token(keys.alive_key(s.team, "clock"))
+            start = time.monotonic()
+            everyone = set(s.roster)
+            if not self._wait(inbox, lambda: everyone <= self.ready, s.startup_timeout_s, None):
+                missing = sorted(everyone - self.ready)
+                raise RellocError(f"clock: robots {missing} did not start within the timeout")
+            self.report.startup_wall_s = time.monotonic() - start
+            self._loop(inbox, tick_pub, ctl_pub)
+            self._publish(ctl_pub, "ctl", {"action": "end", "robot": ""})
+            self._wait(inbox, lambda: not self.present, s.ack_timeout_s, None)
+            token.undeclare()
+        finally:
+            inbox.close()
+            session.close()
+        return self.report
+
+    def _loop(self, inbox: Inbox, tick_pub: Any, ctl_pub: Any) -> None:
+        s = self.s
+        pending = sorted(
+            [("kill", e) for e in s.kills] + [("restart", e) for e in s.restarts],
+            key=lambda item: item[1].at_s,
+        )
+        start = time.monotonic()
+        for k in range(1, s.n_ticks + 1):
+            self._t = k * s.tick_s
+            while pending and pending[0][1].at_s <= self._t + 1e-9:
+                action, event = pending.pop(0)
+                self._robot_event(inbox, ctl_pub, action, event)
+            if s.realtime_factor > 0:
+                due = start + self._t / s.realtime_factor
+                lag = time.monotonic() - due
+                self.report.max_tick_lag_s = max(self.report.max_tick_lag_s, lag)
+                if lag < 0:
+                    time.sleep(-lag)
+            self._acks = set()
+            expected = set(self.present)
+            self._publish(tick_pub, "tick", {"k": k, "dt": s.tick_s})
+            acked = self._wait(
+                inbox, lambda e=expected: e & self.present <= self._acks, s.ack_timeout_s, k
+            )
+            if not acked:
+                for robot in sorted((expected & self.present) - self._acks):
+                    self.report.ack_timeouts[robot] = self.report.ack_timeouts.get(robot, 0) + 1
+            self.report.ticks = k
+        self.report.wall_s = time.monotonic() - start
+
+    def _robot_event(self, inbox: Inbox, ctl_pub: Any, action: str, event: RobotEvent) -> None:
+        wall = time.monotonic()
+        self._publish(ctl_pub, "ctl", {"action": action, "robot": event.robot})
+        if action == "kill":
+            ok = self._wait(inbox, lambda: event.robot not in self.present, 30.0, None)
+        else:
+            ok = self._wait(inbox, lambda: event.robot in self.ready, 60.0, None)
+        self.report.events.append(
+            {
+                "action": action,
+                "robot": event.robot,
+                "at_s": self._t,
+                "completed": ok,
+                "wall_s": time.monotonic() - wall,
+            }
+        )
+
+
+def run_clock(settings: ClockSettings, report_path: Path | None = None) -> ClockReport:
+    """Run a clock to the end; optionally write its report as JSON."""
+    report = Clock(settings).run()
+    if report_path is not None:
+        report_path.write_text(json.dumps(report.as_dict(), indent=2) + "\n")
+    return report

@@ -1,0 +1,337 @@
+"""``relloc team up``: a whole team as separate OS processes on this machine.
+
+The launcher process is the Zenoh hub and the collector: it *listens* on one explicit loopback
+endpoint; the clock/simulator process and every robot process *connect* to it (multicast
+scouting off). It then
+
+- starts ``relloc team clock`` (the clock/simulator process) and one ``relloc node`` per robot,
+  each robot simulating the same seeded scenario and reading only its own sensor slice;
+- collects every robot's ``est`` batches and ``stats`` counters, and watches liveliness;
+- executes the clock's ``kill`` events with a real ``SIGKILL`` of the robot's process and its
+  ``restart`` events by starting the robot again (it rejoins mid-run at the current tick);
+- after ``ctl(end)``, waits for every process to exit, then scores the collected estimates with
+  the same functions as the in-process run (:mod:`relloc.runtime.summary`).
+
+Children are started through a ``forkserver`` that has imported relloc once (a fresh interpreter
+per robot would spend seconds importing numpy/scipy on a small machine); each child runs exactly
+``relloc node ...`` / ``relloc team clock ...`` (the printed commands work by hand too) in its own
+OS process with its own Zenoh session. Every child is killed in a ``finally`` block whatever
+happens; each one's output goes to ``<out>/logs/<robot>.log``.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+import signal
+import sys
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from relloc.errors import ConfigError, RellocError
+from relloc.runtime import keys
+from relloc.runtime.faults import FaultSettings
+from relloc.runtime.messages import MessageRejected, decode
+from relloc.runtime.transport import (
+    Inbox,
+    TransportSettings,
+    free_loopback_port,
+    loopback_endpoint,
+    open_session,
+)
+
+
+@dataclass(frozen=True, kw_only=True)
+class TeamSettings:
+    """One ``team up`` run. ``scenario`` is a TOML path or ``"default"``."""
+
+    scenario: str
+    out_dir: Path
+    seed: int = 0
+    team: str = "team"
+    tick_s: float = 0.1
+    faults: FaultSettings = field(default_factory=FaultSettings)
+    realtime_factor: float = 0.0
+    port: int | None = None
+    wall_timeout_s: float = 300.0
+    filter_kind: str = "plkf"
+
+    def __post_init__(self) -> None:
+        keys.check_id(self.team, "--team")
+        if self.scenario != "default" and not Path(self.scenario).is_file():
+            raise ConfigError(f"scenario: {self.scenario} is not a file (or use 'default')")
+        if not (0.001 <= self.tick_s <= 10):
+            raise ConfigError(f"--tick: {self.tick_s} s outside [0.001, 10]")
+        if self.seed < 0:
+            raise ConfigError(f"--seed: {self.seed} must be ≥ 0")
+        if self.wall_timeout_s <= 0:
+            raise ConfigError("--timeout: must be > 0")
+
+
+@dataclass
+class Collected:
+    """Everything the collector received."""
+
+    estimates: dict[tuple[str, str], list[Mapping[str, Any]]] = field(default_factory=dict)
+    """Per (observer, target), the bodies of the ``est`` messages in arrival order."""
+    events: list[tuple[float, str, str, str]] = field(default_factory=list)
+    """Track events ``(t, observer, target, kind)``."""
+    stats: dict[str, list[dict[str, int]]] = field(default_factory=dict)
+    """Per robot, the counters of each process incarnation (a restart starts a new one)."""
+    rejected: int = 0
+    presence: list[dict[str, Any]] = field(default_factory=list)
+    kills: list[dict[str, Any]] = field(default_factory=list)
+    restarts: list[dict[str, Any]] = field(default_factory=list)
+    wall_s: float = 0.0
+
+
+def node_command(settings: TeamSettings, robot: str, endpoint: str) -> list[str]:
+    """The ``relloc`` arguments of one robot process (``relloc node ...``)."""
+    f = settings.faults
+    cmd = [
+        "node",
+        "--robot",
+        robot,
+        "--scenario",
+        settings.scenario,
+        "--seed",
+        str(settings.seed),
+        "--team",
+        settings.team,
+        "--connect",
+        endpoint,
+        "--filter",
+        settings.filter_kind,
+        "--drop",
+        repr(f.drop),
+        "--delay",
+        repr(f.delay_ms),
+        "--jitter",
+        repr(f.jitter_ms),
+        "--duplicate",
+        repr(f.duplicate),
+        "--reorder",
+        repr(f.reorder),
+    ]
+    for p in f.partitions:
+        cmd += ["--partition", f"{','.join(p.side)}@{p.start_s!r}-{p.end_s!r}"]
+    return cmd
+
+
+def clock_command(
+    settings: TeamSettings,
+    roster: tuple[str, ...],
+    duration_s: float,
+    endpoint: str,
+    report: Path,
+) -> list[str]:
+    """The ``relloc`` arguments of the clock/simulator process (``relloc team clock ...``)."""
+    cmd = [
+        "team",
+        "clock",
+        "--team",
+        settings.team,
+        "--roster",
+        ",".join(roster),
+        "--tick",
+        repr(settings.tick_s),
+        "--duration",
+        repr(duration_s),
+        "--realtime",
+        repr(settings.realtime_factor),
+        "--connect",
+        endpoint,
+        "--report",
+        str(report),
+    ]
+    for e in settings.faults.kills:
+        cmd += ["--kill", f"{e.robot}@{e.at_s!r}"]
+    for e in settings.faults.restarts:
+        cmd += ["--restart", f"{e.robot}@{e.at_s!r}"]
+    return cmd
+
+
+PRELOAD = [
+    "relloc.cli",
+    "relloc.cli.node",
+    "relloc.cli.team",
+    "relloc.runtime.node",
+    "relloc.runtime.clock",
+    "relloc.runtime.scenario",
+    "relloc.runtime.estimation",
+]
+"""Modules the fork server imports once, so robot processes start in milliseconds instead of
+each paying numpy/scipy imports (zenoh is imported by each child: its runtime must not be
+inherited across fork)."""
+
+
+def _child_main(argv: list[str], log_path: str) -> None:
+    """Entry of a child process: ``relloc <argv>`` with stdout/stderr to ``log_path``."""
+    fd = os.open(log_path, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o644)
+    os.dup2(fd, 1)
+    os.dup2(fd, 2)
+    os.close(fd)
+    sys.stdout = open(1, "w", buffering=1, closefd=False)
+    sys.stderr = open(2, "w", buffering=1, closefd=False)
+    from relloc.cli import main
+
+    code = main(argv)
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(code)
+
+
+def _fork_context() -> Any:
+    """A ``forkserver`` multiprocessing context preloading :data:`PRELOAD`."""
+    ctx = multiprocessing.get_context("forkserver")
+    ctx.set_forkserver_preload(PRELOAD)
+    return ctx
+
+
+class TeamLauncher:
+    """Start, supervise and collect a team (see module docstring)."""
+
+    def __init__(self, settings: TeamSettings, roster: tuple[str, ...], duration_s: float) -> None:
+        self.s = settings
+        self.roster = roster
+        self.duration_s = duration_s
+        self.logs = settings.out_dir / "logs"
+        self.procs: dict[str, Any] = {}
+        self.incarnation: dict[str, int] = dict.fromkeys(roster, 0)
+        self.collected = Collected()
+        self.endpoint = ""
+        self._ctx = _fork_context()
+
+    def _spawn(self, name: str, argv: list[str]) -> Any:
+        """Start ``relloc <argv>`` as a separate OS process (forked by the fork server)."""
+        n = self.incarnation.get(name, 0)
+        log = self.logs / (f"{name}.{n}.log" if n else f"{name}.log")
+        proc = self._ctx.Process(target=_child_main, args=(argv, str(log)), name=name)
+        proc.start()
+        return proc
+
+    def run(self) -> Collected:
+        """Run the team to the end (or the wall timeout) and return what was collected."""
+        self.logs.mkdir(parents=True, exist_ok=True)
+        endpoint = self.endpoint = loopback_endpoint(self.s.port or free_loopback_port())
+        session = open_session(TransportSettings(listen=(endpoint,)))
+        inbox = Inbox()
+        start = time.monotonic()
+        try:
+            for kind in ("est", "evt", "stats"):
+                inbox.subscribe(session, keys.robot_wildcard(self.s.team, kind))
+            inbox.subscribe(session, keys.clock_key(self.s.team, "ctl"))
+            inbox.watch_presence(session, keys.alive_wildcard(self.s.team))
+            self.procs["clock"] = self._spawn(
+                "clock",
+                clock_command(
+                    self.s, self.roster, self.duration_s, endpoint, self.s.out_dir / "clock.json"
+                ),
+            )
+            for robot in self.roster:
+                self.procs[robot] = self._spawn(robot, node_command(self.s, robot, endpoint))
+            self._collect(inbox, start)
+        finally:
+            self._stop_all()
+            inbox.close()
+            session.close()
+        self.collected.wall_s = time.monotonic() - start
+        return self.collected
+
+    def _collect(self, inbox: Inbox, start: float) -> None:
+        ended = False
+        end_wall = None
+        while True:
+            now = time.monotonic()
+            if now - start > self.s.wall_timeout_s:
+                raise RellocError(
+                    f"team up: not finished after {self.s.wall_timeout_s:g} s of wall time; "
+                    f"see the logs in {self.logs}"
+                )
+            clock = self.procs["clock"]
+            if clock.exitcode not in (None, 0):
+                raise RellocError(
+                    f"team up: the clock process failed (exit {clock.exitcode}); "
+                    f"see {self.logs / 'clock.log'}"
+                )
+            if ended:
+                alive = [r for r in self.roster if self.procs[r].exitcode is None]
+                if not alive and clock.exitcode is not None:
+                    break
+                if end_wall is not None and now - end_wall > 30.0:
+                    raise RellocError(f"team up: robots {alive} did not exit after the end")
+            item = inbox.get(timeout=0.2)
+            if item is None:
+                continue
+            ended = self._on_item(item) or ended
+            if ended and end_wall is None:
+                end_wall = time.monotonic()
+        for item in inbox.drain():
+            self._on_item(item)
+
+    def _on_item(self, item: Any) -> bool:
+        """File one record; True if it was the clock's end event."""
+        if item.presence != "data":
+            token, member = keys.parse_presence_key(item.key)
+            self.collected.presence.append(
+                {"member": member, "token": token, "event": item.presence}
+            )
+            return False
+        parsed = keys.parse_robot_key(item.key)
+        try:
+            msg = decode(
+                item.payload,
+                roster=self.roster,
+                key_sender=parsed[0] if parsed else "clock",
+                max_bytes=16 * 2**20,
+            )
+        except MessageRejected:
+            self.collected.rejected += 1
+            return False
+        if msg.kind == "est":
+            pair = (msg.sender, msg.body["target"])
+            self.collected.estimates.setdefault(pair, []).append(msg.body)
+        elif msg.kind == "evt":
+            b = msg.body
+            for t, target, kind in zip(b["stamps"].tolist(), b["targets"], b["kinds"], strict=True):
+                self.collected.events.append((t, msg.sender, target, kind))
+        elif msg.kind == "stats":
+            per_robot = self.collected.stats.setdefault(msg.sender, [])
+            index = self.incarnation[msg.sender]
+            while len(per_robot) <= index:
+                per_robot.append({})
+            per_robot[index] = dict(msg.body["counters"])
+        elif msg.kind == "ctl":
+            return self._on_control(msg.body["action"], msg.body["robot"], msg.t)
+        return False
+
+    def _on_control(self, action: str, robot: str, t: float) -> bool:
+        if action == "end":
+            return True
+        proc = self.procs.get(robot)
+        if action == "kill" and proc is not None:
+            os.kill(proc.pid, signal.SIGKILL)
+            proc.join(timeout=30)
+            self.collected.kills.append({"robot": robot, "at_s": t, "pid": proc.pid})
+        elif action == "restart":
+            self.incarnation[robot] += 1
+            self.procs[robot] = self._spawn(robot, node_command(self.s, robot, self.endpoint))
+            self.collected.restarts.append(
+                {"robot": robot, "at_s": t, "pid": self.procs[robot].pid}
+            )
+        return False
+
+    def _stop_all(self) -> None:
+        """Terminate every child still running; SIGKILL those that do not stop in 5 s."""
+        for proc in self.procs.values():
+            if proc.exitcode is None:
+                proc.terminate()
+        deadline = time.monotonic() + 5.0
+        for proc in self.procs.values():
+            proc.join(timeout=max(0.1, deadline - time.monotonic()))
+            if proc.exitcode is None:
+                proc.kill()
+                proc.join(timeout=5.0)

@@ -1,0 +1,117 @@
+"""What each injected fault did: accuracy before / during / after it, and the tracks it touched.
+
+For a fault with a time window — a partition ``[T1, T2)``, or a robot killed at ``T1`` and
+restarted at ``T2`` (end of run if never) — the *affected pairs* are those whose observer and
+observed robot are on different sides of the partition, or that involve the killed robot.
+Over those pairs:
+
+- position RMSE (m) of all recorded beliefs before ``T1``, in ``[T1, T2)`` and from ``T2`` on
+  (no steady-state filter: the point is what the fault does to a running team);
+- ``tracks_kept``: affected pairs with a live track at ``T1`` that were not deleted before
+  ``T2 + keep window``; ``tracks_deleted``: deletions of affected pairs in that interval;
+  ``tracks_refound``: tracks of affected pairs (re-)created after a deletion or a restart
+  in ``[T1, end]``.
+
+Network faults without a window (loss, delay, jitter, duplicates, reordering) are reported once
+for the whole run against the fault-free in-process run on the same seed.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from relloc.estimators.track_manager import TeamEstimates
+from relloc.experiments.team_run import RunResult
+from relloc.runtime.faults import FaultSettings
+from relloc.sim.log import Log
+
+
+def _rmse(errors: Sequence[np.ndarray]) -> float | None:
+    e = np.concatenate([x[:, :3] for x in errors]) if errors else np.zeros((0, 3))
+    return float(np.sqrt(np.mean(np.sum(e**2, axis=1)))) if e.size else None
+
+
+def _window_outcome(
+    name: str,
+    t1: float,
+    t2: float,
+    affected: set[tuple[str, str]],
+    result: RunResult,
+    estimates: TeamEstimates,
+    keep_window_s: float,
+) -> dict[str, Any]:
+    pairs = [p for p in result.pairs if (p.observer, p.observed) in affected]
+    phases = {
+        "before": [p.error[p.t < t1] for p in pairs],
+        "during": [p.error[(p.t >= t1) & (p.t < t2)] for p in pairs],
+        "after": [p.error[p.t >= t2] for p in pairs],
+    }
+    events = [e for e in estimates.events if (e.observer, e.observed) in affected]
+    horizon = t2 + keep_window_s
+    deleted = [e for e in events if e.kind == "deleted" and t1 <= e.t <= horizon]
+    refound = [e for e in events if e.kind in ("created", "recreated") and e.t > t1]
+    live_at_start = {
+        (p.observer, p.observed) for p in estimates.pairs if p.t.size and p.t[0] < t1 <= p.t[-1]
+    }
+    deleted_pairs = {(e.observer, e.observed) for e in deleted}
+    return {
+        "fault": name,
+        "window_s": [t1, t2],
+        "affected_pairs": sorted(f"{a}->{b}" for a, b in affected),
+        "position_rmse_before_m": _rmse(phases["before"]),
+        "position_rmse_during_m": _rmse(phases["during"]),
+        "position_rmse_after_m": _rmse(phases["after"]),
+        "tracks_kept": len(live_at_start - deleted_pairs),
+        "tracks_deleted": len(deleted),
+        "tracks_refound": len(refound),
+    }
+
+
+def fault_outcomes(
+    faults: FaultSettings,
+    result: RunResult,
+    estimates: TeamEstimates,
+    log: Log,
+    *,
+    keep_window_s: float = 2.0,
+) -> list[dict[str, Any]]:
+    """One entry per fault (see module docstring)."""
+    t_end = log.span[1]
+    all_pairs = {(p.observer, p.observed) for p in estimates.pairs}
+    out: list[dict[str, Any]] = []
+    for p in faults.partitions:
+        affected = {(a, b) for a, b in all_pairs if (a in p.side) != (b in p.side)}
+        name = f"partition {','.join(p.side)}@{p.start_s:g}-{p.end_s:g}"
+        out.append(
+            _window_outcome(name, p.start_s, p.end_s, affected, result, estimates, keep_window_s)
+        )
+    for kill in faults.kills:
+        back = [r.at_s for r in faults.restarts if r.robot == kill.robot and r.at_s > kill.at_s]
+        t2 = min(back) if back else t_end
+        affected = {(a, b) for a, b in all_pairs if kill.robot in (a, b)}
+        name = f"kill {kill.robot}@{kill.at_s:g}" + (f", restart @{t2:g}" if back else "")
+        entry = _window_outcome(name, kill.at_s, t2, affected, result, estimates, keep_window_s)
+        entry["restarted"] = bool(back)
+        out.append(entry)
+    if faults.drop or faults.delay_ms or faults.jitter_ms or faults.duplicate or faults.reorder:
+        counts = {k: sum(e.kind == k for e in estimates.events) for k in ("created", "deleted")}
+        counts["recreated"] = sum(e.kind == "recreated" for e in estimates.events)
+        out.append(
+            {
+                "fault": (
+                    f"network drop={faults.drop:g} delay={faults.delay_ms:g}ms "
+                    f"jitter={faults.jitter_ms:g}ms duplicate={faults.duplicate:g} "
+                    f"reorder={faults.reorder:g}"
+                ),
+                "window_s": [log.span[0], t_end],
+                "position_rmse_during_m": _rmse([p.error for p in result.pairs]),
+                "tracks_created": counts["created"],
+                "tracks_deleted": counts["deleted"],
+                "tracks_refound": counts["recreated"],
+                "note": "whole run; compare with the in-process (fault-free) accuracy above",
+            }
+        )
+    return out

@@ -1,0 +1,161 @@
+"""Turn what the launcher collected into the run's results.
+
+:func:`assemble_estimates` rebuilds a :class:`~relloc.estimators.track_manager.TeamEstimates` —
+the very type the in-process run produces — from the robots' ``est``/``evt`` streams, so the
+distributed run is scored by the same functions as ``relloc run``. :func:`runtime_section` adds
+what only a distributed run has: per-robot message counts (sent, received, rejected), estimate
+counts, latencies, and per-fault outcomes.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from relloc.errors import ConfigError
+from relloc.estimators.track_manager import PairEstimates, TeamEstimates, TrackEvent
+from relloc.runtime.launcher import Collected
+
+DATA_KINDS = ("odom", "meas", "eqm")
+
+
+def _cat(bodies: Sequence[Mapping[str, Any]], name: str, tail: tuple[int, ...]) -> np.ndarray:
+    parts = [np.asarray(b[name], dtype=float).reshape((-1, *tail)) for b in bodies]
+    return np.concatenate(parts) if parts else np.zeros((0, *tail))
+
+
+def assemble_estimates(
+    collected: Collected, roster: Sequence[str], filter_name: str
+) -> TeamEstimates:
+    """One :class:`PairEstimates` per (observer, target) pair, in roster order; records sorted by
+    time (a restarted observer's second life follows its first)."""
+    order = {r: i for i, r in enumerate(roster)}
+    pairs = []
+    for (observer, target), bodies in sorted(
+        collected.estimates.items(), key=lambda kv: (order[kv[0][0]], order[kv[0][1]])
+    ):
+        t = _cat(bodies, "stamps", ())
+        ut = _cat(bodies, "update_stamps", ())
+        rec = np.argsort(t, kind="stable")
+        upd = np.argsort(ut, kind="stable")
+        pairs.append(
+            PairEstimates(
+                observer=observer,
+                observed=target,
+                t=t[rec],
+                mean=_cat(bodies, "means", (4,))[rec],
+                cov=_cat(bodies, "covs", (4, 4))[rec],
+                age=_cat(bodies, "ages", ())[rec],
+                update_t=ut[upd],
+                update_age=_cat(bodies, "update_ages", ())[upd],
+                nis=_cat(bodies, "nis", ())[upd],
+                cond_r=_cat(bodies, "cond_r", ())[upd],
+                cond_s=_cat(bodies, "cond_s", ())[upd],
+            )
+        )
+    events = sorted(collected.events, key=lambda e: (e[0], order[e[1]], order[e[2]]))
+    return TeamEstimates(
+        filter=filter_name,
+        pairs=tuple(pairs),
+        events=tuple(TrackEvent(t=t, observer=o, observed=d, kind=k) for t, o, d, k in events),  # type: ignore[arg-type]
+    )
+
+
+def _sum_counters(incarnations: Sequence[Mapping[str, int]]) -> dict[str, int]:
+    total: dict[str, int] = {}
+    for counters in incarnations:
+        for key, value in counters.items():
+            if key.startswith("latency_us."):
+                continue
+            total[key] = total.get(key, 0) + int(value)
+    return total
+
+
+def robot_messages(collected: Collected, roster: Sequence[str]) -> dict[str, dict[str, Any]]:
+    """Per robot: messages sent / received (on the wire, delivered after faults) / rejected,
+    estimates, track events, latency percentiles (of its last incarnation)."""
+    out: dict[str, dict[str, Any]] = {}
+    for robot in roster:
+        lives = collected.stats.get(robot, [])
+        c = _sum_counters(lives)
+        last = lives[-1] if lives else {}
+        rejected = {k.split(".", 1)[1]: v for k, v in c.items() if k.startswith("rejected.")}
+        out[robot] = {
+            "processes": len(lives),
+            "final_report": bool(last.get("final", 0)),
+            "estimates": c.get("estimates", 0),
+            "sent": {k: c.get(f"sent.{k}", 0) for k in (*DATA_KINDS, "est", "evt", "stats", "ack")},
+            "received_wire": {k: c.get(f"wire.{k}", 0) for k in DATA_KINDS},
+            "received_delivered": {k: c.get(f"delivered.{k}", 0) for k in DATA_KINDS},
+            "rejected": c.get("rejected", 0),
+            "rejected_by_reason": rejected,
+            "duplicates_dropped": c.get("duplicates", 0),
+            "late_odometry_samples": c.get("late_samples", 0),
+            "from_absent_teammate": sum(v for k, v in c.items() if k.startswith("from_absent.")),
+            "faults": {k.split(".", 1)[1]: v for k, v in c.items() if k.startswith("fault.")},
+            "tracks": {k.split(".", 1)[1]: v for k, v in c.items() if k.startswith("tracks.")},
+            "ticks": c.get("ticks", 0),
+            "teammate_departures_seen": c.get("teammate.departures", 0),
+            "teammate_joins_seen": c.get("teammate.joins", 0),
+            "latency_us": {
+                "p50": last.get("latency_us.p50"),
+                "p99": last.get("latency_us.p99"),
+                "samples": last.get("latency_us.samples", 0),
+            },
+        }
+    return out
+
+
+def team_message_totals(
+    per_robot: Mapping[str, Mapping[str, Any]], *, killed: bool = False
+) -> dict[str, Any]:
+    """Team totals and the transport loss rate ``1 − received / expected`` of the data streams,
+    where each data message is expected once at every other robot (emulated faults act after
+    reception, so this is what the transport itself lost). With a killed robot the expectation
+    is undefined (a dead robot receives nothing) and the rate is None."""
+    n = len(per_robot)
+    sent = sum(sum(r["sent"][k] for k in DATA_KINDS) for r in per_robot.values())
+    wire = sum(sum(r["received_wire"].values()) for r in per_robot.values())
+    delivered = sum(sum(r["received_delivered"].values()) for r in per_robot.values())
+    expected = sent * (n - 1)
+    return {
+        "data_messages_sent": sent,
+        "data_messages_expected": expected,
+        "data_messages_received_wire": wire,
+        "data_messages_delivered": delivered,
+        "transport_loss_rate": None if killed or not expected else 1.0 - wire / expected,
+        "rejected": sum(r["rejected"] for r in per_robot.values()),
+        "estimates": sum(r["estimates"] for r in per_robot.values()),
+    }
+
+
+def agreement(distributed: TeamEstimates, in_process: TeamEstimates) -> dict[str, Any]:
+    """How far the distributed estimates are from the in-process ones at the same times.
+
+    Per pair: the number of common recording times, the largest absolute difference of any
+    state and of any covariance entry there, and the records only one run has.
+    """
+    per_pair: dict[str, Any] = {}
+    worst_mean = worst_cov = 0.0
+    for ref in in_process.pairs:
+        try:
+            got = distributed.pair(ref.observer, ref.observed)
+        except ConfigError:  # a pair the distributed run never tracked
+            per_pair[ref.label] = {"common": 0, "only_in_process": int(ref.t.size)}
+            continue
+        common, i_ref, i_got = np.intersect1d(
+            np.round(ref.t, 6), np.round(got.t, 6), return_indices=True
+        )
+        d_mean = float(np.abs(ref.mean[i_ref] - got.mean[i_got]).max(initial=0.0))
+        d_cov = float(np.abs(ref.cov[i_ref] - got.cov[i_got]).max(initial=0.0))
+        worst_mean, worst_cov = max(worst_mean, d_mean), max(worst_cov, d_cov)
+        per_pair[ref.label] = {
+            "common": int(common.size),
+            "only_in_process": int(ref.t.size - common.size),
+            "only_distributed": int(got.t.size - common.size),
+            "max_abs_mean_diff": d_mean,
+            "max_abs_cov_diff": d_cov,
+        }
+    return {"max_abs_mean_diff": worst_mean, "max_abs_cov_diff": worst_cov, "pairs": per_pair}

@@ -1,0 +1,119 @@
+"""What a node knows about its teammates: presence, received odometry, beliefs they broadcast.
+
+The relative motion model of seed 000 (Eq. 1) needs the *observed* robot's body velocities,
+which only that robot measures — so they come over the network. :class:`ReceivedOdometry`
+keeps the samples that arrived and answers zero-order-hold queries exactly like
+:meth:`relloc.sim.log.Odometry.held_at`: with a perfect network the node therefore feeds its
+filters the very same inputs as the in-process run. A lost sample means the previous one is
+held longer; a sample that arrives after the node has already propagated past its time is
+counted ``late`` and not used (the past is not re-filtered).
+"""
+
+from __future__ import annotations
+
+import bisect
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from relloc.core.gaussian import Gaussian
+
+Array = NDArray[np.float64]
+
+
+class ReceivedOdometry:
+    """Body-velocity samples of one teammate as received (sorted by stamp, no duplicates)."""
+
+    def __init__(self) -> None:
+        self._t: list[float] = []
+        self._u: list[Array] = []
+        self.consumed_until = -np.inf
+        self.late = 0
+        self.duplicate_samples = 0
+
+    def add(self, stamps: Array, u: Array) -> None:
+        for s, v in zip(stamps.tolist(), u, strict=True):
+            if s < self.consumed_until:
+                self.late += 1
+                continue
+            i = bisect.bisect_left(self._t, s)
+            if i < len(self._t) and self._t[i] == s:
+                self.duplicate_samples += 1
+                continue
+            self._t.insert(i, s)
+            self._u.insert(i, np.asarray(v, dtype=float))
+
+    def held_at(self, t: Array) -> Array:
+        """Zero-order hold at times ``t`` (zeros before the first sample), shape ``(len(t), 4)``."""
+        tq = np.atleast_1d(np.asarray(t, dtype=float))
+        out = np.zeros((tq.size, 4))
+        if not self._t:
+            return out
+        stamps = np.asarray(self._t)
+        idx = np.searchsorted(stamps, tq, side="right") - 1
+        ok = idx >= 0
+        out[ok] = np.asarray(self._u)[idx[ok]]
+        return out
+
+    def stamps_between(self, t0: float, t1: float, inclusive: bool = False) -> Array:
+        """Stamps of the samples held in ``[t0, t1)`` (``[t0, t1]`` with ``inclusive``)."""
+        stamps = np.asarray(self._t, dtype=float)
+        upper = stamps <= t1 if inclusive else stamps < t1
+        return stamps[(stamps >= t0) & upper]
+
+    def consume_until(self, t: float) -> None:
+        """The node has filtered up to ``t`` (exclusive): later arrivals stamped before ``t`` are
+        late; samples older than the last one before ``t`` (the velocity still held at the
+        filter's current time) are no longer needed and are released."""
+        self.consumed_until = max(self.consumed_until, t)
+        keep_from = max(0, bisect.bisect_left(self._t, t) - 1)
+        del self._t[:keep_from]
+        del self._u[:keep_from]
+
+    @property
+    def last_stamp(self) -> float | None:
+        return self._t[-1] if self._t else None
+
+
+@dataclass
+class Teammate:
+    """One teammate as seen by a node."""
+
+    robot: str
+    present: bool = False
+    joins: int = 0
+    departures: int = 0
+    odometry: ReceivedOdometry = field(default_factory=ReceivedOdometry)
+    heard_until_s: float | None = None
+    """End of the latest odometry window received (the header time of its ``odom``)."""
+    belief_of: dict[str, tuple[float, Gaussian]] = field(default_factory=dict)
+    """Latest equivalent measurement this teammate broadcast, per target: (time, belief)."""
+
+
+class SeenSequences:
+    """Per (sender, kind) duplicate filter on message sequence numbers (bounded memory)."""
+
+    def __init__(self, window: int = 4096) -> None:
+        self.window = window
+        self._seen: dict[tuple[str, str], set[int]] = {}
+        self._top: dict[tuple[str, str], int] = {}
+
+    def is_new(self, sender: str, kind: str, seq: int) -> bool:
+        key = (sender, kind)
+        seen = self._seen.setdefault(key, set())
+        top = self._top.get(key, -1)
+        if seq in seen or seq <= top - self.window:
+            return False
+        seen.add(seq)
+        if seq > top:
+            self._top[key] = seq
+            if len(seen) > 2 * self.window:
+                self._seen[key] = {s for s in seen if s > seq - self.window}
+        return True
+
+    def forget(self, sender: str) -> None:
+        """A restarted sender counts from 0 again."""
+        for key in [k for k in self._seen if k[0] == sender]:
+            del self._seen[key]
+            self._top.pop(key, None)
