@@ -153,16 +153,15 @@ def predict_kernel(
     return mean, cov
 
 
-def update_kernel(
-    m: Vec, P: Vec, A: Vec, nu: Vec, R: Vec, ops: Ops
-) -> tuple[Vec, Vec, Vec, Scalar] | None:
-    """Joseph-form update with ``H = [A | 0]`` (``A`` row-major 3 × 3), residual ``ν``, ``R``.
+def gain_kernel(P: Vec, A: Vec, R: Vec, ops: Ops) -> tuple[Vec, Vec, Vec] | None:
+    """Kalman gain for ``H = [A | 0]`` (``A`` row-major 3 × 3): ``S = H P Hᵀ + R``,
+    ``K = P Hᵀ S⁻¹`` (``S⁻¹`` by cofactors).
 
-    Returns ``(mean, cov, S, nis)``, or ``None`` if some ``S`` is not positive definite
-    (Sylvester's criterion on its leading minors).
+    Returns ``(K, S, S⁻¹)`` with ``K`` row-major 4 × 3 and ``S``, ``S⁻¹`` as upper triangles, or
+    ``None`` if some ``S`` is not positive definite (Sylvester's criterion on its leading minors).
     """
     a00, a01, a02, a10, a11, a12, a20, a21, a22 = A
-    p00, p01, p02, p03, p11, p12, p13, p22, p23, p33 = P
+    p00, p01, p02, p03, p11, p12, p13, p22, p23, _p33 = P  # φφ does not enter H P Hᵀ
     # U = P Hᵀ (4 × 3)
     u00 = p00 * a00 + p01 * a01 + p02 * a02
     u01 = p00 * a10 + p01 * a11 + p02 * a12
@@ -195,19 +194,39 @@ def update_kernel(
         return None
     inv = 1.0 / det
     i00, i01, i02, i11, i12, i22 = c00 * inv, c01 * inv, c02 * inv, c11 * inv, c12 * inv, c22 * inv
-    # K = U S⁻¹ (4 × 3)
-    k00 = u00 * i00 + u01 * i01 + u02 * i02
-    k01 = u00 * i01 + u01 * i11 + u02 * i12
-    k02 = u00 * i02 + u01 * i12 + u02 * i22
-    k10 = u10 * i00 + u11 * i01 + u12 * i02
-    k11 = u10 * i01 + u11 * i11 + u12 * i12
-    k12 = u10 * i02 + u11 * i12 + u12 * i22
-    k20 = u20 * i00 + u21 * i01 + u22 * i02
-    k21 = u20 * i01 + u21 * i11 + u22 * i12
-    k22 = u20 * i02 + u21 * i12 + u22 * i22
-    k30 = u30 * i00 + u31 * i01 + u32 * i02
-    k31 = u30 * i01 + u31 * i11 + u32 * i12
-    k32 = u30 * i02 + u31 * i12 + u32 * i22
+    K = (
+        u00 * i00 + u01 * i01 + u02 * i02,
+        u00 * i01 + u01 * i11 + u02 * i12,
+        u00 * i02 + u01 * i12 + u02 * i22,
+        u10 * i00 + u11 * i01 + u12 * i02,
+        u10 * i01 + u11 * i11 + u12 * i12,
+        u10 * i02 + u11 * i12 + u12 * i22,
+        u20 * i00 + u21 * i01 + u22 * i02,
+        u20 * i01 + u21 * i11 + u22 * i12,
+        u20 * i02 + u21 * i12 + u22 * i22,
+        u30 * i00 + u31 * i01 + u32 * i02,
+        u30 * i01 + u31 * i11 + u32 * i12,
+        u30 * i02 + u31 * i12 + u32 * i22,
+    )
+    return K, (s00, s01, s02, s11, s12, s22), (i00, i01, i02, i11, i12, i22)
+
+
+def update_kernel(
+    m: Vec, P: Vec, A: Vec, nu: Vec, R: Vec, ops: Ops
+) -> tuple[Vec, Vec, Vec, Scalar] | None:
+    """Joseph-form update with ``H = [A | 0]`` (``A`` row-major 3 × 3), residual ``ν``, ``R``.
+
+    Returns ``(mean, cov, S, nis)``, or ``None`` if some ``S`` is not positive definite.
+    """
+    gain = gain_kernel(P, A, R, ops)
+    if gain is None:
+        return None
+    K, S, S_inv = gain
+    k00, k01, k02, k10, k11, k12, k20, k21, k22, k30, k31, k32 = K
+    i00, i01, i02, i11, i12, i22 = S_inv
+    a00, a01, a02, a10, a11, a12, a20, a21, a22 = A
+    p00, p01, p02, p03, p11, p12, p13, p22, p23, p33 = P
+    r00, r01, r02, r11, r12, r22 = R
     n0, n1, n2 = nu
     w0 = i00 * n0 + i01 * n1 + i02 * n2
     w1 = i01 * n0 + i11 * n1 + i12 * n2
@@ -276,7 +295,7 @@ def update_kernel(
         c_20 * b30 + c_21 * b31 + c_22 * b32 + c_23 + e20 * k30 + e21 * k31 + e22 * k32,
         c_30 * b30 + c_31 * b31 + c_32 * b32 + c_33 + e30 * k30 + e31 * k31 + e32 * k32,
     )
-    return mean, cov, (s00, s01, s02, s11, s12, s22), nis
+    return mean, cov, S, nis
 
 
 def tekf_terms(m: Vec, z: Vec, var: Vec, ops: Ops) -> tuple[Vec, Vec, Vec]:
@@ -290,7 +309,8 @@ def tekf_terms(m: Vec, z: Vec, var: Vec, ops: Ops) -> tuple[Vec, Vec, Vec]:
     r2 = rho2 + zz * zz
     r = ops.sqrt(r2)
     rr = rho * r2
-    A = (x / r, y / r, zz / r, -y / rho2, x / rho2, 0.0 * x, -x * zz / rr, -y * zz / rr, rho / r2)
+    zero = 0.0 * x  # a zero shaped like the batch
+    A = (x / r, y / r, zz / r, -y / rho2, x / rho2, zero, -x * zz / rr, -y * zz / rr, rho / r2)
     two_pi = 2.0 * math.pi
     d_az = z[1] - ops.atan2(y, x)
     d_el = z[2] - ops.atan2(zz, rho)
@@ -313,7 +333,8 @@ def plkf_terms(
     x, y, zz = m[0], m[1], m[2]
     ct, st = ops.cos(z[1]), ops.sin(z[1])
     ca, sa = ops.cos(z[2]), ops.sin(z[2])
-    A = (ct * ca, st * ca, sa, -st, ct, 0.0 * ct, -ct * sa, -st * sa, ca)
+    zero = 0.0 * ct  # a zero shaped like the batch
+    A = (ct * ca, st * ca, sa, -st, ct, zero, -ct * sa, -st * sa, ca)
     nu = (
         z[0] - (A[0] * x + A[1] * y + sa * zz),
         st * x - ct * y,
@@ -365,11 +386,14 @@ def plkf_bias_kernel(
             zj = tuple(z_hat[i] + sign * step if i == axis else z_hat[i] for i in range(3))
             A, _, R = plkf_terms(prior, zj, var, ops, full_covariance=full_covariance)
             _, nu, _ = plkf_terms(posterior, zj, var, ops)
-            out = update_kernel(posterior, P, A, nu, R, ops)
-            if out is None:
+            gain = gain_kernel(P, A, R, ops)
+            if gain is None:
                 return None
+            K = gain[0]
             for i in range(4):
-                total[i] = total[i] + (out[0][i] - posterior[i])
+                total[i] = total[i] + (
+                    K[3 * i] * nu[0] + K[3 * i + 1] * nu[1] + K[3 * i + 2] * nu[2]
+                )
     return tuple(t / 6.0 for t in total)
 
 
