@@ -1,0 +1,176 @@
+"""Track manager: create on first sight, keep (predict only) within the window, delete after it,
+re-create on reappearance; several observers and observed robots; every filter; consistency."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from relloc.errors import ConfigError
+from relloc.estimators.initialisation import InitPolicy
+from relloc.estimators.track_manager import (
+    FILTERS,
+    TrackManager,
+    TrackManagerSettings,
+    track_log,
+)
+from relloc.metrics import anees, anees_band, nees, state_errors
+from relloc.sim.log import GroundTruth, Log, Measurements, Odometry
+from relloc.sim.scenario import (
+    RobotSpec,
+    Scenario,
+    SensorSpec,
+    VelocityMotion,
+    WaypointMotion,
+    default_scenario,
+)
+from relloc.sim.sensors import range_azimuth_elevation
+from relloc.sim.simulate import simulate
+
+SIGMA_Z = np.array([0.0068, 0.0036, 0.0036])
+
+
+def _two_robot_log(seen_windows):
+    """Static observer at the origin; the target flies at 0.5 m/s along y, 5 m ahead, 2 m up.
+    Noise-free measurements at 10 Hz only inside ``seen_windows``."""
+    dt, duration = 0.01, 12.0
+    t = np.arange(int(duration / dt) + 1) * dt
+    observer = np.zeros((t.size, 4))
+    target = np.column_stack(
+        [np.full(t.size, 5.0), -3.0 + 0.5 * t, np.full(t.size, 2.0), np.full(t.size, 0.3)]
+    )
+    # The target moves along world y with yaw 0.3: body velocity = R(−0.3) (0, 0.5).
+    v_body = np.array([np.sin(0.3) * 0.5, np.cos(0.3) * 0.5, 0.0, 0.0])
+    tm = np.arange(1, int(duration * 10) + 1) / 10.0
+    keep = np.zeros(tm.size, dtype=bool)
+    for a, b in seen_windows:
+        keep |= (tm >= a - 1e-9) & (tm <= b + 1e-9)
+    tm = tm[keep]
+    rel = np.column_stack([np.full(tm.size, 5.0), -3.0 + 0.5 * tm, np.full(tm.size, 2.0)])
+    sigma = np.array([1e-3, 1e-2, 1e-2, 1e-2])
+    return Log(
+        robots=("l", "c"),
+        kinds=("ground", "aerial"),
+        truth=(GroundTruth(t=t, pose=observer), GroundTruth(t=t, pose=target)),
+        odometry=(
+            Odometry(t=t[:-1], velocity=np.zeros((t.size - 1, 4)), sigma=sigma),
+            Odometry(t=t[:-1], velocity=np.tile(v_body, (t.size - 1, 1)), sigma=sigma),
+        ),
+        measurements=Measurements(
+            t=tm,
+            observer=np.zeros(tm.size, dtype=np.int64),
+            observed=np.ones(tm.size, dtype=np.int64),
+            z=range_azimuth_elevation(rel),
+            sigma=np.tile(SIGMA_Z, (tm.size, 1)),
+        ),
+    )
+
+
+def test_track_created_kept_deleted_and_recreated():
+    log = _two_robot_log([(0.1, 2.0), (3.0, 4.0), (8.0, 12.0)])
+    est = track_log(log, TrackManagerSettings(keep_window_s=2.0))
+    kinds = [(e.kind, round(e.t, 2)) for e in est.events]
+    # gap 2.0 → 3.0 (1 s) is bridged; gap 4.0 → 8.0 exceeds the 2 s window: deleted just after
+    # 6.0 s (first event time more than 2 s after the last update), re-created at 8.0 s.
+    assert kinds[0] == ("created", 0.1)
+    assert kinds[1][0] == "deleted" and 6.0 < kinds[1][1] <= 6.02
+    assert kinds[2] == ("recreated", 8.0)
+    assert len(kinds) == 3
+    pair = est.pair("l", "c")
+    # Recorded while kept without measurements (2.0–3.0 s) ...
+    coast = (pair.t > 2.05) & (pair.t < 2.95)
+    assert coast.sum() >= 8
+    # ... where only prediction happens, so the position uncertainty grows.
+    sx = np.sqrt(pair.cov[coast, 0, 0])
+    assert np.all(np.diff(sx) > 0)
+    # No record while the track does not exist, and the age restarts at re-creation.
+    assert not np.any((pair.t > 6.02) & (pair.t < 8.0))
+    assert pair.age[np.searchsorted(pair.t, 8.0)] == pytest.approx(0.0)
+    # Accurate after re-creation (noise-free measurements).
+    late = pair.t > 10.0
+    truth = log.relative_truth("l", "c", pair.t[late])
+    err = state_errors(pair.mean[late], truth)
+    assert np.max(np.abs(err[:, :3])) < 0.02 and np.max(np.abs(err[:, 3])) < 0.05
+
+
+@pytest.mark.parametrize("name", list(FILTERS))
+def test_every_filter_tracks_the_pair(name):
+    log = _two_robot_log([(0.1, 12.0)])
+    est = track_log(log, TrackManagerSettings(filter=name, init=InitPolicy(name="known")))
+    pair = est.pair("l", "c")
+    assert est.filter == name and pair.nis.size == 120
+    truth = log.relative_truth("l", "c", pair.t)
+    err = state_errors(pair.mean, truth)
+    assert np.max(np.abs(err[pair.t > 2.0, :3])) < 0.02
+
+
+def test_several_observers_and_observed_robots():
+    sensor = SensorSpec(fov_deg=360.0, max_range=30.0)
+    loop = ((3.0, 8.0), (7.0, 8.0), (7.0, 14.0), (3.0, 14.0))
+    robots = (
+        RobotSpec(
+            name="l1",
+            kind="ground",
+            initial_pose=(5.0, 2.0, 1.57),
+            sensor=sensor,
+            motion=VelocityMotion(mean=(0.05, 0.0, 0.0, 0.0)),
+        ),
+        RobotSpec(
+            name="l2",
+            kind="ground",
+            initial_pose=(2.0, 18.0, -1.57),
+            sensor=sensor,
+            motion=VelocityMotion(mean=(0.05, 0.0, 0.0, 0.0)),
+        ),
+        RobotSpec(
+            name="c1", kind="aerial", height=2.0, motion=WaypointMotion(points=loop, speed=0.4)
+        ),
+        RobotSpec(
+            name="c2",
+            kind="ground",
+            height=-0.1,
+            observes=None,
+            motion=WaypointMotion(points=tuple(reversed(loop)), speed=0.3),
+        ),
+    )
+    sc = Scenario(robots=robots, duration_s=6.0)
+    log = simulate(sc, np.random.default_rng(0))
+    est = track_log(log, TrackManagerSettings(), rng=np.random.default_rng(1))
+    labels = {p.label for p in est.pairs}
+    # Each observer tracks every other robot, including the other observer.
+    assert labels == {f"{a}->{b}" for a in ("l1", "l2") for b in ("l1", "l2", "c1", "c2") if a != b}
+    assert sum(e.kind == "created" for e in est.events) == 6
+
+
+def test_statistical_consistency_on_the_default_team():
+    # One NEES per pair and run, at the end of independent short runs: independent χ²(4) draws
+    # for a consistent filter (samples within one run are strongly correlated in time).
+    sc = dataclasses.replace(default_scenario(), duration_s=5.0)
+    values = []
+    for seed in range(8):
+        log = simulate(sc, np.random.default_rng(seed))
+        est = track_log(
+            log,
+            TrackManagerSettings(init=InitPolicy(name="known")),
+            rng=np.random.default_rng(100 + seed),
+        )
+        for p in est.pairs:
+            t_end = p.t[-1:]
+            truth = log.relative_truth(p.observer, p.observed, t_end)
+            values.append(nees(state_errors(p.mean[-1:], truth), p.cov[-1:]))
+    v = np.concatenate(values)
+    assert v.size >= 28
+    lo, hi = anees_band(4, v.size, 0.99)
+    assert lo <= anees(v, 4) <= hi
+
+
+def test_manager_rejects_time_going_backwards_and_bad_settings():
+    m = TrackManager(
+        TrackManagerSettings(), robots=("a", "b"), odometry_sigma=[(0.1,) * 4] * 2, t0=1.0
+    )
+    with pytest.raises(ConfigError, match="time went backwards"):
+        m.advance(0.5, np.zeros((2, 4)))
+    with pytest.raises(ConfigError, match="filter: must be one of"):
+        TrackManagerSettings(filter="ukf")
+    with pytest.raises(ConfigError, match="keep_window_s"):
+        TrackManagerSettings(keep_window_s=-1.0)
