@@ -22,17 +22,16 @@ from typing import Any
 
 import numpy as np
 
-from relloc.models.motion import sinc_and_derivative
+from relloc.models.motion import SINC_SERIES_LIMIT, sinc_and_derivative
 
 Scalar = Any  # float, or a numpy array (B,) of one entry for B pairs
 Vec = tuple[Scalar, ...]
 
-#: Below this |a| the series of sinc and its derivative are used.
-_SERIES = 1e-3
-
 
 def _sinc_scalar(a: float) -> tuple[float, float]:
-    if abs(a) < _SERIES:
+    """Float version of :func:`relloc.models.motion.sinc_and_derivative` (math is ~50x faster
+    than numpy on one number)."""
+    if abs(a) < SINC_SERIES_LIMIT:
         a2 = a * a
         return 1.0 - a2 / 6.0 + a2 * a2 / 120.0, -a / 3.0 + a * a2 / 30.0
     s, c = math.sin(a), math.cos(a)

@@ -46,7 +46,7 @@ STATE_NAMES: tuple[str, str, str, str] = ("x", "y", "z", "phi")
 INPUT_NAMES: tuple[str, str, str, str] = ("v_x", "v_y", "v_z", "omega_z")
 
 #: Below this |a| the series of sinc and its derivative are used (relative error < 1e-16).
-_SINC_SERIES_LIMIT = 1e-3
+SINC_SERIES_LIMIT = 1e-3
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -84,7 +84,7 @@ def _rot(angle: Array) -> Array:
 def sinc_and_derivative(a: ArrayLike) -> tuple[Array, Array]:
     """``sinc(a) = sin(a)/a`` and ``d sinc/da = (a cos a − sin a)/a²``, series near 0."""
     a = np.asarray(a, dtype=float)
-    small = np.abs(a) < _SINC_SERIES_LIMIT
+    small = np.abs(a) < SINC_SERIES_LIMIT
     safe = np.where(small, 1.0, a)
     a2 = a * a
     sinc = np.where(small, 1.0 - a2 / 6.0 + a2 * a2 / 120.0, np.sin(safe) / safe)
