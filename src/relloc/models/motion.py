@@ -42,6 +42,7 @@ from relloc.errors import ConfigError
 
 Array = NDArray[np.float64]
 
+#: Names of the ``RelPose4`` state entries and of the body-velocity inputs, in order.
 STATE_NAMES: tuple[str, str, str, str] = ("x", "y", "z", "phi")
 INPUT_NAMES: tuple[str, str, str, str] = ("v_x", "v_y", "v_z", "omega_z")
 
@@ -65,7 +66,7 @@ class VelocityNoise:
         for name in ("observer", "observed"):
             values = tuple(float(v) for v in getattr(self, name))
             if len(values) != 4:
-                raise ConfigError(f"VelocityNoise.{name}: needs 4 sigmas (v_x, v_y, v_z, ω_z)")
+                raise ConfigError(f"VelocityNoise.{name}: needs 4 sigmas {INPUT_NAMES}")
             if not all(np.isfinite(v) and v >= 0.0 for v in values):
                 raise ConfigError(f"VelocityNoise.{name}: sigmas must be finite and ≥ 0: {values}")
             object.__setattr__(self, name, values)
