@@ -75,7 +75,7 @@ def test_seed000_nonlinear_cases() -> None:
     assert case3.rank == 4 and case3.conditions == (("v_l", "v_c"),)
     rot = analyse(S.relative_nonlinear(("range",)).with_inputs(["v_c", "omega_l", "omega_c"]))
     assert rot.rank == 3
-    assert rot.unobservable_directions[0].endswith("(y, -x, 0, -1)")  # yaw about the observer
+    assert rot.unobservable_directions[0].endswith("(-y, x, 0, 1)")  # yaw about the observer
     bearing = analyse(S.relative_nonlinear(("azimuth", "elevation")), order=2)
     assert bearing.rank == 4 and bearing.conditions == (("v_c",),)
 

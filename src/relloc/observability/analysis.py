@@ -247,6 +247,9 @@ def _symbolic_directions(
             return None
         common = sp.gcd_list(nonzero)
         vec = [sp.trigsimp(sp.factor(sp.cancel(e / common))) for e in vec]
+        constants = [e for e in vec if e.is_Number and e != 0]
+        if constants and constants[0] < 0:  # sign convention: first constant entry positive
+            vec = [-e for e in vec]
         num = np.array([complex(sp.N(e.subs(subs))).real for e in vec])
         Mn = normalise_rows_keep_index(M)
         if not np.all(np.isfinite(num)) or np.linalg.norm(num) == 0:
