@@ -35,7 +35,7 @@ from relloc.errors import ConfigError, RellocError
 from relloc.runtime import keys
 from relloc.runtime.faults import RobotEvent
 from relloc.runtime.messages import MessageRejected, decode, encode
-from relloc.runtime.transport import Inbox, TransportSettings, open_session
+from relloc.runtime.transport import Inbox, TransportSettings, declare_publisher, open_session
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -152,8 +152,8 @@ class Clock:
             inbox.watch_presence(session, keys.alive_wildcard(s.team))
             inbox.watch_presence(session, keys.ready_wildcard(s.team))
             inbox.subscribe(session, keys.robot_wildcard(s.team, "ack"))
-            tick_pub = session.declare_publisher(keys.clock_key(s.team, "tick"))
-            ctl_pub = session.declare_publisher(keys.clock_key(s.team, "ctl"))
+            tick_pub = declare_publisher(session, keys.clock_key(s.team, "tick"))
+            ctl_pub = declare_publisher(session, keys.clock_key(s.team, "ctl"))
             token = session.liveliness().declare_token(keys.alive_key(s.team, "clock"))
             start = time.monotonic()
             everyone = set(s.roster)

@@ -162,6 +162,7 @@ PRELOAD = [
     "relloc.runtime.clock",
     "relloc.runtime.scenario",
     "relloc.runtime.estimation",
+    "relloc.runtime.team",
 ]
 """Modules the fork server imports once, so robot processes start in milliseconds instead of
 each paying numpy/scipy imports (zenoh is imported by each child: its runtime must not be
@@ -203,13 +204,13 @@ class TeamLauncher:
         self.incarnation: dict[str, int] = dict.fromkeys(roster, 0)
         self.collected = Collected()
         self.endpoint = ""
-        self._ctx = _fork_context()
+        self.context = _fork_context()
 
     def _spawn(self, name: str, argv: list[str]) -> Any:
         """Start ``relloc <argv>`` as a separate OS process (forked by the fork server)."""
         n = self.incarnation.get(name, 0)
         log = self.logs / (f"{name}.{n}.log" if n else f"{name}.log")
-        proc = self._ctx.Process(target=_child_main, args=(argv, str(log)), name=name)
+        proc = self.context.Process(target=_child_main, args=(argv, str(log)), name=name)
         proc.start()
         return proc
 

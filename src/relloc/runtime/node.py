@@ -43,7 +43,13 @@ from relloc.runtime.faults import FAULTED_KINDS, FaultSettings, LinkEmulator
 from relloc.runtime.messages import DEFAULT_MAX_BYTES, Message, MessageRejected, decode, encode
 from relloc.runtime.sources import MeasurementBatch, SensorSource
 from relloc.runtime.teammates import ReceivedOdometry, SeenSequences, Teammate
-from relloc.runtime.transport import Inbox, Incoming, TransportSettings, open_session
+from relloc.runtime.transport import (
+    Inbox,
+    Incoming,
+    TransportSettings,
+    declare_publisher,
+    open_session,
+)
 
 LATENCY_SAMPLES = 200_000
 TIME_TOL = 1e-9
@@ -132,7 +138,7 @@ class RobotNode:
             inbox.subscribe(session, keys.clock_key(s.team, "ctl"))
             inbox.watch_presence(session, keys.alive_wildcard(s.team))
             for kind in keys.ROBOT_KINDS:
-                self._pubs[kind] = session.declare_publisher(keys.robot_key(s.team, s.robot, kind))
+                self._pubs[kind] = declare_publisher(session, keys.robot_key(s.team, s.robot, kind))
             self._tokens.append(session.liveliness().declare_token(keys.alive_key(s.team, s.robot)))
             while not self._done:
                 item = inbox.get(timeout=s.clock_timeout_s)

@@ -8,7 +8,8 @@ Over those pairs:
 - position RMSE (m) of all recorded beliefs before ``T1``, in ``[T1, T2)`` and from ``T2`` on
   (no steady-state filter: the point is what the fault does to a running team);
 - ``tracks_kept``: affected pairs with a live track at ``T1`` that were not deleted before
-  ``T2 + keep window``; ``tracks_deleted``: deletions of affected pairs in that interval;
+  ``T2 + keep window`` and did not die with a killed observer's process
+  (``tracks_lost_with_process``); ``tracks_deleted``: deletions of affected pairs in that interval;
   ``tracks_refound``: tracks of affected pairs (re-)created after a deletion or a restart
   in ``[T1, end]``.
 
@@ -42,6 +43,7 @@ def _window_outcome(
     result: RunResult,
     estimates: TeamEstimates,
     keep_window_s: float,
+    dead_observers: frozenset[str] = frozenset(),
 ) -> dict[str, Any]:
     pairs = [p for p in result.pairs if (p.observer, p.observed) in affected]
     phases = {
@@ -57,6 +59,7 @@ def _window_outcome(
         (p.observer, p.observed) for p in estimates.pairs if p.t.size and p.t[0] < t1 <= p.t[-1]
     }
     deleted_pairs = {(e.observer, e.observed) for e in deleted}
+    lost = {pair for pair in live_at_start - deleted_pairs if pair[0] in dead_observers}
     return {
         "fault": name,
         "window_s": [t1, t2],
@@ -64,8 +67,9 @@ def _window_outcome(
         "position_rmse_before_m": _rmse(phases["before"]),
         "position_rmse_during_m": _rmse(phases["during"]),
         "position_rmse_after_m": _rmse(phases["after"]),
-        "tracks_kept": len(live_at_start - deleted_pairs),
+        "tracks_kept": len(live_at_start - deleted_pairs - lost),
         "tracks_deleted": len(deleted),
+        "tracks_lost_with_process": len(lost),
         "tracks_refound": len(refound),
     }
 
@@ -93,7 +97,16 @@ def fault_outcomes(
         t2 = min(back) if back else t_end
         affected = {(a, b) for a, b in all_pairs if kill.robot in (a, b)}
         name = f"kill {kill.robot}@{kill.at_s:g}" + (f", restart @{t2:g}" if back else "")
-        entry = _window_outcome(name, kill.at_s, t2, affected, result, estimates, keep_window_s)
+        entry = _window_outcome(
+            name,
+            kill.at_s,
+            t2,
+            affected,
+            result,
+            estimates,
+            keep_window_s,
+            frozenset({kill.robot}),
+        )
         entry["restarted"] = bool(back)
         out.append(entry)
     if faults.drop or faults.delay_ms or faults.jitter_ms or faults.duplicate or faults.reorder:

@@ -22,13 +22,14 @@ keys:
 from __future__ import annotations
 
 import json
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from relloc.estimators.initialisation import InitPolicy
-from relloc.estimators.track_manager import TrackManagerSettings, track_log
+from relloc.estimators.track_manager import TeamEstimates, TrackManagerSettings, track_log
 from relloc.experiments.output import fmt, markdown_table, prepare_out_dir, write_report
 from relloc.experiments.team_run import (
     TeamRunSettings,
@@ -58,16 +59,17 @@ def run_team(settings: TeamSettings) -> dict[str, Any]:
     settings.faults.check_robots(scenario.robot_names)
     log = simulate_team(scenario, settings.seed)
     t0, t1 = log.span
-    collected = TeamLauncher(settings, log.robots, t1 - t0).run()
     tracker = TrackManagerSettings(filter=settings.filter_kind, init=InitPolicy())
     run_settings = TeamRunSettings(runs=1, seed=settings.seed, tracker=tracker, quiet=True)
+    launcher = TeamLauncher(settings, log.robots, t1 - t0)
+    # the in-process reference runs in a process of its own while the team runs
+    with ProcessPoolExecutor(max_workers=1, mp_context=launcher.context) as pool:
+        reference_run = pool.submit(
+            in_process_estimates, settings.scenario, settings.seed, tracker, run_settings
+        )
+        collected = launcher.run()
+        in_process = reference_run.result()
     distributed = assemble_estimates(collected, log.robots, settings.filter_kind)
-    in_process = track_log(
-        log,
-        tracker,
-        record_rate_hz=run_settings.record_rate_hz,
-        rng=np.random.default_rng(run_seeds(settings.seed)[1]),
-    )
     meta = scenario_meta(scenario, run_settings) | {"experiment": "team_up"}
     summary, results = build_summary(
         [distributed],
@@ -120,6 +122,15 @@ def run_team(settings: TeamSettings) -> dict[str, Any]:
     report = (out / "report.md").read_text()
     write_report(out, report.rstrip() + "\n\n" + runtime_markdown(summary))
     return summary
+
+
+def in_process_estimates(
+    scenario: str, seed: int, tracker: TrackManagerSettings, run: TeamRunSettings
+) -> TeamEstimates:
+    """The in-process run's estimates on the same log (run 0 of ``relloc run --seed SEED``)."""
+    log = simulate_team(load_team_scenario(scenario), seed)
+    rng = np.random.default_rng(run_seeds(seed)[1])
+    return track_log(log, tracker, record_rate_hz=run.record_rate_hz, rng=rng)
 
 
 def runtime_markdown(summary: dict[str, Any]) -> str:

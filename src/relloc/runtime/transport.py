@@ -84,6 +84,22 @@ class TransportSettings:
         return conf
 
 
+def declare_publisher(session: Any, key_expr: str) -> Any:
+    """A reliable publisher that *blocks* rather than drops when Zenoh's queues are full.
+
+    Zenoh's default congestion control for data drops samples under pressure; the runtime's
+    streams (odometry the filters need, the clock barrier, the collector's reports) must not
+    vanish silently, so every relloc publisher blocks instead. Loss is injected on purpose by
+    :mod:`relloc.runtime.faults`, where it is counted.
+    """
+    zenoh = require("zenoh", "runtime")
+    return session.declare_publisher(
+        key_expr,
+        congestion_control=zenoh.CongestionControl.BLOCK,
+        reliability=zenoh.Reliability.RELIABLE,
+    )
+
+
 def loopback_endpoint(port: int) -> str:
     """``tcp/127.0.0.1:<port>``."""
     if not (0 <= port <= 65535):

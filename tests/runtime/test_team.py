@@ -1,0 +1,147 @@
+"""A real team over loopback Zenoh: every robot its own OS process, a clock process, a hub.
+
+- a 3-robot team finds itself (liveliness), produces estimates, and — on a perfect network —
+  agrees with the in-process run on the same seed to floating-point round-off;
+- malformed, oversized, spoofed and unknown-sender messages injected by an outside session are
+  rejected and counted by the robots, which keep working;
+- a killed robot is noticed by its teammates (its liveliness token vanishes) and its restart
+  rejoins the team mid-run (the observer re-finds its track).
+
+Every process is started by the launcher and killed in its ``finally`` block.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+
+import msgpack
+import numpy as np
+import pytest
+
+from relloc.estimators.track_manager import TrackManagerSettings, track_log
+from relloc.runtime import keys
+from relloc.runtime.faults import FaultSettings, parse_robot_event
+from relloc.runtime.launcher import TeamLauncher, TeamSettings
+from relloc.runtime.messages import encode
+from relloc.runtime.scenario import load_team_scenario, run_seeds, simulate_team
+from relloc.runtime.summary import agreement, assemble_estimates, robot_messages
+from relloc.runtime.transport import (
+    Inbox,
+    TransportSettings,
+    declare_publisher,
+    free_loopback_port,
+    loopback_endpoint,
+    open_session,
+)
+
+pytestmark = pytest.mark.slow
+
+
+def _inject_bad_messages(team: str, endpoint: str, roster: tuple[str, ...]) -> None:
+    """Join the hub, wait until every robot is alive (so its subscriptions are known here),
+    then publish one message of each bad kind on teammates' odometry keys."""
+    session = open_session(TransportSettings(connect=(endpoint,)))
+    inbox = Inbox()
+    try:
+        inbox.watch_presence(session, keys.alive_wildcard(team))
+        alive: set[str] = set()
+        deadline = time.monotonic() + 60
+        while not set(roster) <= alive and time.monotonic() < deadline:
+            item = inbox.get(timeout=0.5)
+            if item is not None and item.presence == "joined":
+                alive.add(keys.parse_presence_key(item.key)[1])
+        good = encode("odom", "flyer", 10_000, 0.0, {"stamps": [0.0], "u": np.zeros((1, 4))})
+        bad = {
+            keys.robot_key(team, "flyer", "odom"): [
+                b"\x92\x01",  # a msgpack array, not a message
+                b"\xc1",  # not msgpack at all
+                b"\x00" * 70_000,  # oversized
+                good.replace(b"flyer", b"rover"),  # sender field differs from its key
+            ],
+            keys.robot_key(team, "mallory", "odom"): [
+                msgpack.packb(msgpack.unpackb(good) | {"sender": "mallory"})
+            ],
+        }
+        for key, payloads in bad.items():
+            publisher = declare_publisher(session, key)
+            for payload in payloads:
+                publisher.put(payload)
+            publisher.undeclare()
+        time.sleep(0.5)
+    finally:
+        inbox.close()
+        session.close()
+
+
+def test_three_robot_team_finds_itself_agrees_and_rejects_bad_messages(trio_scenario, tmp_path):
+    path = trio_scenario(6.0)
+    port = free_loopback_port()
+    settings = TeamSettings(scenario=str(path), out_dir=tmp_path / "out", seed=3, port=port)
+    log = simulate_team(load_team_scenario(str(path)), 3)
+    launcher = TeamLauncher(settings, log.robots, log.span[1] - log.span[0])
+    injector = threading.Thread(
+        target=_inject_bad_messages, args=(settings.team, loopback_endpoint(port), log.robots)
+    )
+    injector.start()
+    try:
+        collected = launcher.run()
+    finally:
+        injector.join(timeout=60)
+
+    clock = (tmp_path / "out" / "clock.json").read_text()
+    assert all(f'"robot": "{r}"' in clock for r in log.robots)  # every robot arrived
+    per_robot = robot_messages(collected, log.robots)
+    for robot in log.robots:
+        m = per_robot[robot]
+        assert m["processes"] == 1 and m["final_report"]
+        assert m["ticks"] == 60
+        assert m["teammate_joins_seen"] == 2
+        assert m["received_wire"]["odom"] == 2 * 60  # both teammates, every tick
+    observer = per_robot["observer"]
+    assert observer["estimates"] > 60
+    # the bad messages were rejected and counted by every robot subscribed to odometry
+    for robot in ("observer", "rover"):
+        reasons = per_robot[robot]["rejected_by_reason"]
+        assert reasons == {
+            "malformed": 2,
+            "oversized": 1,
+            "spoofed": 1,
+            "unknown_sender": 1,
+        }, reasons
+    distributed = assemble_estimates(collected, log.robots, "plkf")
+    assert {p.label for p in distributed.pairs} == {"observer->flyer", "observer->rover"}
+    reference = track_log(log, TrackManagerSettings(), rng=np.random.default_rng(run_seeds(3)[1]))
+    agree = agreement(distributed, reference)
+    assert agree["max_abs_mean_diff"] < 1e-9 and agree["max_abs_cov_diff"] < 1e-9, agree
+    assert all(p["only_in_process"] == p["only_distributed"] == 0 for p in agree["pairs"].values())
+
+
+def test_killed_robot_is_noticed_and_its_restart_rejoins(trio_scenario, tmp_path):
+    path = trio_scenario(6.0)
+    faults = FaultSettings(
+        kills=(parse_robot_event("flyer@2.0", "--kill"),),
+        restarts=(parse_robot_event("flyer@4.0", "--restart"),),
+    )
+    settings = TeamSettings(scenario=str(path), out_dir=tmp_path / "out", seed=5, faults=faults)
+    log = simulate_team(load_team_scenario(str(path)), 5)
+    collected = TeamLauncher(settings, log.robots, log.span[1] - log.span[0]).run()
+
+    assert [k["robot"] for k in collected.kills] == ["flyer"]
+    assert [r["robot"] for r in collected.restarts] == ["flyer"]
+    per_robot = robot_messages(collected, log.robots)
+    assert per_robot["flyer"]["processes"] == 2  # two incarnations reported
+    for robot in ("observer", "rover"):
+        assert per_robot[robot]["teammate_departures_seen"] == 1
+        assert per_robot[robot]["teammate_joins_seen"] == 3  # two teammates + one rejoin
+    flyer_events = [e for e in collected.events if e[2] == "flyer"]
+    kinds = [e[3] for e in flyer_events]
+    # the observer's track of the dead robot expires, and is re-found after the restart
+    assert kinds[:3] == ["created", "deleted", "recreated"], flyer_events
+    deleted_t = flyer_events[1][0]
+    refound_t = flyer_events[2][0]
+    assert 2.0 < deleted_t <= 2.0 + 2.0 + 0.3  # within the keep window after the kill
+    assert refound_t >= 3.8  # back only once the robot is (one tick of filter lag)
+    distributed = assemble_estimates(collected, log.robots, "plkf")
+    flyer = distributed.pair("observer", "flyer")
+    assert flyer.t.size and (flyer.t > 4.5).any()  # estimates after the restart
