@@ -1,0 +1,961 @@
+"""``relloc reproduce wanasinghe2014``: seed 000 (Wanasinghe, Mann & Gosine, J. Intell. Robot.
+Syst. 2014, "Relative localization approach for combined aerial and ground robotic system").
+
+What is run (run counts: the paper's where it gives one)
+--------------------------------------------------------
+* ``runs`` (default 20, the paper's §5 count) Monte-Carlo draws of B's built-in default team
+  (:func:`relloc.sim.scenario.default_scenario`), each running every simulation filter at once
+  (:mod:`relloc.experiments.wanasinghe2014_sim`): the accuracy PLKF of the four observed robots
+  and Table 1 (13 initial guesses per case — the paper's count — for PLKF, TEKF and relloc's
+  yaw bank) for the aerial robot 2 m above the observer;
+* the odometry-noise sweep: ``sweep_runs`` (4) draws per noise scale (×1, ×2, ×4, ×8 of the
+  scenario's σ) on a 30 s version of the team — the sweep is ours, not the paper's;
+* ``replay_runs`` (5) sensor-noise draws of the MRCLAM replay of Tables 3–4
+  (:mod:`relloc.experiments.wanasinghe2014_mrclam`). The paper reports one recorded run; one
+  draw of sensor noise is a noisy statistic, five are a compromise with the run time.
+
+``--runs N`` sets the team draws to N and the sweep and replay draws to ``min(N, 4)`` and
+``min(N, 5)``. Every Monte-Carlo loop goes through :func:`relloc.experiments.montecarlo.
+run_monte_carlo` with ``--executor``; seeds: team ``S``, replay ``S + 1``, sweep level ``i``
+``S + 2 + i`` (``S`` = ``--seed``).
+
+summary.json keys
+-----------------
+``experiment``, ``seed``, ``runs``, ``replay_runs``, ``sweep_runs``, ``seeds``;
+``accuracy[robot]``: steady-state (t ≥ 10 s) position RMSE (3-D, m), yaw RMSE (rad), RMSE per
+state, fraction of updates with the error inside ±3σ per state, ANEES with its 95 % band, NIS %
+beyond χ²(3, 0.95), and ``paper`` (5–10 cm, 0.075–0.1 rad);
+``odometry_noise``: the σ used by the team, the sweep (σ_v, σ_ω and the position/yaw RMSE of
+each robot per scale) and the σ fitted for the replay;
+``table1[case][filter][rule][state] = {mean, median, worst}`` for case2–4, PLKF/TEKF, rules
+``paper_rule`` (Eq. 32) and ``fixed`` (0.05 m, 0.1 rad), plus ``table1[case][filter]["paper"]``;
+a guess that never converges counts as (updates + 1) and is counted in
+``table1_not_converged[case][filter][rule][state]``; ``table1_thresholds[filter][rule]``;
+``table1_best[case][rule][state]`` (the yaw bank; case 3 has a known yaw, where the bank is the
+PLKF), ``table1_best[case]["speedup_vs_plkf"][rule][state]`` and ``table1_best["acceptance"]``;
+``table3[case][state] = {rmse_mean, rmse_std, paper_rmse, paper_std}`` (PLKF, MRCLAM replay,
+steady state t ≥ 40 s of the window); ``table4[case]``: % NEES beyond χ²(4, 0.95) with the
+paper's value, % NIS beyond χ²(3, 0.95), ANEES, max log10 conditioning of P, R, S;
+``bias_comparison[case][filter]``: radial bias (m), position and yaw RMSE of PLKF, BC-PLKF
+(noisy cases) and TEKF on the replay; ``replay``: dataset, robots, window, skipped epochs,
+loader report; ``pcrlb_ratio[robot][state]``: RMSE / √PCRLB (steady state) from
+:mod:`relloc.observability.pcrlb`; ``elapsed_s``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from relloc.datasets.paths import default_mrclam_dataset
+from relloc.errors import ConfigError
+from relloc.estimators.initialisation import known_pose
+from relloc.experiments.montecarlo import run_monte_carlo
+from relloc.experiments.output import (
+    figure_md,
+    fmt,
+    markdown_table,
+    prepare_out_dir,
+    save_figure,
+    write_report,
+    write_summary,
+)
+from relloc.experiments.registry import ReproduceArgs
+from relloc.experiments.wanasinghe2014_mrclam import (
+    TABLE2,
+    ReplayData,
+    ReplaySettings,
+    prepare_replay,
+    replay_filters,
+    replay_task,
+)
+from relloc.experiments.wanasinghe2014_sim import (
+    SimSettings,
+    sweep_task,
+    team_task,
+    true_pair_inputs,
+)
+from relloc.metrics.consistency import anees, anees_band, chi2_upper, percent_beyond
+from relloc.metrics.convergence import FIXED_THRESHOLDS, paper_thresholds, updates_to_converge
+from relloc.metrics.errors import rmse
+from relloc.models.motion import VelocityNoise
+from relloc.observability.pcrlb import pcrlb_ratio, relative_pair_pcrlb
+
+Array = NDArray[np.float64]
+
+STATES: tuple[str, ...] = ("x", "y", "z", "phi")
+RULES: tuple[str, ...] = ("paper_rule", "fixed")
+PAPER_RUNS = 20
+
+#: Seed 000 Table 1 (updates to converge, mean of 13 guesses in case 4).
+PAPER_TABLE1: dict[str, dict[str, dict[str, int]]] = {
+    "case2": {"PLKF": dict(x=1, y=1, z=1, phi=5), "TEKF": dict(x=2, y=1, z=1, phi=12)},
+    "case3": {"PLKF": dict(x=1, y=1, z=1, phi=4), "TEKF": dict(x=34, y=5, z=5, phi=141)},
+    "case4": {"PLKF": dict(x=1, y=1, z=1, phi=12), "TEKF": dict(x=37, y=31, z=6, phi=263)},
+}
+#: Seed 000 Table 3: (RMSE, Std-RMSE) per state, in the order phi, x, y, z of the paper.
+PAPER_TABLE3: dict[str, dict[str, tuple[float, float]]] = {
+    "case1": dict(phi=(0.0313, 0.0341), x=(0.0098, 0.0028), y=(0.0131, 0.0038), z=(0.0123, 0.0032)),
+    "case2": dict(phi=(0.0962, 0.0447), x=(0.0925, 0.0210), y=(0.1264, 0.0304), z=(0.0849, 0.0201)),
+    "case3": dict(phi=(0.0443, 0.0820), x=(0.0266, 0.0227), y=(0.0357, 0.0463), z=(0.0135, 0.0042)),
+    "case4": dict(phi=(0.1836, 0.1431), x=(0.1510, 0.0380), y=(0.2246, 0.0629), z=(0.1439, 0.0353)),
+}
+#: Seed 000 Table 4: % of NEES values beyond χ²(4, 0.95).
+PAPER_TABLE4: dict[str, float] = {"case1": 0.0625, "case2": 2.9375, "case3": 4.6875, "case4": 9.25}
+#: Seed 000 §5 / §8: positional and orientational accuracy.
+PAPER_ACCURACY = {"position_rmse_m": (0.05, 0.10), "yaw_rmse_rad": (0.075, 0.1)}
+
+
+@dataclass(frozen=True, kw_only=True)
+class Wanasinghe2014Config:
+    """Run counts and settings of the reproduction (module docstring gives the defaults' why)."""
+
+    runs: int = PAPER_RUNS
+    replay_runs: int = 5
+    sweep_runs: int = 4
+    sweep_scales: tuple[float, ...] = (1.0, 2.0, 4.0, 8.0)
+    sweep_duration_s: float = 30.0
+    steady_state_s: float = 10.0
+    replay_steady_state_s: float = 40.0
+    sim: SimSettings = field(default_factory=SimSettings)
+    replay: ReplaySettings = field(
+        default_factory=lambda: ReplaySettings(dataset=default_mrclam_dataset())
+    )
+
+    def __post_init__(self) -> None:
+        for name in ("runs", "replay_runs", "sweep_runs"):
+            if getattr(self, name) < 1:
+                raise ConfigError(f"{name}: must be ≥ 1, got {getattr(self, name)}")
+        if not self.sweep_scales or any(
+            not (s > 0 and math.isfinite(s)) for s in self.sweep_scales
+        ):
+            raise ConfigError(f"sweep_scales: positive numbers, got {self.sweep_scales}")
+        duration = self.sim.scenario.duration_s
+        if not 0 <= self.steady_state_s < duration:
+            raise ConfigError(
+                f"steady_state_s: must be in [0, {duration:g}) (the scenario's duration), got "
+                f"{self.steady_state_s}"
+            )
+        if not 0 < self.sweep_duration_s:
+            raise ConfigError(f"sweep_duration_s: > 0, got {self.sweep_duration_s}")
+
+    @classmethod
+    def from_args(cls, args: ReproduceArgs) -> Wanasinghe2014Config:
+        """Defaults, with ``--runs`` and ``--dataset`` applied."""
+        base = cls()
+        changes: dict[str, Any] = {}
+        if args.runs is not None:
+            changes.update(
+                runs=args.runs,
+                replay_runs=min(args.runs, base.replay_runs),
+                sweep_runs=min(args.runs, base.sweep_runs),
+            )
+        if args.dataset is not None:
+            changes["replay"] = dataclasses.replace(base.replay, dataset=Path(args.dataset))
+        return dataclasses.replace(base, **changes)
+
+
+def reproduce(args: ReproduceArgs) -> dict[str, Any]:
+    """Entry point of ``relloc reproduce wanasinghe2014`` (see module docstring)."""
+    return run_reproduction(
+        Wanasinghe2014Config.from_args(args),
+        args.out_dir,
+        seed=args.seed,
+        executor=args.executor,
+        quiet=args.quiet,
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# Running
+# ---------------------------------------------------------------------------------------------
+
+
+def run_reproduction(
+    config: Wanasinghe2014Config,
+    out_dir: Path,
+    *,
+    seed: int,
+    executor: str | None = None,
+    quiet: bool = False,
+) -> dict[str, Any]:
+    """Run everything, write summary.json, report.md and figures; return the summary."""
+    started = time.perf_counter()
+    out = prepare_out_dir(out_dir)
+    data = prepare_replay(config.replay)  # fail early on a bad --dataset
+    team = run_monte_carlo(
+        team_task,
+        config.runs,
+        seed,
+        executor=executor,
+        task_args=(config.sim,),
+        description="seed 000: team (accuracy, Table 1)",
+        quiet=quiet,
+    )
+    replay = run_monte_carlo(
+        replay_task,
+        config.replay_runs,
+        seed + 1,
+        executor=executor,
+        task_args=(data, config.replay),
+        description="seed 000: MRCLAM replay (Tables 3-4)",
+        quiet=quiet,
+    )
+    sweep = []
+    for i, scale in enumerate(config.sweep_scales):
+        settings = dataclasses.replace(
+            config.sim,
+            scenario=dataclasses.replace(config.sim.scenario, duration_s=config.sweep_duration_s),
+            odometry_scale=scale,
+            table1=False,
+        )
+        sweep.append(
+            run_monte_carlo(
+                sweep_task,
+                config.sweep_runs,
+                seed + 2 + i,
+                executor=executor,
+                task_args=(settings,),
+                description=f"seed 000: odometry-noise sweep x{scale:g}",
+                quiet=quiet,
+            )
+        )
+
+    summary: dict[str, Any] = {
+        "experiment": "wanasinghe2014",
+        "seed": seed,
+        "runs": config.runs,
+        "replay_runs": config.replay_runs,
+        "sweep_runs": config.sweep_runs,
+        "seeds": {
+            "team": seed,
+            "replay": seed + 1,
+            "sweep": [seed + 2 + i for i in range(len(config.sweep_scales))],
+        },
+    }
+    accuracy, acc_series = accuracy_summary(team, config)
+    summary["accuracy"] = accuracy
+    summary["odometry_noise"] = odometry_noise_summary(config, sweep, data)
+    table1, not_converged, thresholds, rmse_curves = table1_summary(team)
+    summary["table1"] = table1
+    summary["table1_not_converged"] = not_converged
+    summary["table1_thresholds"] = thresholds
+    summary["table1_best"] = table1_best_summary(team, table1, thresholds)
+    table3, table4, bias, replay_series = replay_summary(replay, config)
+    summary["table3"] = table3
+    summary["table4"] = table4
+    summary["bias_comparison"] = bias
+    summary["replay"] = replay_info(config, data)
+    ratios, bounds = pcrlb_summary(config, acc_series)
+    summary["pcrlb_ratio"] = ratios
+    figures = make_figures(
+        out, config, team, acc_series, rmse_curves, thresholds, replay_series, bounds, summary
+    )
+    summary["elapsed_s"] = time.perf_counter() - started
+    write_summary(out, summary)
+    write_report(out, build_report(summary, figures))
+    return summary
+
+
+# ---------------------------------------------------------------------------------------------
+# Accuracy (§5, Figs. 3–4) and the odometry-noise sweep
+# ---------------------------------------------------------------------------------------------
+
+
+def _stack(team: list[dict[str, Any]], robot: str, key: str) -> Array:
+    return np.stack([run["accuracy"][robot][key] for run in team])
+
+
+def accuracy_summary(
+    team: list[dict[str, Any]], config: Wanasinghe2014Config
+) -> tuple[dict[str, Any], dict[str, dict[str, Array]]]:
+    """Per observed robot: steady-state RMSE, ±3σ containment, ANEES, NIS (and the series)."""
+    out: dict[str, Any] = {}
+    series: dict[str, dict[str, Array]] = {}
+    for robot in config.sim.targets:
+        t = team[0]["accuracy"][robot]["t"]
+        E = _stack(team, robot, "errors")
+        S = _stack(team, robot, "sigma")
+        nees_v = _stack(team, robot, "nees")
+        nis_v = _stack(team, robot, "nis")
+        ss = t >= config.steady_state_s
+        per_state = rmse(E[:, ss], axis=(0, 1))
+        pos = float(np.sqrt(np.nanmean(np.sum(E[:, ss, :3] ** 2, axis=-1))))
+        inside = np.mean(np.abs(E) <= 3.0 * S, axis=(0, 1))
+        n = int(np.isfinite(nees_v).sum())
+        out[robot] = {
+            "position_rmse_m": pos,
+            "yaw_rmse_rad": float(per_state[3]),
+            "rmse": dict(zip(STATES, per_state.tolist(), strict=True)),
+            "inside_3sigma": dict(zip(STATES, inside.tolist(), strict=True)),
+            "anees": anees(nees_v, 4),
+            "anees_band_95": list(anees_band(4, n)),
+            "nees_percent_beyond": percent_beyond(nees_v, chi2_upper(4)),
+            "nis_percent_beyond": percent_beyond(nis_v, chi2_upper(3)),
+            "updates": int(t.size),
+            "paper": {k: list(v) for k, v in PAPER_ACCURACY.items()},
+        }
+        series[robot] = {
+            "t": t,
+            "errors": E,
+            "sigma": S,
+            "nees": nees_v,
+            "nis": nis_v,
+            "cond_p": _stack(team, robot, "cond_p"),
+            "cond_r": _stack(team, robot, "cond_r"),
+            "cond_s": _stack(team, robot, "cond_s"),
+        }
+    return out, series
+
+
+def odometry_noise_summary(
+    config: Wanasinghe2014Config, sweep: list[list[dict[str, dict[str, Array]]]], data: ReplayData
+) -> dict[str, Any]:
+    """The σ the team uses, the sweep's RMSE per scale, and the σ fitted for the replay."""
+    scenario = config.sim.scenario
+    used = {
+        r.name: {
+            "sigma_v": r.odometry.sigma_v,
+            "sigma_vz": r.odometry.sigma_vz,
+            "sigma_w": r.odometry.sigma_w,
+        }
+        for r in scenario.robots
+    }
+    steady = min(config.steady_state_s, config.sweep_duration_s / 3.0)
+    rows = []
+    for scale, runs in zip(config.sweep_scales, sweep, strict=True):
+        row: dict[str, Any] = {
+            "scale": scale,
+            "sigma_v": scenario.robots[0].odometry.sigma_v * scale,
+            "sigma_w": scenario.robots[0].odometry.sigma_w * scale,
+            "position_rmse_m": {},
+            "yaw_rmse_rad": {},
+        }
+        for robot in config.sim.targets:
+            t = runs[0][robot]["t"]
+            E = np.stack([run[robot]["errors"] for run in runs])[:, t >= steady]
+            row["position_rmse_m"][robot] = float(np.sqrt(np.nanmean(np.sum(E[..., :3] ** 2, -1))))
+            row["yaw_rmse_rad"][robot] = float(rmse(E[..., 3], axis=(0, 1)))
+        rows.append(row)
+    return {
+        "team": used,
+        "team_note": "white noise per 100 Hz propagation step on each reported body velocity",
+        "sweep": rows,
+        "sweep_duration_s": config.sweep_duration_s,
+        "replay_fit": {label: dataclasses.asdict(fit) for label, fit in data.fits.items()},
+    }
+
+
+# ---------------------------------------------------------------------------------------------
+# Table 1 (§5.1) and the yaw bank
+# ---------------------------------------------------------------------------------------------
+
+
+def _rmse_curves(team: list[dict[str, Any]], case: str, filt: str) -> Array:
+    """RMSE over runs per guess and update: ``(guesses, updates, 4)``."""
+    E = np.stack([run["table1"][case][filt] for run in team])  # (runs, guesses, updates, 4)
+    return rmse(E, axis=0)
+
+
+def _convergence_stats(curves: Array, thresholds: Array) -> tuple[dict[str, Any], dict[str, int]]:
+    """Updates to converge per guess and state → mean / median / worst (censored at M + 1)."""
+    n_upd = curves.shape[1]
+    stats: dict[str, Any] = {}
+    censored: dict[str, int] = {}
+    for i, state in enumerate(STATES):
+        counts = []
+        missed = 0
+        for g in range(curves.shape[0]):
+            k = updates_to_converge(curves[g, :, i], float(thresholds[i]))
+            if k is None:
+                missed += 1
+                k = n_upd + 1
+            counts.append(k)
+        c = np.asarray(counts, dtype=float)
+        stats[state] = {
+            "mean": float(c.mean()),
+            "median": float(np.median(c)),
+            "worst": int(c.max()),
+        }
+        censored[state] = missed
+    return stats, censored
+
+
+def table1_summary(
+    team: list[dict[str, Any]],
+) -> tuple[dict[str, Any], dict[str, Any], dict[str, Any], dict[str, dict[str, Array]]]:
+    """Table 1 for PLKF and TEKF, both rules; thresholds; RMSE curves (for figures)."""
+    thresholds: dict[str, Any] = {}
+    curves: dict[str, dict[str, Array]] = {}
+    for filt in ("PLKF", "TEKF"):
+        known = _rmse_curves(team, "case1", filt)[0]
+        thresholds[filt] = {
+            "paper_rule": dict(zip(STATES, paper_thresholds(known).tolist(), strict=True)),
+            "fixed": dict(zip(STATES, FIXED_THRESHOLDS, strict=True)),
+        }
+    table: dict[str, Any] = {}
+    missed: dict[str, Any] = {}
+    for case in ("case2", "case3", "case4"):
+        table[case], missed[case] = {}, {}
+        curves[case] = {}
+        for filt in ("PLKF", "TEKF"):
+            c = _rmse_curves(team, case, filt)
+            curves[case][filt] = c
+            table[case][filt], missed[case][filt] = {}, {}
+            for rule in RULES:
+                th = np.array([thresholds[filt][rule][s] for s in STATES])
+                table[case][filt][rule], missed[case][filt][rule] = _convergence_stats(c, th)
+            table[case][filt]["paper"] = PAPER_TABLE1[case][filt]
+        if "bank" in team[0]["table1"][case]:
+            curves[case]["bank"] = _rmse_curves(team, case, "bank")
+    return table, missed, thresholds, curves
+
+
+def table1_best_summary(
+    team: list[dict[str, Any]], table1: dict[str, Any], thresholds: dict[str, Any]
+) -> dict[str, Any]:
+    """The yaw bank on the same draws and guesses (its thresholds are the PLKF's: it is one)."""
+    best: dict[str, Any] = {}
+    for case in ("case2", "case3", "case4"):
+        if "bank" in team[0]["table1"][case]:
+            c = _rmse_curves(team, case, "bank")
+            entry: dict[str, Any] = {}
+            not_conv: dict[str, Any] = {}
+            for rule in RULES:
+                th = np.array([thresholds["PLKF"][rule][s] for s in STATES])
+                entry[rule], not_conv[rule] = _convergence_stats(c, th)
+            entry["not_converged"] = not_conv
+            entry["method"] = "yaw bank (Gaussian sum over relative yaw, PLKF components)"
+        else:
+            entry = {rule: table1[case]["PLKF"][rule] for rule in RULES}
+            entry["method"] = "PLKF (yaw known: the bank is a single PLKF)"
+        entry["speedup_vs_plkf"] = {
+            rule: {
+                s: table1[case]["PLKF"][rule][s]["mean"] / entry[rule][s]["mean"] for s in STATES
+            }
+            for rule in RULES
+        }
+        best[case] = entry
+    c4 = best["case4"]
+    plkf_mean = table1["case4"]["PLKF"]["paper_rule"]["phi"]["mean"]
+    best["acceptance"] = {
+        "case4_fixed_phi_worst": c4["fixed"]["phi"]["worst"],
+        "case4_fixed_phi_worst_le_12": c4["fixed"]["phi"]["worst"] <= 12,
+        "case4_paper_rule_phi_mean": c4["paper_rule"]["phi"]["mean"],
+        "case4_plkf_paper_rule_phi_mean": plkf_mean,
+        "case4_paper_rule_ok": c4["paper_rule"]["phi"]["mean"] <= 12
+        or c4["paper_rule"]["phi"]["mean"] <= plkf_mean / 3.0,
+    }
+    return best
+
+
+# ---------------------------------------------------------------------------------------------
+# Tables 3–4 on the MRCLAM replay, bias comparison
+# ---------------------------------------------------------------------------------------------
+
+
+def replay_summary(
+    replay: list[dict[str, dict[str, dict[str, Array]]]], config: Wanasinghe2014Config
+) -> tuple[dict[str, Any], dict[str, Any], dict[str, Any], dict[str, dict[str, dict[str, Array]]]]:
+    """Table 3 (PLKF RMSE mean/std over the steady state), Table 4, bias comparison."""
+    table3: dict[str, Any] = {}
+    table4: dict[str, Any] = {}
+    bias: dict[str, Any] = {}
+    series: dict[str, dict[str, dict[str, Array]]] = {}
+    for case in TABLE2:
+        bias[case] = {}
+        series[case] = {}
+        for filt in replay_filters(case):
+            t = replay[0][case][filt]["t"]
+            ss = t >= config.replay_steady_state_s
+            stacked = {
+                key: np.stack([run[case][filt][key] for run in replay])
+                for key in (
+                    "errors",
+                    "radial",
+                    "sigma",
+                    "nees",
+                    "nis",
+                    "cond_p",
+                    "cond_r",
+                    "cond_s",
+                )
+            }
+            series[case][filt] = {"t": t, **stacked}
+            E = stacked["errors"]
+            per_state = rmse(E[:, ss], axis=(0, 1))
+            bias[case][filt] = {
+                "radial_bias_m": float(np.nanmean(stacked["radial"][:, ss])),
+                "position_rmse_m": float(np.sqrt(np.nanmean(np.sum(E[:, ss, :3] ** 2, -1)))),
+                "yaw_rmse_rad": float(per_state[3]),
+            }
+            if filt != "PLKF":
+                continue
+            curve = rmse(E, axis=0)[ss]  # RMSE over draws at each steady-state update
+            table3[case] = {
+                s: {
+                    "rmse_mean": float(np.nanmean(curve[:, i])),
+                    "rmse_std": float(np.nanstd(curve[:, i])),
+                    "paper_rmse": PAPER_TABLE3[case][s][0],
+                    "paper_std": PAPER_TABLE3[case][s][1],
+                }
+                for i, s in enumerate(STATES)
+            }
+            nees_ss = stacked["nees"][:, ss]
+            table4[case] = {
+                "nees_percent_beyond": percent_beyond(nees_ss, chi2_upper(4)),
+                "paper_nees_percent_beyond": PAPER_TABLE4[case],
+                "nis_percent_beyond": percent_beyond(stacked["nis"][:, ss], chi2_upper(3)),
+                "anees": anees(nees_ss, 4),
+                "max_conditioning": {
+                    "P": float(np.nanmax(stacked["cond_p"])),
+                    "R": float(np.nanmax(stacked["cond_r"])),
+                    "S": float(np.nanmax(stacked["cond_s"])),
+                },
+                "paper_max_conditioning_below": 6.0,
+                "samples": int(np.isfinite(nees_ss).sum()),
+            }
+    return table3, table4, bias, series
+
+
+def replay_info(config: Wanasinghe2014Config, data: ReplayData) -> dict[str, Any]:
+    """Where the replay came from and what the loader skipped."""
+    r = config.replay
+    return {
+        "source": data.source,
+        "dataset": str(r.dataset),
+        "observer": r.observer,
+        "observed": r.observed,
+        "observed_height_m": r.height,
+        "window_s": [float(data.t[0]), float(data.t[-1])],
+        "steady_state_after_s": config.replay_steady_state_s,
+        "epochs_skipped_in_groundtruth_gaps": data.skipped_epochs,
+        "loader": {
+            "n_skipped": data.load_report["n_skipped"],
+            "skipped_by_reason": data.load_report["skipped_by_reason"],
+        },
+    }
+
+
+# ---------------------------------------------------------------------------------------------
+# PCRLB
+# ---------------------------------------------------------------------------------------------
+
+
+def pcrlb_summary(
+    config: Wanasinghe2014Config, acc_series: dict[str, dict[str, Array]]
+) -> tuple[dict[str, Any], dict[str, Array]]:
+    """RMSE / √PCRLB per observed robot and state, and √diag(PCRLB) at the updates."""
+    sim = config.sim
+    scenario = sim.scenario
+    specs = {r.name: r for r in scenario.robots}
+    obs_spec = specs[sim.observer]
+    sensor = sim.sensor
+    ratios: dict[str, Any] = {}
+    bounds: dict[str, Array] = {}
+    for robot in sim.targets:
+        t, truth, u_l, u_c = true_pair_inputs(sim, robot)
+        dt = float(t[1] - t[0])
+        series = acc_series[robot]
+        steps = np.rint(series["t"] / dt).astype(np.int64)
+        mask = np.zeros(t.size, dtype=bool)
+        mask[steps] = True
+        tgt_spec = specs[robot]
+        noise = VelocityNoise(
+            observer=obs_spec.odometry.sigma_for(obs_spec.kind),
+            observed=tgt_spec.odometry.sigma_for(tgt_spec.kind),
+        )
+        B = relative_pair_pcrlb(
+            truth,
+            u_l,
+            u_c,
+            dt,
+            mask,
+            sigma_r=sensor.sigma_range,
+            sigma_theta=sensor.sigma_azimuth,
+            sigma_alpha=sensor.sigma_elevation,
+            velocity_noise=noise,
+            P0=np.asarray(known_pose(truth[0]).cov),
+        )[steps]
+        start = int(np.searchsorted(series["t"], config.steady_state_s))
+        ratio = pcrlb_ratio(series["errors"], B, start=start)
+        ratios[robot] = dict(zip(STATES, np.asarray(ratio).tolist(), strict=True))
+        bounds[robot] = np.sqrt(np.diagonal(B, axis1=-2, axis2=-1))
+    return ratios, bounds
+
+
+# ---------------------------------------------------------------------------------------------
+# Figures and report
+# ---------------------------------------------------------------------------------------------
+
+
+def make_figures(
+    out: Path,
+    config: Wanasinghe2014Config,
+    team: list[dict[str, Any]],
+    acc: dict[str, dict[str, Array]],
+    curves: dict[str, dict[str, Array]],
+    thresholds: dict[str, Any],
+    replay: dict[str, dict[str, dict[str, Array]]],
+    bounds: dict[str, Array],
+    summary: dict[str, Any],
+) -> dict[str, str]:
+    """Draw every figure; returns ``{key: file name}``."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from relloc.plotting.consistency import plot_chi2_series, plot_conditioning
+    from relloc.plotting.errors import plot_pose_errors_with_bounds, plot_robot_errors
+    from relloc.plotting.wanasinghe import (
+        plot_bias_comparison,
+        plot_convergence_curves,
+        plot_noise_sweep,
+        plot_rmse_vs_bound,
+    )
+
+    files: dict[str, str] = {}
+    targets = config.sim.targets
+    aerial = config.sim.table1_target
+
+    # Fig. 3: one aerial robot, error of draw 0 with its ±3σ bounds
+    fig, axes = plt.subplots(4, 1, figsize=(8, 8), sharex=True)
+    a = acc[aerial]
+    plot_pose_errors_with_bounds(axes, a["t"], a["errors"][0], a["sigma"][0])
+    axes[0].set_title(f"{aerial}: PLKF error and ±3σ (draw 0, seed {summary['seed']})")
+    files["aerial_error"] = save_figure(fig, out, "fig3_aerial_error_3sigma")
+
+    # Fig. 4: all four robots (draw 0)
+    fig, axes = plt.subplots(4, 1, figsize=(8, 8), sharex=True)
+    plot_robot_errors(axes, {r: (acc[r]["t"], acc[r]["errors"][0]) for r in targets})
+    axes[0].set_title("PLKF errors of the four observed robots (draw 0)")
+    files["all_errors"] = save_figure(fig, out, "fig4_all_robot_errors")
+
+    # Fig. 6: PLKF vs TEKF vs yaw bank from the case-4 guess with the largest initial yaw error
+    c4 = team[0]["table1"]["case4"]
+    g = int(np.argmax(np.abs(c4["PLKF"][:, 0, 3])))
+    t = acc[aerial]["t"]
+    fig, axes = plt.subplots(4, 1, figsize=(8, 8), sharex=True)
+    plot_robot_errors(axes, {f: (t, c4[f][g]) for f in ("PLKF", "TEKF", "bank")})
+    axes[0].set_title(f"case 4, guess {g}: arbitrary initialisation (draw 0)")
+    files["arbitrary_init"] = save_figure(fig, out, "fig6_plkf_vs_tekf_arbitrary_init")
+
+    # Table 1 convergence curves of the yaw
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4), sharey=True)
+    for ax, case in zip(axes, ("case2", "case4"), strict=True):
+        th = thresholds["PLKF"]["fixed"]["phi"]
+        for filt, color in (("TEKF", "tab:red"), ("PLKF", "tab:blue"), ("bank", "tab:green")):
+            plot_convergence_curves(
+                ax, curves[case][filt][..., 3], threshold=th, label=filt, color=color
+            )
+        ax.set_title(f"{case}: yaw RMSE per initial guess ({config.runs} draws)")
+        ax.legend(fontsize="small")
+    axes[0].set_ylabel("φ RMSE (rad)")
+    files["convergence"] = save_figure(fig, out, "table1_yaw_convergence")
+
+    # NEES / NIS with χ² bounds: team average over draws, and the replay's case (1) single draw
+    fig, axes = plt.subplots(2, 2, figsize=(11, 7))
+    n = config.runs
+    plot_chi2_series(axes[0, 0], t, np.nanmean(acc[aerial]["nees"], 0), 4, n_runs=n, label="NEES")
+    plot_chi2_series(axes[1, 0], t, np.nanmean(acc[aerial]["nis"], 0), 3, n_runs=n, label="NIS")
+    axes[0, 0].set_title(f"{aerial}, simulation, mean of {n} draws")
+    r1 = replay["case1"]["PLKF"]
+    plot_chi2_series(axes[0, 1], r1["t"], r1["nees"][0], 4, label="NEES")
+    plot_chi2_series(axes[1, 1], r1["t"], r1["nis"][0], 3, label="NIS")
+    axes[0, 1].set_title("MRCLAM replay, Table-2 case (1), draw 0")
+    for ax in axes[1]:
+        ax.set_xlabel("time (s)")
+    files["nees_nis"] = save_figure(fig, out, "fig10_11_nees_nis")
+
+    # Fig. 12: conditioning of P, R, S on the replay, four Table-2 cases (draw 0)
+    fig, axes = plt.subplots(2, 2, figsize=(11, 7), sharey=True)
+    for ax, case in zip(axes.ravel(), TABLE2, strict=True):
+        rc = replay[case]["PLKF"]
+        plot_conditioning(ax, {m: (rc["t"], rc[f"cond_{m.lower()}"][0]) for m in ("P", "R", "S")})
+        ax.set_title(f"Table-2 {case}")
+    files["conditioning"] = save_figure(fig, out, "fig12_conditioning")
+
+    # RMSE vs PCRLB
+    fig, axes = plt.subplots(4, 1, figsize=(8, 8), sharex=True)
+    plot_rmse_vs_bound(axes, t, rmse(acc[aerial]["errors"], axis=0), bounds[aerial], label=aerial)
+    axes[0].set_title(f"{aerial}: PLKF RMSE over {n} draws vs √PCRLB")
+    files["pcrlb"] = save_figure(fig, out, "rmse_vs_pcrlb")
+
+    # odometry-noise sweep
+    sweep = summary["odometry_noise"]["sweep"]
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    plot_noise_sweep(
+        ax,
+        [row["sigma_v"] for row in sweep],
+        {r: [row["position_rmse_m"][r] for row in sweep] for r in targets},
+        paper_band=PAPER_ACCURACY["position_rmse_m"],
+    )
+    files["sweep"] = save_figure(fig, out, "odometry_noise_sweep")
+
+    # radial bias of PLKF / BC-PLKF / TEKF on the replay
+    fig, ax = plt.subplots(figsize=(7, 4))
+    plot_bias_comparison(
+        ax,
+        {
+            c: {f: v["radial_bias_m"] for f, v in d.items()}
+            for c, d in summary["bias_comparison"].items()
+        },
+        ylabel="radial bias (m)",
+    )
+    files["bias"] = save_figure(fig, out, "radial_bias")
+    return files
+
+
+def _table3_cells(t3: dict[str, Any]) -> list[str]:
+    """Ours and the paper's "RMSE (std)" per state, in the paper's column order φ, x, y, z."""
+    cells = []
+    for st in ("phi", "x", "y", "z"):
+        cells.append(f"{t3[st]['rmse_mean']:.4f} ({t3[st]['rmse_std']:.4f})")
+        cells.append(f"{t3[st]['paper_rmse']:.4f} ({t3[st]['paper_std']:.4f})")
+    return cells
+
+
+def _t1_cell(entry: dict[str, Any]) -> str:
+    return f"{fmt(entry['mean'], 3)} / {fmt(entry['median'], 3)} / {entry['worst']}"
+
+
+def build_report(summary: dict[str, Any], figures: dict[str, str]) -> str:
+    """report.md: tables ours | paper, figures inline, differences explained."""
+    s = summary
+    lines = [
+        "# Seed 000 — Wanasinghe, Mann & Gosine (2014), reproduced",
+        "",
+        f"Seed {s['seed']}; {s['runs']} team draws (the paper's 20), {s['replay_runs']} "
+        f"MRCLAM replay draws, {s['sweep_runs']} draws per sweep level; "
+        f"run time {fmt(s.get('elapsed_s'), 3)} s.",
+        "",
+        "## Accuracy of the four observed robots (PLKF, known initial pose, t ≥ 10 s)",
+        "",
+        markdown_table(
+            [
+                "robot",
+                "position RMSE (m)",
+                "yaw RMSE (rad)",
+                "inside ±3σ (x/y/z/φ)",
+                "ANEES",
+                "ANEES 95 % band",
+                "NIS % > χ²(3)",
+                "paper",
+            ],
+            [
+                [
+                    r,
+                    a["position_rmse_m"],
+                    a["yaw_rmse_rad"],
+                    " / ".join(f"{v:.3f}" for v in a["inside_3sigma"].values()),
+                    a["anees"],
+                    " – ".join(f"{v:.2f}" for v in a["anees_band_95"]),
+                    a["nis_percent_beyond"],
+                    "0.05–0.10 m, 0.075–0.1 rad",
+                ]
+                for r, a in s["accuracy"].items()
+            ],
+        ),
+        "",
+        figure_md(
+            figures["aerial_error"], "Error and ±3σ bounds of the aerial robot (paper Fig. 3)"
+        ),
+        figure_md(figures["all_errors"], "Errors of the four observed robots (paper Fig. 4)"),
+        "### Odometry noise and the paper's 5–10 cm",
+        "",
+        "The team's odometry noise (white, per 100 Hz step, on every reported body velocity): "
+        + ", ".join(
+            f"{r}: σ_v {v['sigma_v']:g} m/s, σ_vz {v['sigma_vz']:g} m/s, σ_ω {v['sigma_w']:g} rad/s"
+            for r, v in s["odometry_noise"]["team"].items()
+        )
+        + ". With the Table-2 precise sensor the position error is centimetre-level; the sweep "
+        "below reruns the team with every σ scaled (simulated and assumed alike). It is shown, "
+        "not used to pick the noise.",
+        "",
+        markdown_table(
+            ["σ_v (m/s)", "σ_ω (rad/s)"] + [f"{r} pos / yaw RMSE" for r in s["accuracy"]],
+            [
+                [row["sigma_v"], row["sigma_w"]]
+                + [
+                    f"{row['position_rmse_m'][r]:.4f} / {row['yaw_rmse_rad'][r]:.4f}"
+                    for r in s["accuracy"]
+                ]
+                for row in s["odometry_noise"]["sweep"]
+            ],
+        ),
+        "",
+        figure_md(figures["sweep"], "Steady-state position RMSE against odometry noise"),
+        "## Table 1 — measurement updates to converge (mean / median / worst of 13 guesses)",
+        "",
+        "Rule `paper_rule` is Eq. 32 (1.05 × the maximum case-1 RMSE of the same filter); "
+        "`fixed` is 0.05 m / 0.1 rad. The RMSE of each guess is taken over the draws. A guess "
+        "that never converges counts as (updates + 1). Thresholds: "
+        + "; ".join(
+            f"{f} Eq. 32: " + ", ".join(f"{k} {v:.4g}" for k, v in th["paper_rule"].items())
+            for f, th in s["table1_thresholds"].items()
+        )
+        + ".",
+        "",
+    ]
+    rows = []
+    for case in ("case2", "case3", "case4"):
+        for filt in ("PLKF", "TEKF"):
+            entry = s["table1"][case][filt]
+            for rule in RULES:
+                rows.append(
+                    [case, filt, rule]
+                    + [_t1_cell(entry[rule][st]) for st in STATES]
+                    + [" / ".join(str(entry["paper"][st]) for st in STATES)]
+                )
+        best = s["table1_best"][case]
+        for rule in RULES:
+            rows.append(
+                [case, "yaw bank" if "bank" in best["method"] else "best (PLKF)", rule]
+                + [_t1_cell(best[rule][st]) for st in STATES]
+                + ["—"]
+            )
+    lines += [
+        markdown_table(["case", "filter", "rule", "x", "y", "z", "φ", "paper x/y/z/φ"], rows),
+        "",
+        "Not converged within the run (guesses, per state x/y/z/φ): "
+        + "; ".join(
+            f"{case} {filt} {rule}: "
+            + "/".join(str(v) for v in s["table1_not_converged"][case][filt][rule].values())
+            for case in ("case2", "case3", "case4")
+            for filt in ("PLKF", "TEKF")
+            for rule in RULES
+        )
+        + ".",
+        "",
+        f"Acceptance (yaw bank, case 4): fixed-rule worst φ = "
+        f"{s['table1_best']['acceptance']['case4_fixed_phi_worst']} (≤ 12: "
+        f"{fmt(s['table1_best']['acceptance']['case4_fixed_phi_worst_le_12'])}); Eq.-32 mean φ = "
+        f"{fmt(s['table1_best']['acceptance']['case4_paper_rule_phi_mean'], 3)} vs plain PLKF "
+        f"{fmt(s['table1_best']['acceptance']['case4_plkf_paper_rule_phi_mean'], 3)} (≤ 12 or "
+        f"≤ 1/3 of the PLKF: {fmt(s['table1_best']['acceptance']['case4_paper_rule_ok'])}).",
+        "",
+        figure_md(figures["convergence"], "Yaw RMSE per initial guess: TEKF, PLKF, yaw bank"),
+        figure_md(
+            figures["arbitrary_init"],
+            "PLKF vs TEKF vs yaw bank from an arbitrary pose (paper Fig. 6)",
+        ),
+        "## Tables 3–4 — real MRCLAM trajectories",
+        "",
+        f"{s['replay']['source']}; observed plane raised {s['replay']['observed_height_m']:g} m; "
+        f"window {s['replay']['window_s'][0]:.1f}–{s['replay']['window_s'][1]:.1f} s of the "
+        f"recording, steady state after {s['replay']['steady_state_after_s']:g} s; recorded "
+        "odometry as inputs; measurements synthesised from the ground truth. Odometry noise "
+        "assumed (fitted from the recording, equivalent white noise over 1 s windows): "
+        + "; ".join(
+            f"{k}: σ_v {v['sigma_v']:.3f} m/s, σ_lateral {v['sigma_lateral']:.3f} m/s, "
+            f"σ_ω {v['sigma_w']:.3f} rad/s"
+            for k, v in s["odometry_noise"]["replay_fit"].items()
+        )
+        + ".",
+        "",
+        markdown_table(
+            [
+                "case",
+                "φ RMSE (std)",
+                "paper",
+                "x RMSE (std)",
+                "paper",
+                "y RMSE (std)",
+                "paper",
+                "z RMSE (std)",
+                "paper",
+            ],
+            [[case, *_table3_cells(t3)] for case, t3 in s["table3"].items()],
+        ),
+        "",
+        markdown_table(
+            [
+                "case",
+                "% NEES > χ²(4, .95)",
+                "paper",
+                "% NIS > χ²(3, .95)",
+                "ANEES",
+                "max cond P / R / S",
+                "paper: all < 6",
+            ],
+            [
+                [
+                    case,
+                    t4["nees_percent_beyond"],
+                    t4["paper_nees_percent_beyond"],
+                    t4["nis_percent_beyond"],
+                    t4["anees"],
+                    " / ".join(f"{v:.2f}" for v in t4["max_conditioning"].values()),
+                    "yes" if max(t4["max_conditioning"].values()) < 6 else "no",
+                ]
+                for case, t4 in s["table4"].items()
+            ],
+        ),
+        "",
+        "### Radial bias: PLKF vs bias-compensated PLKF vs TEKF (replay, steady state)",
+        "",
+        markdown_table(
+            ["case", "filter", "radial bias (m)", "position RMSE (m)", "yaw RMSE (rad)"],
+            [
+                [case, filt, v["radial_bias_m"], v["position_rmse_m"], v["yaw_rmse_rad"]]
+                for case, d in s["bias_comparison"].items()
+                for filt, v in d.items()
+            ],
+        ),
+        "",
+        figure_md(figures["bias"], "Radial bias of the three filters per Table-2 case"),
+        figure_md(figures["nees_nis"], "NEES and NIS with χ² bounds (paper Figs. 10–11)"),
+        figure_md(figures["conditioning"], "Conditioning of P, R, S (paper Fig. 12)"),
+        "## RMSE against the PCRLB (simulation, steady state)",
+        "",
+        markdown_table(
+            ["robot", "x", "y", "z", "φ"],
+            [[r] + [v[st] for st in STATES] for r, v in s["pcrlb_ratio"].items()],
+        ),
+        "",
+        figure_md(figures["pcrlb"], "RMSE and √PCRLB of the aerial robot"),
+        "## Differences from the paper, explained",
+        "",
+        *DIFFERENCES,
+    ]
+    return "\n".join(lines)
+
+
+DIFFERENCES: tuple[str, ...] = (
+    "- **Accuracy (5–10 cm, 0.075–0.1 rad).** The paper does not state its odometry noise. "
+    "With the Table-2 precise sensor (σ_θ = 0.0036 rad, a few cm at 5–10 m) and B's default "
+    "odometry noise our steady-state errors are about a centimetre; the sweep shows how much "
+    "larger the velocity noise must be for 5–10 cm. We keep the scenario's noise rather than "
+    "tune it to the paper.",
+    "- **Table 1.** The paper gives one number per cell (a mean over 13 guesses); we add the "
+    "median and the worst guess, and a fixed threshold beside Eq. 32. Eq. 32 ties the threshold "
+    "to the known-initialisation RMSE, so it depends on the odometry noise; our trajectories "
+    "and noise are B's default team, not the paper's (unpublished) ones, so counts differ in "
+    "detail. The qualitative result holds: the PLKF fixes position in one update, the TEKF "
+    "needs more, and both can stall for hundreds of updates when the yaw guess is near the "
+    "wrong side of the circle (the worst column), which the paper's mean hides. The yaw bank "
+    "removes that stall.",
+    "- **Tables 3–4 (real data).** The paper used two Pioneer robots with laser map-based "
+    "localisation as ground truth; we use two iRobot Create robots of MRCLAM with Vicon truth "
+    "and their recorded *commanded* odometry (quantised, leading the motion by ~0.2 s, a few "
+    "percent fast, turning more than they do). These robots move slowly (≈ 5–6 cm/s), and the "
+    "relative yaw is observable only through the observed robot's motion (seed 000 Lemma 1), "
+    "so the yaw error is larger than the paper's and the odometry errors, correlated over "
+    "seconds rather than white, make the filter over-confident in yaw (NEES beyond the bound "
+    "more often than the paper's Table 4). Positions, observed directly, match the paper's "
+    "order of magnitude. The replay draws five sensor-noise realisations; the paper's table is "
+    "one run.",
+    "- **Bias.** With the noisy Table-2 sensor the PLKF's measured bearings inside H_pmo bias "
+    "the range outwards by centimetres; the bias-compensated PLKF (A's, Nguyen & Doğançay 2017) "
+    "removes most of it, the TEKF has no such bias but linearises the bearing.",
+    "- **PCRLB.** The bound uses the true commands and the filters' own noise models; a ratio "
+    "near 1 means the estimator is close to efficient for that state.",
+)

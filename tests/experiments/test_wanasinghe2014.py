@@ -1,0 +1,144 @@
+"""A small seeded run of the seed-000 reproduction on a truncated MRCLAM-layout copy.
+
+The run is the real pipeline (simulation, Table 1 with the yaw bank, MRCLAM replay, sweep,
+PCRLB, figures, report) with a reduced internal configuration: a 4 s team, 3 initial guesses,
+2 draws, a 15 s replay window of a truncated copy of MRCLAM run 6 written into ``tmp_path``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from pathlib import Path
+
+import pytest
+
+from relloc.datasets.paths import default_mrclam_dataset
+from relloc.errors import ConfigError, DataError
+from relloc.experiments.registry import ReproduceArgs
+from relloc.experiments.wanasinghe2014 import (
+    PAPER_TABLE1,
+    RULES,
+    STATES,
+    Wanasinghe2014Config,
+    run_reproduction,
+)
+from relloc.experiments.wanasinghe2014_mrclam import ReplaySettings, prepare_replay
+from relloc.experiments.wanasinghe2014_sim import SimSettings
+from relloc.sim.scenario import default_scenario
+
+KEEP_SECONDS = 45.0
+
+
+def _truncated_copy(src: Path, dst: Path, robots: tuple[int, ...] = (1, 2, 3)) -> Path:
+    """Barcodes, landmarks and the first ``KEEP_SECONDS`` of three robots, same file names."""
+    dst.mkdir()
+    for name in ("Barcodes.dat", "Landmark_Groundtruth.dat"):
+        (dst / name).write_text((src / name).read_text())
+    first = None
+    for n in robots:
+        for kind in ("Groundtruth", "Odometry", "Measurement"):
+            lines = (src / f"Robot{n}_{kind}.dat").read_text().splitlines()
+            header = [ln for ln in lines if ln.startswith("#")]
+            rows = [ln for ln in lines if ln.strip() and not ln.startswith("#")]
+            if first is None:
+                first = float(rows[0].split()[0])
+            kept = [ln for ln in rows if float(ln.split()[0]) < first + KEEP_SECONDS]
+            (dst / f"Robot{n}_{kind}.dat").write_text("\n".join(header + kept) + "\n")
+    return dst
+
+
+@pytest.fixture(scope="module")
+def small_dataset(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    src = default_mrclam_dataset()
+    if not (src / "Barcodes.dat").is_file():
+        pytest.skip(f"MRCLAM run 6 not found at {src} (shared data absent)")
+    return _truncated_copy(src, tmp_path_factory.mktemp("mrclam") / "MRCLAM_short")
+
+
+def _small_config(dataset: Path) -> Wanasinghe2014Config:
+    return Wanasinghe2014Config(
+        runs=2,
+        replay_runs=1,
+        sweep_runs=1,
+        sweep_scales=(1.0,),
+        sweep_duration_s=3.0,
+        steady_state_s=1.0,
+        replay_steady_state_s=3.0,
+        sim=SimSettings(
+            scenario=dataclasses.replace(default_scenario(), duration_s=4.0), n_poses=3
+        ),
+        replay=ReplaySettings(
+            dataset=dataset, duration_s=15.0, min_duration_s=10.0, start_after_odometry_s=1.0
+        ),
+    )
+
+
+def test_small_reproduction_on_another_mrclam_folder(small_dataset: Path, tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    summary = run_reproduction(
+        _small_config(small_dataset), out, seed=11, executor="serial", quiet=True
+    )
+    on_disk = json.loads((out / "summary.json").read_text())
+    assert on_disk["seed"] == 11 and on_disk["runs"] == 2
+    for key in ("accuracy", "table1", "table1_best", "table3", "table4", "pcrlb_ratio"):
+        assert key in on_disk
+    # accuracy of the four observed robots
+    assert set(summary["accuracy"]) == {"aerial1", "aerial2", "ground1", "ground2"}
+    for acc in summary["accuracy"].values():
+        assert 0 < acc["position_rmse_m"] < 0.5 and 0 < acc["yaw_rmse_rad"] < 0.5
+        assert set(acc["inside_3sigma"]) == set(STATES)
+        assert acc["paper"]["position_rmse_m"] == [0.05, 0.1]
+    # table1[case][filter][rule][state] = {mean, median, worst}, paper values alongside
+    for case in ("case2", "case3", "case4"):
+        for filt in ("PLKF", "TEKF"):
+            entry = summary["table1"][case][filt]
+            assert entry["paper"] == PAPER_TABLE1[case][filt]
+            for rule in RULES:
+                for state in STATES:
+                    cell = entry[rule][state]
+                    assert set(cell) == {"mean", "median", "worst"}
+                    assert 1 <= cell["mean"] <= cell["worst"]
+    # the yaw bank's acceptance thresholds (issue 2)
+    best = summary["table1_best"]
+    assert best["case4"]["fixed"]["phi"]["worst"] <= 12
+    plkf_mean = summary["table1"]["case4"]["PLKF"]["paper_rule"]["phi"]["mean"]
+    bank_mean = best["case4"]["paper_rule"]["phi"]["mean"]
+    assert bank_mean <= 12 or bank_mean <= plkf_mean / 3
+    assert best["acceptance"]["case4_fixed_phi_worst_le_12"] is True
+    # Tables 3-4 on the truncated copy
+    assert summary["replay"]["dataset"] == str(small_dataset)
+    assert set(summary["table3"]) == {"case1", "case2", "case3", "case4"}
+    for case, t3 in summary["table3"].items():
+        for state in STATES:
+            assert math.isfinite(t3[state]["rmse_mean"]) and t3[state]["paper_rmse"] > 0
+        t4 = summary["table4"][case]
+        assert 0 <= t4["nees_percent_beyond"] <= 100
+        assert set(t4["max_conditioning"]) == {"P", "R", "S"}
+    assert set(summary["bias_comparison"]["case2"]) == {"PLKF", "BC-PLKF", "TEKF"}
+    for ratios in summary["pcrlb_ratio"].values():
+        assert all(math.isfinite(v) and v > 0 for v in ratios.values())
+    # report and every figure it shows
+    report = (out / "report.md").read_text()
+    figures = [line.split("](")[1].rstrip(")") for line in report.splitlines() if "](" in line]
+    assert len(figures) >= 8
+    assert all((out / f).is_file() for f in figures)
+
+
+def test_config_from_cli_arguments(tmp_path: Path) -> None:
+    args = ReproduceArgs(out_dir=tmp_path, runs=2, dataset=tmp_path / "elsewhere")
+    cfg = Wanasinghe2014Config.from_args(args)
+    assert (cfg.runs, cfg.replay_runs, cfg.sweep_runs) == (2, 2, 2)
+    assert cfg.replay.dataset == tmp_path / "elsewhere"
+    default = Wanasinghe2014Config.from_args(ReproduceArgs(out_dir=tmp_path))
+    assert (default.runs, default.sim.n_poses) == (20, 13)  # the paper's counts
+    with pytest.raises(ConfigError, match="steady_state_s"):
+        Wanasinghe2014Config(steady_state_s=1000.0)
+
+
+def test_replay_rejects_a_folder_too_short(small_dataset: Path) -> None:
+    with pytest.raises(DataError, match="share only"):
+        prepare_replay(ReplaySettings(dataset=small_dataset, min_duration_s=100.0))
+    with pytest.raises(DataError, match="robot 5"):
+        prepare_replay(ReplaySettings(dataset=small_dataset, observed=5))
