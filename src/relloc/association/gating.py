@@ -56,11 +56,16 @@ class GateSettings:
             an (almost) uniform yaw and gets the modified gate.
         horizon: time ``τ`` (s) over which the unknown yaw can displace the track (the
             interval between direct-fusion scans).
+        p_birth_exclusion: probability of the wider gate around every track inside which no
+            new track is born (a correct measurement falls outside the update gate with
+            probability 1 − P_G; without this margin each such miss would start a duplicate
+            track with uniform yaw on top of the existing one).
     """
 
     p_gate: float = 0.95
     yaw_sigma_uniform: float = 0.5
     horizon: float = 0.1
+    p_birth_exclusion: float = 0.9999
 
     def __post_init__(self) -> None:
         if not 0.0 < self.p_gate < 1.0:
@@ -68,6 +73,11 @@ class GateSettings:
         if not (np.isfinite(self.yaw_sigma_uniform) and self.yaw_sigma_uniform > 0.0):
             raise ConfigError(
                 f"GateSettings.yaw_sigma_uniform must be > 0, got {self.yaw_sigma_uniform}"
+            )
+        if not self.p_gate <= self.p_birth_exclusion < 1.0:
+            raise ConfigError(
+                "GateSettings.p_birth_exclusion must lie in [p_gate, 1), got "
+                f"{self.p_birth_exclusion}"
             )
         if not (np.isfinite(self.horizon) and self.horizon >= 0.0):
             raise ConfigError(f"GateSettings.horizon must be ≥ 0, got {self.horizon}")

@@ -7,7 +7,8 @@ tracks teammate ``j`` branches, for one sensor's measurement set ``Z = {z_1 … 
   ``w_h (1 − P_D P_G)``;
 * one **detected** track per measurement ``z_r`` inside the track's gate (association
   ``A_r``), Kalman-updated, with the likelihood weight of Eq. 7 divided by the density ``κ``
-  of measurements that are *not* ``j`` (clutter and the other teammates)::
+  of measurements that are *not* ``j`` (clutter and the other teammates; the fuser evaluates
+  it per measurement, see :mod:`relloc.estimators.gaussian_sum`)::
 
       w_{h,r} = w_h · P_D · N(z_r; ẑ_h, S_h) / κ;
 
@@ -81,7 +82,7 @@ def formation_weights(
     likelihood: Array,
     gated: NDArray[np.bool_],
     settings: FormationSettings,
-    false_density: float,
+    false_density: float | Array,
 ) -> tuple[Array, Array]:
     """Unnormalised weights of false-alarm and detected tracks (module docstring).
 
@@ -90,15 +91,17 @@ def formation_weights(
         likelihood: ``N(z_r; ẑ_h, S_h)`` (K, m).
         gated: ``True`` where measurement ``r`` is inside the gate of track ``h`` (K, m).
         settings: formation probabilities.
-        false_density: density ``κ`` of measurements not originating from the target (> 0).
+        false_density: density ``κ`` of measurements not originating from the target (> 0),
+            a scalar or one value per (track, measurement) pair (K, m).
 
     Returns:
         ``(w_false_alarm (K,), w_detected (K, m))`` with zeros outside the gate.
     """
-    if not (np.isfinite(false_density) and false_density > 0.0):
-        raise ConfigError(f"formation_weights: false_density must be > 0, got {false_density}")
+    kappa = np.asarray(false_density, dtype=float)
+    if not (np.all(np.isfinite(kappa)) and np.all(kappa > 0.0)):
+        raise ConfigError(f"formation_weights: false_density must be > 0, got {kappa}")
     w_fa = weights * (1.0 - settings.p_detect * settings.p_gate)
-    w_det = np.where(gated, weights[:, None] * settings.p_detect * likelihood / false_density, 0.0)
+    w_det = np.where(gated, weights[:, None] * settings.p_detect * likelihood / kappa, 0.0)
     return w_fa, w_det
 
 
@@ -110,15 +113,17 @@ def birth_tracks(
     settings: FormationSettings,
     *,
     volume: float,
-    false_density: float,
+    false_density: float | Array,
 ) -> tuple[Array, Array, Array]:
     """New tracks of Eq. 13 for bearings ``(α_k, β_k)`` with ranges ``r_k`` and heights ``h_k``.
 
     ``r`` and ``h`` are scalars or one value per bearing (several teammates at once).
-    ``volume`` is the volume ``V`` of the bearing space and ``false_density`` the density ``κ``.
+    ``volume`` is the volume ``V`` of the bearing space and ``false_density`` the density ``κ``
+    (scalar or one value per bearing).
     Returns ``(means (m, 4), covs (m, 4, 4), weights (m,))``.
     """
-    if not (volume > 0.0 and false_density > 0.0):
+    kappa = np.asarray(false_density, dtype=float)
+    if not (volume > 0.0 and np.all(kappa > 0.0)):
         raise ConfigError(
             f"birth_tracks: volume and false_density must be > 0: {volume}, {false_density}"
         )
@@ -134,5 +139,5 @@ def birth_tracks(
     covs = np.broadcast_to(np.diag(settings.birth_variances), (alpha.size, 4, 4)).copy()
     var_z = settings.birth_variances[2]
     consistency = np.exp(-0.5 * (h - r * np.sin(beta)) ** 2 / var_z)
-    weights = settings.p_birth * consistency * settings.p_detect / (volume * false_density)
+    weights = settings.p_birth * consistency * settings.p_detect / (volume * kappa)
     return means, covs, weights

@@ -20,10 +20,13 @@ one sensor does not discard the others:
    and clutter) is a candidate for every teammate (``association.hypotheses``).
 
 Known-correspondence sensors do not branch: a track whose χ² gate holds the measurement is
-updated and weighted by the likelihood (Eq. 7, ``w ← w N(z; ẑ, S)``); a track whose gate does
-not hold it keeps its state and gets the outlier weight ``w (1 − P_G) N_γ`` where
-``N_γ = e^{−γ/2}/√det(2πS)`` is the likelihood on the gate boundary (a measurement outside the
-gate is scored as if it lay on it, so an outlier cannot cost more than that).
+updated and its weight multiplied by the likelihood ratio ``N(z; ẑ, S)/N(ẑ; ẑ, S) = e^{−d²/2}``
+(Eq. 7, relative to a perfectly consistent track); a track whose gate does not hold it keeps
+its state and gets the outlier factor ``(1 − P_G) e^{−γ/2}`` (scored as if the measurement lay
+on the gate boundary, discounted by the probability of a correct measurement outside the gate).
+The weights are normalised only at the end of the scan, so the evidence of the range and height
+against a track still counts when it competes with the new tracks born from the bearings (which
+are built from that range and height, ratio 1) — this is what re-finds a kidnapped robot.
 
 After the direct scan each filter is normalised and reduced (``association.mixture_reduction``
 and ``association.nscan``): prune by weight, N-scan prune track families, merge by Mahalanobis
@@ -402,7 +405,11 @@ class GaussianSumFuser:
     # ------------------------------------------------------------------ direct fusion
 
     def update_known(self, kind: Literal["height", "range"], values: ArrayLike) -> None:
-        """Update with a known-correspondence sensor (``values`` per teammate, NaN = none)."""
+        """Update with a known-correspondence sensor (``values`` per teammate, NaN = none).
+
+        Weights are multiplied by the likelihood ratios and left unnormalised (see
+        :meth:`direct_scan`; :meth:`reduce` normalises).
+        """
         vals = self._per_teammate(values, kind)
         t = self.tracks
         if t.size == 0:
@@ -433,13 +440,10 @@ class GaussianSumFuser:
         )
         t.mean[sel] = np.where(inside[:, None], new_m, mean)
         t.cov[sel] = np.where(inside[:, None, None], new_P, cov)
-        lik = np.where(
-            inside,
-            _gaussian_density(nu, S),
-            (1.0 - self.settings.gate.p_gate) * _edge_density(S, gamma),
+        ratio = np.where(
+            inside, np.exp(-0.5 * d2), (1.0 - self.settings.gate.p_gate) * np.exp(-0.5 * gamma)
         )
-        t.weight[sel] = t.weight[sel] * lik
-        self._normalise()
+        t.weight[sel] = t.weight[sel] * ratio
 
     def update_bearings(self, bearings: ArrayLike, ranges: ArrayLike, heights: ArrayLike) -> None:
         """Gate, form and update with a bearing set of unknown correspondence.
@@ -455,14 +459,10 @@ class GaussianSumFuser:
         r = self._per_teammate(ranges, "ranges")
         h = self._per_teammate(heights, "heights")
         m = Z.shape[0]
-        n_team = len(self.teammates)
-        kappa = (
-            st.expected_clutter + st.formation.p_detect * max(n_team - 1, 0)
-        ) / st.bearing_volume
-        kappa = max(kappa, 1.0 / st.bearing_volume)
         t = self.tracks
         k = t.size
         gated = np.zeros((k, m), dtype=bool)
+        near = np.zeros((k, m), dtype=bool)
         parts: list[Tracks] = []
         if k and m:
             hz = range_bearing(t.mean)[:, st.bearing_rows]
@@ -476,8 +476,10 @@ class GaussianSumFuser:
             )
             d2 = mahalanobis_batch(nu, S_gate[:, None, :, :])
             gated = d2 <= chi2_gate(nb, st.gate.p_gate)
+            near = d2 <= chi2_gate(nb, st.gate.p_birth_exclusion)
             lik = _gaussian_density(nu, np.broadcast_to(S[:, None], (k, m, nb, nb)))
-            w_fa, w_det = formation_weights(t.weight, lik, gated, st.formation, kappa)
+            kappa = self._false_density(lik, m)
+            w_fa, w_det = formation_weights(t.weight, lik, gated, st.formation, kappa[t.owner])
             fa = t.take(np.arange(k))
             fa.weight = w_fa
             fa.assoc = np.full(k, -1, dtype=np.int64)
@@ -505,22 +507,47 @@ class GaussianSumFuser:
             t.assoc[:] = -1
             return
         if m:
-            parts.extend(self._births(Z, r, h, gated, kappa))
+            if not k:
+                kappa = self._false_density(np.zeros((0, m)), m)
+            parts.extend(self._births(Z, r, h, near, kappa))
         if parts:
             self.tracks = Tracks.concat(parts)
-            self._normalise()
+
+    def _false_density(self, lik: Array, m: int) -> Array:
+        """``κ[j, b]``: density at bearing ``b`` of everything that is not teammate ``j``.
+
+        Clutter (``expected_clutter/V``) plus ``P_D`` times the predicted bearing density of
+        every other teammate: the mixture ``Σ_h w_h N(z_b; ẑ_h, S_h)`` of its filter when it has
+        tracks, uniform ``1/V`` while it has none. A bearing that another teammate's tracks
+        explain is therefore weak evidence for ``j`` (no ghost track of ``j`` can feed on it).
+        """
+        st = self.settings
+        n_team = len(self.teammates)
+        t = self.tracks
+        dens = np.zeros((n_team, m))
+        tracked = np.zeros(n_team, dtype=bool)
+        if t.size:
+            totals = np.bincount(t.owner, weights=t.weight, minlength=n_team)
+            w = t.weight / np.where(totals > 0.0, totals, 1.0)[t.owner]
+            np.add.at(dens, t.owner, w[:, None] * lik)
+            tracked[t.owner] = True
+        dens[~tracked] = 1.0 / st.bearing_volume
+        others = dens.sum(axis=0)[None, :] - dens
+        clutter = max(st.expected_clutter, 1e-3) / st.bearing_volume
+        return clutter + st.formation.p_detect * others
 
     def _births(
-        self, Z: Array, r: Array, h: Array, gated: NDArray[np.bool_], kappa: float
+        self, Z: Array, r: Array, h: Array, near: NDArray[np.bool_], kappa: Array
     ) -> list[Tracks]:
-        """New tracks (Eq. 13) from bearings outside every gate of each teammate's filter."""
+        """New tracks (Eq. 13) from bearings outside the birth-exclusion gate of every track
+        of each teammate's filter."""
         st = self.settings
         t = self.tracks
         n_team = len(self.teammates)
         # hit[j, b]: bearing b lies in the gate of some track of teammate j
         hit = np.zeros((n_team, Z.shape[0]), dtype=bool)
         if t.size:
-            np.logical_or.at(hit, t.owner, gated)
+            np.logical_or.at(hit, t.owner, near)
         usable = np.isfinite(r) & (r > 0.0) & np.isfinite(h)
         jj, bb = np.nonzero(~hit & usable[:, None])
         if jj.size == 0:
@@ -533,7 +560,7 @@ class GaussianSumFuser:
             h[jj],
             st.formation,
             volume=st.bearing_volume,
-            false_density=kappa,
+            false_density=kappa[jj, bb],
         )
         ids = self._ids(jj.size)
         return [
@@ -550,7 +577,10 @@ class GaussianSumFuser:
         ]
 
     def direct_scan(self, heights: ArrayLike, ranges: ArrayLike, bearings: ArrayLike) -> None:
-        """One direct-fusion scan: height, range, then bearings, then reduction."""
+        """One direct-fusion scan: height, range, then bearings, then reduction.
+
+        The weights are left unnormalised between the sensors and normalised by the reduction.
+        """
         self.update_known("height", heights)
         self.update_known("range", ranges)
         self.update_bearings(bearings, ranges, heights)
@@ -773,9 +803,7 @@ class GaussianSumFuser:
                     cov=covs[free].copy(),
                     prior_mean=means[free].copy(),
                     prior_cov=covs[free].copy(),
-                    weight=st.formation.p_birth
-                    * weights[free]
-                    * _edge_density(covs[free] + np.diag(st.formation.birth_variances), gamma),
+                    weight=st.formation.p_birth * weights[free] * _edge_density(covs[free], gamma),
                     history=new_history(ids, st.nscan_depth),
                     assoc=np.full(free.size, -1, dtype=np.int64),
                 )

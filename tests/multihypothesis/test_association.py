@@ -1,0 +1,134 @@
+"""Gating, formation, assignment, mixture reduction and N-scan pruning."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.stats import chi2
+
+from relloc.association.assignment import assign
+from relloc.association.gating import GateSettings, chi2_gate, modified_gate_covariance
+from relloc.association.hypotheses import FormationSettings, birth_tracks, formation_weights
+from relloc.association.mixture_reduction import (
+    cap_indices,
+    merge_groups,
+    merge_moments,
+    prune_mask,
+)
+from relloc.association.nscan import branch, family_keep_mask, new_history
+from relloc.core.gaussian import GaussianMixture
+from relloc.errors import ConfigError, ModelError
+
+
+def _random_spd(rng: np.random.Generator, n: int) -> np.ndarray:
+    A = rng.normal(size=(n, n))
+    return A @ A.T + n * np.eye(n)
+
+
+def test_chi2_gate_matches_scipy_and_rejects_bad_input() -> None:
+    for dim, p in ((1, 0.95), (2, 0.99), (4, 0.9)):
+        assert chi2_gate(dim, p) == pytest.approx(chi2.ppf(p, dim))
+    with pytest.raises(ConfigError, match="p_gate"):
+        chi2_gate(2, 1.0)
+    with pytest.raises(ConfigError, match="dim"):
+        chi2_gate(0, 0.5)
+    with pytest.raises(ConfigError, match="p_gate"):
+        GateSettings(p_gate=0.0)
+
+
+def test_modified_gate_only_widens_uniform_yaw_tracks() -> None:
+    S = np.broadcast_to(np.eye(2) * 0.01, (2, 2, 2)).copy()
+    H = np.zeros((2, 2, 4))
+    H[:, 0, 0] = H[:, 1, 1] = 1.0
+    out = modified_gate_covariance(
+        S, H, np.array([4 * np.pi, 0.01]), np.array([0.5, 0.5]), GateSettings(horizon=0.1)
+    )
+    np.testing.assert_allclose(out[1], S[1])
+    np.testing.assert_allclose(out[0], S[0] + 0.05**2 * np.eye(2))
+
+
+def test_merge_preserves_first_two_moments() -> None:
+    rng = np.random.default_rng(3)
+    k, n = 5, 4
+    means = rng.normal(size=(k, n))
+    covs = np.stack([_random_spd(rng, n) for _ in range(k)])
+    w = rng.random(k)
+    mean, cov, total = merge_moments(means, covs, w, np.arange(k))
+    ref = GaussianMixture(means=means, covs=covs, weights=w).moments()
+    np.testing.assert_allclose(mean, ref.mean, atol=1e-12)
+    np.testing.assert_allclose(cov, ref.cov, atol=1e-12)
+    assert total == pytest.approx(w.sum())
+
+
+def test_merge_aligns_headings_across_the_wrap() -> None:
+    means = np.array([[0.0, 0.0, 0.0, np.pi - 0.05], [0.0, 0.0, 0.0, -np.pi + 0.05]])
+    covs = np.broadcast_to(np.eye(4) * 0.1, (2, 4, 4))
+    mean, _, _ = merge_moments(means, covs, np.array([0.5, 0.5]), np.arange(2), angle_index=3)
+    assert abs(abs(mean[3]) - np.pi) < 1e-9
+    groups = merge_groups(means, covs, np.array([0.6, 0.4]), 4.0, angle_index=3)
+    assert len(groups) == 1
+
+
+def test_merge_groups_separates_far_and_broad_components() -> None:
+    sharp = np.eye(4) * 0.01
+    broad = np.diag([0.1, 0.1, 0.05, 4 * np.pi])
+    means = np.array([[0, 0, 0, 0.0], [0.01, 0, 0, 0.0], [5, 0, 0, 0.0], [0, 0, 0, 1.0]])
+    covs = np.stack([sharp, sharp, sharp, broad])
+    groups = merge_groups(means, covs, np.array([0.4, 0.3, 0.2, 0.1]), 4.0, angle_index=3)
+    assert [sorted(g.tolist()) for g in groups] == [[0, 1], [2], [3]]
+    with pytest.raises(ModelError):
+        merge_groups(means, covs, np.ones(4), -1.0)
+
+
+def test_prune_and_cap_keep_the_heaviest_per_group() -> None:
+    w = np.array([1e-5, 2e-5, 0.5, 0.2])
+    groups = np.array([0, 0, 1, 1])
+    np.testing.assert_array_equal(prune_mask(w, 1e-3, groups), [False, True, True, True])
+    np.testing.assert_array_equal(cap_indices(w, 2), [2, 3])
+
+
+def test_nscan_prunes_light_families_but_keeps_the_best() -> None:
+    hist = new_history(np.array([10, 11, 12]), 2)
+    assert hist.shape == (3, 3)
+    kids = branch(hist, np.array([0, 0, 1, 2]), np.array([20, 21, 22, 23]))
+    np.testing.assert_array_equal(kids[:, 0], [10, 10, 11, 12])
+    np.testing.assert_array_equal(kids[:, -1], [20, 21, 22, 23])
+    w = np.array([0.5, 0.45, 0.0004, 0.0496])
+    np.testing.assert_array_equal(family_keep_mask(kids, w, 0.01), [True, True, False, True])
+    # a lone heaviest family below the threshold is still kept
+    np.testing.assert_array_equal(family_keep_mask(kids[:1], np.array([0.001]), 0.01), [True])
+
+
+def test_assignment_one_to_one_with_missed_targets() -> None:
+    cost = np.array([[1.0, 5.0, np.inf], [1.5, np.inf, np.inf], [np.inf, np.inf, np.inf]])
+    out = assign(cost, np.array([10.0, 10.0, 10.0]))
+    np.testing.assert_array_equal(out, [1, 0, -1])
+    np.testing.assert_array_equal(assign(cost, np.array([0.1, 0.1, 0.1])), [-1, -1, -1])
+    with pytest.raises(ModelError):
+        assign(cost, np.ones(2))
+
+
+def test_formation_and_birth_weights_follow_eq7_and_eq13() -> None:
+    st = FormationSettings()
+    w_fa, w_det = formation_weights(
+        np.array([0.7, 0.3]),
+        np.array([[2.0, 4.0], [1.0, 8.0]]),
+        np.array([[True, False], [True, True]]),
+        st,
+        0.5,
+    )
+    np.testing.assert_allclose(w_fa, np.array([0.7, 0.3]) * (1 - 0.95 * 0.95))
+    np.testing.assert_allclose(
+        w_det, [[0.7 * 0.95 * 4.0, 0.0], [0.3 * 0.95 * 2.0, 0.3 * 0.95 * 16]]
+    )
+    r, alpha, beta = 3.0, np.array([0.3, 0.3]), np.array([0.2, 0.6])
+    h = r * np.sin(0.2)
+    means, covs, w = birth_tracks(r, alpha, beta, h, st, volume=2.0, false_density=0.25)
+    np.testing.assert_allclose(
+        means[0], [r * np.cos(0.2) * np.cos(0.3), r * np.cos(0.2) * np.sin(0.3), h, 0.0]
+    )
+    np.testing.assert_allclose(covs[0], np.diag([0.1, 0.1, 0.05, 4 * np.pi]))
+    assert w[0] == pytest.approx(0.5 * 0.95 / (2.0 * 0.25))
+    assert w[1] < 1e-3 * w[0]
+    with pytest.raises(ConfigError, match="p_birth"):
+        FormationSettings(p_birth=0.0)

@@ -1,0 +1,209 @@
+"""Gaussian-sum fusers: EKF equivalence, gating, formation, sharing, seeded short team runs."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from relloc.core.angles import wrap_angle
+from relloc.errors import ConfigError, DataError
+from relloc.estimators.gaussian_sum import (
+    GaussianSumFuser,
+    GaussianSumSettings,
+    Tracks,
+    predict_fusers,
+)
+from relloc.estimators.relative import predict_arrays
+from relloc.experiments.desilva2015 import RunConfig, _task, filter_settings
+from relloc.models.motion import VelocityNoise
+from relloc.sim.multihypothesis import DeSilvaScenario
+
+NOISE = VelocityNoise(observer=(0.2, 0.2, 0.2, 0.1), observed=(0.2, 0.2, 0.2, 0.1))
+
+
+def _settings(**kw: object) -> GaussianSumSettings:
+    base = dict(
+        velocity_noise=NOISE,
+        sigma_height=0.01,
+        sigma_range=0.02,
+        sigma_azimuth=0.05,
+        sigma_elevation=0.05,
+    )
+    base.update(kw)
+    return GaussianSumSettings(**base)  # type: ignore[arg-type]
+
+
+def _one_track(mean: np.ndarray, cov: np.ndarray, depth: int) -> Tracks:
+    return Tracks(
+        owner=np.zeros(1, dtype=np.int64),
+        mean=mean[None].copy(),
+        cov=cov[None].copy(),
+        prior_mean=mean[None].copy(),
+        prior_cov=cov[None].copy(),
+        weight=np.ones(1),
+        history=np.zeros((1, depth + 1), dtype=np.int64),
+        assoc=np.full(1, -1, dtype=np.int64),
+    )
+
+
+def _ekf_update(x, P, z, h, H, R, wrap=()):  # type: ignore[no-untyped-def]
+    """Textbook EKF update (independent of relloc's implementation)."""
+    nu = z - h
+    for i in wrap:
+        nu[i] = wrap_angle(nu[i])
+    S = H @ P @ H.T + R
+    K = P @ H.T @ np.linalg.inv(S)
+    I_KH = np.eye(4) - K @ H
+    return x + K @ nu, I_KH @ P @ I_KH.T + K @ R @ K.T
+
+
+def test_single_component_without_clutter_equals_the_ekf() -> None:
+    st = _settings(prune_weight=0.5, merge_threshold=0.0)
+    fus = GaussianSumFuser(0, [1], st)
+    x0 = np.array([3.0, 1.0, 0.5, 0.3])
+    P0 = np.diag([0.05, 0.05, 0.02, 0.1])
+    fus.tracks = _one_track(x0, P0, st.nscan_depth)
+    u_self, u_mate = np.array([0.3, 0.0, 0.0, 0.1]), np.array([0.2, 0.1, 0.0, -0.2])
+    fus.predict(u_self, u_mate[None], 0.1)
+    x, P = predict_arrays(x0, P0, u_self, u_mate, 0.1, NOISE)
+    np.testing.assert_allclose(fus.tracks.mean[0], x)
+    true = np.array([3.05, 1.1, 0.52, 0.3])
+    h_meas, r_meas = true[2] + 0.004, np.linalg.norm(true[:3]) - 0.01
+    az = np.arctan2(true[1], true[0]) + 0.02
+    el = np.arctan2(true[2], np.hypot(true[0], true[1])) - 0.01
+    fus.direct_scan([h_meas], [r_meas], np.array([[az, el]]))
+    # reference: sequential EKF on h, r, (α, β)
+    x, P = _ekf_update(
+        x, P, np.array([h_meas]), x[2:3], np.array([[0, 0, 1.0, 0]]), np.array([[0.01**2]])
+    )
+    r = np.linalg.norm(x[:3])
+    x, P = _ekf_update(
+        x,
+        P,
+        np.array([r_meas]),
+        np.array([r]),
+        np.array([[x[0] / r, x[1] / r, x[2] / r, 0.0]]),
+        np.array([[0.02**2]]),
+    )
+    rho2 = x[0] ** 2 + x[1] ** 2
+    rho, r2 = np.sqrt(rho2), rho2 + x[2] ** 2
+    Hb = np.array(
+        [
+            [-x[1] / rho2, x[0] / rho2, 0.0, 0.0],
+            [-x[0] * x[2] / (rho * r2), -x[1] * x[2] / (rho * r2), rho / r2, 0.0],
+        ]
+    )
+    hb = np.array([np.arctan2(x[1], x[0]), np.arctan2(x[2], rho)])
+    x, P = _ekf_update(x, P, np.array([az, el]), hb, Hb, np.diag([0.05**2, 0.05**2]), wrap=(0,))
+    mix = fus.mixture(1)
+    assert mix is not None and mix.size == 1
+    np.testing.assert_allclose(mix.means[0], x, atol=1e-10)
+    np.testing.assert_allclose(mix.covs[0], P, atol=1e-12)
+    summary = fus.summary(1)
+    assert summary is not None and summary.assoc == 0
+
+
+def test_out_of_gate_known_measurement_leaves_the_track_alone() -> None:
+    st = _settings()
+    fus = GaussianSumFuser(0, [1], st)
+    x0 = np.array([3.0, 0.0, 0.0, 0.0])
+    fus.tracks = _one_track(x0, np.eye(4) * 0.01, st.nscan_depth)
+    fus.update_known("range", [10.0])
+    np.testing.assert_allclose(fus.tracks.mean[0], x0)
+    fus.update_known("range", [np.nan])
+    np.testing.assert_allclose(fus.tracks.mean[0], x0)
+    with pytest.raises(DataError, match="one value per teammate"):
+        fus.update_known("range", [1.0, 2.0])
+
+
+def test_births_from_unknown_bearings_and_clutter() -> None:
+    st = _settings()
+    fus = GaussianSumFuser(0, [1, 2], st)
+    # teammate 1 at height 0 and 3 m, teammate 2 at height 1 m and 4 m; bearings shuffled
+    b1 = (0.5, 0.0)
+    b2 = (-1.0, float(np.arcsin(1.0 / 4.0)))
+    fus.direct_scan([0.0, 1.0], [3.0, 4.0], np.array([b2, b1]))
+    for robot, (az, el), r in ((1, b1, 3.0), (2, b2, 4.0)):
+        s = fus.summary(robot)
+        assert s is not None
+        expected = r * np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
+        np.testing.assert_allclose(s.belief.mean[:3], expected, atol=1e-9)
+        assert s.belief.cov[3, 3] == pytest.approx(4 * np.pi)
+    with pytest.raises(DataError, match="non-finite"):
+        fus.update_bearings(np.array([[np.nan, 0.0]]), [1.0, 1.0], [0.0, 0.0])
+
+
+def test_fuse_dispatches_mutual_and_indirect_and_validates() -> None:
+    st = _settings()
+    a, b = GaussianSumFuser(0, [1, 2], st), GaussianSumFuser(1, [0, 2], st)
+    a.direct_scan([0.0, 0.0], [3.0, 2.0], np.array([[0.0, 0.0], [1.0, 0.0]]))
+    b.direct_scan([0.0, 0.0], [3.0, 2.5], np.array([[np.pi, 0.0], [2.0, 0.0]]))
+    kinds = sorted(a.fuse(m) for m in b.broadcast())
+    assert kinds == ["indirect", "mutual"]
+    with pytest.raises(DataError, match="own message"):
+        a.fuse(a.broadcast()[0])
+    with pytest.raises(DataError, match="not a teammate"):
+        a.teammate_index(7)
+
+
+def test_predict_fusers_equals_separate_predictions() -> None:
+    st = _settings()
+    fa, fb = GaussianSumFuser(0, [1], st), GaussianSumFuser(1, [0], st)
+    ga, gb = GaussianSumFuser(0, [1], st), GaussianSumFuser(1, [0], st)
+    for f in (fa, ga):
+        f.tracks = _one_track(np.array([2.0, 0.0, 0.0, 0.1]), np.eye(4) * 0.1, st.nscan_depth)
+    for f in (fb, gb):
+        f.tracks = _one_track(np.array([-2.0, 0.5, 0.0, -0.1]), np.eye(4) * 0.2, st.nscan_depth)
+    u0, u1 = np.array([0.3, 0, 0, 0.1]), np.array([0.1, 0, 0, -0.2])
+    predict_fusers([fa, fb], [u0, u1], [u1[None], u0[None]], 0.05)
+    ga.predict(u0, u1[None], 0.05)
+    gb.predict(u1, u0[None], 0.05)
+    np.testing.assert_allclose(fa.tracks.mean, ga.tracks.mean)
+    np.testing.assert_allclose(fb.tracks.cov, gb.tracks.cov)
+
+
+def test_settings_are_validated() -> None:
+    with pytest.raises(ConfigError, match="sigma_range"):
+        _settings(sigma_range=0.0)
+    with pytest.raises(ConfigError, match="fusion"):
+        _settings(fusion="naive")
+    with pytest.raises(ConfigError, match="max_components"):
+        _settings(max_components=0)
+    with pytest.raises(ConfigError, match="teammates"):
+        GaussianSumFuser(0, [0, 1], _settings())
+
+
+def _tracked_at_end(result, window: float = 3.0) -> np.ndarray:  # type: ignore[no-untyped-def]
+    final = result.times >= result.times[-1] - window
+    return result.tracked[:, final, :].mean(axis=1)
+
+
+@pytest.mark.slow
+def test_seeded_short_run_finds_every_teammate() -> None:
+    scenario = DeSilvaScenario(duration=10.0)
+    result = _task(np.random.SeedSequence(11), 0, RunConfig(scenario=scenario))
+    frac = _tracked_at_end(result)
+    for li in range(2):
+        others = [j for j in range(5) if j != li]
+        assert np.all(frac[li, others] >= 0.9), frac
+
+
+@pytest.mark.slow
+def test_kidnapped_robot_is_refound() -> None:
+    scenario = DeSilvaScenario(duration=14.0, kidnap=(3, 7.0, 3.0, -2.0, 2.0))
+    result = _task(np.random.SeedSequence(5), 0, RunConfig(scenario=scenario))
+    frac = _tracked_at_end(result)
+    assert np.all(frac[:, 3] >= 0.9), frac
+    just_after = (result.times > 7.0) & (result.times < 7.3)
+    assert not result.tracked[:, just_after, 3].all()
+
+
+def test_filter_settings_follow_the_scenario() -> None:
+    sc = DeSilvaScenario(p_detect=0.8, clutter_density=1e-5)
+    st = filter_settings(sc)
+    assert st.formation.p_detect == 0.8
+    assert st.expected_clutter == pytest.approx(sc.expected_clutter)
+    assert st.sigma_range == pytest.approx(np.sqrt(8.0) * 1e-3)
+    assert replace(st, fusion="ci").fusion == "ci"
