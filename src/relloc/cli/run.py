@@ -1,6 +1,7 @@
 """``relloc run [SCENARIO.toml] --out DIR [--seed S] [--runs N] [--filter plkf|tekf|bcplkf]``
 
-plus ``--init`` (track initialisation policy), ``--keep-window`` (seconds a track survives
+plus ``--init`` (track initialisation policy), ``--yaw-bank K`` (yaw hypotheses for an unknown
+initial yaw), ``--keep-window`` (seconds a track survives
 without measurements), ``--duration`` (shorten the scenario) and ``--executor``.
 
 Runs a team scenario (default: the built-in seed-000 air-ground team), prints per-robot
@@ -48,6 +49,16 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         help="track initialisation (default: from the first measurement, yaw unknown)",
     )
     p.add_argument(
+        "--yaw-bank",
+        type=int,
+        default=12,
+        metavar="K",
+        help=(
+            "start tracks whose yaw is unknown as a bank of K yaw hypotheses "
+            "(default 12; 0 = a single filter, as in seed 000)"
+        ),
+    )
+    p.add_argument(
         "--duration",
         type=float,
         default=None,
@@ -76,6 +87,7 @@ def run(args: argparse.Namespace) -> int:
     from relloc.errors import ConfigError
     from relloc.estimators.initialisation import FieldOfView, InitPolicy
     from relloc.estimators.track_manager import TrackManagerSettings
+    from relloc.estimators.yaw_bank import YawBankSettings
     from relloc.experiments.team_run import TeamRunSettings, run_team, summary_rows
     from relloc.sim.scenario import default_scenario, load_scenario
 
@@ -104,6 +116,7 @@ def run(args: argparse.Namespace) -> int:
             filter=args.filter,
             keep_window_s=args.keep_window,
             init=InitPolicy(name=args.init, fov=fov),
+            yaw_bank=YawBankSettings(n_components=args.yaw_bank) if args.yaw_bank else None,
         ),
         executor=args.executor,
         quiet=args.quiet,
@@ -119,7 +132,7 @@ def run(args: argparse.Namespace) -> int:
         table = Table(
             title=(
                 f"{scenario.name}: {args.filter.upper()}, {settings.runs} run(s), "
-                f"seed {settings.seed}, init {args.init}"
+                f"seed {settings.seed}, init {args.init}, yaw bank {args.yaw_bank or 'off'}"
             )
         )
         for h in headers:

@@ -8,9 +8,13 @@ deletion gets a new track. :class:`TrackManager` does exactly that:
 - a track per (observer, observed) pair is **created** on the first measurement of the pair,
   starting from an :class:`~relloc.estimators.initialisation.InitPolicy`;
 - every live track is **predicted** with both robots' body velocities (the shared predict of
-  :mod:`relloc.estimators.relative`, batched over pairs with the same odometry noise);
+  :mod:`relloc.estimators.relative`);
 - a measurement **updates** its pair's track with the selected filter — PLKF, TEKF or
   bias-compensated PLKF (``bcplkf``);
+- optionally, a track whose initial yaw is unknown starts as a bank of yaw hypotheses (a
+  Gaussian sum over φ, :mod:`relloc.estimators.yaw_bank`) that is reweighted by every
+  measurement and collapses to a single filter once one hypothesis dominates — this avoids the
+  long stalls of a single filter started near the wrong yaw (seed 000 Table 1, case 4);
 - a track with no update for longer than ``keep_window_s`` is **deleted**; the next measurement
   of the pair **re-creates** it.
 
@@ -23,6 +27,7 @@ whole :class:`~relloc.sim.log.Log`.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Literal
@@ -33,7 +38,14 @@ from numpy.typing import NDArray
 from relloc.core.gaussian import Gaussian
 from relloc.errors import ConfigError
 from relloc.estimators.initialisation import InitContext, InitPolicy
-from relloc.estimators.relative import FilterSettings, predict_arrays
+from relloc.estimators.relative import FilterSettings, Innovation, predict_arrays
+from relloc.estimators.yaw_bank import (
+    YawBank,
+    YawBankSettings,
+    predict_yaw_bank,
+    spread_yaw_bank,
+    update_yaw_bank,
+)
 from relloc.metrics.conditioning import condition_log10_batch
 from relloc.models.measurement import RangeBearingNoise
 from relloc.models.motion import VelocityNoise
@@ -52,12 +64,15 @@ _TIME_TOL = 1e-9
 class TrackManagerSettings:
     """``filter``: ``plkf`` | ``tekf`` | ``bcplkf``; ``keep_window_s``: how long a track is
     predicted without measurements before deletion; ``pseudo_linear_covariance``:
-    ``simplified`` (seed 000 Eq. 6) or ``full`` (Eqs. 4–5); ``init``: how tracks start."""
+    ``simplified`` (seed 000 Eq. 6) or ``full`` (Eqs. 4–5); ``init``: how tracks start;
+    ``yaw_bank``: spread a track whose initial yaw is unknown into a bank of yaw hypotheses
+    (:mod:`relloc.estimators.yaw_bank`), or ``None`` for a single filter per track."""
 
     filter: str = "plkf"
     keep_window_s: float = 2.0
     pseudo_linear_covariance: Literal["simplified", "full"] = "simplified"
     init: InitPolicy = field(default_factory=InitPolicy)
+    yaw_bank: YawBankSettings | None = None
 
     def __post_init__(self) -> None:
         if self.filter not in FILTERS:
@@ -72,6 +87,8 @@ class TrackManagerSettings:
             )
         if not isinstance(self.init, InitPolicy):
             raise ConfigError("init: expected an InitPolicy")
+        if self.yaw_bank is not None and not isinstance(self.yaw_bank, YawBankSettings):
+            raise ConfigError("yaw_bank: expected YawBankSettings or None")
 
 
 @dataclass(frozen=True)
@@ -128,11 +145,42 @@ class TeamEstimates:
 
 @dataclass
 class _Track:
+    """A live track: its best estimate and, while several yaw hypotheses live, the bank."""
+
     mean: Array
     cov: Array
     created_t: float
     last_update_t: float
     settings: FilterSettings
+    bank: YawBank | None = None
+
+    def predict(self, u_l: Array, u_c: Array, dt: float, where: str) -> None:
+        noise = self.settings.motion_noise
+        if self.bank is None:
+            self.mean, self.cov = predict_arrays(
+                self.mean, self.cov, u_l, u_c, dt, noise, where=where
+            )
+        else:
+            self.bank = predict_yaw_bank(self.bank, u_l, u_c, dt, noise)
+            self.mean, self.cov = self.bank.estimate()
+
+    def update(self, z: Array, bank_settings: YawBankSettings | None, where: str) -> Innovation:
+        if self.bank is None or bank_settings is None:
+            self.mean, self.cov, inn = self.settings.update_arrays(
+                self.mean, self.cov, z, where=where
+            )
+            return inn
+        self.bank, inns = update_yaw_bank(self.bank, z, self.settings, bank_settings)
+        k = int(self.bank.best_index)
+        self.mean, self.cov = self.bank.estimate()
+        if int(self.bank.alive.sum()) == 1:  # collapsed: a single filter from now on
+            self.bank = None
+        return Innovation(
+            residual=inns.residual[k],
+            cov=inns.cov[k],
+            nis=float(np.asarray(inns.nis)[k]),
+            meas_cov=inns.meas_cov[k],
+        )
 
 
 @dataclass
@@ -220,21 +268,12 @@ class TrackManager:
         dt = float(t) - self.t
         if dt < -_TIME_TOL:
             raise ConfigError(f"TrackManager.advance: time went backwards ({self.t} -> {t})")
-        if dt > 0.0 and self._tracks:
-            groups: dict[VelocityNoise, list[tuple[int, int]]] = {}
-            for key, tr in self._tracks.items():
-                groups.setdefault(tr.settings.motion_noise, []).append(key)
-            for noise, keys in groups.items():
-                mean = np.stack([self._tracks[k].mean for k in keys])
-                cov = np.stack([self._tracks[k].cov for k in keys])
-                u_l = velocities[[k[0] for k in keys]]
-                u_c = velocities[[k[1] for k in keys]]
-                mean, cov = predict_arrays(
-                    mean, cov, u_l, u_c, dt, noise, where=f"predict at t={t:.3f}"
-                )
-                for i, k in enumerate(keys):
-                    self._tracks[k].mean = mean[i]
-                    self._tracks[k].cov = cov[i]
+        if dt > 0.0:
+            # One pair at a time: the relative filter's scalar kernels are faster than numpy
+            # on the handful of pairs a robot tracks.
+            where = f"predict at t={t:.3f}"
+            for (i, j), tr in self._tracks.items():
+                tr.predict(velocities[i], velocities[j], dt, where)
         self.t = max(self.t, float(t))
 
     def measure(self, observer: int, observed: int, z: Array, sensor_sigma: Array) -> None:
@@ -249,12 +288,19 @@ class TrackManager:
             belief = self.settings.init(
                 InitContext(z=z, sensor_sigma=sensor_sigma, truth=truth, rng=self._rng)
             )
+            bank_settings = self.settings.yaw_bank
+            bank = None
+            if bank_settings is not None and math.sqrt(belief.cov[3, 3]) >= (
+                bank_settings.spread_above
+            ):
+                bank = spread_yaw_bank(belief.mean, belief.cov, bank_settings)
             tr = _Track(
                 mean=belief.mean.copy(),
                 cov=belief.cov.copy(),
                 created_t=self.t,
                 last_update_t=self.t,
                 settings=settings,
+                bank=bank,
             )
             self._tracks[key] = tr
             kind: EventKind = "recreated" if key in self._records else "created"
@@ -267,10 +313,8 @@ class TrackManager:
             if self.settings.init.uses_measurement:
                 return
         tr.settings = settings
-        mean, cov, inn = settings.update_arrays(
-            tr.mean, tr.cov, z, where=f"{self._label(key)} at t={self.t:.3f}"
-        )
-        tr.mean, tr.cov, tr.last_update_t = mean, cov, self.t
+        inn = tr.update(z, self.settings.yaw_bank, f"{self._label(key)} at t={self.t:.3f}")
+        tr.last_update_t = self.t
         rec = self._records[key]
         rec.update_t.append(self.t)
         rec.update_age.append(self.t - tr.created_t)

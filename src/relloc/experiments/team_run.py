@@ -475,7 +475,16 @@ def report_markdown(
     """``report.md``: settings, the per-robot table, track events, notes and figures."""
     headers, rows = summary_rows(summary)
     lines = [f"# {title}", ""]
-    for key in ("scenario", "seed", "runs", "filter", "init", "keep_window_s", "settle_s"):
+    for key in (
+        "scenario",
+        "seed",
+        "runs",
+        "filter",
+        "init",
+        "yaw_bank_components",
+        "keep_window_s",
+        "settle_s",
+    ):
         if key in summary:
             lines.append(f"- **{key}**: {summary[key]}")
     if "odometry_sigma" in summary:
@@ -552,6 +561,9 @@ def scenario_meta(scenario: Scenario, settings: TeamRunSettings) -> dict[str, An
         "filter": settings.tracker.filter,
         "init": settings.tracker.init.name,
         "keep_window_s": settings.tracker.keep_window_s,
+        "yaw_bank_components": settings.tracker.yaw_bank.n_components
+        if settings.tracker.yaw_bank
+        else 0,
         "pseudo_linear_covariance": settings.tracker.pseudo_linear_covariance,
         "duration_s": scenario.duration_s,
         "propagation_rate_hz": scenario.propagation_rate_hz,
