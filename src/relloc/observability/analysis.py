@@ -14,8 +14,9 @@
    v_c ≠ 0 and ω_l ≠ 0". An empty set among them means no input is needed.
 3. **Unobservable directions.** When the rank is deficient, the null space of the matrix at a
    generic witness state, expressed on the state names: symbolically (solving ``O_sel v = 0``
-   on ``rank`` independent rows, each free state set to 1, then simplified and verified at the
-   witness) for models with at most six states, numerically otherwise.
+   on ``rank`` independent rows by Cramer's rule, then simplified and verified at the witness)
+   for models with at most six states and a null space of dimension ≤ 2, numerically (reduced
+   row-echelon basis at the witness) otherwise.
 
 :func:`rank_at` gives the rank at a given state and constant inputs: the Lie derivatives of
 ``h`` along the *combined* field ``f₀ + Σ fᵢ uᵢ`` (orders ``0 … order``).
@@ -49,8 +50,10 @@ Array = NDArray[np.float64]
 MAX_CONDITION_INPUTS = 10
 #: Rank of every subset of input groups is tabulated for at most this many groups.
 MAX_SUBSET_TABLE_GROUPS = 6
-#: Symbolic null-space only for models with at most this many states.
+#: Symbolic null-space only for models with at most this many states and null dimensions
+#: (Cramer's rule on larger systems makes SymPy slow; numeric directions are used instead).
 MAX_SYMBOLIC_NULL_STATES = 6
+MAX_SYMBOLIC_NULL_DIM = 2
 
 
 @dataclass(frozen=True)
@@ -350,7 +353,8 @@ def analyse(
     dirs: list[str] = []
     if rank < model.n and directions != "none":
         symbolic = None
-        if directions == "auto" and model.n <= MAX_SYMBOLIC_NULL_STATES:
+        small = model.n <= MAX_SYMBOLIC_NULL_STATES and model.n - rank <= MAX_SYMBOLIC_NULL_DIM
+        if directions == "auto" and small:
             symbolic = _symbolic_directions(om, w_M, rank, w_state, w_params)
         dirs = (
             symbolic if symbolic is not None else _numeric_directions(model.state_names, w_M, rank)

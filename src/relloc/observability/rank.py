@@ -39,17 +39,23 @@ def singular_values(M: Array) -> Array:
     A = normalise_rows(M)
     out = np.zeros(n)
     if A.shape[0]:
+        if A.shape[0] > 2 * n:  # tall: the triangular factor has the same singular values
+            A = np.linalg.qr(A, mode="r")
         sv = np.linalg.svd(A, compute_uv=False)
         out[: sv.size] = sv[:n]
     return out
 
 
-def numeric_rank(M: Array, *, rtol: float = RANK_RTOL) -> int:
-    """Rank of ``M`` after row normalisation (module doc)."""
-    sv = singular_values(M)
+def rank_from_singular_values(sv: Array, *, rtol: float = RANK_RTOL) -> int:
+    """Number of singular values above ``rtol · σ_max``."""
     if sv.size == 0 or sv[0] == 0.0:
         return 0
     return int(np.count_nonzero(sv > rtol * sv[0]))
+
+
+def numeric_rank(M: Array, *, rtol: float = RANK_RTOL) -> int:
+    """Rank of ``M`` after row normalisation (module doc)."""
+    return rank_from_singular_values(singular_values(M), rtol=rtol)
 
 
 def null_space(M: Array, rank: int) -> Array:

@@ -45,7 +45,7 @@ from relloc.core.angles import wrap_angle
 from relloc.errors import ConfigError, DataError
 from relloc.models.symbolic import unicycle_landmarks, unicycle_team
 from relloc.observability.lie import ObservabilityMatrix
-from relloc.observability.rank import numeric_rank, singular_values
+from relloc.observability.rank import numeric_rank, rank_from_singular_values, singular_values
 
 Array = NDArray[np.float64]
 
@@ -241,8 +241,8 @@ def team_observability(
     G = build_rpmg(poses, landmarks, sensor)
     M = team_observability_matrix(G, poses, speeds, landmarks, gps=gps, order=order)
     n = G.graph["n_robots"]
-    rank = numeric_rank(M) if M.shape[0] else 0
     sv = singular_values(M) if M.shape[0] else np.zeros(3 * n)
+    rank = rank_from_singular_values(sv)
     return TeamObservability(
         rank=rank,
         sigma_min=float(sv[-1]) if rank == 3 * n else 0.0,
@@ -250,3 +250,56 @@ def team_observability(
         beta=beta(G),
         n_edges=G.number_of_edges(),
     )
+
+
+def name_unobservable_directions(
+    G: nx.DiGraph, poses: Array, landmarks: Array, M: Array, rank: int
+) -> list[str]:
+    """Name the null space of a team matrix with rigid motions of robot components.
+
+    Candidates, per connected component of the robot graph: translation along x and y,
+    rotation about the origin (``δx_i = −y_i, δy_i = x_i, δψ_i = 1``) and rotation about each
+    landmark. Candidates in the numeric null space are taken greedily until its dimension is
+    reached; anything left is reported as a numeric vector.
+    """
+    P, L = _check_team(poses, landmarks)
+    n, _ = _sizes(G)
+    robots = nx.Graph()
+    robots.add_nodes_from(range(n))
+    robots.add_edges_from((i, j) for i, j in G.edges if j < n)
+    A = M / np.maximum(np.linalg.norm(M, axis=1, keepdims=True), 1e-300) if M.size else M
+    null_dim = 3 * n - rank
+    chosen: list[Array] = []
+    names: list[str] = []
+    for comp in sorted(nx.connected_components(robots), key=min):
+        label = "robots " + ",".join(str(i + 1) for i in sorted(comp))
+        cands: list[tuple[str, Array]] = []
+        for what, unit in (
+            ("translation along x", (1.0, 0.0, 0.0)),
+            ("translation along y", (0.0, 1.0, 0.0)),
+        ):
+            v = np.zeros(3 * n)
+            for i in comp:
+                v[3 * i : 3 * i + 3] = unit
+            cands.append((what, v))
+        centres = [("the origin", np.zeros(2))] + [
+            (f"landmark {k + 1}", L[k]) for k in range(len(L))
+        ]
+        for where, c in centres:
+            v = np.zeros(3 * n)
+            for i in comp:
+                v[3 * i : 3 * i + 3] = (-(P[i, 1] - c[1]), P[i, 0] - c[0], 1.0)
+            cands.append((f"rotation about {where}", v))
+        for what, v in cands:
+            if len(chosen) == null_dim:
+                break
+            u = v / np.linalg.norm(v)
+            if A.size and np.linalg.norm(A @ u) > 1e-7 * np.sqrt(A.shape[0]):
+                continue
+            if chosen and numeric_rank(np.vstack([*chosen, u])) <= len(chosen):
+                continue
+            chosen.append(u)
+            names.append(f"{what} of {label}")
+    if len(chosen) < null_dim:
+        names.append(f"{null_dim - len(chosen)} further direction(s) not a rigid motion")
+    return names
