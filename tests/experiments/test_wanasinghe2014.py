@@ -142,3 +142,48 @@ def test_replay_rejects_a_folder_too_short(small_dataset: Path) -> None:
         prepare_replay(ReplaySettings(dataset=small_dataset, min_duration_s=100.0))
     with pytest.raises(DataError, match="robot 5"):
         prepare_replay(ReplaySettings(dataset=small_dataset, observed=5))
+
+
+def test_batched_runner_equals_one_tracker_per_filter() -> None:
+    """Stacking filters into one batch must not change any of them."""
+    import numpy as np
+
+    from relloc.core.gaussian import Gaussian
+    from relloc.estimators.initialisation import fully_unknown, known_pose
+    from relloc.estimators.relative import FilterSettings, RelativeTracker
+    from relloc.experiments.wanasinghe2014_filters import TrackSpec, run_tracks
+    from relloc.experiments.wanasinghe2014_sim import streams_from_log
+    from relloc.metrics.errors import state_errors
+    from relloc.sim.simulate import simulate
+
+    scenario = default_scenario()
+    scenario = dataclasses.replace(scenario, robots=scenario.robots[:3], duration_s=1.0)
+    log = simulate(scenario, np.random.default_rng(3))
+    streams = streams_from_log(log, "observer", ("aerial1", "aerial2"))
+    truth0 = log.relative_truth(0, 1, 0.0)[0]
+    priors = [
+        known_pose(truth0),
+        fully_unknown(np.array([4.0, -1.0, 0.0, 2.5]), sigma_position=5.0),
+    ]
+    specs = [
+        TrackSpec(target=t, kind=kind, prior_mean=p.mean, prior_cov=p.cov)
+        for t in (0, 1)
+        for kind in ("plkf", "tekf")
+        for p in priors
+    ]
+    records = run_tracks(streams, specs)
+    for spec, rec in zip(specs, records, strict=True):
+        target = streams.targets[spec.target]
+        tracker = RelativeTracker(
+            Gaussian(mean=spec.prior_mean, cov=spec.prior_cov),
+            FilterSettings(kind=spec.kind, motion_noise=target.noise, sensor_noise=target.sensor),
+        )
+        errors = []
+        m = 0
+        for k in range(streams.n_steps):
+            tracker.predict(streams.u_l[k], target.u_c[k], streams.dt)
+            while m < len(target.step) and target.step[m] == k + 1:
+                tracker.update(target.z[m])
+                errors.append(state_errors(tracker.belief.mean, target.truth[m]))
+                m += 1
+        np.testing.assert_allclose(rec.errors, np.array(errors), rtol=1e-9, atol=1e-12)
