@@ -29,6 +29,7 @@ what is left, ships its last report and exits cleanly.
 
 from __future__ import annotations
 
+import time
 from collections import Counter, deque
 from dataclasses import dataclass, field
 from typing import Any
@@ -52,6 +53,8 @@ from relloc.runtime.transport import (
 )
 
 LATENCY_SAMPLES = 200_000
+END_DRAIN_S = 3.0
+"""Wall seconds a node waits after ``ctl(end)`` for teammates' last odometry."""
 TIME_TOL = 1e-9
 
 
@@ -125,6 +128,7 @@ class RobotNode:
         self._next_eqm_s = 0.0
         self._next_report_s = 0.0
         self._done = False
+        self._end_deadline: float | None = None
 
     # ------------------------------------------------------------------ process main loop
     def run(self) -> dict[str, int]:
@@ -141,12 +145,20 @@ class RobotNode:
                 self._pubs[kind] = declare_publisher(session, keys.robot_key(s.team, s.robot, kind))
             self._tokens.append(session.liveliness().declare_token(keys.alive_key(s.team, s.robot)))
             while not self._done:
-                item = inbox.get(timeout=s.clock_timeout_s)
-                if item is None:
-                    self.counters["exit.clock_silent"] += 1
-                    self._finish()
-                    break
-                self._on_incoming(item)
+                if self._end_deadline is not None:
+                    wait = self._end_deadline - time.monotonic()
+                    if wait <= 0 or all(self._inputs_in(w) for w in self._pending):
+                        self._finish()
+                        break
+                    item = inbox.get(timeout=min(wait, 0.05))
+                else:
+                    item = inbox.get(timeout=s.clock_timeout_s)
+                    if item is None:
+                        self.counters["exit.clock_silent"] += 1
+                        self._finish()
+                        break
+                if item is not None:
+                    self._on_incoming(item)
             self.counters["inbox_overflow"] = inbox.overflow
             self._report()
         finally:
@@ -179,8 +191,10 @@ class RobotNode:
         if msg.kind == "tick":
             self._on_tick(msg)
         elif msg.kind == "ctl":
-            if msg.body["action"] == "end":
-                self._finish()
+            if msg.body["action"] == "end" and self._end_deadline is None:
+                # teammates sent their last odometry before their last ack, but it may still be
+                # on its way on another link: wait for it (bounded), then finish
+                self._end_deadline = time.monotonic() + END_DRAIN_S
         elif msg.kind in FAULTED_KINDS:
             self.counters[f"wire.{msg.kind}"] += 1
             if len(self._latency_us) < LATENCY_SAMPLES:
@@ -372,6 +386,7 @@ class RobotNode:
         """Counters, the link emulator's fault tallies, estimator track counts and latencies."""
         out = dict(self.counters)
         out["late_samples"] = sum(m.odometry.late for m in self.teammates.values())
+        out["cpu_ms"] = int(time.process_time() * 1000)
         for name, value in self.link.counters.as_dict().items():
             out[f"fault.{name}"] = value
         for name, value in self.estimator.counters().items():

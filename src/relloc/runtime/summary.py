@@ -97,6 +97,7 @@ def robot_messages(collected: Collected, roster: Sequence[str]) -> dict[str, dic
             "faults": {k.split(".", 1)[1]: v for k, v in c.items() if k.startswith("fault.")},
             "tracks": {k.split(".", 1)[1]: v for k, v in c.items() if k.startswith("tracks.")},
             "ticks": c.get("ticks", 0),
+            "cpu_s": c.get("cpu_ms", 0) / 1000.0,
             "teammate_departures_seen": c.get("teammate.departures", 0),
             "teammate_joins_seen": c.get("teammate.joins", 0),
             "latency_us": {
