@@ -213,7 +213,7 @@ class TrackManager:
         settings: TrackManagerSettings,
         *,
         robots: Sequence[str],
-        odometry_sigma: Sequence[Sequence[float]],
+        odometry_sigma: Sequence[Sequence[float] | Array],
         t0: float,
         truth_fn: TruthFn | None = None,
         rng: np.random.Generator | None = None,

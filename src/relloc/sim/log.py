@@ -173,9 +173,15 @@ class Measurements:
             arr.setflags(write=False)
             ids.append(arr)
         n = t.shape[0]
-        for name, arr in (("z", z), ("sigma", sigma), ("observer", ids[0]), ("observed", ids[1])):
-            if arr.shape[0] != n:
-                raise DataError(f"measurements.{name}: {arr.shape[0]} rows but {n} timestamps")
+        columns: tuple[tuple[str, np.ndarray], ...] = (
+            ("z", z),
+            ("sigma", sigma),
+            ("observer", ids[0]),
+            ("observed", ids[1]),
+        )
+        for name, column in columns:
+            if column.shape[0] != n:
+                raise DataError(f"measurements.{name}: {column.shape[0]} rows but {n} timestamps")
         if np.any(sigma <= 0):
             row = int(np.argwhere(sigma <= 0)[0][0])
             raise DataError(f"measurements.sigma: row {row} has a standard deviation ≤ 0")
