@@ -155,3 +155,18 @@ def test_team_bearing_bound_reduces_uncertainty_and_rejects_bad_rows() -> None:
     assert gain.max() > 0.1  # and the bearings do inform some direction
     with pytest.raises(DataError, match="one per step"):
         unicycle_team_pcrlb(poses, u, 0.1, [bearing], input_sigma=[0.05, 0.02], P0=P0)
+
+
+def test_irregular_step_lengths_use_each_step() -> None:
+    T = 30
+    X, u_l, u_c = _moving_pair(np.random.default_rng(1), T)
+    noise = VelocityNoise(observer=(0.05, 0.05, 0.02, 0.02), observed=(0.05, 0.05, 0.02, 0.02))
+    mask = np.ones(T, dtype=bool)
+    uniform = relative_pair_pcrlb(X, u_l, u_c, 0.1, mask, velocity_noise=noise, P0=np.eye(4), **SIG)
+    steps = np.full(T - 1, 0.1)
+    steps[-1] = 0.5
+    irregular = relative_pair_pcrlb(
+        X, u_l, u_c, steps, mask, velocity_noise=noise, P0=np.eye(4), **SIG
+    )
+    np.testing.assert_allclose(irregular[:-1], uniform[:-1], rtol=1e-12)
+    assert np.trace(irregular[-1]) > np.trace(uniform[-1])  # a longer step adds more noise

@@ -138,11 +138,15 @@ def relative_pair_pcrlb(
         raise DataError(f"PCRLB: sensor sigmas must be finite and > 0, got {sig}")
     steps = _step_lengths(dt, T)
 
-    F = np.empty((M, T - 1, 4, 4))
-    Q = np.empty((M, T - 1, 4, 4))
-    for k in range(T - 1):
-        F[:, k], G = relative_jacobians(X[:, k], U_l[:, k], U_c[:, k], float(steps[k]))
-        Q[:, k] = process_noise(G, velocity_noise)
+    if T > 1 and np.all(steps == steps[0]):  # one batched call over all steps
+        F, G = relative_jacobians(X[:, :-1], U_l[:, :-1], U_c[:, :-1], float(steps[0]))
+        Q = process_noise(G, velocity_noise)
+    else:
+        F = np.empty((M, T - 1, 4, 4))
+        Q = np.empty((M, T - 1, 4, 4))
+        for k in range(T - 1):
+            F[:, k], G = relative_jacobians(X[:, k], U_l[:, k], U_c[:, k], float(steps[k]))
+            Q[:, k] = process_noise(G, velocity_noise)
     H = range_bearing_jacobian(X)[..., rows, :]
     R = np.diag(sig[rows] ** 2)
     info = measurement_information(H, np.broadcast_to(R, (*H.shape[:-2], len(rows), len(rows))))
