@@ -270,6 +270,8 @@ START = np.array(
         [-30.0, 30.0, 2.5],
     ]
 )
+#: Duration of each waypoint segment (s).
+SEGMENT_S = 50.0
 #: Waypoints per robot: robots 3 and 4 leave the group and come back, robot 2 wanders.
 WAYPOINTS = (
     [(40.0, 20.0), (0.0, -30.0), (40.0, 20.0), (0.0, -30.0)],
@@ -285,13 +287,13 @@ def fig2_trajectories(duration: float = 200.0) -> tuple[np.ndarray, np.ndarray, 
 
     Each robot drives at 5 m/s towards its next waypoint with a saturated proportional
     heading controller (|ω| ≤ 0.6 rad/s) and circles a waypoint once reached, until the next
-    segment starts (segments of duration/4).
+    segment starts (waypoint ``k`` is the goal during ``[k, k+1)·SEGMENT_S``).
     """
     steps = round(duration / TS)
     P = np.empty((steps + 1, len(START), 3))
     U = np.empty((steps + 1, len(START), 2))
     P[0] = START
-    seg = steps // 4
+    seg = round(SEGMENT_S / TS)
     for k in range(steps + 1):
         for i, wps in enumerate(WAYPOINTS):
             goal = np.array(wps[min(k // seg, 3)])
@@ -305,8 +307,9 @@ def fig2_trajectories(duration: float = 200.0) -> tuple[np.ndarray, np.ndarray, 
     return P, U, TS * np.arange(steps + 1)
 
 
-def _fig2(every: int = 5) -> dict[str, Any]:
-    P, U, t = fig2_trajectories()
+def fig2_series(duration: float = 200.0, every: int = 5) -> dict[str, Any]:
+    """β, σ_min, rank and edge count every ``every`` steps of the Fig. 2 scenario."""
+    P, U, t = fig2_trajectories(duration)
     idx = np.arange(0, len(t), every)
     beta_v, sig, ranks, edges = [], [], [], []
     for k in idx:
@@ -359,7 +362,7 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
     t_teams = time.perf_counter() - t0 - t_edges
     cases["block_assembly_vs_symbolic_3_robots"] = _block_assembly_check(args.seed)
     t1 = time.perf_counter()
-    fig2 = _fig2()
+    fig2 = fig2_series()
     t_fig2 = time.perf_counter() - t1
     cases["fig2_beta_equals_full_rank"] = {
         "rank": int(fig2["rank"].max()),
