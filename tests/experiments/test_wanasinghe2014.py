@@ -1,8 +1,8 @@
 """A small seeded run of the seed-000 reproduction on a truncated MRCLAM-layout copy.
 
 The run is the real pipeline (simulation, Table 1 with the yaw bank, MRCLAM replay, sweep,
-PCRLB, figures, report) with a reduced internal configuration: a 4 s team, 3 initial guesses,
-2 draws, a 15 s replay window of a truncated copy of MRCLAM run 6 written into ``tmp_path``.
+PCRLB, figures, report) with a reduced internal configuration: a 3 s team, 3 initial guesses,
+2 draws, a 10 s replay window of a truncated copy of MRCLAM run 6 written into ``tmp_path``.
 """
 
 from __future__ import annotations
@@ -63,14 +63,14 @@ def _small_config(dataset: Path) -> Wanasinghe2014Config:
         replay_runs=1,
         sweep_runs=1,
         sweep_scales=(1.0,),
-        sweep_duration_s=3.0,
+        sweep_duration_s=2.0,
         steady_state_s=1.0,
         replay_steady_state_s=3.0,
         sim=SimSettings(
-            scenario=dataclasses.replace(default_scenario(), duration_s=4.0), n_poses=3
+            scenario=dataclasses.replace(default_scenario(), duration_s=3.0), n_poses=3
         ),
         replay=ReplaySettings(
-            dataset=dataset, duration_s=15.0, min_duration_s=10.0, start_after_odometry_s=1.0
+            dataset=dataset, duration_s=10.0, min_duration_s=8.0, start_after_odometry_s=1.0
         ),
     )
 

@@ -127,7 +127,6 @@ class _Block:
     kind: UpdateKind
     specs: list[int]
     rows: IntArray
-    n_components: int = 1
     log_weights: Array | None = None
     detail: NDArray[np.bool_] = field(default_factory=lambda: np.zeros(0, dtype=bool))
 
@@ -171,7 +170,7 @@ def _build_groups(
                 k = 1
                 m, P = s.prior_mean[None, :], s.prior_cov[None, :, :]
             key = (s.target, s.kind, s.bank, k)
-            block = blocks.setdefault(key, _Block(s.target, s.kind, [], np.zeros(0, np.int64), k))
+            block = blocks.setdefault(key, _Block(s.target, s.kind, [], np.zeros(0, np.int64)))
             block.specs.append(i)
             block.rows = np.concatenate([block.rows, np.arange(row, row + k)])
             means.append(np.asarray(m, dtype=float))
