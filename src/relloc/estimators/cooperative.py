@@ -39,8 +39,8 @@ once per measurement epoch.
 Measurements
 ------------
 Rows (:mod:`relloc.models.planar_measurement`) are built per epoch: bearing (always, if
-``use_bearing``), range (if ``use_range``; corrected by the fitted bearing-dependent bias
-``b(η) = Σ c_k η^k`` and optionally thinned to one range per pair every ``range_min_interval_s``
+``use_bearing``), range (if ``use_range``; corrected by a fitted bias
+``b(η, ρ)`` that depends on bearing and range (:class:`SensorModel`) and optionally thinned to one range per pair every ``range_min_interval_s``
 because consecutive ranges have strongly correlated errors), and absolute pose rows. Each detection
 or fix is gated as a whole with its normalised innovation squared against
 ``χ²_{dof}(p_gate)`` (:mod:`relloc.association.gating`) before the batch update.
@@ -281,11 +281,20 @@ class OdometryModel:
         return OdometryModel(q_v0=sigma_v**2 * dt, q_w0=sigma_w**2 * dt, max_step_s=dt)
 
 
+RANGE_BIAS_FEATURES = ("1", "η", "η²", "ρ", "ρη²")
+
+
+def range_bias_features(bearing: Array, rng: Array) -> Array:
+    """Regressors ``(1, η, η², ρ, ρ η²)`` of the range-bias model, shape ``(…, 5)``."""
+    return np.stack([np.ones_like(bearing), bearing, bearing**2, rng, rng * bearing**2], axis=-1)
+
+
 @dataclass(frozen=True, kw_only=True)
 class SensorModel:
     """Noise and corrections of the camera rows.
 
-    ``range_bias_coeffs``: ``(c_0, c_1, …)`` of ``b(η) = Σ c_k η^k`` subtracted from each range;
+    ``range_bias_coeffs``: ``c`` of the range bias ``b(η, ρ) = c · (1, η, η², ρ, ρη²)`` (fewer
+    coefficients use a prefix of the features) subtracted from each measured range;
     ``sigma_range = √(σ_r0² + (k_r ρ)²)``; ``range_min_interval_s``: at most one range per
     (observer, target) pair within this interval (0 keeps every range).
     """
@@ -306,13 +315,17 @@ class SensorModel:
             self.bearing_bias
         ):
             raise ConfigError("SensorModel.range_bias_coeffs/bearing_bias must be finite")
+        if len(self.range_bias_coeffs) > len(RANGE_BIAS_FEATURES):
+            raise ConfigError(
+                f"SensorModel.range_bias_coeffs: at most {len(RANGE_BIAS_FEATURES)} coefficients"
+            )
 
-    def range_bias(self, bearing: Array) -> Array:
-        """``b(η)`` evaluated at the measured bearings."""
-        out = np.zeros_like(bearing)
-        for k, c in enumerate(self.range_bias_coeffs):
-            out = out + c * bearing**k
-        return out
+    def range_bias(self, bearing: Array, rng: Array) -> Array:
+        """``b(η, ρ)`` at the measured bearings and ranges."""
+        c = np.asarray(self.range_bias_coeffs, dtype=float)
+        if c.size == 0:
+            return np.zeros_like(rng)
+        return range_bias_features(bearing, rng)[..., : c.size] @ c
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -464,7 +477,7 @@ def advance(
     # G' = ∂x⁺/∂(v dt, ω dt) and the covariance of an increment's noise is diag(q_v dt, q_ω dt).
     incr = np.stack([v * dt, w * dt], axis=-1)  # (K, n, 2)
     theta = np.cumsum(incr[..., 1], axis=0)
-    prev = np.zeros(incr.shape[:2] + (3,))
+    prev = np.zeros((*incr.shape[:2], 3))
     prev[..., 2] = pending.pose[:, 2] + np.concatenate(
         [np.zeros((1, theta.shape[1])), theta[:-1]], axis=0
     )
@@ -592,7 +605,7 @@ def detection_rows(
                 observer=observer[use],
                 target=target[use],
                 landmark_xy=lm_xy[use],
-                z=r_use - sensor.range_bias(bearing_z[use]),
+                z=r_use - sensor.range_bias(bearing_z[use], r_use),
                 sigma=np.sqrt(sensor.sigma_range0**2 + (sensor.sigma_range_rel * r_use) ** 2),
                 group=groups[use],
             )
