@@ -138,7 +138,7 @@ def run(args: argparse.Namespace) -> int:
         TrackManagerSettings(filter=args.filter, init=InitPolicy(name=args.init)),
         robot=args.robot,
         roster=log.robots,
-        odometry_sigma=[od.sigma for od in log.odometry],
+        odometry_sigma=[tuple(od.sigma) for od in log.odometry],
         t0=log.span[0],
         record_origin=log.span[0],
         rng=np.random.default_rng(np.random.SeedSequence([args.seed, index])),

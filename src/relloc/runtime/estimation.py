@@ -34,6 +34,7 @@ from relloc.estimators.track_manager import (
     TrackEvent,
     TrackManager,
     TrackManagerSettings,
+    TruthFn,
 )
 from relloc.runtime.sources import MeasurementBatch
 from relloc.runtime.teammates import ReceivedOdometry
@@ -92,7 +93,7 @@ class TrackManagerEstimator:
         record_rate_hz: float = 10.0,
         record_origin: float = 0.0,
         rng: np.random.Generator | None = None,
-        truth_fn: object | None = None,
+        truth_fn: TruthFn | None = None,
     ) -> None:
         self.robot = robot
         self.roster = tuple(roster)
@@ -104,7 +105,7 @@ class TrackManagerEstimator:
             robots=self.roster,
             odometry_sigma=odometry_sigma,
             t0=t0,
-            truth_fn=truth_fn,  # type: ignore[arg-type]
+            truth_fn=truth_fn,
             rng=rng,
         )
         self._sent = _Sent()

@@ -85,6 +85,8 @@ class Collected:
     presence: list[dict[str, Any]] = field(default_factory=list)
     kills: list[dict[str, Any]] = field(default_factory=list)
     restarts: list[dict[str, Any]] = field(default_factory=list)
+    exit_codes: dict[str, list[int | None]] = field(default_factory=dict)
+    """Per child name, the exit code of each of its processes (SIGKILLed: ``-9``)."""
     wall_s: float = 0.0
 
 
@@ -204,6 +206,8 @@ class TeamLauncher:
         self.incarnation: dict[str, int] = dict.fromkeys(roster, 0)
         self.collected = Collected()
         self.endpoint = ""
+        self._start = time.monotonic()
+        self._finished: list[tuple[str, Any]] = []
         self.context = _fork_context()
 
     def _spawn(self, name: str, argv: list[str]) -> Any:
@@ -220,7 +224,7 @@ class TeamLauncher:
         endpoint = self.endpoint = loopback_endpoint(self.s.port or free_loopback_port())
         session = open_session(TransportSettings(listen=(endpoint,)))
         inbox = Inbox()
-        start = time.monotonic()
+        start = self._start = time.monotonic()
         try:
             for kind in ("est", "evt", "stats"):
                 inbox.subscribe(session, keys.robot_wildcard(self.s.team, kind))
@@ -278,7 +282,12 @@ class TeamLauncher:
         if item.presence != "data":
             token, member = keys.parse_presence_key(item.key)
             self.collected.presence.append(
-                {"member": member, "token": token, "event": item.presence}
+                {
+                    "member": member,
+                    "token": token,
+                    "event": item.presence,
+                    "wall_s": time.monotonic() - self._start,
+                }
             )
             return False
         parsed = keys.parse_robot_key(item.key)
@@ -316,6 +325,7 @@ class TeamLauncher:
         if action == "kill" and proc is not None:
             os.kill(proc.pid, signal.SIGKILL)
             proc.join(timeout=30)
+            self._finished.append((robot, proc))
             self.collected.kills.append({"robot": robot, "at_s": t, "pid": proc.pid})
         elif action == "restart":
             self.incarnation[robot] += 1
@@ -336,3 +346,5 @@ class TeamLauncher:
             if proc.exitcode is None:
                 proc.kill()
                 proc.join(timeout=5.0)
+        for name, proc in [*self._finished, *self.procs.items()]:
+            self.collected.exit_codes.setdefault(name, []).append(proc.exitcode)

@@ -255,9 +255,9 @@ class RobotNode:
         if self._done:
             return
         self._deliver(self.link.release(np.inf))
-        if self._pending:  # the run's last instant belongs to the last window
-            last = self._pending[-1]
-            last.measurements.append(self._publish_measurements(last.end, last.end, True))
+        if self._pending:  # the run's last instant belongs to the last window (filtered here,
+            last = self._pending[-1]  # not published: teammates are already finishing)
+            last.measurements.append(self.source.measurements(last.end, last.end, inclusive=True))
         self._filter_ready(force=True)
         self.counters["final"] = 1
         self._done = True
@@ -285,10 +285,7 @@ class RobotNode:
         stamps, u = self.source.odometry(t0, t1)
         self.own_odometry.add(stamps, u)
         self._send("odom", {"stamps": stamps, "u": u})
-        return self._publish_measurements(t0, t1, False)
-
-    def _publish_measurements(self, t0: float, t1: float, inclusive: bool) -> MeasurementBatch:
-        batch = self.source.measurements(t0, t1, inclusive=inclusive)
+        batch = self.source.measurements(t0, t1)
         if batch.size:
             self._send(
                 "meas",

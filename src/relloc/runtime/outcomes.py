@@ -5,8 +5,9 @@ restarted at ``T2`` (end of run if never) — the *affected pairs* are those who
 observed robot are on different sides of the partition, or that involve the killed robot.
 Over those pairs:
 
-- position RMSE (m) of all recorded beliefs before ``T1``, in ``[T1, T2)`` and from ``T2`` on
-  (no steady-state filter: the point is what the fault does to a running team);
+- position RMSE (m) and yaw RMSE (rad) of all recorded beliefs before ``T1``, in ``[T1, T2)``
+  and from ``T2`` on (no steady-state filter: the point is what the fault does to a running
+  team);
 - ``tracks_kept``: affected pairs with a live track at ``T1`` that were not deleted before
   ``T2 + keep window`` and did not die with a killed observer's process
   (``tracks_lost_with_process``); ``tracks_deleted``: deletions of affected pairs in that interval;
@@ -31,8 +32,15 @@ from relloc.sim.log import Log
 
 
 def _rmse(errors: Sequence[np.ndarray]) -> float | None:
+    """Position RMSE (m) of stacked ``(K, 4)`` errors; None without samples."""
     e = np.concatenate([x[:, :3] for x in errors]) if errors else np.zeros((0, 3))
     return float(np.sqrt(np.mean(np.sum(e**2, axis=1)))) if e.size else None
+
+
+def _yaw_rmse(errors: Sequence[np.ndarray]) -> float | None:
+    """Yaw RMSE (rad) of stacked ``(K, 4)`` errors (already wrapped); None without samples."""
+    e = np.concatenate([x[:, 3] for x in errors]) if errors else np.zeros(0)
+    return float(np.sqrt(np.mean(e**2))) if e.size else None
 
 
 def _window_outcome(
@@ -67,6 +75,9 @@ def _window_outcome(
         "position_rmse_before_m": _rmse(phases["before"]),
         "position_rmse_during_m": _rmse(phases["during"]),
         "position_rmse_after_m": _rmse(phases["after"]),
+        "yaw_rmse_before_rad": _yaw_rmse(phases["before"]),
+        "yaw_rmse_during_rad": _yaw_rmse(phases["during"]),
+        "yaw_rmse_after_rad": _yaw_rmse(phases["after"]),
         "tracks_kept": len(live_at_start - deleted_pairs - lost),
         "tracks_deleted": len(deleted),
         "tracks_lost_with_process": len(lost),
@@ -121,6 +132,7 @@ def fault_outcomes(
                 ),
                 "window_s": [log.span[0], t_end],
                 "position_rmse_during_m": _rmse([p.error for p in result.pairs]),
+                "yaw_rmse_during_rad": _yaw_rmse([p.error for p in result.pairs]),
                 "tracks_created": counts["created"],
                 "tracks_deleted": counts["deleted"],
                 "tracks_refound": counts["recreated"],

@@ -164,8 +164,8 @@ class Inbox:
         zenoh = require("zenoh", "runtime")
 
         def on_token(sample: Any) -> None:
-            kind = "joined" if sample.kind == zenoh.SampleKind.PUT else "left"
-            self._push(Incoming(str(sample.key_expr), b"", kind))
+            joined = sample.kind == zenoh.SampleKind.PUT
+            self._push(Incoming(str(sample.key_expr), b"", "joined" if joined else "left"))
 
         self._handles.append(
             session.liveliness().declare_subscriber(key_expr, on_token, history=True)
