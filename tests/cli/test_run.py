@@ -101,3 +101,14 @@ def test_bad_toml_exits_2_naming_the_field(tmp_path, capsys):
     assert code == 2
     assert "robots[0].sensor.fov_deg: must be in (0, 360]" in capsys.readouterr().err
     assert not (tmp_path / "o" / "summary.json").exists()
+
+
+def test_bad_options_exit_2_naming_the_option(tmp_path, capsys):
+    out = str(tmp_path / "o")
+    for argv, message in (
+        (["--runs", "0"], "--runs: must be an integer ≥ 1"),
+        (["--duration", "-1"], "--duration: duration_s: must be in (0, ∞)"),
+        (["--yaw-bank", "1"], "--yaw-bank: 0 (off) or"),
+    ):
+        assert main(["run", "--out", out, "--quiet", *argv]) == 2
+        assert message in capsys.readouterr().err

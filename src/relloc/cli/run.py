@@ -13,6 +13,10 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from relloc.estimators.yaw_bank import YawBankSettings
 
 DEFAULT_OUT = Path("out/run")
 
@@ -87,7 +91,6 @@ def run(args: argparse.Namespace) -> int:
     from relloc.errors import ConfigError
     from relloc.estimators.initialisation import FieldOfView, InitPolicy
     from relloc.estimators.track_manager import TrackManagerSettings
-    from relloc.estimators.yaw_bank import YawBankSettings
     from relloc.experiments.team_run import TeamRunSettings, run_team, summary_rows
     from relloc.sim.scenario import default_scenario, load_scenario
 
@@ -116,7 +119,7 @@ def run(args: argparse.Namespace) -> int:
             filter=args.filter,
             keep_window_s=args.keep_window,
             init=InitPolicy(name=args.init, fov=fov),
-            yaw_bank=YawBankSettings(n_components=args.yaw_bank) if args.yaw_bank else None,
+            yaw_bank=_yaw_bank(args.yaw_bank),
         ),
         executor=args.executor,
         quiet=args.quiet,
@@ -145,3 +148,16 @@ def run(args: argparse.Namespace) -> int:
         console.print(table)
         console.print(f"wrote {args.out / 'summary.json'} and {args.out / 'report.md'}")
     return 0
+
+
+def _yaw_bank(n_components: int) -> YawBankSettings | None:
+    """``--yaw-bank K``: K yaw hypotheses, or ``None`` (a single filter) for 0."""
+    from relloc.errors import ConfigError
+    from relloc.estimators.yaw_bank import YawBankSettings
+
+    if n_components == 0:
+        return None
+    try:
+        return YawBankSettings(n_components=n_components)
+    except ConfigError as exc:
+        raise ConfigError(f"--yaw-bank: 0 (off) or {exc}") from None
