@@ -57,14 +57,14 @@ def _short_plan(runs):
         sweep_runs=1,
         dwell_times=(4.0,),
         drone_counts=(2,),
-        duration_scale=0.1,
+        duration_scale=0.05,
     )
 
 
 def test_cli_reproduce_smoke(tmp_path, monkeypatch):
     if not default_uwb_csv().is_file():
         pytest.skip(f"shared UWB data not found at {default_uwb_csv()}")
-    # The real CLI path with a short plan (10 % durations, one run per block).
+    # The real CLI path with a short plan (5 % durations, one run per block).
     monkeypatch.setattr(guler2023, "default_plan", _short_plan)
     out = tmp_path / "g"
     code = main(

@@ -124,6 +124,7 @@ def heading_h(x: Array, index: int) -> tuple[float, Array]:
 def mode_measurement(x: Array, mode: Mode) -> tuple[Array, Array, tuple[bool, ...]]:
     """Stacked Eq. 4 for one mode: ``(h(x), H, is_angle)`` with components in paper order."""
     parts = [range_h(x)]
+    angles: tuple[bool, ...]
     if mode is Mode.PAIR_SEEN:
         parts += [bearing_h(x), heading_h(x, TH_I), heading_h(x, TH_0)]
         angles = (False, True, True, True)

@@ -345,7 +345,7 @@ def simulate_airground(sc: AirGroundScenario, rng: np.random.Generator) -> AirGr
     a_yaw = math.exp(-dt / sc.drone.yaw_tau)
     detected: tuple[int, ...] = ()
 
-    out_t = np.arange(1, steps + 1) * dt
+    out_t = np.arange(1, steps + 1, dtype=np.float64) * dt
     truth = np.zeros((steps, n + 1, 3))
     drone_tr = np.zeros((steps, m, 3))
     est = np.zeros((steps, n, 4))
