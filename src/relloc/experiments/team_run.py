@@ -209,9 +209,7 @@ def run_averaged_nees(
     return t[full], table[:, full].mean(axis=0), len(runs)
 
 
-def _accuracy_and_consistency(
-    runs: Sequence[PairEvaluation], *, settle_s: float, rate_hz: float
-) -> dict[str, Any]:
+def _accuracy_and_consistency(runs: Sequence[PairEvaluation], *, settle_s: float) -> dict[str, Any]:
     steady = [r.age >= settle_s for r in runs]
     err = np.concatenate([r.error[s] for r, s in zip(runs, steady, strict=True)]).reshape(-1, 4)
     sig = np.concatenate([r.sigma[s] for r, s in zip(runs, steady, strict=True)]).reshape(-1, 4)
@@ -250,7 +248,7 @@ def _pair_summary(
         "observer": first.observer,
         "observed": first.observed,
         "observed_kind": first.observed_kind,
-        **_accuracy_and_consistency(runs, settle_s=settle_s, rate_hz=rate),
+        **_accuracy_and_consistency(runs, settle_s=settle_s),
     }
     if len(runs) >= 2:
         _, avg, n = run_averaged_nees(runs, rate_hz=rate, settle_s=settle_s)
@@ -286,7 +284,7 @@ def summarise(
         for lab, runs in by_pair.items()
     }
     everything = [p for r in results for p in r.pairs]
-    team = _accuracy_and_consistency(everything, settle_s=settle_s, rate_hz=record_rate_hz)
+    team = _accuracy_and_consistency(everything, settle_s=settle_s)
     return {
         **(dict(meta) if meta else {}),
         "runs": len(results),
