@@ -12,11 +12,15 @@ Seed 001 (Sharma, Quebe, Beard & Taylor 2013) §3–4.1:
 - Fig. 2: five robots and two landmarks (sensing range 120 m, V = 5 m/s, T_s = 0.1 s) moving so
   that the RPMG connectivity changes; β (Eq. 22) and σ_min of the observability matrix over
   time, and whether "β = 1 ⇔ rank 3n" holds at every instant;
-- a 20-robot team (rank and timing).
+- a 20-robot team (rank and timing);
+- the PCRLB of robot 2 along the Fig. 2 trajectories for the four cases of seed 001 Figs. 8–10
+  (no landmark, one, two, GPS on robot 1), with
+  :func:`relloc.observability.pcrlb.unicycle_team_pcrlb`.
 
 summary.json keys: ``experiment``, ``seed``, ``runs``, ``cases`` (name → ``rank``,
 ``state_dim``, ``conditions``, ``unobservable_directions``, ``paper_claim``, ``agrees``,
 ``evidence``), ``fig2`` (``t``, ``beta``, ``sigma_min``, ``rank``, ``agreement_fraction``),
+``pcrlb_robot2`` (case → ``sqrt_bound_final``, ``sqrt_bound_mean_second_half`` for x, y, ψ),
 ``timing_s``.
 """
 
@@ -40,9 +44,11 @@ from relloc.experiments.output import (
 )
 from relloc.experiments.registry import ReproduceArgs
 from relloc.models import symbolic as S
+from relloc.models.planar_measurement import RowKind, ScalarRows
 from relloc.models.unicycle import unicycle_step
 from relloc.observability.analysis import analyse
 from relloc.observability.lie import ObservabilityMatrix
+from relloc.observability.pcrlb import unicycle_team_pcrlb
 from relloc.observability.rank import numeric_rank
 from relloc.observability.rpmg import (
     SensorSettings,
@@ -331,6 +337,59 @@ def fig2_series(duration: float = 200.0, every: int = 5) -> dict[str, Any]:
     }
 
 
+# --- PCRLB of robot 2 in the Fig. 2 scenario (the bound behind seed 001 Figs. 8–10) ---------
+#: Seed 001 §4.1: bearing σ_η = 0.1 rad, encoder σ_v = 0.2 m/s, σ_ω = 0.2 rad/s, initial
+#: σ = (5 m, 5 m, 0.2 rad). The GPS noise of the Theorem-4 case is not given; ours is assumed.
+SIGMA_BEARING = 0.1
+INPUT_SIGMA = (0.2, 0.2)
+P0_ROBOT = (25.0, 25.0, 0.04)
+GPS_SIGMA = (1.0, 1.0, 0.05)
+BOUND_CASES = ("no landmarks", "one landmark", "two landmarks", "GPS on robot 1")
+
+
+def _rows_at(G: nx.DiGraph, case: str) -> ScalarRows:
+    """Bearing rows along the RPMG edges at one instant (+ GPS rows of robot 1)."""
+    n = G.graph["n_robots"]
+    keep_marks = {"no landmarks": 0, "one landmark": 1, "two landmarks": 2}.get(case, 0)
+    edges = [(i, j) for i, j in G.edges if j < n or j - n < keep_marks]
+    kinds = [RowKind.BEARING] * len(edges)
+    observers = [i for i, _ in edges]
+    targets = [j if j < n else -1 for _, j in edges]
+    marks = [LANDMARKS[j - n] if j >= n else (0.0, 0.0) for _, j in edges]
+    sigmas = [SIGMA_BEARING] * len(edges)
+    if case == "GPS on robot 1":
+        kinds += [RowKind.POSE_X, RowKind.POSE_Y, RowKind.POSE_HEADING]
+        observers += [0, 0, 0]
+        targets += [-1, -1, -1]
+        marks += [(0.0, 0.0)] * 3
+        sigmas += list(GPS_SIGMA)
+    m = len(kinds)
+    return ScalarRows(
+        kind=np.array(kinds, dtype=np.int64),
+        observer=np.array(observers, dtype=np.int64),
+        target=np.array(targets, dtype=np.int64),
+        landmark_xy=np.array(marks, dtype=float).reshape(m, 2),
+        z=np.zeros(m),
+        sigma=np.array(sigmas, dtype=float),
+        group=np.arange(m, dtype=np.int64),
+    )
+
+
+def team_bounds(duration: float = 200.0, robot: int = 1) -> dict[str, np.ndarray]:
+    """√PCRLB ``(T, 3)`` of one robot's ``(x, y, ψ)`` for each case of :data:`BOUND_CASES`."""
+    P, U, _ = fig2_trajectories(duration)
+    n = P.shape[1]
+    P0 = np.diag(np.tile(P0_ROBOT, n))
+    out = {}
+    graphs = [build_rpmg(P[k], LANDMARKS, SENSOR) for k in range(P.shape[0])]
+    for case in BOUND_CASES:
+        rows = [_rows_at(G, case) for G in graphs]
+        B = unicycle_team_pcrlb(P, U, TS, rows, input_sigma=INPUT_SIGMA, P0=P0)
+        block = B[:, 3 * robot : 3 * robot + 3, 3 * robot : 3 * robot + 3]
+        out[case] = np.sqrt(np.diagonal(block, axis1=-2, axis2=-1))
+    return out
+
+
 def _twenty_robots(seed: int) -> dict[str, Any]:
     rng = np.random.default_rng(seed)
     n = 20
@@ -377,26 +436,40 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
         },
     }
     cases["twenty_robots"] = _twenty_robots(args.seed)
+    t2 = time.perf_counter()
+    bounds = team_bounds()
+    t_bounds = time.perf_counter() - t2
+    half = bounds[BOUND_CASES[0]].shape[0] // 2
+    pcrlb_robot2 = {
+        case: {
+            "sqrt_bound_final": b[-1],
+            "sqrt_bound_mean_second_half": b[half:].mean(axis=0),
+            "states": ["x", "y", "psi"],
+        }
+        for case, b in bounds.items()
+    }
     summary = {
         "experiment": "sharma-observability",
         "seed": args.seed,
         "runs": runs,
         "cases": cases,
         "fig2": {k: v for k, v in fig2.items() if k != "poses"},
+        "pcrlb_robot2": pcrlb_robot2,
         "timing_s": {
             "edge_analysis": t_edges,
             "random_teams": t_teams,
             "fig2": t_fig2,
             "twenty_robot_matrix": cases["twenty_robots"]["evidence"]["seconds"],
+            "team_pcrlb_4_cases": t_bounds,
         },
     }
-    figures = _figures(out_dir, fig2)
+    figures = _figures(out_dir, fig2, bounds)
     write_summary(out_dir, summary)
     write_report(out_dir, _report(summary, figures))
     return summary
 
 
-def _figures(out_dir: Any, fig2: dict[str, Any]) -> list[str]:
+def _figures(out_dir: Any, fig2: dict[str, Any], bounds: dict[str, np.ndarray]) -> list[str]:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -422,6 +495,17 @@ def _figures(out_dir: Any, fig2: dict[str, Any]) -> list[str]:
             title=f"t = {k * TS:.0f} s, β = {int(fig2['beta'][k // 5])}",
         )
     files.append(save_figure(fig, out_dir, "fig2_team_snapshots"))
+    fig, axes = plt.subplots(3, 1, figsize=(8, 8), sharex=True)
+    t = TS * np.arange(next(iter(bounds.values())).shape[0])
+    for j, (ax, label) in enumerate(zip(axes, ("x (m)", "y (m)", "ψ (rad)"), strict=True)):
+        for case, b in bounds.items():
+            ax.plot(t, 3.0 * b[:, j], lw=1.0, label=case)
+        ax.set_yscale("log")
+        ax.set_ylabel(f"3√PCRLB {label}")
+    axes[0].legend(fontsize=8)
+    axes[-1].set_xlabel("time (s)")
+    axes[0].set_title("Robot 2: smallest achievable 3σ (cf. seed 001 Figs. 8–10)")
+    files.append(save_figure(fig, out_dir, "pcrlb_robot2"))
     return files
 
 
@@ -473,9 +557,26 @@ def _report(summary: dict[str, Any], figures: list[str]) -> str:
     captions = {
         "fig2_beta_sigma_min.png": "β(G) (dashed) and σ_min (solid) over time.",
         "fig2_team_snapshots.png": "Trajectories and RPMG at the start and when β first drops.",
+        "pcrlb_robot2.png": "3√PCRLB of robot 2 for the four measurement cases.",
     }
     for f in figures:
         parts.append(figure_md(f, captions.get(f, f)))
+    bound_rows = [
+        [case, *v["sqrt_bound_mean_second_half"]] for case, v in summary["pcrlb_robot2"].items()
+    ]
+    parts += [
+        "## Accuracy limit: PCRLB of robot 2 along the Fig. 2 trajectories",
+        "",
+        "Bearings along the RPMG edges every step (σ_η = 0.1 rad), encoder noise σ_v = σ_ω = 0.2, "
+        "initial σ = (5 m, 5 m, 0.2 rad) as in seed 001 §4.1; GPS (σ = 1 m, 1 m, 0.05 rad, our "
+        "assumption) on robot 1 in the last case. The paper's Figs. 8–10 show its filter's 3σ for "
+        "the same four cases; the bound shows what any filter could reach: it keeps growing "
+        "without landmarks or with one, and stays bounded with two landmarks or GPS while the "
+        "robot is connected to them.",
+        "",
+        markdown_table(["case", "√B x (m)", "√B y (m)", "√B ψ (rad)"], bound_rows),
+        "",
+    ]
     timing = summary["timing_s"]
     parts += [
         "## Timing",

@@ -185,12 +185,16 @@ def unicycle_team_pcrlb(
     N = 3 * n
     F = np.zeros((M, T - 1, N, N))
     Q = np.zeros((M, T - 1, N, N))
-    for k in range(T - 1):
-        Fi, Gi = unicycle_jacobians(X[:, k], U[:, k], float(steps[k]))  # (M, n, 3, 3), (M, n, 3, 2)
-        Qi = (Gi * sig[None, :, None, :] ** 2) @ np.swapaxes(Gi, -1, -2)
-        for i in range(n):
-            F[:, k, 3 * i : 3 * i + 3, 3 * i : 3 * i + 3] = Fi[:, i]
-            Q[:, k, 3 * i : 3 * i + 3, 3 * i : 3 * i + 3] = Qi[:, i]
+    # per-robot blocks (M, T−1, n, 3, ·): one batched call per distinct step length
+    Fi = np.empty((M, T - 1, n, 3, 3))
+    Gi = np.empty((M, T - 1, n, 3, 2))
+    for d in np.unique(steps):
+        at = np.flatnonzero(steps == d)
+        Fi[:, at], Gi[:, at] = unicycle_jacobians(X[:, at], U[:, at], float(d))
+    Qi = (Gi * sig[:, None, :] ** 2) @ np.swapaxes(Gi, -1, -2)
+    for i in range(n):
+        F[:, :, 3 * i : 3 * i + 3, 3 * i : 3 * i + 3] = Fi[:, :, i]
+        Q[:, :, 3 * i : 3 * i + 3, 3 * i : 3 * i + 3] = Qi[:, :, i]
     info = np.zeros((M, T, N, N))
     for k, batch in enumerate(rows):
         if batch.size == 0:
