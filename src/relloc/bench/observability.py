@@ -91,14 +91,14 @@ def run(quiet: bool = False) -> dict[str, Any]:
     for n in (5, 10, 20):
         P, marks = _connected_team(rng, n)
         speeds = np.column_stack([np.full(n, 5.0), rng.uniform(-0.3, 0.3, n)])
-        result = team_observability(P, speeds, marks, sensor)
+        team = team_observability(P, speeds, marks, sensor)
         teams[str(n)] = {
             "team_matrix_s": _best(
                 lambda P=P, s=speeds, m=marks: team_observability(P, s, m, sensor)
             ),
-            "rank": result.rank,
-            "expected_rank": result.expected_rank,
-            "edges": result.n_edges,
+            "rank": team.rank,
+            "expected_rank": team.expected_rank,
+            "edges": team.n_edges,
         }
     t0 = time.perf_counter()
     ObservabilityMatrix.build(

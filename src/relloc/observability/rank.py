@@ -40,7 +40,7 @@ def singular_values(M: Array) -> Array:
     out = np.zeros(n)
     if A.shape[0]:
         if A.shape[0] > 2 * n:  # tall: the triangular factor has the same singular values
-            A = np.linalg.qr(A, mode="r")
+            A = np.asarray(np.linalg.qr(A, mode="r"), dtype=float)
         sv = np.linalg.svd(A, compute_uv=False)
         out[: sv.size] = sv[:n]
     return out
