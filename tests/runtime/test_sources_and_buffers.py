@@ -8,13 +8,13 @@ import numpy as np
 import pytest
 
 from relloc.errors import DataError
-from relloc.runtime.scenario import load_team_scenario, simulate_team
+from relloc.runtime.scenario import load_team
 from relloc.runtime.sources import LiveSource, LogSource
 from relloc.runtime.teammates import ReceivedOdometry, SeenSequences
 
 
 def test_log_source_windows_partition_the_robot_slice(trio_scenario):
-    log = simulate_team(load_team_scenario(str(trio_scenario(3.0))), 1)
+    log = load_team(str(trio_scenario(3.0)), 1).log
     src = LogSource(log, "observer")
     edges = np.arange(0, 31) * 0.1
     stamps = np.concatenate([src.odometry(a, b)[0] for a, b in itertools.pairwise(edges)])

@@ -24,7 +24,7 @@ from relloc.runtime import keys
 from relloc.runtime.faults import FaultSettings, parse_robot_event
 from relloc.runtime.launcher import TeamLauncher, TeamSettings
 from relloc.runtime.messages import encode
-from relloc.runtime.scenario import load_team_scenario, run_seeds, simulate_team
+from relloc.runtime.scenario import load_team, run_seeds
 from relloc.runtime.summary import agreement, assemble_estimates, robot_messages
 from relloc.runtime.transport import (
     Inbox,
@@ -78,7 +78,7 @@ def test_three_robot_team_finds_itself_agrees_and_rejects_bad_messages(trio_scen
     path = trio_scenario(6.0)
     port = free_loopback_port()
     settings = TeamSettings(scenario=str(path), out_dir=tmp_path / "out", seed=3, port=port)
-    log = simulate_team(load_team_scenario(str(path)), 3)
+    log = load_team(str(path), 3).log
     launcher = TeamLauncher(settings, log.robots, log.span[1] - log.span[0])
     injector = threading.Thread(
         target=_inject_bad_messages, args=(settings.team, loopback_endpoint(port), log.robots)
@@ -124,7 +124,7 @@ def test_killed_robot_is_noticed_and_its_restart_rejoins(trio_scenario, tmp_path
         restarts=(parse_robot_event("flyer@4.0", "--restart"),),
     )
     settings = TeamSettings(scenario=str(path), out_dir=tmp_path / "out", seed=5, faults=faults)
-    log = simulate_team(load_team_scenario(str(path)), 5)
+    log = load_team(str(path), 5).log
     collected = TeamLauncher(settings, log.robots, log.span[1] - log.span[0]).run()
 
     assert [k["robot"] for k in collected.kills] == ["flyer"]

@@ -1,6 +1,7 @@
-"""``relloc node --robot ID --scenario FILE|default`` — run one robot as its own process.
+"""``relloc node --robot ID --scenario FILE|default | --dataset DIR`` — one robot as a process.
 
-The robot simulates the (seeded) scenario, keeps only its own sensor slice, joins the team over
+The robot simulates the (seeded) scenario — or replays the recorded team of a dataset folder in
+MRCLAM layout (:mod:`relloc.runtime.dataset`) — keeps only its own sensor slice, joins the team over
 Zenoh on the given endpoints, and runs until the clock process ends the run (see
 :mod:`relloc.runtime.node`). Usually started by ``relloc team up``; by hand::
 
@@ -91,8 +92,12 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument("--robot", required=True, help="this robot's name in the scenario")
-    p.add_argument(
+    source = p.add_mutually_exclusive_group()
+    source.add_argument(
         "--scenario", default="default", help="scenario TOML file, or 'default' (built-in team)"
+    )
+    source.add_argument(
+        "--dataset", default=None, metavar="DIR", help="replay the team of an MRCLAM-layout folder"
     )
     p.add_argument("--seed", type=int, default=0, help="simulation seed (same for the team)")
     p.add_argument("--filter", default="plkf", help="plkf | tekf | bcplkf")
@@ -115,11 +120,10 @@ def run(args: argparse.Namespace) -> int:
     from relloc.estimators.track_manager import TrackManagerSettings
     from relloc.runtime.estimation import TrackManagerEstimator
     from relloc.runtime.node import NodeSettings, RobotNode
-    from relloc.runtime.scenario import load_team_scenario, simulate_team
+    from relloc.runtime.scenario import load_team
     from relloc.runtime.sources import LogSource
 
-    scenario = load_team_scenario(args.scenario)
-    log = simulate_team(scenario, args.seed)
+    log = load_team(args.dataset or args.scenario, args.seed).log
     if args.robot not in log.robots:
         raise ConfigError(f"--robot: {args.robot!r} is not in the scenario {log.robots}")
     settings = NodeSettings(

@@ -1,4 +1,4 @@
-"""``relloc team up SCENARIO|default --out DIR`` — the whole team as separate processes.
+"""``relloc team up SCENARIO|default|DATASET_DIR --out DIR`` — the whole team as processes.
 
 Every robot runs as its own ``relloc node`` process and a ``relloc team clock`` process drives
 simulated time (faster than real time unless ``--realtime``); the launcher collects every
@@ -34,7 +34,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     actions = p.add_subparsers(dest="team_command", metavar="ACTION", required=True)
 
     up = actions.add_parser("up", help="launch a team, collect its estimates, write a report")
-    up.add_argument("scenario", help="scenario TOML file, or 'default' (built-in team)")
+    up.add_argument(
+        "scenario",
+        help="scenario TOML file, 'default' (built-in team), or an MRCLAM-layout dataset folder",
+    )
     up.add_argument("--out", type=Path, required=True, help="output folder")
     up.add_argument("--seed", type=int, default=0, help="simulation and fault seed")
     up.add_argument("--team", default="team", help="team id (key-expression prefix)")

@@ -35,6 +35,7 @@ from relloc.errors import ConfigError, RellocError
 from relloc.runtime import keys
 from relloc.runtime.faults import FaultSettings
 from relloc.runtime.messages import MessageRejected, decode
+from relloc.runtime.scenario import check_source
 from relloc.runtime.transport import (
     Inbox,
     TransportSettings,
@@ -46,7 +47,8 @@ from relloc.runtime.transport import (
 
 @dataclass(frozen=True, kw_only=True)
 class TeamSettings:
-    """One ``team up`` run. ``scenario`` is a TOML path or ``"default"``."""
+    """One ``team up`` run. ``scenario`` is a team source: ``"default"``, a scenario TOML file or
+    a dataset folder (see :mod:`relloc.runtime.scenario`)."""
 
     scenario: str
     out_dir: Path
@@ -61,8 +63,7 @@ class TeamSettings:
 
     def __post_init__(self) -> None:
         keys.check_id(self.team, "--team")
-        if self.scenario != "default" and not Path(self.scenario).is_file():
-            raise ConfigError(f"scenario: {self.scenario} is not a file (or use 'default')")
+        check_source(self.scenario)
         if not (0.001 <= self.tick_s <= 10):
             raise ConfigError(f"--tick: {self.tick_s} s outside [0.001, 10]")
         if self.seed < 0:
@@ -97,7 +98,7 @@ def node_command(settings: TeamSettings, robot: str, endpoint: str) -> list[str]
         "node",
         "--robot",
         robot,
-        "--scenario",
+        "--dataset" if Path(settings.scenario).is_dir() else "--scenario",
         settings.scenario,
         "--seed",
         str(settings.seed),

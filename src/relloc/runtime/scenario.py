@@ -1,12 +1,23 @@
-"""The team a runtime run simulates: the built-in default or a scenario file, and its seeded log.
+"""The team a runtime run replays: a scenario (built-in or TOML) or a recorded dataset folder.
 
-Every process of a team (each robot, the launcher that scores the run) calls
-:func:`simulate_team` with the same scenario and seed and gets the same
-:class:`~relloc.sim.log.Log` — the simulator is deterministic for a given generator state — so each
-robot can read its own sensor slice without any sensor data crossing the network.
+Every process of a team (each robot, the launcher that scores the run) calls :func:`load_team`
+with the same source and seed and gets the same :class:`~relloc.sim.log.Log` — the simulator and
+the dataset replay are deterministic for a given generator state — so each robot can read its
+own sensor slice without any sensor data crossing the network. Sources:
+
+- ``"default"``: the built-in seed-000 team (:func:`relloc.sim.scenario.default_scenario`);
+- a ``.toml`` file: a user scenario (:func:`relloc.sim.scenario.load_scenario`);
+- a folder in MRCLAM layout: the recorded team replayed as in seed 000 §6
+  (:func:`relloc.runtime.dataset.mrclam_team_log`).
+
+The seed gives run 0 of ``relloc run --seed SEED``: the simulation (or sensor-noise) stream and
+the initialisation stream of :func:`relloc.experiments.team_run.team_task`.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -18,25 +29,55 @@ from relloc.sim.scenario import Scenario, default_scenario, load_scenario
 from relloc.sim.simulate import simulate
 
 
-def load_team_scenario(spec: str) -> Scenario:
-    """``"default"`` → the built-in seed-000 team; anything else is a TOML path. Robot names
-    must be valid runtime ids (they become key-expression segments)."""
-    scenario = default_scenario() if spec == "default" else load_scenario(spec)
-    for name in scenario.robot_names:
-        check_id(name, f"scenario robot name {name!r}")
-    return scenario
+@dataclass(frozen=True)
+class Team:
+    """A team to run: its name, its seeded log and, for simulations, its scenario."""
+
+    name: str
+    description: str
+    log: Log
+    scenario: Scenario | None
+
+
+def check_source(spec: str) -> str:
+    """``spec`` if it names a team source (see module docstring), else a ConfigError."""
+    if spec != "default" and not Path(spec).exists():
+        raise ConfigError(
+            f"team source: {spec!r} is neither 'default', a scenario file nor a dataset folder"
+        )
+    return spec
 
 
 def run_seeds(seed: int) -> tuple[np.random.SeedSequence, np.random.SeedSequence]:
-    """``(simulation, initialisation)`` seeds of run 0 of ``relloc run --seed SEED`` — the same
-    streams :func:`relloc.experiments.team_run.team_task` uses, so a team run and the
-    in-process run see the very same log."""
+    """``(simulation, initialisation)`` seeds of run 0 of ``relloc run --seed SEED``."""
     if seed < 0:
         raise ConfigError(f"--seed: {seed} must be ≥ 0")
     sim_seed, init_seed = spawn_seeds(seed, 1)[0].spawn(2)
     return sim_seed, init_seed
 
 
-def simulate_team(scenario: Scenario, seed: int) -> Log:
-    """The seeded log every process of a run shares (run 0 of ``relloc run --seed SEED``)."""
-    return simulate(scenario, np.random.default_rng(run_seeds(seed)[0]))
+def load_team_scenario(spec: str) -> Scenario:
+    """``"default"`` → the built-in team; anything else is a TOML path. Robot names must be
+    valid runtime ids (they become key-expression segments)."""
+    scenario = default_scenario() if spec == "default" else load_scenario(check_source(spec))
+    for name in scenario.robot_names:
+        check_id(name, f"scenario robot name {name!r}")
+    return scenario
+
+
+def load_team(spec: str, seed: int) -> Team:
+    """The team of a source and seed (see module docstring)."""
+    rng = np.random.default_rng(run_seeds(seed)[0])
+    if Path(check_source(spec)).is_dir():
+        from relloc.runtime.dataset import mrclam_team_log
+
+        log = mrclam_team_log(spec, rng)
+        name = f"replay of {Path(spec).name}"
+        return Team(name=name, description=log.source, log=log, scenario=None)
+    scenario = load_team_scenario(spec)
+    return Team(
+        name=scenario.name,
+        description=scenario.description,
+        log=simulate(scenario, rng),
+        scenario=scenario,
+    )

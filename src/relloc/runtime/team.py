@@ -39,7 +39,7 @@ from relloc.experiments.team_run import (
 )
 from relloc.runtime.launcher import TeamLauncher, TeamSettings
 from relloc.runtime.outcomes import fault_outcomes
-from relloc.runtime.scenario import load_team_scenario, run_seeds, simulate_team
+from relloc.runtime.scenario import Team, load_team, run_seeds
 from relloc.runtime.summary import (
     agreement,
     assemble_estimates,
@@ -55,9 +55,9 @@ in-process beliefs at common times that counts as agreement on a perfect network
 def run_team(settings: TeamSettings) -> dict[str, Any]:
     """Run the team of ``settings`` and write its outputs; returns the summary."""
     out = prepare_out_dir(settings.out_dir)
-    scenario = load_team_scenario(settings.scenario)
-    settings.faults.check_robots(scenario.robot_names)
-    log = simulate_team(scenario, settings.seed)
+    team = load_team(settings.scenario, settings.seed)
+    log = team.log
+    settings.faults.check_robots(log.robots)
     t0, t1 = log.span
     tracker = TrackManagerSettings(filter=settings.filter_kind, init=InitPolicy())
     run_settings = TeamRunSettings(runs=1, seed=settings.seed, tracker=tracker, quiet=True)
@@ -70,7 +70,7 @@ def run_team(settings: TeamSettings) -> dict[str, Any]:
         collected = launcher.run()
         in_process = reference_run.result()
     distributed = assemble_estimates(collected, log.robots, settings.filter_kind)
-    meta = scenario_meta(scenario, run_settings) | {"experiment": "team_up"}
+    meta = team_meta(team, settings, run_settings)
     summary, results = build_summary(
         [distributed],
         [log],
@@ -117,20 +117,40 @@ def run_team(settings: TeamSettings) -> dict[str, Any]:
         out,
         summary,
         results,
-        title=f"relloc team up — {scenario.name} ({len(log.robots)} robot processes)",
-        arena=(scenario.arena.x, scenario.arena.y),
-        notes=[scenario.description] if scenario.description else (),
+        title=f"relloc team up — {team.name} ({len(log.robots)} robot processes)",
+        arena=(team.scenario.arena.x, team.scenario.arena.y) if team.scenario else None,
+        notes=[team.description] if team.description else (),
     )
     report = (out / "report.md").read_text()
     write_report(out, report.rstrip() + "\n\n" + runtime_markdown(summary))
     return summary
 
 
+def team_meta(team: Team, settings: TeamSettings, run: TeamRunSettings) -> dict[str, Any]:
+    """The settings part of ``summary.json`` (that of ``relloc run`` for a scenario)."""
+    if team.scenario is not None:
+        return scenario_meta(team.scenario, run) | {"experiment": "team_up"}
+    log = team.log
+    return {
+        "experiment": "team_up",
+        "scenario": team.name,
+        "source": team.description,
+        "seed": settings.seed,
+        "filter": run.tracker.filter,
+        "init": run.tracker.init.name,
+        "keep_window_s": run.tracker.keep_window_s,
+        "odometry_sigma": {r: log.odometry[i].sigma.tolist() for i, r in enumerate(log.robots)},
+        "sensor_sigma": {log.robots[0]: log.measurements.sigma[0].tolist()}
+        if log.measurements.size
+        else {},
+    }
+
+
 def in_process_estimates(
     scenario: str, seed: int, tracker: TrackManagerSettings, run: TeamRunSettings
 ) -> TeamEstimates:
     """The in-process run's estimates on the same log (run 0 of ``relloc run --seed SEED``)."""
-    log = simulate_team(load_team_scenario(scenario), seed)
+    log = load_team(scenario, seed).log
     rng = np.random.default_rng(run_seeds(seed)[1])
     return track_log(log, tracker, record_rate_hz=run.record_rate_hz, rng=rng)
 
