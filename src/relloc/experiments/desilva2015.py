@@ -231,9 +231,13 @@ def _time_series(results: list[RunResult]) -> dict[str, dict[str, Array]]:
     comps = np.stack([r.components for r in results])
     out: dict[str, dict[str, Array]] = {"pos": {}, "yaw": {}, "comp": {}}
     for li, j, name in _pairs(pe.shape[1]):
-        with np.errstate(invalid="ignore"):
-            out["pos"][name] = np.sqrt(np.nanmean(pe[:, li, :, j] ** 2, axis=0))
-            out["yaw"][name] = np.sqrt(np.nanmean(ye[:, li, :, j] ** 2, axis=0))
+        for key, err in (("pos", pe), ("yaw", ye)):
+            e = err[:, li, :, j]
+            n = np.isfinite(e).sum(axis=0)
+            total = np.nansum(e**2, axis=0)
+            rms = np.sqrt(total / np.maximum(n, 1))
+            # floor for the log axis: errors below 0.1 mm / 0.1 mrad are drawn at the floor
+            out[key][name] = np.where(n > 0, np.maximum(rms, 1e-4), np.nan)
         out["comp"][name] = comps[:, li, :, j].mean(axis=0)
     return out
 

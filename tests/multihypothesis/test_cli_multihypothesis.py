@@ -1,0 +1,60 @@
+"""CLI smoke tests of ``relloc reproduce desilva2015`` / ``mrclam-association`` and the bench."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from relloc.cli import main
+from relloc.experiments import desilva2015
+
+
+@pytest.mark.slow
+def test_reproduce_desilva2015_smoke(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    # shortened runs: the experiment's constants are module level on purpose
+    monkeypatch.setattr(desilva2015, "DURATION_S", 4.0)
+    monkeypatch.setattr(desilva2015, "STEADY_FROM_S", 1.0)
+    monkeypatch.setattr(desilva2015, "FINAL_WINDOW_S", 1.0)
+    monkeypatch.setattr(desilva2015, "KIDNAP", (3, 2.0, 3.0, -2.0, 2.0))
+    out = tmp_path / "ds"
+    code = main(
+        [
+            "reproduce",
+            "desilva2015",
+            "--out",
+            str(out),
+            "--runs",
+            "1",
+            "--seed",
+            "7",
+            "--executor",
+            "serial",
+            "--quiet",
+        ]
+    )
+    assert code == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["experiment"] == "desilva2015" and summary["seed"] == 7
+    for key in (
+        "success_rate",
+        "clutter_sweep",
+        "pd_sweep",
+        "wrong_association_rate",
+        "no_sharing",
+        "time_to_first_confirmed_s",
+        "hypotheses",
+        "kidnapped",
+    ):
+        assert key in summary
+    assert set(summary["clutter_sweep"]) == {"1", "10", "100", "1000"}
+    assert set(summary["pd_sweep"]) == {"0.95", "0.8", "0.6"}
+    assert 0.0 <= summary["success_rate"]["overall"] <= 1.0
+    report = (out / "report.md").read_text()
+    for fig in summary["figures"].values():
+        assert (out / fig).is_file() and fig in report
+
+
+def test_reproduce_rejects_bad_runs(tmp_path: Path) -> None:
+    assert main(["reproduce", "desilva2015", "--out", str(tmp_path), "--runs", "0"]) == 2
