@@ -7,7 +7,6 @@ Every function draws into the matplotlib ``Axes`` it is given and returns nothin
 - :func:`plot_subset_ranks`: rank for every set of excited input groups (one row per case);
 - :func:`plot_beta_sigma`: seed 001 Fig. 2 — β connectivity and σ_min of the observability
   matrix over time (σ_min on a twin axis);
-- :func:`plot_rmse_vs_bound`: RMSE of an estimator against ``sqrt`` of the PCRLB over time;
 - :func:`plot_team_snapshot`: robots, landmarks and RPMG edges at one instant.
 """
 
@@ -80,26 +79,6 @@ def plot_beta_sigma(ax: Any, t: ArrayLike, beta: ArrayLike, sigma_min: ArrayLike
     twin.plot(t, np.asarray(sigma_min, dtype=float), color="tab:blue", lw=1.2, label="σ_min")
     twin.set_ylabel("σ_min of the observability matrix", color="tab:blue")
     twin.set_ylim(bottom=0.0)
-
-
-def plot_rmse_vs_bound(
-    ax: Any,
-    t: ArrayLike,
-    rmse: ArrayLike,
-    bound_sd: ArrayLike,
-    *,
-    ylabel: str = "",
-    label: str = "RMSE",
-) -> None:
-    """RMSE over time against ``sqrt(PCRLB)`` (the smallest achievable RMSE)."""
-    t = np.asarray(t, dtype=float)
-    ax.plot(t, np.asarray(rmse, dtype=float), color="tab:blue", lw=1.0, label=label)
-    ax.plot(t, np.asarray(bound_sd, dtype=float), color="k", lw=1.0, ls="--", label="√PCRLB")
-    ax.set_yscale("log")
-    ax.set_xlabel("time (s)")
-    if ylabel:
-        ax.set_ylabel(ylabel)
-    ax.legend(fontsize=8)
 
 
 def plot_team_snapshot(
