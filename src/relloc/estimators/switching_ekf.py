@@ -56,8 +56,9 @@ from relloc.models.airground import (
 )
 
 Array = NDArray[np.float64]
-#: Block kinds counted by the filter.
-BLOCKS = ("range", "camera", "triangle", "leader_heading")
+#: Block kinds counted by the filter, with their measurement dimension.
+BLOCK_DIMS = {"range": 1, "camera": 3, "triangle": 2, "leader_heading": 1}
+BLOCKS = tuple(BLOCK_DIMS)
 
 
 @dataclass(frozen=True, kw_only=True)
