@@ -157,10 +157,6 @@ class SymbolicModel:
         """``H = ∂h/∂x`` (m × n)."""
         return self.output_matrix().jacobian(sp.Matrix(self.states))
 
-    def rate_jacobian(self) -> sp.Matrix:
-        """``∂f/∂x`` (n × n), inputs kept symbolic."""
-        return self.rate().jacobian(sp.Matrix(self.states))
-
     def lambdify(self, expr: sp.Matrix, *, with_inputs: bool = False) -> Callable[..., Array]:
         """Numeric function ``g(x, [u,] c)`` of a matrix expression (cse, numpy)."""
         args: list[list[sp.Symbol]] = [list(self.states)]

@@ -70,10 +70,6 @@ def model_fields(model: SymbolicModel) -> dict[int, tuple[sp.Expr, ...]]:
     return fields
 
 
-def field_label(model: SymbolicModel, index: int) -> str:
-    return "f0" if index == DRIFT else f"f[{model.input_names[index - 1]}]"
-
-
 class _Probe:
     """Numeric gradients of kept rows at a few random points (for the redundancy test)."""
 
