@@ -390,9 +390,22 @@ def write_figures(
     for p in run0.pairs:
         fig, axes = plt.subplots(4, 1, figsize=(7, 7), sharex=True)
         plot_pose_errors_with_bounds(axes, p.t, p.error, p.sigma)
+        steady = p.age >= settle_s
+        if steady.any():  # scale to the steady state; the start-up transient is clipped
+            for i, ax in enumerate(axes):
+                half = 1.3 * float(
+                    np.max(np.maximum(3 * p.sigma[steady, i], np.abs(p.error[steady, i])))
+                )
+                ax.set_ylim(-half, half)
         axes[0].set_title(f"{p.label} ({p.observed_kind}): error and ±3σ, run 0")
         name = save_figure(fig, out_dir, f"error_bounds_{p.observed}")
-        figures.append((name, f"Error of {p.label} with the filter's ±3σ bounds (run 0)."))
+        figures.append(
+            (
+                name,
+                f"Error of {p.label} with the filter's ±3σ bounds (run 0); axes scaled to the "
+                "steady state, so the start-up transient is clipped.",
+            )
+        )
 
     series = {}
     labels = [p.label for p in run0.pairs]

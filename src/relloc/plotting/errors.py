@@ -14,6 +14,22 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+
+def break_gaps(t: ArrayLike, *series: ArrayLike) -> tuple[np.ndarray, ...]:
+    """Insert a NaN row wherever the time step exceeds 1.5× its median, so a line is not drawn
+    across an interval without data (e.g. while a track did not exist)."""
+    t = np.asarray(t, dtype=float)
+    arrays = [np.asarray(y, dtype=float) for y in series]
+    if t.size < 3:
+        return (t, *arrays)
+    dt = np.diff(t)
+    gaps = np.flatnonzero(dt > 1.5 * np.median(dt)) + 1
+    if gaps.size == 0:
+        return (t, *arrays)
+    t_out = np.insert(t, gaps, np.nan)
+    return (t_out, *(np.insert(y, gaps, np.nan, axis=0) for y in arrays))
+
+
 #: Axis labels of the ``RelPose4`` states.
 STATE_LABELS: tuple[str, ...] = ("x (m)", "y (m)", "z (m)", "φ (rad)")
 
@@ -30,10 +46,9 @@ def plot_error_with_bounds(
     color: str = "tab:blue",
     bound_color: str = "tab:cyan",
 ) -> None:
-    """One state's error over time with the ``±n_sigma·σ`` envelope of the filter."""
-    t = np.asarray(t, dtype=float)
-    e = np.asarray(error, dtype=float)
-    s = n_sigma * np.asarray(sigma, dtype=float)
+    """One state's error over time with the ``±n_sigma·σ`` envelope of the filter (lines are
+    broken where samples are missing)."""
+    t, e, s = break_gaps(t, error, n_sigma * np.asarray(sigma, dtype=float))
     ax.plot(t, e, color=color, lw=1.0, label=label)
     ax.plot(t, s, color=bound_color, lw=0.9, label=f"±{n_sigma:g}σ")
     ax.plot(t, -s, color=bound_color, lw=0.9)
@@ -68,10 +83,10 @@ def plot_robot_errors(
 
     ``series`` maps a label (e.g. the observed robot's name) to ``(t, errors)``.
     """
-    for label, (t, err) in series.items():
-        e = np.asarray(err, dtype=float)
+    for label, (t_raw, err) in series.items():
+        t, e = break_gaps(t_raw, err)
         for i, ax in enumerate(axes):
-            ax.plot(np.asarray(t, dtype=float), e[:, i], lw=0.9, label=label)
+            ax.plot(t, e[:, i], lw=0.9, label=label)
     for i, ax in enumerate(axes):
         ax.set_ylabel(STATE_LABELS[i])
         ax.axhline(0.0, color="0.6", lw=0.5)
