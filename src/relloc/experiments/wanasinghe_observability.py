@@ -27,7 +27,7 @@ no claim), ``evidence``, ``elapsed_s``), ``equation_checks`` (equation → ``pap
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import sympy as sp
@@ -66,6 +66,14 @@ def _inputs(**values: float) -> list[float]:
     return out
 
 
+def _eq12_as_printed(model: S.SymbolicModel) -> S.SymbolicModel:
+    """The model with the ω_l field of Eq. 12 as printed: no −1 on φ̇."""
+    x, y = S.RELATIVE_STATES[:2]
+    fields = list(model.input_fields)
+    fields[3] = (y, -x, sp.Integer(0), sp.Integer(0))
+    return replace(model, name=f"{model.name}[Eq. 12 as printed]", input_fields=tuple(fields))
+
+
 def _cases() -> list[_Case]:
     pl1 = S.relative_pseudo_linear()
     pl2 = S.relative_pseudo_linear(("azimuth", "elevation"))
@@ -84,6 +92,13 @@ def _cases() -> list[_Case]:
             pl2,
             "Lemma 2: rank 4 if v_c ≠ 0 and ω_l ≠ 0",
             lambda r: r.rank == 4 and r.conditions == (("omega_l", "v_c"),),
+        ),
+        _Case(
+            "case2_bearing_pseudo_linear_eq12_as_printed",
+            _eq12_as_printed(pl2),
+            "Lemma 2 derived with Eq. 12, whose ω_l field lacks the −1 on φ̇",
+            lambda r: r.rank == 4 and r.conditions == (("omega_l", "v_c"),),
+            "the omission changes no rank: same conditions and input-subset ranks as case 2",
         ),
         _Case(
             "appendix1_bearing_pseudo_linear_only_v_c_v_l",
