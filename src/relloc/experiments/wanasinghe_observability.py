@@ -387,9 +387,10 @@ def _report(
         f"field (pruned, see `relloc.observability.lie`). Total symbolic time {total:.1f} s.",
         "",
         "Models: `relloc.models.symbolic` (derived, not copied: the relative yaw obeys "
-        "φ̇ = ω_c − ω_l, and ω_l also acts on φ, which Eq. 12 omits). Conditions are the minimal "
-        "sets of input groups whose Lie derivatives reach the generic rank (an input held at "
-        "zero contributes none).",
+        "φ̇ = ω_c − ω_l, and ω_l also acts on φ, which Eq. 12 omits; the case "
+        "`case2_bearing_pseudo_linear_eq12_as_printed` shows the omission changes no rank). "
+        "Conditions are the minimal sets of input groups whose Lie derivatives reach the "
+        "generic rank (an input held at zero contributes none).",
         "",
         markdown_table(
             ["case", "rank", "conditions (ours)", "unobservable directions", "paper", "verdict"],
