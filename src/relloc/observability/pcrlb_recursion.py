@@ -123,13 +123,16 @@ def pcrlb_information(F: Array, Q: Array, meas_info: Array, J0: Array) -> Array:
             )
         return J
     for k in range(Tm1):
-        Qinv = np.empty_like(Q[:, k])
-        for m in range(M):
-            Qinv[m] = _inverse_pd(
-                Q[m, k],
-                where=f"process noise Q of trajectory {m} at step {k} (the averaged "
-                "PCRLB needs Q positive definite; use one trajectory for singular Q)",
-            )
+        try:
+            Qinv = _inverse_pd(Q[:, k], where=f"process noise Q at step {k}")
+        except ModelError:
+            for m in range(M):  # name the first offending trajectory
+                _inverse_pd(
+                    Q[m, k],
+                    where=f"process noise Q of trajectory {m} at step {k} (the averaged "
+                    "PCRLB needs Q positive definite; use one trajectory for singular Q)",
+                )
+            raise
         Ft = np.swapaxes(F[:, k], -1, -2)
         D11 = (Ft @ Qinv @ F[:, k]).mean(axis=0)
         D12 = -(Ft @ Qinv).mean(axis=0)
