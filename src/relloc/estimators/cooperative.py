@@ -40,7 +40,8 @@ Measurements
 ------------
 Rows (:mod:`relloc.models.planar_measurement`) are built per epoch: bearing (always, if
 ``use_bearing``), range (if ``use_range``; corrected by a fitted bias
-``b(η, ρ)`` that depends on bearing and range (:class:`SensorModel`) and optionally thinned to one range per pair every ``range_min_interval_s``
+``b(η, ρ)`` that depends on bearing and range (:class:`SensorModel`) and optionally
+thinned to one range per pair every ``range_min_interval_s``
 because consecutive ranges have strongly correlated errors), and absolute pose rows. Each detection
 or fix is gated as a whole with its normalised innovation squared against
 ``χ²_{dof}(p_gate)`` (:mod:`relloc.association.gating`) before the batch update.

@@ -136,7 +136,7 @@ def fit_odometry(ds: Any, t_lo: float, t_hi: float, window_s: float) -> dict[str
         r = ds.robot(rid)
         lo = max(t_lo, float(r.odometry.t[0]) + 1.0) if len(r.odometry.t) else t_hi
         hi = min(t_hi, float(r.groundtruth.t[-1]) - 1.0)
-        t = np.arange(lo, hi, 0.02) if hi > lo + 10 * window_s else np.zeros(0)
+        t = np.arange(lo, hi, 0.02) if hi > lo + 3 * window_s else np.zeros(0)
         v, w, ok = _gt_velocities(r.groundtruth, t)
         grids.append((r, t[ok], v[ok], w[ok]))
     if not any(g[1].size for g in grids):
@@ -672,8 +672,6 @@ def _figures(
         paths["/".join(key)] = by_key[key]["mean"][q.valid, 1, :2]
     fig, ax = plt.subplots(figsize=(7, 6))
     plot_trajectories(ax, paths)
-    ax.set_xlim(-2.5, 6.5)
-    ax.set_ylim(-6.5, 6.5)
     ax.set_title(f"Robot {rid}: truth, dead reckoning and CL")
     figs.append((save_figure(fig, out, "robot2_paths"), f"Robot {rid} paths"))
     series = {}

@@ -33,7 +33,7 @@ Array = NDArray[np.float64]
 
 @dataclass(frozen=True, kw_only=True)
 class CooperativeScenario:
-    """A planar team scenario. ``waypoints[i]`` is robot ``i``'s cyclic way-point list ``(k, 2)``."""
+    """A planar team scenario; ``waypoints[i]`` is robot ``i``'s cyclic way-point list (k, 2)."""
 
     start_poses: Array
     waypoints: tuple[Array, ...]
@@ -172,7 +172,7 @@ def _controls(pose: Array, targets: Array, s: CooperativeScenario) -> Array:
 def _detect(
     pose: Array, points: Array, s: CooperativeScenario, exclude_self: bool
 ) -> tuple[NDArray[np.int64], NDArray[np.int64], Array, Array]:
-    """``(observer, target, true range, true bearing)`` of every visible pair (range and FOV limits)."""
+    """``(observer, target, range, bearing)`` of every pair within sensing range and FOV."""
     d = points[None, :, :] - pose[:, None, :2]
     dist = np.hypot(d[..., 0], d[..., 1])
     brg = np.asarray(wrap_angle(np.arctan2(d[..., 1], d[..., 0]) - pose[:, None, 2]))
@@ -186,7 +186,7 @@ def _detect(
 def simulate(s: CooperativeScenario, rng: np.random.Generator) -> CooperativeSim:
     """Run the scenario (deterministic for a given generator state)."""
     n, dt = s.n_robots, s.dt
-    steps = int(round(s.duration / dt))
+    steps = round(s.duration / dt)
     t = np.arange(steps + 1) * dt
     truth = np.zeros((steps + 1, n, 3))
     truth[0] = s.start_poses
@@ -243,7 +243,7 @@ def simulate(s: CooperativeScenario, rng: np.random.Generator) -> CooperativeSim
 def _gps(s: CooperativeScenario, t: Array, truth: Array, rng: np.random.Generator) -> PoseFixes:
     if not s.gps_robots:
         return PoseFixes.none()
-    every = max(1, int(round(s.gps_period / s.dt)))
+    every = max(1, round(s.gps_period / s.dt))
     ks = np.arange(every, t.size, every)
     robots = np.array(s.gps_robots, dtype=np.int64)
     tt = np.repeat(t[ks], robots.size)

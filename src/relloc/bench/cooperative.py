@@ -1,0 +1,131 @@
+"""``relloc bench cooperative``: how large a team the centralised EIF localizes in real time.
+
+A grid team (:func:`relloc.sim.cooperative.grid_team_scenario`: robots 30 m apart, 50 m
+sensing range, so each sees its ~8 nearest neighbours, plus a few landmarks) is simulated at
+10 Hz (odometry and bearings every 0.1 s); the asynchronous pipeline then replays it with the
+EIF (:mod:`relloc.estimators.eif`) and, as the baseline measured in the same run, the
+covariance-form joint EKF (:mod:`relloc.estimators.joint_ekf`), reporting the estimate of every
+robot at every step. Both are checked to give the same estimates before timing counts.
+
+Reported per team size ``n``: wall time per 0.1 s step (best of ``repeats``), the real-time
+factor (simulated time / wall time; > 1 is faster than real time), rows per step, and the
+largest ``|EIF − EKF|`` of the means. ``realtime_limit_n`` is the team size at which the EIF's
+real-time factor crosses 1 (log-log interpolation between the sizes measured). The process is
+pinned to one CPU (``os.sched_setaffinity``) while timing, so BLAS runs on one core.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from typing import Any
+
+import numpy as np
+
+from relloc.estimators.cooperative import (
+    OdometryModel,
+    PipelineSettings,
+    SensorModel,
+    TeamRun,
+    run_team,
+)
+from relloc.sim.cooperative import grid_team_scenario, simulate
+
+SIZES = (5, 10, 25, 50, 100, 200, 300, 400)
+STEPS = 30
+REPEATS = 2
+
+
+def _time_run(sim: Any, settings: PipelineSettings, repeats: int) -> tuple[float, TeamRun]:
+    best = np.inf
+    run = None
+    for _ in range(repeats):
+        start = time.perf_counter()
+        run = run_team(sim.recording, sim.prior, 0.0, sim.t, settings)
+        best = min(best, time.perf_counter() - start)
+    assert run is not None
+    return float(best), run
+
+
+def _crossing(sizes: list[int], factors: list[float]) -> float | None:
+    """``n`` where the real-time factor crosses 1 (log-log interpolation), if it does."""
+    for k in range(1, len(sizes)):
+        if factors[k - 1] >= 1.0 > factors[k]:
+            x0, x1 = np.log(sizes[k - 1]), np.log(sizes[k])
+            y0, y1 = np.log(factors[k - 1]), np.log(factors[k])
+            return float(np.exp(x0 + (0.0 - y0) * (x1 - x0) / (y1 - y0)))
+    return None
+
+
+def run(quiet: bool = False) -> dict[str, Any]:
+    """Measure the sizes in :data:`SIZES` (stopping two sizes after real time is lost)."""
+    pinned = hasattr(os, "sched_setaffinity")
+    previous = os.sched_getaffinity(0) if pinned else None
+    if pinned:
+        os.sched_setaffinity(0, {min(previous or {0})})
+    rows: list[dict[str, Any]] = []
+    try:
+        below = 0
+        for n in SIZES:
+            scenario = grid_team_scenario(n, duration=STEPS * 0.1)
+            sim = simulate(scenario, np.random.default_rng(n))
+            odometry = OdometryModel.from_discrete(scenario.sigma_v, scenario.sigma_w, 0.1)
+            sensor = SensorModel(sigma_bearing=scenario.sigma_bearing)
+            timing: dict[str, float] = {}
+            runs: dict[str, TeamRun] = {}
+            for kind in ("eif", "ekf"):
+                settings = PipelineSettings(
+                    odometry=odometry, sensor=sensor, anchors=(0, 1), filter=kind
+                )
+                timing[kind], runs[kind] = _time_run(sim, settings, REPEATS)
+            duration = float(sim.t[-1])
+            row = {
+                "n": n,
+                "state_dim": 3 * n,
+                "rows_per_step": runs["eif"].counts.used / max(runs["eif"].counts.epochs, 1),
+                "eif_ms_per_step": 1e3 * timing["eif"] / STEPS,
+                "ekf_ms_per_step": 1e3 * timing["ekf"] / STEPS,
+                "eif_realtime_factor": duration / timing["eif"],
+                "ekf_realtime_factor": duration / timing["ekf"],
+                "max_mean_diff_eif_ekf": float(np.max(np.abs(runs["eif"].mean - runs["ekf"].mean))),
+            }
+            rows.append(row)
+            below += row["eif_realtime_factor"] < 1.0
+            if below >= 2:
+                break
+    finally:
+        if pinned and previous is not None:
+            os.sched_setaffinity(0, previous)
+    sizes = [r["n"] for r in rows]
+    result = {
+        "benchmark": "cooperative",
+        "rate_hz": 10.0,
+        "steps": STEPS,
+        "one_core": pinned,
+        "load_average": list(os.getloadavg()) if hasattr(os, "getloadavg") else None,
+        "sizes": rows,
+        "realtime_at_50": next(
+            (r["eif_realtime_factor"] >= 1.0 for r in rows if r["n"] == 50), None
+        ),
+        "realtime_limit_n": _crossing(sizes, [r["eif_realtime_factor"] for r in rows]),
+        "ekf_realtime_limit_n": _crossing(sizes, [r["ekf_realtime_factor"] for r in rows]),
+    }
+    if not quiet:
+        from rich.console import Console
+        from rich.table import Table
+
+        table = Table(title="Centralised cooperative localization at 10 Hz, one core")
+        for col in ("n", "rows/step", "EIF ms/step", "EIF × real time", "EKF ms/step", "EKF ×"):
+            table.add_column(col)
+        for r in rows:
+            table.add_row(
+                str(r["n"]),
+                f"{r['rows_per_step']:.0f}",
+                f"{r['eif_ms_per_step']:.2f}",
+                f"{r['eif_realtime_factor']:.1f}",
+                f"{r['ekf_ms_per_step']:.2f}",
+                f"{r['ekf_realtime_factor']:.1f}",
+            )
+        Console().print(table)
+        Console().print(f"EIF real-time limit: n ≈ {result['realtime_limit_n']}")
+    return result

@@ -1,0 +1,127 @@
+"""MRCLAM loader + cooperative localization smoke tests, and CLI smoke tests."""
+
+import json
+import sys
+
+import numpy as np
+import pytest
+
+from relloc.cli import main
+from relloc.datasets.paths import default_mrclam_dataset
+
+MODES = ("dead_reckoning", "bearing", "range_bearing")
+ANCHORS = ("none", "2_landmarks", "all_landmarks", "gps_robot1")
+
+
+def test_mrclam_cl_cli_on_a_synthetic_mrclam_folder(synthetic_mrclam, tmp_path):
+    out = tmp_path / "out"
+    code = main(
+        [
+            "reproduce",
+            "mrclam-cl",
+            "--out",
+            str(out),
+            "--dataset",
+            str(synthetic_mrclam),
+            "--executor",
+            "serial",
+            "--quiet",
+        ]
+    )
+    assert code == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert {"experiment", "seed", "runs", "cases", "fit", "targets"} <= set(summary)
+    assert set(summary["cases"]) == {f"{m}/{a}" for m in MODES for a in ANCHORS}
+    for case in summary["cases"].values():
+        for key in ("pos_rmse_m", "heading_rmse_rad"):
+            assert set(case[key]) == {"1", "2", "3", "4", "5", "mean"}
+            assert all(np.isfinite(v) for v in case[key].values())
+        assert {"nees_pct_beyond", "used", "rejected"} <= set(case)
+    rb = summary["cases"]["range_bearing/all_landmarks"]
+    assert rb["used"] > 0
+    assert rb["counts"]["unknown_barcodes"] == 1  # the stray barcode 99 is counted
+    dr = summary["cases"]["dead_reckoning/none"]["pos_rmse_m"]["mean"]
+    assert rb["pos_rmse_m"]["mean"] < dr
+    assert (out / "report.md").is_file() and (out / "pos_rmse.png").is_file()
+
+
+def test_mrclam_missing_file_is_a_data_error(synthetic_mrclam, tmp_path, capsys):
+    broken = tmp_path / "broken"
+    broken.mkdir()
+    for f in synthetic_mrclam.iterdir():
+        if f.name != "Robot3_Odometry.dat":
+            (broken / f.name).write_text(f.read_text())
+    assert (
+        main(
+            [
+                "reproduce",
+                "mrclam-cl",
+                "--out",
+                str(tmp_path / "o"),
+                "--dataset",
+                str(broken),
+                "--quiet",
+            ]
+        )
+        == 3
+    )
+    assert "Robot3_Odometry.dat" in capsys.readouterr().err
+
+
+@pytest.mark.skipif(
+    not default_mrclam_dataset().is_dir(), reason="shared MRCLAM_Dataset6 not available here"
+)
+def test_loader_and_cooperative_localization_on_real_mrclam():
+    from relloc.datasets.mrclam import load_mrclam
+    from relloc.estimators.cooperative import run_team
+    from relloc.experiments.mrclam_cl import build_recording, case_settings, evaluate, fit_models
+
+    ds = load_mrclam(default_mrclam_dataset())
+    fit = fit_models(ds, 0.0, 100.0)
+    prepared = build_recording(ds, fit, np.random.default_rng(0))
+    out_t = prepared.out_t[prepared.out_t <= 30.0]
+    n_lm = prepared.recording.landmarks_xy.shape[0]
+    result = {}
+    for mode, anchors in (("dead_reckoning", "none"), ("range_bearing", "all_landmarks")):
+        settings = case_settings(mode, anchors, fit, prepared.two_landmarks, n_lm)
+        run = run_team(prepared.recording, prepared.prior, prepared.t_start, out_t, settings)
+        result[mode] = (evaluate({"mean": run.mean, "cov": run.cov}, ds, out_t, 0.0), run.counts)
+    cl, counts = result["range_bearing"]
+    assert counts.used > 100 and np.isfinite(cl["pos_rmse_m"]["mean"])
+    assert cl["pos_rmse_m"]["mean"] < 0.2
+    assert cl["pos_rmse_m"]["mean"] < result["dead_reckoning"][0]["pos_rmse_m"]["mean"]
+
+
+def test_sharma2013_cli_writes_the_acceptance_keys(tmp_path, monkeypatch):
+    """Short (5 s) run; the symbolic observability tool is made unavailable (its documented
+    fallback) to keep this smoke test fast — the full reproduction computes the ranks."""
+    from relloc.experiments import sharma2013
+
+    monkeypatch.setattr(sharma2013, "DURATION_S", 5.0)
+    monkeypatch.setitem(sys.modules, "relloc.observability.analysis", None)
+    out = tmp_path / "s"
+    assert (
+        main(
+            [
+                "reproduce",
+                "sharma2013",
+                "--out",
+                str(out),
+                "--runs",
+                "1",
+                "--executor",
+                "serial",
+                "--quiet",
+            ]
+        )
+        == 0
+    )
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["runs"] == 1 and summary["seed"] == 2026
+    assert set(summary["cases"]) == {"no_landmark", "one_landmark", "two_landmarks", "gps_robot1"}
+    for case in summary["cases"].values():
+        assert set(case["pos_rmse_m"]) == {"1", "2", "3", "4", "5", "mean"}
+        assert set(case["heading_rmse_rad"]) == {"1", "2", "3", "4", "5", "mean"}
+        assert isinstance(case["bounded"], bool)
+        assert case["observability_rank"]["available"] is False
+    assert (out / "fig3_topology.png").is_file() and (out / "report.md").is_file()
