@@ -144,3 +144,21 @@ def test_twenty_robots_and_bad_input() -> None:
         build_rpmg(bad, marks, WIDE)
     with pytest.raises(ConfigError, match="sensing_range"):
         SensorSettings(sensing_range=-1.0)
+
+
+def test_minimal_moving_sets() -> None:
+    from relloc.observability.rpmg import minimal_moving_sets
+
+    G = nx.DiGraph(n_robots=2, n_landmarks=0)
+    G.add_nodes_from([0, 1])
+    G.add_edge(0, 1)
+    poses = np.array([[0.0, 0.0, 0.3], [10.0, 5.0, -1.0]])
+    speeds = np.array([[1.0, 0.1], [1.0, 0.2]])
+    assert minimal_moving_sets(G, poses, speeds, np.zeros((0, 2))) == [[1]]  # the measured one
+    L = nx.DiGraph(n_robots=1, n_landmarks=2)
+    L.add_nodes_from([0, 1, 2])
+    L.add_edges_from([(0, 1), (0, 2)])
+    marks = np.array([[10.0, 5.0], [-4.0, 9.0]])
+    pose = np.array([[0.0, 0.0, 0.3]])
+    # two landmark bearings fix a pose without motion (rank 3 from the static rows)
+    assert minimal_moving_sets(L, pose, np.array([[1.0, 0.1]]), marks) == [[]]

@@ -33,6 +33,7 @@ collinear with the robots, or GPS), generically. The rank is ``Σ_c (3 n_c − d
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import lru_cache
@@ -303,3 +304,41 @@ def name_unobservable_directions(
     if len(chosen) < null_dim:
         names.append(f"{null_dim - len(chosen)} further direction(s) not a rigid motion")
     return names
+
+
+#: Largest team for which every subset of moving robots is tried.
+MAX_CONDITION_ROBOTS = 10
+
+
+def minimal_moving_sets(
+    G: nx.DiGraph,
+    poses: Array,
+    speeds: Array,
+    landmarks: Array,
+    *,
+    gps: Sequence[int] = (),
+    order: int = 2,
+) -> list[list[int]] | None:
+    """Minimal sets of robots that must move for the team matrix to keep its rank.
+
+    Robots outside a set are stopped (``V = ω = 0``: their fields excite no rows); the sets
+    returned (robot indices from 0) are the minimal ones whose motion alone reaches the rank
+    obtained with ``speeds``. ``None`` for teams larger than :data:`MAX_CONDITION_ROBOTS`.
+    """
+    n, _ = _sizes(G)
+    if n > MAX_CONDITION_ROBOTS:
+        return None
+    U = np.asarray(speeds, dtype=float)
+    target = numeric_rank(team_observability_matrix(G, poses, U, landmarks, gps=gps, order=order))
+    found: list[frozenset[int]] = []
+    for size in range(n + 1):
+        for combo in itertools.combinations(range(n), size):
+            s = frozenset(combo)
+            if any(f <= s for f in found):
+                continue
+            stopped = U.copy()
+            stopped[[i for i in range(n) if i not in s]] = 0.0
+            M = team_observability_matrix(G, poses, stopped, landmarks, gps=gps, order=order)
+            if (numeric_rank(M) if M.shape[0] else 0) == target:
+                found.append(s)
+    return [sorted(f) for f in found]
