@@ -155,10 +155,13 @@ def test_minimal_moving_sets() -> None:
     poses = np.array([[0.0, 0.0, 0.3], [10.0, 5.0, -1.0]])
     speeds = np.array([[1.0, 0.1], [1.0, 0.2]])
     assert minimal_moving_sets(G, poses, speeds, np.zeros((0, 2))) == [[1]]  # the measured one
-    L = nx.DiGraph(n_robots=1, n_landmarks=2)
-    L.add_nodes_from([0, 1, 2])
+    L = nx.DiGraph(n_robots=1, n_landmarks=3)
+    L.add_nodes_from([0, 1, 2, 3])
     L.add_edges_from([(0, 1), (0, 2)])
-    marks = np.array([[10.0, 5.0], [-4.0, 9.0]])
+    marks = np.array([[10.0, 5.0], [-4.0, 9.0], [3.0, -8.0]])
     pose = np.array([[0.0, 0.0, 0.3]])
-    # two landmark bearings fix a pose without motion (rank 3 from the static rows)
-    assert minimal_moving_sets(L, pose, np.array([[1.0, 0.1]]), marks) == [[]]
+    moving = np.array([[1.0, 0.1]])
+    assert minimal_moving_sets(L, pose, moving, marks) == [[0]]  # two bearings: must move
+    L.add_edge(0, 3)
+    # three landmark bearings fix the pose without motion (resection from the static rows)
+    assert minimal_moving_sets(L, pose, moving, marks) == [[]]
