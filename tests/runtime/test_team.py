@@ -41,12 +41,13 @@ pytestmark = pytest.mark.slow
 def _inject_bad_messages(team: str, endpoint: str, roster: tuple[str, ...]) -> None:
     """Join the hub, wait until every robot is alive (so its subscriptions are known here),
     then publish one message of each bad kind on teammates' odometry keys."""
+    deadline = time.monotonic() + 60
+    # the hub listens only once the launcher runs; Zenoh retries the endpoint until then
     session = open_session(TransportSettings(connect=(endpoint,)))
     inbox = Inbox()
     try:
         inbox.watch_presence(session, keys.alive_wildcard(team))
         alive: set[str] = set()
-        deadline = time.monotonic() + 60
         while not set(roster) <= alive and time.monotonic() < deadline:
             item = inbox.get(timeout=0.5)
             if item is not None and item.presence == "joined":
@@ -75,19 +76,26 @@ def _inject_bad_messages(team: str, endpoint: str, roster: tuple[str, ...]) -> N
 
 
 def test_three_robot_team_finds_itself_agrees_and_rejects_bad_messages(trio_scenario, tmp_path):
-    path = trio_scenario(6.0)
+    path = trio_scenario(4.0)
     port = free_loopback_port()
     settings = TeamSettings(scenario=str(path), out_dir=tmp_path / "out", seed=3, port=port)
     log = load_team(str(path), 3).log
     launcher = TeamLauncher(settings, log.robots, log.span[1] - log.span[0])
-    injector = threading.Thread(
-        target=_inject_bad_messages, args=(settings.team, loopback_endpoint(port), log.robots)
-    )
+    failures: list[BaseException] = []
+
+    def inject() -> None:
+        try:
+            _inject_bad_messages(settings.team, loopback_endpoint(port), log.robots)
+        except BaseException as exc:
+            failures.append(exc)
+
+    injector = threading.Thread(target=inject)
     injector.start()
     try:
         collected = launcher.run()
     finally:
         injector.join(timeout=60)
+    assert not failures, failures
 
     clock = (tmp_path / "out" / "clock.json").read_text()
     assert all(f'"robot": "{r}"' in clock for r in log.robots)  # every robot arrived
@@ -95,11 +103,11 @@ def test_three_robot_team_finds_itself_agrees_and_rejects_bad_messages(trio_scen
     for robot in log.robots:
         m = per_robot[robot]
         assert m["processes"] == 1 and m["final_report"]
-        assert m["ticks"] == 60
+        assert m["ticks"] == 40
         assert m["teammate_joins_seen"] == 2
-        assert m["received_wire"]["odom"] == 2 * 60  # both teammates, every tick
+        assert m["received_wire"]["odom"] == 2 * 40  # both teammates, every tick
     observer = per_robot["observer"]
-    assert observer["estimates"] > 60
+    assert observer["estimates"] > 40
     # the bad messages were rejected and counted by every robot subscribed to odometry
     for robot in ("observer", "rover"):
         reasons = per_robot[robot]["rejected_by_reason"]
@@ -113,15 +121,16 @@ def test_three_robot_team_finds_itself_agrees_and_rejects_bad_messages(trio_scen
     assert {p.label for p in distributed.pairs} == {"observer->flyer", "observer->rover"}
     reference = track_log(log, TrackManagerSettings(), rng=np.random.default_rng(run_seeds(3)[1]))
     agree = agreement(distributed, reference)
-    assert agree["max_abs_mean_diff"] < 1e-9 and agree["max_abs_cov_diff"] < 1e-9, agree
+    diagnostics = (agree, collected.stats["observer"], collected.presence)
+    assert agree["max_abs_mean_diff"] < 1e-9 and agree["max_abs_cov_diff"] < 1e-9, diagnostics
     assert all(p["only_in_process"] == p["only_distributed"] == 0 for p in agree["pairs"].values())
 
 
 def test_killed_robot_is_noticed_and_its_restart_rejoins(trio_scenario, tmp_path):
-    path = trio_scenario(6.0)
+    path = trio_scenario(5.0)
     faults = FaultSettings(
-        kills=(parse_robot_event("flyer@2.0", "--kill"),),
-        restarts=(parse_robot_event("flyer@4.0", "--restart"),),
+        kills=(parse_robot_event("flyer@1.0", "--kill"),),
+        restarts=(parse_robot_event("flyer@3.5", "--restart"),),
     )
     settings = TeamSettings(scenario=str(path), out_dir=tmp_path / "out", seed=5, faults=faults)
     log = load_team(str(path), 5).log
@@ -140,8 +149,8 @@ def test_killed_robot_is_noticed_and_its_restart_rejoins(trio_scenario, tmp_path
     assert kinds[:3] == ["created", "deleted", "recreated"], flyer_events
     deleted_t = flyer_events[1][0]
     refound_t = flyer_events[2][0]
-    assert 2.0 < deleted_t <= 2.0 + 2.0 + 0.3  # within the keep window after the kill
-    assert refound_t >= 3.8  # back only once the robot is (one tick of filter lag)
+    assert 1.0 < deleted_t <= 1.0 + 2.0 + 0.3  # within the keep window after the kill
+    assert refound_t >= 3.3  # back only once the robot is (one tick of filter lag)
     distributed = assemble_estimates(collected, log.robots, "plkf")
     flyer = distributed.pair("observer", "flyer")
-    assert flyer.t.size and (flyer.t > 4.5).any()  # estimates after the restart
+    assert flyer.t.size and (flyer.t > 4.0).any()  # estimates after the restart

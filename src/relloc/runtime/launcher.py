@@ -157,6 +157,9 @@ def clock_command(
     return cmd
 
 
+FINAL_REPORT_GRACE_S = 5.0
+"""Wall seconds the collector waits, after every process exited, for final reports in flight."""
+
 PRELOAD = [
     "relloc.cli",
     "relloc.cli.node",
@@ -209,6 +212,7 @@ class TeamLauncher:
         self.endpoint = ""
         self._start = time.monotonic()
         self._finished: list[tuple[str, Any]] = []
+        self._dead: set[str] = set()
         self.context = _fork_context()
 
     def _spawn(self, name: str, argv: list[str]) -> Any:
@@ -275,8 +279,23 @@ class TeamLauncher:
             ended = self._on_item(item) or ended
             if ended and end_wall is None:
                 end_wall = time.monotonic()
+        # a robot's last report may still be in flight when its process has exited
+        deadline = time.monotonic() + FINAL_REPORT_GRACE_S
+        while not self._final_reports_in() and time.monotonic() < deadline:
+            item = inbox.get(timeout=0.05)
+            if item is not None:
+                self._on_item(item)
         for item in inbox.drain():
             self._on_item(item)
+
+    def _final_reports_in(self) -> bool:
+        """Whether every robot's current process has sent its final counters."""
+        for robot in set(self.roster) - self._dead:
+            lives = self.collected.stats.get(robot, [])
+            index = self.incarnation[robot]
+            if len(lives) <= index or not lives[index].get("final"):
+                return False
+        return True
 
     def _on_item(self, item: Any) -> bool:
         """File one record; True if it was the clock's end event."""
@@ -327,9 +346,11 @@ class TeamLauncher:
             os.kill(proc.pid, signal.SIGKILL)
             proc.join(timeout=30)
             self._finished.append((robot, proc))
+            self._dead.add(robot)
             self.collected.kills.append({"robot": robot, "at_s": t, "pid": proc.pid})
         elif action == "restart":
             self.incarnation[robot] += 1
+            self._dead.discard(robot)
             self.procs[robot] = self._spawn(robot, node_command(self.s, robot, self.endpoint))
             self.collected.restarts.append(
                 {"robot": robot, "at_s": t, "pid": self.procs[robot].pid}

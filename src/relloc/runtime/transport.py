@@ -38,14 +38,15 @@ class TransportSettings:
 
     ``listen``/``connect`` are Zenoh endpoints such as ``tcp/127.0.0.1:7447`` (``tls/...`` with a
     TLS ``config_file``). ``lease_s`` is how long a silent peer is kept before its liveliness
-    tokens are dropped (a clean kill is noticed at once because the TCP link closes).
+    tokens are dropped (a clean kill is noticed at once because the TCP link closes). An
+    endpoint that does not answer yet (a hub started later) is retried every 50–500 ms.
     """
 
     mode: Mode = "peer"
     listen: tuple[str, ...] = ()
     connect: tuple[str, ...] = ()
     multicast_scouting: bool = False
-    lease_s: float = 3.0
+    lease_s: float = 10.0
     config_file: Path | None = None
 
     def __post_init__(self) -> None:
@@ -81,6 +82,8 @@ class TransportSettings:
             conf.insert_json5("connect/endpoints", json.dumps(list(self.connect)))
         conf.insert_json5("scouting/multicast/enabled", json.dumps(self.multicast_scouting))
         conf.insert_json5("transport/link/tx/lease", str(int(self.lease_s * 1000)))
+        retry = {"period_init_ms": 50, "period_max_ms": 500, "period_increase_factor": 2}
+        conf.insert_json5("connect/retry", json.dumps(retry))
         return conf
 
 
