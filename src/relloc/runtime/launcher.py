@@ -261,12 +261,13 @@ class TeamLauncher:
                     f"team up: not finished after {self.s.wall_timeout_s:g} s of wall time; "
                     f"see the logs in {self.logs}"
                 )
+            for name, proc in self.procs.items():
+                if proc.exitcode not in (None, 0) and name not in self._dead:
+                    raise RellocError(
+                        f"team up: the {name} process failed (exit {proc.exitcode}); "
+                        f"see its log in {self.logs}"
+                    )
             clock = self.procs["clock"]
-            if clock.exitcode not in (None, 0):
-                raise RellocError(
-                    f"team up: the clock process failed (exit {clock.exitcode}); "
-                    f"see {self.logs / 'clock.log'}"
-                )
             if ended:
                 alive = [r for r in self.roster if self.procs[r].exitcode is None]
                 if not alive and clock.exitcode is not None:
