@@ -110,6 +110,10 @@ class GaussianSumSettings:
             used to register ``l``'s messages (indirect fusion).
         confirm_weight, confirm_position_sigma, confirm_yaw_sigma: a filter's dominant track is
             *confirmed* when its weight and its position / yaw standard deviations pass these.
+        max_range, max_position_sigma: tracks farther than ``max_range`` (m) or with a position
+            standard deviation ``√tr P_xyz`` above ``max_position_sigma`` (m) carry no usable
+            information (a teammate unseen for long) and are deleted; the filter then waits
+            for new measurements to give birth to tracks again.
     """
 
     velocity_noise: VelocityNoise
@@ -131,6 +135,8 @@ class GaussianSumSettings:
     confirm_weight: float = 0.8
     confirm_position_sigma: float = 0.3
     confirm_yaw_sigma: float = 0.35
+    max_range: float = 20.0
+    max_position_sigma: float = 5.0
 
     def __post_init__(self) -> None:
         if not isinstance(self.velocity_noise, VelocityNoise):
@@ -142,6 +148,8 @@ class GaussianSumSettings:
             "sigma_elevation",
             "confirm_position_sigma",
             "confirm_yaw_sigma",
+            "max_range",
+            "max_position_sigma",
         ):
             value = getattr(self, name)
             if not (np.isfinite(value) and value > 0.0):
@@ -589,12 +597,20 @@ class GaussianSumFuser:
     # ------------------------------------------------------------------ reduction
 
     def reduce(self) -> None:
-        """Prune, N-scan prune, merge and cap every filter (seed 002 §II-D.5)."""
+        """Delete unusable tracks, prune, N-scan prune, merge and cap every filter (§II-D.5)."""
         st = self.settings
         t = self.tracks
         if t.size == 0:
             return
+        usable = (np.linalg.norm(t.mean[:, :3], axis=1) <= st.max_range) & (
+            np.trace(t.cov[:, :3, :3], axis1=1, axis2=2) <= st.max_position_sigma**2
+        )
+        t = t.take(np.flatnonzero(usable))
+        self.tracks = t
+        if t.size == 0:
+            return
         self._normalise()
+        t = self.tracks
         keep = prune_mask(t.weight, st.prune_weight, t.owner)
         t = t.take(np.flatnonzero(keep))
         t = t.take(np.flatnonzero(family_keep_mask(t.history, t.weight, st.nscan_weight, t.owner)))

@@ -1,0 +1,292 @@
+"""Multi-hypothesis relative localization on MRCLAM with hidden bearing correspondence.
+
+``relloc reproduce mrclam-association --out DIR [--dataset PATH] [--seed S]``
+
+Real data (Leung, Barfoot & Liu, IJRR 2011; any folder in MRCLAM layout, default run 6): every
+robot runs a fuser (:class:`~relloc.estimators.gaussian_sum.GaussianSumFuser`) with one
+Gaussian-sum filter per other robot, as in seed 002. The camera rows of one time stamp form a
+scan. Each robot-to-robot row keeps its *range* with its barcode (known correspondence, like the
+paper's ranging sensor) but its *bearing* goes, without the barcode, into the scan's bearing
+set, together with the bearings of every landmark row (real clutter: things that are not robots)
+and ``CLUTTER_PER_SCAN`` uniformly injected false bearings (Poisson, seeded). The robots are
+planar: the bearing sensor is azimuth-only and the height difference is a known 0 ± 1 cm.
+Odometry (commanded v, ω, held) drives the prediction at 20 Hz; mutual and indirect fusion run
+at 1 Hz.
+
+Noise models: the odometry noise is fitted (``relloc.datasets.mrclam.fit_odometry_noise``,
+1-s windows) on a calibration window — the first ``CALIBRATION_S`` seconds after every robot
+has started moving — and the evaluation uses the next ``EVAL_S`` seconds, so no number is
+fitted on the data it is scored on. Range σ 0.2 m and bearing σ 0.03 rad follow the dataset's
+documented error levels (range error bias −0.25 … +0.2 m depending on bearing, strongly
+correlated; bearings 0.01–0.02 rad with rare outliers).
+
+summary.json keys: ``experiment, seed, runs (1), dataset, window_s, clutter_per_scan,
+odometry_noise, association_accuracy`` (fraction of the bearings used by the dominant track of
+a filter that really came from that robot, after its first confirmation; per observer too),
+``pos_rmse_m`` (dominant track vs Vicon ground truth, planar position, after 10 s),
+``yaw_rmse_rad``, ``tracked_fraction`` (scans with the dominant track within 0.5 m and 0.5 rad),
+``bearings`` (counts of robot, landmark and injected bearings), ``load_report``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from relloc.core.angles import wrap_angle
+from relloc.datasets.mrclam import MrclamDataset, fit_odometry_noise, load_mrclam
+from relloc.datasets.paths import default_mrclam_dataset
+from relloc.errors import DataError
+from relloc.estimators.gaussian_sum import GaussianSumSettings
+from relloc.experiments.output import (
+    figure_md,
+    markdown_table,
+    prepare_out_dir,
+    save_figure,
+    write_report,
+    write_summary,
+)
+from relloc.experiments.registry import ReproduceArgs
+from relloc.fusion.team import CLUTTER, NO_BEARING, DirectScan, TeamData, TeamRunSettings, run_team
+from relloc.models.motion import VelocityNoise
+
+FILTER_RATE = 20.0
+CALIBRATION_S = 60.0
+EVAL_S = 240.0
+CLUTTER_PER_SCAN = 1.0
+SIGMA_RANGE = 0.2
+SIGMA_BEARING = 0.03
+SIGMA_HEIGHT = 0.01
+WARMUP_S = 10.0
+POS_TOL_M = 0.5
+YAW_TOL_RAD = 0.5
+
+
+def _team_data(
+    ds: MrclamDataset, t_start: float, t_end: float, rng: np.random.Generator
+) -> tuple[TeamData, dict[str, int]]:
+    """Filter grid, odometry, scans (hidden bearing barcodes, clutter) and truth."""
+    ids = list(ds.robot_ids)
+    n = len(ids)
+    index = {s: k for k, s in enumerate(ids)}
+    times = np.arange(t_start, t_end, 1.0 / FILTER_RATE)
+    vel = np.zeros((times.size, n, 4))
+    truth = np.full((times.size, n, 4), np.nan)
+    for s, k in index.items():
+        rob = ds.robot(s)
+        v, w = rob.odometry.at(times)
+        vel[:, k, 0] = v
+        vel[:, k, 3] = w
+        q = rob.groundtruth.at(times)
+        truth[:, k, 0], truth[:, k, 1], truth[:, k, 3] = q.x, q.y, q.theta
+        truth[~q.valid, k] = np.nan
+        truth[q.valid, k, 2] = 0.0
+    counts = {"robot": 0, "landmark": 0, "injected": 0, "unknown_subject": 0}
+    scans: list[DirectScan] = []
+    for s, i in index.items():
+        meas = ds.robot(s).measurements
+        sel = (meas.t >= t_start) & (meas.t < times[-1])
+        t_m, subj, rng_m, brg = meas.t[sel], meas.subject[sel], meas.range[sel], meas.bearing[sel]
+        for stamp in np.unique(t_m):
+            rows = np.flatnonzero(t_m == stamp)
+            ranges = np.full(n, np.nan)
+            heights = np.zeros(n)
+            heights[i] = np.nan
+            bearings: list[float] = []
+            origins: list[int] = []
+            for r in rows:
+                sub = int(subj[r])
+                if sub in index and sub != s:
+                    j = index[sub]
+                    if np.isnan(ranges[j]):
+                        ranges[j] = rng_m[r]
+                    bearings.append(float(brg[r]))
+                    origins.append(j)
+                    counts["robot"] += 1
+                elif ds.is_robot(np.array([sub]))[0]:
+                    counts["unknown_subject"] += 1
+                else:
+                    bearings.append(float(brg[r]))
+                    origins.append(CLUTTER)
+                    counts["landmark"] += 1
+            n_cl = rng.poisson(CLUTTER_PER_SCAN)
+            counts["injected"] += n_cl
+            bearings.extend(rng.uniform(-np.pi, np.pi, n_cl).tolist())
+            origins.extend([CLUTTER] * n_cl)
+            order = rng.permutation(len(bearings))
+            k = min(int(np.searchsorted(times, stamp)), times.size - 1)
+            scans.append(
+                DirectScan(
+                    time=float(times[k]),
+                    observer=i,
+                    heights=heights,
+                    ranges=ranges,
+                    bearings=np.asarray(bearings, dtype=float).reshape(-1, 1)[order],
+                    origins=np.asarray(origins, dtype=np.int64)[order],
+                )
+            )
+    scans.sort(key=lambda sc: (sc.time, sc.observer))
+    truth_filled = np.where(np.isfinite(truth), truth, 0.0)
+    data = TeamData(
+        times=times,
+        velocities=vel,
+        sensing=tuple(range(n)),
+        scans=tuple(scans),
+        truth=truth_filled,
+    )
+    return data, counts | {"truth_missing": int(np.isnan(truth[..., 0]).sum())}
+
+
+def _settings(ds: MrclamDataset, t0: float) -> tuple[GaussianSumSettings, dict[str, float]]:
+    fits = [
+        fit_odometry_noise(ds.robot(s), t_start=t0, t_end=t0 + CALIBRATION_S, rate_hz=FILTER_RATE)
+        for s in ds.robot_ids
+    ]
+    sv = float(np.sqrt(np.mean([f.sigma_v**2 for f in fits])))
+    sl = float(np.sqrt(np.mean([f.sigma_lateral**2 for f in fits])))
+    sw = float(np.sqrt(np.mean([f.sigma_w**2 for f in fits])))
+    sig = (sv, sl, 1e-3, sw)
+    st = GaussianSumSettings(
+        velocity_noise=VelocityNoise(observer=sig, observed=sig),
+        sigma_height=SIGMA_HEIGHT,
+        sigma_range=SIGMA_RANGE,
+        sigma_azimuth=SIGMA_BEARING,
+        sigma_elevation=SIGMA_BEARING,
+        use_elevation=False,
+        expected_clutter=CLUTTER_PER_SCAN,
+    )
+    return st, {"sigma_v": sv, "sigma_lateral": sl, "sigma_w": sw}
+
+
+def reproduce(args: ReproduceArgs) -> dict[str, Any]:
+    """Run the fusers on the dataset window; write summary.json, report.md and a figure."""
+    out = prepare_out_dir(args.out_dir)
+    folder = Path(args.dataset) if args.dataset is not None else default_mrclam_dataset()
+    ds = load_mrclam(folder)
+    starts = [float(ds.robot(s).odometry.t[0]) for s in ds.robot_ids if ds.robot(s).odometry.t.size]
+    if len(starts) != len(ds.robot_ids) or len(starts) < 2:
+        raise DataError(f"{folder}: needs odometry for at least two robots")
+    t_cal = max(starts)
+    t_start = t_cal + CALIBRATION_S
+    t_end = min(t_start + EVAL_S, ds.duration)
+    if t_end - t_start < 2 * WARMUP_S:
+        raise DataError(f"{folder}: too short for a {EVAL_S:.0f} s evaluation after calibration")
+    settings, odo = _settings(ds, t_cal)
+    rng = np.random.default_rng(args.seed)
+    data, counts = _team_data(ds, t_start, t_end, rng)
+    traces = run_team(data, settings, TeamRunSettings())
+    names = [f"R{s}" for s in ds.robot_ids]
+    from relloc.sim.multihypothesis import relative_truth
+
+    rows, all_pe, all_ye, all_tr = [], [], [], []
+    used_total = correct_total = 0
+    per_obs: dict[str, Any] = {}
+    for i, tr in traces.items():
+        rel = relative_truth(data.truth[tr.scan_index], i)
+        pe = np.linalg.norm(tr.mean[..., :2] - rel[..., :2], axis=-1)
+        ye = np.abs(wrap_angle(tr.mean[..., 3] - rel[..., 3]))
+        after = (tr.times - data.times[0]) >= WARMUP_S
+        conf = np.cumsum(tr.confirmed, axis=0) > 0
+        used = conf & (tr.assoc_origin != NO_BEARING)
+        correct = used & (tr.assoc_origin == np.arange(tr.mean.shape[1])[None, :])
+        ok = np.isfinite(pe) & after[:, None]
+        ok[:, i] = False
+        u, c = int(used.sum()), int(correct.sum())
+        used_total += u
+        correct_total += c
+        tracked = (pe <= POS_TOL_M) & (ye <= YAW_TOL_RAD)
+        per_obs[names[i]] = {
+            "association_accuracy": c / u if u else None,
+            "bearings_used": u,
+            "pos_rmse_m": float(np.sqrt(np.mean(pe[ok] ** 2))) if ok.any() else None,
+            "tracked_fraction": float(tracked[ok].mean()) if ok.any() else None,
+        }
+        rows.append(
+            [
+                names[i],
+                per_obs[names[i]]["association_accuracy"],
+                u,
+                per_obs[names[i]]["pos_rmse_m"],
+                per_obs[names[i]]["tracked_fraction"],
+            ]
+        )
+        all_pe.append(pe[ok])
+        all_ye.append(ye[ok])
+        all_tr.append(tracked[ok])
+    pe_all, ye_all, tr_all = np.concatenate(all_pe), np.concatenate(all_ye), np.concatenate(all_tr)
+    summary: dict[str, Any] = {
+        "experiment": "mrclam-association",
+        "seed": args.seed,
+        "runs": 1,
+        "dataset": str(folder),
+        "window_s": [t_start, t_end],
+        "calibration_window_s": [t_cal, t_start],
+        "clutter_per_scan": CLUTTER_PER_SCAN,
+        "odometry_noise": odo,
+        "sigma_range_m": SIGMA_RANGE,
+        "sigma_bearing_rad": SIGMA_BEARING,
+        "association_accuracy": correct_total / used_total if used_total else None,
+        "pos_rmse_m": float(np.sqrt(np.mean(pe_all**2))) if pe_all.size else None,
+        "pos_median_m": float(np.median(pe_all)) if pe_all.size else None,
+        "yaw_rmse_rad": float(np.sqrt(np.mean(ye_all**2))) if ye_all.size else None,
+        "tracked_fraction": float(tr_all.mean()) if tr_all.size else None,
+        "per_observer": per_obs,
+        "bearings": counts,
+        "scans": len(data.scans),
+        "load_report": ds.report.to_dict(),
+    }
+    fig_name = _figure(out, traces, data, names)
+    summary["figures"] = {"errors": fig_name}
+    write_summary(out, summary)
+    table = markdown_table(
+        ["observer", "association accuracy", "bearings used", "pos RMSE (m)", "tracked"],
+        rows,
+        digits=3,
+    )
+    write_report(
+        out,
+        f"""# MRCLAM: relative localization with hidden bearing correspondence
+
+Dataset `{folder}`, evaluation window {t_start:.0f}–{t_end:.0f} s (after a {CALIBRATION_S:.0f} s
+odometry-noise calibration window), seed {args.seed}. Bearings of robots lose their barcodes and
+are mixed with {counts["landmark"]} landmark bearings and {counts["injected"]} injected uniform
+false bearings ({CLUTTER_PER_SCAN} per scan on average); ranges keep their barcodes.
+
+| figure | ours |
+|---|---|
+| association accuracy (dominant tracks) | {summary["association_accuracy"]} |
+| position RMSE vs Vicon (m) | {summary["pos_rmse_m"]} |
+| median position error (m) | {summary["pos_median_m"]} |
+| yaw RMSE (rad) | {summary["yaw_rmse_rad"]} |
+| scans tracked (0.5 m, 0.5 rad) | {summary["tracked_fraction"]} |
+
+{table}
+
+{figure_md(fig_name, "Position error of the dominant track of every filter (log scale)")}
+
+The paper (seed 002) has no real-data experiment; these numbers show the same estimator on
+recorded data. MRCLAM's range errors are biased and correlated and its odometry is the commanded
+velocity, so the white-noise models the filter assumes are approximations (see the noise fit).
+""",
+    )
+    return summary
+
+
+def _figure(out: Path, traces: dict[int, Any], data: TeamData, names: list[str]) -> str:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from relloc.plotting.multihypothesis import plot_series
+    from relloc.sim.multihypothesis import relative_truth
+
+    fig, axes = plt.subplots(len(traces), 1, figsize=(10, 2.2 * len(traces)), sharex=True)
+    for ax, (i, tr) in zip(np.atleast_1d(axes), traces.items(), strict=True):
+        rel = relative_truth(data.truth[tr.scan_index], i)
+        pe = np.linalg.norm(tr.mean[..., :2] - rel[..., :2], axis=-1)
+        series = {names[j]: np.maximum(pe[:, j], 1e-3) for j in range(len(names)) if j != i}
+        plot_series(ax, tr.times - data.times[0], series, ylabel=f"{names[i]}: error (m)", log=True)
+    return save_figure(fig, out, "mrclam_association_errors")
