@@ -26,6 +26,7 @@ import os
 import signal
 import sys
 import time
+from collections import Counter
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -213,6 +214,7 @@ class TeamLauncher:
         self._start = time.monotonic()
         self._finished: list[tuple[str, Any]] = []
         self._dead: set[str] = set()
+        self._received: Counter[tuple[str, str]] = Counter()
         self.context = _fork_context()
 
     def _spawn(self, name: str, argv: list[str]) -> Any:
@@ -290,12 +292,18 @@ class TeamLauncher:
             self._on_item(item)
 
     def _final_reports_in(self) -> bool:
-        """Whether every robot's current process has sent its final counters."""
-        for robot in set(self.roster) - self._dead:
+        """Whether every robot's current process has sent its final counters, and every
+        ``est``/``evt`` message the counters say were sent has arrived (callbacks of different
+        subscriptions may hand messages over in a slightly different order)."""
+        for robot in self.roster:
             lives = self.collected.stats.get(robot, [])
             index = self.incarnation[robot]
-            if len(lives) <= index or not lives[index].get("final"):
+            if robot not in self._dead and (len(lives) <= index or not lives[index].get("final")):
                 return False
+            for kind in ("est", "evt"):
+                sent = sum(life.get(f"sent.{kind}", 0) for life in lives)
+                if self._received[(robot, kind)] < sent:
+                    return False
         return True
 
     def _on_item(self, item: Any) -> bool:
@@ -322,6 +330,7 @@ class TeamLauncher:
         except MessageRejected:
             self.collected.rejected += 1
             return False
+        self._received[(msg.sender, msg.kind)] += 1
         if msg.kind == "est":
             pair = (msg.sender, msg.body["target"])
             self.collected.estimates.setdefault(pair, []).append(msg.body)
