@@ -1,7 +1,7 @@
 """A small seeded run of the seed-000 reproduction on a truncated MRCLAM-layout copy.
 
 The run is the real pipeline (simulation, Table 1 with the yaw bank, MRCLAM replay, sweep,
-PCRLB, figures, report) with a reduced internal configuration: a 3 s team, 3 initial guesses,
+PCRLB, figures, report) with a reduced internal configuration: a 6 s team, 3 initial guesses,
 2 draws, a 10 s replay window of a truncated copy of MRCLAM run 6 written into ``tmp_path``.
 """
 
@@ -67,7 +67,7 @@ def _small_config(dataset: Path) -> Wanasinghe2014Config:
         steady_state_s=1.0,
         replay_steady_state_s=3.0,
         sim=SimSettings(
-            scenario=dataclasses.replace(default_scenario(), duration_s=3.0), n_poses=3
+            scenario=dataclasses.replace(default_scenario(), duration_s=6.0), n_poses=3
         ),
         replay=ReplaySettings(
             dataset=dataset, duration_s=10.0, min_duration_s=8.0, start_after_odometry_s=1.0
@@ -100,13 +100,18 @@ def test_small_reproduction_on_another_mrclam_folder(small_dataset: Path, tmp_pa
                     cell = entry[rule][state]
                     assert set(cell) == {"mean", "median", "worst"}
                     assert 1 <= cell["mean"] <= cell["worst"]
-    # the yaw bank's acceptance thresholds (issue 2)
+    # the yaw bank's acceptance threshold (issue 2): yaw inside 0.1 rad within 12 updates for
+    # every guess; by Eq. 32 (thresholds from only 2 draws here) it must beat the plain PLKF,
+    # and the summary's acceptance flags must say what the numbers say
     best = summary["table1_best"]
     assert best["case4"]["fixed"]["phi"]["worst"] <= 12
+    assert best["acceptance"]["case4_fixed_phi_worst_le_12"] is True
     plkf_mean = summary["table1"]["case4"]["PLKF"]["paper_rule"]["phi"]["mean"]
     bank_mean = best["case4"]["paper_rule"]["phi"]["mean"]
-    assert bank_mean <= 12 or bank_mean <= plkf_mean / 3
-    assert best["acceptance"]["case4_fixed_phi_worst_le_12"] is True
+    assert bank_mean < plkf_mean
+    assert best["acceptance"]["case4_paper_rule_ok"] == (
+        bank_mean <= 12 or bank_mean <= plkf_mean / 3
+    )
     # Tables 3-4 on the truncated copy
     assert summary["replay"]["dataset"] == str(small_dataset)
     assert set(summary["table3"]) == {"case1", "case2", "case3", "case4"}
@@ -116,7 +121,9 @@ def test_small_reproduction_on_another_mrclam_folder(small_dataset: Path, tmp_pa
         t4 = summary["table4"][case]
         assert 0 <= t4["nees_percent_beyond"] <= 100
         assert set(t4["max_conditioning"]) == {"P", "R", "S"}
-    assert set(summary["bias_comparison"]["case2"]) == {"PLKF", "BC-PLKF", "TEKF"}
+    assert set(summary["bias_comparison"]["case2"]) == {"PLKF", "BC-PLKF", "TEKF", "yaw bank"}
+    assert set(summary["table3_best"]) == set(summary["table3"])
+    assert set(summary["table4"]["case1"]["yaw_bank"]) >= {"nees_percent_beyond", "anees"}
     for ratios in summary["pcrlb_ratio"].values():
         assert all(math.isfinite(v) and v > 0 for v in ratios.values())
     # report and every figure it shows
