@@ -131,6 +131,9 @@ def test_births_from_unknown_bearings_and_clutter() -> None:
         expected = r * np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
         np.testing.assert_allclose(s.belief.mean[:3], expected, atol=1e-9)
         assert s.belief.cov[3, 3] == pytest.approx(4 * np.pi)
+    # the joint decision maps each bearing to the teammate it came from, one to one
+    np.testing.assert_array_equal(fus.decide(np.array([b1, b2])), [0, 1])
+    np.testing.assert_array_equal(fus.decide(np.array([b2, (2.5, 0.0)])), [-1, 0])
     with pytest.raises(DataError, match="non-finite"):
         fus.update_bearings(np.array([[np.nan, 0.0]]), [1.0, 1.0], [0.0, 0.0])
 

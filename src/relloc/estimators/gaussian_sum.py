@@ -54,6 +54,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from relloc.association.assignment import assign
 from relloc.association.gating import (
     GateSettings,
     chi2_gate,
@@ -63,6 +64,7 @@ from relloc.association.gating import (
 from relloc.association.hypotheses import FormationSettings, birth_tracks, formation_weights
 from relloc.association.mixture_reduction import (
     align_angles,
+    heaviest_mask,
     merge_groups,
     merge_moments,
     prune_mask,
@@ -340,6 +342,8 @@ class GaussianSumFuser:
         self.time = 0.0
         #: horizontal speed of each teammate at the last prediction (for the modified gate)
         self._speed = np.zeros(len(team))
+        #: per teammate, the bearing index the last :meth:`decide` gave it (−1: none)
+        self.last_decision = np.full(len(team), -1, dtype=np.int64)
 
     # ------------------------------------------------------------------ bookkeeping helpers
 
@@ -584,11 +588,44 @@ class GaussianSumFuser:
             )
         ]
 
+    def decide(self, bearings: ArrayLike) -> IntArray:
+        """Joint (global-nearest-neighbour) decision: which bearing is which teammate.
+
+        The filters weigh every association separately; this one-to-one decision uses the
+        dominant track of every filter *before* the update: cost
+        ``−log(P_D N(z_b; ẑ_j, S_j)/κ)`` inside the gate (κ: clutter density), ``−log(1 − P_D P_G)``
+        for no bearing, solved by :func:`relloc.association.assignment.assign`. Returns, per
+        teammate, the bearing index or −1.
+        """
+        st = self.settings
+        nb = len(st.bearing_rows)
+        Z = np.asarray(bearings, dtype=float).reshape(-1, nb)
+        n_team = len(self.teammates)
+        t = self.tracks
+        cost = np.full((n_team, Z.shape[0]), np.inf)
+        if t.size and Z.shape[0]:
+            dom = np.flatnonzero(heaviest_mask(t.weight, t.owner))
+            mean, cov = t.mean[dom], t.cov[dom]
+            H = range_bearing_jacobian(mean)[:, st.bearing_rows, :]
+            S = H @ cov @ np.swapaxes(H, -1, -2) + st.bearing_noise
+            nu = Z[None, :, :] - range_bearing(mean)[:, st.bearing_rows][:, None, :]
+            nu[..., 0] = wrap_angle(nu[..., 0])
+            d2 = mahalanobis_batch(nu, S[:, None, :, :])
+            kappa = max(st.expected_clutter, 1e-3) / st.bearing_volume
+            c = 0.5 * d2 + 0.5 * np.log(np.linalg.det(2.0 * np.pi * S))[:, None]
+            c += np.log(kappa / st.formation.p_detect)
+            cost[t.owner[dom]] = np.where(d2 <= chi2_gate(nb, st.gate.p_gate), c, np.inf)
+        miss = np.full(n_team, -np.log(1.0 - st.formation.p_detect * st.formation.p_gate))
+        return assign(cost, miss)
+
     def direct_scan(self, heights: ArrayLike, ranges: ArrayLike, bearings: ArrayLike) -> None:
         """One direct-fusion scan: height, range, then bearings, then reduction.
 
         The weights are left unnormalised between the sensors and normalised by the reduction.
+        The joint decision of :meth:`decide` (on the predicted tracks) is kept in
+        ``last_decision``.
         """
+        self.last_decision = self.decide(bearings)
         self.update_known("height", heights)
         self.update_known("range", ranges)
         self.update_bearings(bearings, ranges, heights)

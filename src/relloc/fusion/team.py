@@ -119,8 +119,10 @@ class TeamTrace:
     """Dominant track of every filter at every direct scan of its observer.
 
     Arrays are indexed ``[scan, target]`` for the scans of one observer; ``mean`` (S, n, 4),
-    ``cov`` (S, n, 4, 4), ``weight`` / ``components`` / ``confirmed`` / ``assoc_origin``
-    (S, n). Entries of the observer itself and of filters without tracks are NaN / 0 / False.
+    ``cov`` (S, n, 4, 4), ``weight`` / ``components`` / ``confirmed`` / ``assoc_origin`` (true
+    origin of the bearing the dominant track used) / ``joint_origin`` (true origin of the bearing
+    the fuser's joint decision gave the teammate) (S, n). Entries of the observer itself and of
+    filters without tracks are NaN / 0 / False / ``NO_BEARING``.
     """
 
     observer: int
@@ -132,6 +134,7 @@ class TeamTrace:
     components: IntArray
     confirmed: NDArray[np.bool_]
     assoc_origin: IntArray
+    joint_origin: IntArray
     bearing_origin_present: NDArray[np.bool_]
 
 
@@ -146,7 +149,7 @@ def run_team(
     n = data.n_robots
     fusers = {i: _fuser_for(i, n, settings) for i in data.sensing}
     rec: dict[int, dict[str, list[object]]] = {
-        i: {k: [] for k in ("t", "k", "m", "P", "w", "c", "conf", "a", "present")}
+        i: {k: [] for k in ("t", "k", "m", "P", "w", "c", "conf", "a", "jo", "present")}
         for i in data.sensing
     }
     scan_ptr = 0
@@ -194,9 +197,12 @@ def _record(
     c = np.zeros(n, dtype=np.int64)
     conf = np.zeros(n, dtype=bool)
     a = np.full(n, NO_BEARING, dtype=np.int64)
+    jo = np.full(n, NO_BEARING, dtype=np.int64)
     present = np.zeros(n, dtype=bool)
-    for j in others:
+    for local, j in enumerate(others):
         present[j] = bool(np.any(scan.origins == j))
+        if fus.last_decision[local] >= 0:
+            jo[j] = int(scan.origins[fus.last_decision[local]])
         s = fus.summary(j)
         if s is None:
             continue
@@ -210,8 +216,8 @@ def _record(
         if s.assoc >= 0:
             a[j] = int(scan.origins[s.assoc])
     for key, val in zip(
-        ("t", "k", "m", "P", "w", "c", "conf", "a", "present"),
-        (scan.time, k, m, P, w, c, conf, a, present),
+        ("t", "k", "m", "P", "w", "c", "conf", "a", "jo", "present"),
+        (scan.time, k, m, P, w, c, conf, a, jo, present),
         strict=True,
     ):
         rec[key].append(val)
@@ -231,5 +237,6 @@ def _finish(observer: int, rec: dict[str, list[object]], n: int) -> TeamTrace:
         components=arr("c", np.int64, (n,)),
         confirmed=arr("conf", bool, (n,)),
         assoc_origin=arr("a", np.int64, (n,)),
+        joint_origin=arr("jo", np.int64, (n,)),
         bearing_origin_present=arr("present", bool, (n,)),
     )
