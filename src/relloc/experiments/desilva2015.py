@@ -41,6 +41,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from relloc.core.angles import wrap_angle
+from relloc.errors import ModelError
 from relloc.estimators.gaussian_sum import GaussianSumSettings
 from relloc.experiments.montecarlo import run_monte_carlo
 from relloc.experiments.output import (
@@ -126,13 +127,15 @@ def _task(seed_seq: np.random.SeedSequence, run_index: int, config: RunConfig) -
         data, filter_settings(config.scenario), TeamRunSettings(sharing=config.sharing)
     )
     leaders = config.scenario.sensing
-    assert data.truth is not None
-    out: dict[str, list[Array]] = {
+    truth = data.truth
+    if truth is None:
+        raise ModelError("desilva2015: the simulator returned no ground truth")
+    out: dict[str, list[NDArray[Any]]] = {
         k: [] for k in ("pe", "ye", "c", "conf", "tr", "w", "u", "jw", "ju", "e", "t")
     }
     for i in leaders:
         tr = traces[i]
-        rel = relative_truth(data.truth[tr.scan_index], i)
+        rel = relative_truth(truth[tr.scan_index], i)
         pe = np.linalg.norm(tr.mean[..., :3] - rel[..., :3], axis=-1)
         ye = np.abs(wrap_angle(tr.mean[..., 3] - rel[..., 3]))
         tracked = (pe <= POS_TOL_M) & (ye <= YAW_TOL_RAD)
@@ -165,7 +168,7 @@ def _task(seed_seq: np.random.SeedSequence, run_index: int, config: RunConfig) -
         joint_used=np.stack(out["ju"]),
         estimate_xy=np.stack(out["e"]),
         truth_xy=np.stack(out["t"]),
-        world_xy=data.truth[..., :2],
+        world_xy=truth[..., :2],
     )
 
 

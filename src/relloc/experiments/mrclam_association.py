@@ -34,6 +34,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from relloc.core.angles import wrap_angle
 from relloc.datasets.mrclam import MrclamDataset, fit_odometry_noise, load_mrclam
@@ -139,6 +140,12 @@ def _team_data(
     return data, counts | {"truth_missing": int(np.isnan(truth[..., 0]).sum())}
 
 
+def _truth(data: TeamData) -> NDArray[np.float64]:
+    if data.truth is None:
+        raise DataError("mrclam-association: the replay has no ground truth")
+    return data.truth
+
+
 def _settings(ds: MrclamDataset, t0: float) -> tuple[GaussianSumSettings, dict[str, float]]:
     fits = [
         fit_odometry_noise(ds.robot(s), t_start=t0, t_end=t0 + CALIBRATION_S, rate_hz=FILTER_RATE)
@@ -177,6 +184,7 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
     rng = np.random.default_rng(args.seed)
     data, counts = _team_data(ds, t_start, t_end, rng)
     traces = run_team(data, settings, TeamRunSettings())
+    truth = _truth(data)
     ids = list(ds.robot_ids)
     names = [f"R{s}" for s in ids]
     from relloc.sim.multihypothesis import relative_truth
@@ -185,7 +193,7 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
     used_total = correct_total = j_used_total = j_correct_total = 0
     per_obs: dict[str, Any] = {}
     for i, tr in traces.items():
-        rel = relative_truth(data.truth[tr.scan_index], i)
+        rel = relative_truth(truth[tr.scan_index], i)
         pe = np.linalg.norm(tr.mean[..., :2] - rel[..., :2], axis=-1)
         ye = np.abs(wrap_angle(tr.mean[..., 3] - rel[..., 3]))
         after = (tr.times - data.times[0]) >= WARMUP_S
@@ -291,8 +299,9 @@ def _figure(out: Path, traces: dict[int, Any], data: TeamData, names: list[str])
     from relloc.sim.multihypothesis import relative_truth
 
     fig, axes = plt.subplots(len(traces), 1, figsize=(10, 2.2 * len(traces)), sharex=True)
+    truth = _truth(data)
     for ax, (i, tr) in zip(np.atleast_1d(axes), traces.items(), strict=True):
-        rel = relative_truth(data.truth[tr.scan_index], i)
+        rel = relative_truth(truth[tr.scan_index], i)
         pe = np.linalg.norm(tr.mean[..., :2] - rel[..., :2], axis=-1)
         series = {names[j]: np.maximum(pe[:, j], 1e-3) for j in range(len(names)) if j != i}
         plot_series(ax, tr.times - data.times[0], series, ylabel=f"{names[i]}: error (m)", log=True)

@@ -201,7 +201,7 @@ def simulate(scenario: DeSilvaScenario, rng: np.random.Generator) -> TeamData:
     """Simulate one run: truth, noisy velocities and the leaders' direct scans."""
     dt = 1.0 / scenario.filter_rate
     n_steps = round(scenario.duration * scenario.filter_rate) + 1
-    times = np.arange(n_steps) * dt
+    times: Array = np.arange(n_steps, dtype=np.float64) * dt
     truth = path_poses(scenario, times)
     u_true = zoh_velocities(truth, dt)
     if scenario.kidnap is not None:
