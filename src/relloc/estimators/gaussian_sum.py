@@ -28,6 +28,14 @@ The weights are normalised only at the end of the scan, so the evidence of the r
 against a track still counts when it competes with the new tracks born from the bearings (which
 are built from that range and height, ratio 1) — this is what re-finds a kidnapped robot.
 
+For the bearings the density ``κ`` of measurements that are not teammate ``j`` is evaluated per
+bearing from the fuser's other filters (clutter plus ``P_D`` times their predicted bearing
+densities, :meth:`GaussianSumFuser._false_density`): the filters of one fuser are independent
+mixtures as in the paper, but a bearing that teammate ``k``'s tracks explain is weak evidence
+for ``j``. New tracks are born only from bearings outside a wide exclusion gate of ``j``'s
+tracks (``GateSettings.p_birth_exclusion``). :meth:`GaussianSumFuser.decide` gives, on top, a
+one-to-one bearing-to-teammate decision (``linear_sum_assignment``) for reporting.
+
 After the direct scan each filter is normalised and reduced (``association.mixture_reduction``
 and ``association.nscan``): prune by weight, N-scan prune track families, merge by Mahalanobis
 distance (moment preserving), and cap the number of components.
