@@ -45,6 +45,7 @@ from relloc.sim.cooperative import grid_team_scenario, simulate
 SIZES = (5, 10, 25, 50, 100, 150, 200, 300, 400)
 STEPS = 30
 REPEATS = 2
+EQUIVALENCE_TOL = 1e-6
 
 
 def _time_run(sim: Any, settings: PipelineSettings, repeats: int) -> tuple[float, TeamRun]:
@@ -103,9 +104,10 @@ def measure() -> dict[str, Any]:
             if "ekf" in runs:
                 row["ekf_ms_per_step"] = 1e3 * timing["ekf"] / STEPS
                 row["ekf_realtime_factor"] = duration / timing["ekf"]
-                row["max_mean_diff_eif_ekf"] = float(
-                    np.max(np.abs(runs["eif"].mean - runs["ekf"].mean))
-                )
+                diff = float(np.max(np.abs(runs["eif"].mean - runs["ekf"].mean)))
+                if not diff < EQUIVALENCE_TOL:
+                    raise ModelError(f"EIF and EKF disagree by {diff:g} for n = {n}")
+                row["max_mean_diff_eif_ekf"] = diff
                 # the baseline is dropped once it is well below real time (it only gets slower)
                 ekf_active = row["ekf_realtime_factor"] >= 0.5
             rows.append(row)
