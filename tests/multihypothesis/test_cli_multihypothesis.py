@@ -14,10 +14,10 @@ from relloc.experiments import desilva2015
 @pytest.mark.slow
 def test_reproduce_desilva2015_smoke(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     # shortened runs: the experiment's constants are module level on purpose
-    monkeypatch.setattr(desilva2015, "DURATION_S", 4.0)
+    monkeypatch.setattr(desilva2015, "DURATION_S", 3.0)
     monkeypatch.setattr(desilva2015, "STEADY_FROM_S", 1.0)
     monkeypatch.setattr(desilva2015, "FINAL_WINDOW_S", 1.0)
-    monkeypatch.setattr(desilva2015, "KIDNAP", (3, 2.0, 3.0, -2.0, 2.0))
+    monkeypatch.setattr(desilva2015, "KIDNAP", (3, 1.5, 3.0, -2.0, 2.0))
     out = tmp_path / "ds"
     code = main(
         [

@@ -429,9 +429,13 @@ def _figures(
             plot_series(axes[0, li], t, pick, ylabel="mean hypotheses")
             axes[0, li].set_title(f"{ROBOT_NAMES[li]} ({len(results)} runs)")
             pick = {k: v for k, v in ts["pos"].items() if k.startswith(ROBOT_NAMES[li])}
-            plot_series(axes[1, li], t, pick, ylabel="RMS position error (m)", log=True)
+            plot_series(
+                axes[1, li], t, pick, ylabel="RMS position error (m)", log10=True, legend=False
+            )
             pick = {k: v for k, v in ts["yaw"].items() if k.startswith(ROBOT_NAMES[li])}
-            plot_series(axes[2, li], t, pick, ylabel="RMS yaw error (rad)", log=True)
+            plot_series(
+                axes[2, li], t, pick, ylabel="RMS yaw error (rad)", log10=True, legend=False
+            )
         files[tag] = save_figure(fig, out, tag)
 
     fig, axes = plt.subplots(1, 2, figsize=(11, 4))

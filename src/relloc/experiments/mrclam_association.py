@@ -279,7 +279,7 @@ false bearings ({CLUTTER_PER_SCAN} per scan on average); ranges keep their barco
 
 {table}
 
-{figure_md(fig_name, "Position error of the dominant track of every filter (log scale)")}
+{figure_md(fig_name, "log10 position error of the dominant track of every filter")}
 
 The paper (seed 002) has no real-data experiment; these numbers show the same estimator on
 recorded data. MRCLAM's range errors are biased and correlated and its odometry is the commanded
@@ -304,5 +304,7 @@ def _figure(out: Path, traces: dict[int, Any], data: TeamData, names: list[str])
         rel = relative_truth(truth[tr.scan_index], i)
         pe = np.linalg.norm(tr.mean[..., :2] - rel[..., :2], axis=-1)
         series = {names[j]: np.maximum(pe[:, j], 1e-3) for j in range(len(names)) if j != i}
-        plot_series(ax, tr.times - data.times[0], series, ylabel=f"{names[i]}: error (m)", log=True)
+        plot_series(
+            ax, tr.times - data.times[0], series, ylabel=f"{names[i]}: error (m)", log10=True
+        )
     return save_figure(fig, out, "mrclam_association_errors")

@@ -56,18 +56,26 @@ def plot_series(
     series: Mapping[str, ArrayLike],
     *,
     ylabel: str,
-    log: bool = False,
+    log10: bool = False,
+    legend: bool = True,
 ) -> None:
-    """Several named time series against ``t`` (``log``: logarithmic y axis)."""
+    """Several named time series against ``t``.
+
+    ``log10``: draw ``log10(y)`` on a linear axis (seed 002 Fig. 5 plots log RMS errors);
+    ``legend``: label the lines.
+    """
     tt = np.asarray(t, dtype=float)
     for label, y in series.items():
-        ax.plot(tt, np.asarray(y, dtype=float), lw=1.0, label=label)
-    if log:
-        ax.set_yscale("log")
+        yy = np.asarray(y, dtype=float)
+        if log10:
+            with np.errstate(divide="ignore", invalid="ignore"):
+                yy = np.log10(yy)
+        ax.plot(tt, yy, lw=1.0, label=label)
     ax.set_xlabel("time (s)")
-    ax.set_ylabel(ylabel)
+    ax.set_ylabel(f"log10 {ylabel}" if log10 else ylabel)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=6, loc="best", ncol=2)
+    if legend:
+        ax.legend(fontsize=6, loc="upper right", ncol=2)
 
 
 def plot_sweep(
