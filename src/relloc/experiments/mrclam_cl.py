@@ -766,6 +766,29 @@ def _report(summary: dict[str, Any], figures: list[tuple[str, str]]) -> str:
         f"{f['sigma_range']:.3f} m, at most one range per pair every "
         f"{f['range_interval_s']:g} s. Residual lag-correlations: {f['correlation']}."
     )
+    missed = [
+        f"{mode}: {name}"
+        for mode, v in t.items()
+        for name, ok in (
+            ("position RMSE", v["pos_ok"]),
+            ("heading RMSE", v["heading_ok"]),
+            ("20× over dead reckoning", v["improvement_ok"]),
+            ("NEES ≤ 10 %", v["nees_ok"]),
+        )
+        if not ok
+    ]
+    verdict = (
+        "Every target is met."
+        if not missed
+        else "Missed: "
+        + "; ".join(missed)
+        + ". The heading error is largest while a robot turns with no landmark in view (the "
+        "landmarks sit in six tight clusters): the commanded turn rate is a poor model of the "
+        "real turn (fitted scales 0.78–0.84 and a lag that a pure delay only approximates), and "
+        "the correlation-inflated bearing noise makes each sighting correct the heading less. "
+        "We did not shrink the fitted noise to reach the heading target, because that "
+        "breaks the NEES target (the un-inflated models give NEES beyond χ² near 50 %)."
+    )
     parts = [
         "# MRCLAM cooperative localization (seed 001 EIF on real data)",
         f"Dataset `{summary['dataset']}`, robots {summary['robots']}, seed {summary['seed']} (only "
@@ -773,6 +796,7 @@ def _report(summary: dict[str, Any], figures: list[tuple[str, str]]) -> str:
         f"--seed {summary['seed']}`.",
         "## Targets (all landmarks)",
         ttable,
+        verdict,
         "## Every case",
         table,
         "Position / heading RMSE: per robot over every output time (0.5 s grid) with valid "
