@@ -89,4 +89,4 @@ def write_mrclam_folder(folder: Path, duration: float = 30.0, seed: int = 0) -> 
 
 @pytest.fixture(scope="session")
 def synthetic_mrclam(tmp_path_factory) -> Path:
-    return write_mrclam_folder(tmp_path_factory.mktemp("mrclam") / "Synthetic", duration=20.0)
+    return write_mrclam_folder(tmp_path_factory.mktemp("mrclam") / "Synthetic", duration=12.0)
