@@ -255,7 +255,7 @@ def _mad_sigma(x: Array) -> float:
     return float(1.4826 * np.median(np.abs(x - np.median(x))))
 
 
-def lag_correlation(res: Residuals, values: Array, keep: Array, lag: float) -> float:
+def lag_correlation(res: Residuals, values: Array, keep: NDArray[np.bool_], lag: float) -> float:
     """Correlation of a residual with the same pair's residual ``lag`` seconds later (±0.25 s)."""
     a, b = [], []
     key = res.observer * 1000 + res.subject

@@ -18,6 +18,7 @@ Everything random goes through the ``np.random.Generator`` passed in.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -187,12 +188,12 @@ def simulate(s: CooperativeScenario, rng: np.random.Generator) -> CooperativeSim
     """Run the scenario (deterministic for a given generator state)."""
     n, dt = s.n_robots, s.dt
     steps = round(s.duration / dt)
-    t = np.arange(steps + 1) * dt
+    t: Array = np.arange(steps + 1, dtype=np.float64) * dt
     truth = np.zeros((steps + 1, n, 3))
     truth[0] = s.start_poses
     odo_u = np.zeros((steps, n, 2))
     wp_index = np.zeros(n, dtype=int)
-    det_cols: list[list[Array]] = [[], [], [], [], [], []]
+    det_cols: list[list[NDArray[Any]]] = [[], [], [], [], [], []]
     for k in range(steps):
         pose = truth[k]
         targets = np.array([s.waypoints[i][wp_index[i] % len(s.waypoints[i])] for i in range(n)])
