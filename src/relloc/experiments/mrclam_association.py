@@ -67,6 +67,9 @@ SIGMA_RANGE = 0.2
 SIGMA_BEARING = 0.03
 SIGMA_HEIGHT = 0.01
 WARMUP_S = 10.0
+#: floors of the fitted odometry noise (a perfect fit would leave the filter no process noise)
+MIN_SIGMA_V = 0.02
+MIN_SIGMA_W = 0.02
 POS_TOL_M = 0.5
 YAW_TOL_RAD = 0.5
 
@@ -155,9 +158,9 @@ def _settings(ds: MrclamDataset, t0: float) -> tuple[GaussianSumSettings, dict[s
         fit_odometry_noise(ds.robot(s), t_start=t0, t_end=t0 + CALIBRATION_S, rate_hz=FILTER_RATE)
         for s in ds.robot_ids
     ]
-    sv = float(np.sqrt(np.mean([f.sigma_v**2 for f in fits])))
-    sl = float(np.sqrt(np.mean([f.sigma_lateral**2 for f in fits])))
-    sw = float(np.sqrt(np.mean([f.sigma_w**2 for f in fits])))
+    sv = max(float(np.sqrt(np.mean([f.sigma_v**2 for f in fits]))), MIN_SIGMA_V)
+    sl = max(float(np.sqrt(np.mean([f.sigma_lateral**2 for f in fits]))), MIN_SIGMA_V)
+    sw = max(float(np.sqrt(np.mean([f.sigma_w**2 for f in fits]))), MIN_SIGMA_W)
     sig = (sv, sl, 1e-3, sw)
     p_detect = _detection_rate(ds, t0, t0 + CALIBRATION_S)
     base = GaussianSumSettings(
