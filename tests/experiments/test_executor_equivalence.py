@@ -39,7 +39,7 @@ def test_serial_process_and_dask_give_identical_results():
         processes=False,
         protocol="tcp",
         host="127.0.0.1",
-        dashboard_address=None,
+        dashboard_address=":0",
     ) as cluster:
         address = cluster.scheduler_address.removeprefix("tcp://")
         on_dask = run_monte_carlo(

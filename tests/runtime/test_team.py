@@ -141,8 +141,9 @@ def test_killed_robot_is_noticed_and_its_restart_rejoins(trio_scenario, tmp_path
     per_robot = robot_messages(collected, log.robots)
     assert per_robot["flyer"]["processes"] == 2  # two incarnations reported
     for robot in ("observer", "rover"):
-        assert per_robot[robot]["teammate_departures_seen"] == 1
-        assert per_robot[robot]["teammate_joins_seen"] == 3  # two teammates + one rejoin
+        seen = (per_robot[robot], collected.presence)
+        assert per_robot[robot]["teammate_departures_seen"] == 1, seen
+        assert per_robot[robot]["teammate_joins_seen"] == 3, seen  # two teammates + one rejoin
     flyer_events = [e for e in collected.events if e[2] == "flyer"]
     kinds = [e[3] for e in flyer_events]
     # the observer's track of the dead robot expires, and is re-found after the restart
