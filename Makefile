@@ -10,7 +10,7 @@ run: setup
 
 # The test suite (what CI runs).
 test: setup
-	.venv/bin/python -m pytest -q -n 2 --durations=15
+	.venv/bin/python -m pytest -q -n 2 --timeout 600 --durations=15
 
 bench: setup
 	.venv/bin/python benchmarks/run_all.py
