@@ -4,7 +4,8 @@
    tracking ``n − 1`` teammates, seed-000 style) run in *real time* (clock paced at 1×, tick
    0.1 s: every robot publishes a 10-sample odometry batch at 10 Hz, the observer a measurement
    batch at 10 Hz, every robot its counters and beliefs at 1 Hz). A size *keeps its rates* when
-   the clock never fell more than one tick behind real time, no robot missed a barrier and the
+   the team achieved ≥ 99 % of the nominal tick rate over the run (a stall is caught up, so the
+   largest lag behind real time is reported beside it), no robot missed a barrier and the
    transport lost < 1 % of the data messages. Sizes grow until one fails (or the list ends).
 2. **Message latency** p50 / p99 (µs, publisher wall clock to subscriber inbox, all robots).
 3. **CPU per robot process** (CPU seconds per simulated second; the observer separately, since
@@ -36,6 +37,7 @@ from relloc.sim.scenario import default_scenario
 TEAM_SIZES = (2, 4, 6, 8, 12, 16, 24)
 DURATION_S = 8.0
 LOSS_LIMIT = 0.01
+RATE_LIMIT = 0.99
 
 
 def team_toml(n: int, duration_s: float) -> str:
@@ -103,14 +105,16 @@ def run_team_size(n: int, work: Path, *, duration_s: float = DURATION_S) -> dict
         for m in per_robot.values()
         if m["latency_us"]["p50"] is not None
     ]
+    achieved = clock["ticks"] * tick_s / clock["wall_s"] if clock["wall_s"] > 0 else 0.0
     keeps = (
-        clock["max_tick_lag_s"] <= tick_s
+        achieved >= RATE_LIMIT
         and not clock["ack_timeouts"]
         and (totals["transport_loss_rate"] or 0.0) < LOSS_LIMIT
     )
     return {
         "robots": n,
         "keeps_rates": bool(keeps),
+        "achieved_rate_fraction": achieved,
         "max_tick_lag_s": clock["max_tick_lag_s"],
         "ack_timeouts": sum(clock["ack_timeouts"].values()),
         "transport_loss_rate": totals["transport_loss_rate"],
@@ -159,7 +163,8 @@ def run(quiet: bool = False) -> dict[str, Any]:
             sizes.append(result)
             if not quiet:
                 print(
-                    f"team of {n:2d}: keeps rates {result['keeps_rates']}, "
+                    f"team of {n:2d}: keeps rates {result['keeps_rates']} "
+                    f"({100 * result['achieved_rate_fraction']:.1f} % of real time), "
                     f"lag {result['max_tick_lag_s']:.3f} s, loss {result['transport_loss_rate']}, "
                     f"latency p50/p99 {result['latency_us_p50']}/{result['latency_us_p99']} µs"
                 )
