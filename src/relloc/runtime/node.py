@@ -219,6 +219,9 @@ class RobotNode:
                 mate.present = True
                 mate.joins += 1
                 self.counters["teammate.joins"] += 1
+            elif not joined and mate.present and self._end_deadline is not None:
+                # after ctl(end) teammates exit normally; their streams are complete
+                self.counters["teammate.exits_after_end"] += 1
             elif not joined and mate.present:
                 mate.present = False
                 mate.departures += 1
