@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.stats import chi2
 
 from relloc.errors import ConfigError, ModelError
 
@@ -51,6 +50,8 @@ def nis(residual: ArrayLike, innovation_cov: ArrayLike) -> Array:
 
 def chi2_upper(dof: int, p: float = 0.95) -> float:
     """One-sided bound ``χ²_dof(p)``, e.g. ``chi2_upper(4) = 9.4877`` (seed 000 Eq. 34)."""
+    from scipy.stats import chi2  # imported here: scipy.stats costs seconds at process start
+
     return float(chi2.ppf(_check_probability(p), dof))
 
 
@@ -60,6 +61,8 @@ def mean_chi2_band(dof: int, n_samples: int, p: float = 0.95) -> tuple[float, fl
     if n_samples < 1 or dof < 1:
         raise ConfigError(f"mean_chi2_band: dof and n_samples must be ≥ 1 ({dof}, {n_samples})")
     k = dof * n_samples
+    from scipy.stats import chi2
+
     lo, hi = chi2.ppf([(1.0 - p) / 2.0, (1.0 + p) / 2.0], k)
     return float(lo / n_samples), float(hi / n_samples)
 
