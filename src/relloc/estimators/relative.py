@@ -252,6 +252,33 @@ def _check_covariance_kind(kind: str) -> bool:
     return kind == "full"
 
 
+def _plkf_update(
+    mean: ArrayLike,
+    cov: ArrayLike,
+    z: ArrayLike,
+    noise: RangeBearingNoise,
+    covariance: PseudoLinearCovariance,
+    where: str,
+    *,
+    compensate_bias: bool,
+) -> tuple[Array, Array, Innovation]:
+    """The PLKF update, optionally minus its estimated bias ``b̂`` (shared by both variants)."""
+    var = tuple(noise.variances.tolist())
+    full = _check_covariance_kind(covariance)
+
+    def bias(prior: Vec, P: Vec, post: Vec, ops: Ops) -> Vec | None:
+        return plkf_bias_kernel(prior, P, post, var, ops, full_covariance=full)
+
+    return _kernel_update(
+        mean,
+        cov,
+        z,
+        lambda m, zz, ops: plkf_terms(m, zz, var, ops, full_covariance=full),
+        where,
+        bias=bias if compensate_bias else None,
+    )
+
+
 def update_plkf_arrays(
     mean: ArrayLike,
     cov: ArrayLike,
@@ -262,15 +289,7 @@ def update_plkf_arrays(
     where: str = "",
 ) -> tuple[Array, Array, Innovation]:
     """PLKF update with ``H_pmo`` from the measured bearings and ``y = [r̃, 0, 0]`` (batched)."""
-    var = tuple(noise.variances.tolist())
-    full = _check_covariance_kind(covariance)
-    return _kernel_update(
-        mean,
-        cov,
-        z,
-        lambda m, zz, ops: plkf_terms(m, zz, var, ops, full_covariance=full),
-        where,
-    )
+    return _plkf_update(mean, cov, z, noise, covariance, where, compensate_bias=False)
 
 
 def update_plkf_bc_arrays(
@@ -283,18 +302,7 @@ def update_plkf_bc_arrays(
     where: str = "",
 ) -> tuple[Array, Array, Innovation]:
     """Bias-compensated PLKF update: the PLKF update minus its estimated bias ``b̂`` (batched)."""
-    var = tuple(noise.variances.tolist())
-    full = _check_covariance_kind(covariance)
-    return _kernel_update(
-        mean,
-        cov,
-        z,
-        lambda m, zz, ops: plkf_terms(m, zz, var, ops, full_covariance=full),
-        where,
-        bias=lambda prior, P, post, ops: plkf_bias_kernel(
-            prior, P, post, var, ops, full_covariance=full
-        ),
-    )
+    return _plkf_update(mean, cov, z, noise, covariance, where, compensate_bias=True)
 
 
 # --------------------------------------------------------------------------- single-pair API
