@@ -28,4 +28,6 @@ def circular_interp(
 ) -> NDArray[np.float64]:
     """Interpolate angles on the circle: unwrap, interpolate linearly, wrap back."""
     unwrapped = np.unwrap(np.asarray(angle_known, dtype=float))
-    return np.asarray(wrap_angle(np.interp(t, t_known, unwrapped)), dtype=float)
+    t_query = np.asarray(t, dtype=float)
+    t_grid = np.asarray(t_known, dtype=float)
+    return np.asarray(wrap_angle(np.interp(t_query, t_grid, unwrapped)), dtype=float)

@@ -15,7 +15,7 @@ Array = NDArray[np.float64]
 
 def symmetrise(P: Array) -> Array:
     """Return ``(P + Pᵀ)/2`` (works on a stack ``(..., n, n)``)."""
-    return 0.5 * (P + np.swapaxes(P, -1, -2))
+    return np.asarray(0.5 * (P + np.swapaxes(P, -1, -2)), dtype=float)
 
 
 def cholesky(P: Array, *, where: str = "") -> Array:
