@@ -21,7 +21,7 @@ def symmetrise(P: Array) -> Array:
 def cholesky(P: Array, *, where: str = "") -> Array:
     """Lower Cholesky factor of ``P``; raises :class:`ModelError` naming ``where`` if not PD."""
     try:
-        return np.linalg.cholesky(symmetrise(P))
+        return np.asarray(np.linalg.cholesky(symmetrise(P)), dtype=float)
     except np.linalg.LinAlgError as exc:
         eig = np.linalg.eigvalsh(symmetrise(P)) if np.all(np.isfinite(P)) else "non-finite"
         raise ModelError(
