@@ -88,50 +88,35 @@ def test_covariance_intersection_is_conservative() -> None:
     assert np.linalg.det(fP) <= min(np.linalg.det(P), np.linalg.det(P_b)) + 1e-12
 
 
-def test_equivalent_measurement_validation() -> None:
+def _message_fields() -> dict[str, object]:
     m = np.zeros((2, 4))
     P = np.broadcast_to(np.eye(4), (2, 4, 4))
-    msg = EquivalentMeasurement(
-        sender=0,
-        subject=1,
-        time=1.0,
-        means=m,
-        covs=P,
-        prior_means=m,
-        prior_covs=P,
-        weights=np.array([2.0, 2.0]),
-    )
+    return {
+        "sender": 0,
+        "subject": 1,
+        "time": 1.0,
+        "means": m,
+        "covs": P,
+        "prior_means": m,
+        "prior_covs": P,
+        "weights": np.array([2.0, 2.0]),
+    }
+
+
+def test_equivalent_measurement_normalises_weights() -> None:
+    msg = EquivalentMeasurement(**_message_fields())  # type: ignore[arg-type]
     np.testing.assert_allclose(msg.weights, [0.5, 0.5])
-    with pytest.raises(DataError, match="covs"):
-        EquivalentMeasurement(
-            sender=0,
-            subject=1,
-            time=1.0,
-            means=m,
-            covs=P[:1],
-            prior_means=m,
-            prior_covs=P,
-            weights=np.ones(2),
-        )
-    with pytest.raises(DataError, match="differ"):
-        EquivalentMeasurement(
-            sender=1,
-            subject=1,
-            time=1.0,
-            means=m,
-            covs=P,
-            prior_means=m,
-            prior_covs=P,
-            weights=np.ones(2),
-        )
-    with pytest.raises(DataError, match="non-finite"):
-        EquivalentMeasurement(
-            sender=0,
-            subject=1,
-            time=1.0,
-            means=m + np.nan,
-            covs=P,
-            prior_means=m,
-            prior_covs=P,
-            weights=np.ones(2),
-        )
+
+
+@pytest.mark.parametrize(
+    ("field", "bad", "message"),
+    [
+        ("covs", np.broadcast_to(np.eye(4), (1, 4, 4)), "covs"),
+        ("sender", 1, "differ"),
+        ("means", np.full((2, 4), np.nan), "non-finite"),
+    ],
+)
+def test_equivalent_measurement_rejects_bad_fields(field: str, bad: object, message: str) -> None:
+    fields = _message_fields() | {field: bad}
+    with pytest.raises(DataError, match=message):
+        EquivalentMeasurement(**fields)  # type: ignore[arg-type]

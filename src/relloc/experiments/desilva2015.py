@@ -439,29 +439,22 @@ def _figures(
         files[tag] = save_figure(fig, out, tag)
 
     fig, axes = plt.subplots(1, 2, figsize=(11, 4))
-    xs = [float(k) for k in clutter_sweep]
-    plot_sweep(
-        axes[0],
-        xs,
-        {
-            "success rate": [v["success_rate"] for v in clutter_sweep.values()],
-            "wrong-association rate": [v["wrong_association_rate"] for v in clutter_sweep.values()],
-        },
-        xlabel="clutter density (× λ)",
-        ylabel="fraction",
-        logx=True,
+    panels = (
+        (clutter_sweep, "clutter density (× λ)", True),
+        (pd_sweep, "detection probability P_D", False),
     )
-    pds = [float(k) for k in pd_sweep]
-    plot_sweep(
-        axes[1],
-        pds,
-        {
-            "success rate": [v["success_rate"] for v in pd_sweep.values()],
-            "wrong-association rate": [v["wrong_association_rate"] for v in pd_sweep.values()],
-        },
-        xlabel="detection probability P_D",
-        ylabel="fraction",
-    )
+    for ax, (sweep, xlabel, logx) in zip(axes, panels, strict=True):
+        plot_sweep(
+            ax,
+            [float(k) for k in sweep],
+            {
+                "success rate": [v["success_rate"] for v in sweep.values()],
+                "wrong-association rate": [v["wrong_association_rate"] for v in sweep.values()],
+            },
+            xlabel=xlabel,
+            ylabel="fraction",
+            logx=logx,
+        )
     files["sweeps"] = save_figure(fig, out, "sweeps")
     return files
 
