@@ -123,12 +123,15 @@ def test_formation_and_birth_weights_follow_eq7_and_eq13() -> None:
     )
     r, alpha, beta = 3.0, np.array([0.3, 0.3]), np.array([0.2, 0.6])
     h = r * np.sin(0.2)
-    means, covs, w = birth_tracks(r, alpha, beta, h, st, volume=2.0, false_density=0.25)
+    means, covs, w = birth_tracks(
+        r, alpha, beta, h, st, volume=2.0, range_volume=10.0, false_density=0.25
+    )
     np.testing.assert_allclose(
         means[0], [r * np.cos(0.2) * np.cos(0.3), r * np.cos(0.2) * np.sin(0.3), h, 0.0]
     )
     np.testing.assert_allclose(covs[0], np.diag([0.1, 0.1, 0.05, 4 * np.pi]))
-    assert w[0] == pytest.approx(0.5 * 0.95 / (2.0 * 0.25))
+    # P_B · (1/V_r) · N(h; r sin β, 0.05) · P_D / (V κ), the height exactly consistent
+    assert w[0] == pytest.approx(0.5 / 10.0 / np.sqrt(2 * np.pi * 0.05) * 0.95 / (2.0 * 0.25))
     assert w[1] < 1e-3 * w[0]
     with pytest.raises(ConfigError, match="p_birth"):
         FormationSettings(p_birth=0.0)

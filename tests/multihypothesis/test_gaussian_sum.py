@@ -118,6 +118,33 @@ def test_out_of_gate_known_measurement_leaves_the_track_alone() -> None:
         fus.update_known("range", [1.0, 2.0])
 
 
+def test_converged_track_survives_an_unlucky_scan_but_a_kidnapped_one_is_refound() -> None:
+    """Teammate 1's bearing is missed and its height is a 2.6σ draw: its converged track must
+    not lose to a track born from teammate 2's bearing (elevation consistent with teammate 1's
+    range and height). When teammate 1 has jumped (range 1 m off its track, bearing far from its
+    gate), the track born from its new bearing must win."""
+    st = _settings(sigma_height=0.002, sigma_range=0.003, sigma_azimuth=0.06, sigma_elevation=0.06)
+    x1 = np.array([0.2, 3.0, 0.85, 2.0])
+    az2, el2, r2 = 0.1, 0.36, 3.0
+    x2 = r2 * np.array([np.cos(el2) * np.cos(az2), np.cos(el2) * np.sin(az2), np.sin(el2), 0.0])
+    cov = np.diag([0.07, 0.024, 0.022, 0.066]) ** 2
+    jumped = (-1.0, float(np.arcsin(0.85 / 4.1)))
+    cases = (
+        (0.85 + 2.6 * 0.022, 3.12, [(az2, el2)], x1),
+        (0.85, 4.1, [(az2, el2), jumped], 4.1 * np.cos(jumped[1]) * np.array([0.540, -0.841])),
+    )
+    for height, rng_m, bearings, expected_xy in cases:
+        fus = GaussianSumFuser(0, [1, 2], st)
+        second = _one_track(x2, cov, st.nscan_depth)
+        second.owner[:] = 1
+        fus.tracks = Tracks.concat([_one_track(x1, cov, st.nscan_depth), second])
+        fus.direct_scan([height, x2[2]], [rng_m, r2], np.array(bearings))
+        s = fus.summary(1)
+        assert s is not None
+        assert np.linalg.norm(s.belief.mean[:2] - expected_xy[:2]) < 0.05, (s.belief.mean, s.weight)
+        assert s.weight > 0.9
+
+
 def test_births_from_unknown_bearings_and_clutter() -> None:
     st = _settings()
     fus = GaussianSumFuser(0, [1, 2], st)

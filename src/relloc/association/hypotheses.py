@@ -25,13 +25,16 @@ Birth (Eq. 13), from range ``r`` (known correspondence), a bearing ``(α, β)`` 
 correspondence and the height difference ``h``::
 
     m = [r cos β cos α, r cos β sin α, r sin β, 0],   P = diag(0.1, 0.1, 0.05, 4π)
-    w = P_B · N(h; r sin β, P₃₃) · √(2π P₃₃) · P_D / (V κ)
-      = P_B exp(−(h − r sin β)² / (2 P₃₃)) · P_D / (V κ).
+    w = P_B · (1/V_r) · N(h; r sin β, P₃₃) · P_D / (V κ).
 
-The density of Eq. 13 is divided by its peak value ``1/√(2π P₃₃)`` (the height check becomes a
-dimensionless consistency factor) and multiplied by the uniform-prior likelihood ratio
-``P_D/(Vκ)``, so that birth, false-alarm and detected weights share one normalisation. The yaw,
-unobservable from one measurement, starts at 0 with variance 4π (almost uniform over a turn).
+Every factor is the predictive density of one measurement under the hypothesis "teammate ``j``
+is somewhere new" (a uniform prior over the measurement space), so that it can be compared
+with the densities an existing track gets for the same measurements: the range is uniform on
+``[0, V_r]`` (density ``1/V_r``; an existing track gets ``N(r; r̂, S_r)``), the height, given
+the range and the bearing, is ``N(h; r sin β, P₃₃)`` (Eq. 13; an existing track gets
+``N(h; ẑ, S_h)``) and the bearing is uniform over its space (``1/V``, divided by ``κ`` like a
+detection). The yaw, unobservable from one measurement, starts at 0 with variance 4π (almost
+uniform over a turn).
 """
 
 from __future__ import annotations
@@ -113,19 +116,22 @@ def birth_tracks(
     settings: FormationSettings,
     *,
     volume: float,
+    range_volume: float,
     false_density: float | Array,
 ) -> tuple[Array, Array, Array]:
     """New tracks of Eq. 13 for bearings ``(α_k, β_k)`` with ranges ``r_k`` and heights ``h_k``.
 
     ``r`` and ``h`` are scalars or one value per bearing (several teammates at once).
-    ``volume`` is the volume ``V`` of the bearing space and ``false_density`` the density ``κ``
-    (scalar or one value per bearing).
+    ``volume`` is the volume ``V`` of the bearing space, ``range_volume`` the extent ``V_r`` (m)
+    of the range space and ``false_density`` the density ``κ`` (scalar or one value per
+    bearing).
     Returns ``(means (m, 4), covs (m, 4, 4), weights (m,))``.
     """
     kappa = np.asarray(false_density, dtype=float)
-    if not (volume > 0.0 and np.all(kappa > 0.0)):
+    if not (volume > 0.0 and range_volume > 0.0 and np.all(kappa > 0.0)):
         raise ConfigError(
-            f"birth_tracks: volume and false_density must be > 0: {volume}, {false_density}"
+            "birth_tracks: volume, range_volume and false_density must be > 0: "
+            f"{volume}, {range_volume}, {false_density}"
         )
     alpha = np.asarray(alpha, dtype=float).reshape(-1)
     beta = np.asarray(beta, dtype=float).reshape(-1)
@@ -138,6 +144,10 @@ def birth_tracks(
     )
     covs = np.broadcast_to(np.diag(settings.birth_variances), (alpha.size, 4, 4)).copy()
     var_z = settings.birth_variances[2]
-    consistency = np.exp(-0.5 * (h - r * np.sin(beta)) ** 2 / var_z)
-    weights = settings.p_birth * consistency * settings.p_detect / (volume * kappa)
+    height_density = np.exp(-0.5 * (h - r * np.sin(beta)) ** 2 / var_z) / np.sqrt(
+        2.0 * np.pi * var_z
+    )
+    weights = (
+        settings.p_birth * height_density / range_volume * settings.p_detect / (volume * kappa)
+    )
     return means, covs, weights

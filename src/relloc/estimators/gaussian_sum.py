@@ -19,14 +19,21 @@ one sensor does not discard the others:
 3. bearings ``(α, β)`` of *unknown* correspondence: every bearing the robot sees (teammates
    and clutter) is a candidate for every teammate (``association.hypotheses``).
 
-Known-correspondence sensors do not branch: a track whose χ² gate holds the measurement is
-updated and its weight multiplied by the likelihood ratio ``N(z; ẑ, S)/N(ẑ; ẑ, S) = e^{−d²/2}``
-(Eq. 7, relative to a perfectly consistent track); a track whose gate does not hold it keeps
-its state and gets the outlier factor ``(1 − P_G) e^{−γ/2}`` (scored as if the measurement lay
-on the gate boundary, discounted by the probability of a correct measurement outside the gate).
-The weights are normalised only at the end of the scan, so the evidence of the range and height
-against a track still counts when it competes with the new tracks born from the bearings (which
-are built from that range and height, ratio 1) — this is what re-finds a kidnapped robot.
+Known-correspondence sensors do not branch. Every track's weight is multiplied by the
+predictive density of the measurement, with a small outlier probability ``ε``
+(``known_outlier_probability``) spread uniformly over the sensor's span ``V_z``
+(``max_range`` for a range, ``2·max_range`` for a height difference)::
+
+    w_h ← w_h · ((1 − ε) N(z; ẑ_h, S_h) + ε / V_z),
+
+and the track is Kalman-updated when the measurement is more likely valid than an outlier,
+``(1 − ε) N(z; ẑ_h, S_h) ≥ ε / V_z`` (about a 4σ gate at the paper's noise). The weights are
+normalised only at the end of the scan, so these densities compete with those of the new tracks
+born from the bearings, which explain the same range and height with the uniform-prior
+densities of :func:`relloc.association.hypotheses.birth_tracks` (``1/V_r`` and
+``N(h; r sin β, P₃₃)``): a converged track is not displaced by a newborn one because one
+measurement was a 2–3σ draw, while a track whose range or height has drifted away is (this is
+what re-finds a kidnapped robot).
 
 For the bearings the density ``κ`` of measurements that are not teammate ``j`` is evaluated per
 bearing from the fuser's other filters (clutter plus ``P_D`` times their predicted bearing
@@ -120,6 +127,8 @@ class GaussianSumSettings:
             used to register ``l``'s messages (indirect fusion).
         confirm_weight, confirm_position_sigma, confirm_yaw_sigma: a filter's dominant track is
             *confirmed* when its weight and its position / yaw standard deviations pass these.
+        known_outlier_probability: probability ``ε`` that a range or height is an outlier
+            (uniform over the sensor's span; module docstring).
         max_range, max_position_sigma: tracks farther than ``max_range`` (m) or with a position
             standard deviation ``√tr P_xyz`` above ``max_position_sigma`` (m) carry no usable
             information (a teammate unseen for long) and are deleted; the filter then waits
@@ -145,6 +154,7 @@ class GaussianSumSettings:
     confirm_weight: float = 0.8
     confirm_position_sigma: float = 0.3
     confirm_yaw_sigma: float = 0.35
+    known_outlier_probability: float = 0.01
     max_range: float = 20.0
     max_position_sigma: float = 5.0
 
@@ -168,7 +178,13 @@ class GaussianSumSettings:
             value = getattr(self, name)
             if not (np.isfinite(value) and value >= 0.0):
                 raise ConfigError(f"GaussianSumSettings.{name} must be finite and ≥ 0: {value}")
-        for name in ("prune_weight", "nscan_weight", "registration_weight", "confirm_weight"):
+        for name in (
+            "prune_weight",
+            "nscan_weight",
+            "registration_weight",
+            "confirm_weight",
+            "known_outlier_probability",
+        ):
             value = getattr(self, name)
             if not 0.0 <= value < 1.0:
                 raise ConfigError(f"GaussianSumSettings.{name} must lie in [0, 1): {value}")
@@ -195,6 +211,11 @@ class GaussianSumSettings:
             else [self.sigma_azimuth]
         )
         return np.diag(np.square(sig))
+
+    def known_span(self, kind: Literal["height", "range"]) -> float:
+        """Span ``V_z`` (m) of a known-correspondence sensor: ``[0, max_range]`` for a range,
+        ``[−max_range, max_range]`` for a height difference."""
+        return self.max_range if kind == "range" else 2.0 * self.max_range
 
     @property
     def bearing_volume(self) -> float:
@@ -427,8 +448,8 @@ class GaussianSumFuser:
     def update_known(self, kind: Literal["height", "range"], values: ArrayLike) -> None:
         """Update with a known-correspondence sensor (``values`` per teammate, NaN = none).
 
-        Weights are multiplied by the likelihood ratios and left unnormalised (see
-        :meth:`direct_scan`; :meth:`reduce` normalises).
+        Weights are multiplied by the outlier-robust predictive density (module docstring) and
+        left unnormalised (see :meth:`direct_scan`; :meth:`reduce` normalises).
         """
         vals = self._per_teammate(values, kind)
         t = self.tracks
@@ -452,18 +473,16 @@ class GaussianSumFuser:
         R = np.full((sel.size, 1, 1), var)
         nu = z[sel, None] - pred
         S = H @ cov @ np.swapaxes(H, -1, -2) + R
-        gamma = chi2_gate(1, self.settings.gate.p_gate)
-        d2 = mahalanobis_batch(nu, S)
-        inside = d2 <= gamma
+        eps = self.settings.known_outlier_probability
+        valid = (1.0 - eps) * _gaussian_density(nu, S)
+        outlier = eps / self.settings.known_span(kind)
+        inside = valid >= outlier
         new_m, new_P, _ = kalman_update(
             mean, cov, nu, H, R, where=f"fuser {self.robot} {kind} t={self.time:.3f}"
         )
         t.mean[sel] = np.where(inside[:, None], new_m, mean)
         t.cov[sel] = np.where(inside[:, None, None], new_P, cov)
-        ratio = np.where(
-            inside, np.exp(-0.5 * d2), (1.0 - self.settings.gate.p_gate) * np.exp(-0.5 * gamma)
-        )
-        t.weight[sel] = t.weight[sel] * ratio
+        t.weight[sel] = t.weight[sel] * (valid + outlier)
 
     def update_bearings(self, bearings: ArrayLike, ranges: ArrayLike, heights: ArrayLike) -> None:
         """Gate, form and update with a bearing set of unknown correspondence.
@@ -580,6 +599,7 @@ class GaussianSumFuser:
             h[jj],
             st.formation,
             volume=st.bearing_volume,
+            range_volume=st.known_span("range"),
             false_density=kappa[jj, bb],
         )
         ids = self._ids(jj.size)
