@@ -109,7 +109,7 @@ def test_assignment_one_to_one_with_missed_targets() -> None:
 
 
 def test_formation_and_birth_weights_follow_eq7_and_eq13() -> None:
-    st = FormationSettings()
+    st = FormationSettings(birth_yaw_components=1)
     w_fa, w_det = formation_weights(
         np.array([0.7, 0.3]),
         np.array([[2.0, 4.0], [1.0, 8.0]]),
@@ -133,5 +133,23 @@ def test_formation_and_birth_weights_follow_eq7_and_eq13() -> None:
     # P_B · (1/V_r) · N(h; r sin β, 0.05) · P_D / (V κ), the height exactly consistent
     assert w[0] == pytest.approx(0.5 / 10.0 / np.sqrt(2 * np.pi * 0.05) * 0.95 / (2.0 * 0.25))
     assert w[1] < 1e-3 * w[0]
+    # K yaw components: same position block, yaw 2πk/K with σ = π/K, weight split K ways
+    m4, c4, w4 = birth_tracks(
+        r,
+        alpha,
+        beta,
+        h,
+        FormationSettings(birth_yaw_components=4),
+        volume=2.0,
+        range_volume=10.0,
+        false_density=0.25,
+    )
+    assert m4.shape == (8, 4) and c4.shape == (8, 4, 4)
+    np.testing.assert_allclose(m4[:4, 3], [0.0, np.pi / 2, np.pi, 3 * np.pi / 2])
+    np.testing.assert_allclose(m4[:4, :3], np.repeat(means[:1, :3], 4, axis=0))
+    np.testing.assert_allclose(c4[:, 3, 3], (np.pi / 4) ** 2)
+    np.testing.assert_allclose(w4.reshape(2, 4).sum(axis=1), w)
     with pytest.raises(ConfigError, match="p_birth"):
         FormationSettings(p_birth=0.0)
+    with pytest.raises(ConfigError, match="birth_yaw_components"):
+        FormationSettings(birth_yaw_components=0)

@@ -58,12 +58,18 @@ class FormationSettings:
         p_gate: gate probability ``P_G``.
         p_birth: birth probability ``P_B`` of a new track.
         birth_variances: diagonal of the birth covariance ``(σ²_x, σ²_y, σ²_z, σ²_φ)``.
+        birth_yaw_components: ``K``; 1 is Eq. 13's single component (yaw 0, variance σ²_φ);
+            ``K > 1`` splits every new track into ``K`` components at yaw ``2πk/K`` with
+            standard deviation ``π/K`` and weight ``w/K`` (a Gaussian sum over the unknown yaw,
+            as :mod:`relloc.estimators.yaw_bank`), so that no update is linearised about a yaw
+            that is far from the truth.
     """
 
     p_detect: float = 0.95
     p_gate: float = 0.95
     p_birth: float = 0.5
     birth_variances: tuple[float, float, float, float] = (0.1, 0.1, 0.05, 4.0 * np.pi)
+    birth_yaw_components: int = 8
 
     def __post_init__(self) -> None:
         for name in ("p_detect", "p_gate", "p_birth"):
@@ -78,6 +84,11 @@ class FormationSettings:
                 f"FormationSettings.birth_variances needs 4 positive values, got {bv}"
             )
         object.__setattr__(self, "birth_variances", bv)
+        if not 1 <= self.birth_yaw_components <= 64:
+            raise ConfigError(
+                "FormationSettings.birth_yaw_components must lie in [1, 64], got "
+                f"{self.birth_yaw_components}"
+            )
 
 
 def formation_weights(
@@ -125,7 +136,8 @@ def birth_tracks(
     ``volume`` is the volume ``V`` of the bearing space, ``range_volume`` the extent ``V_r`` (m)
     of the range space and ``false_density`` the density ``κ`` (scalar or one value per
     bearing).
-    Returns ``(means (m, 4), covs (m, 4, 4), weights (m,))``.
+    Returns ``(means (mK, 4), covs (mK, 4, 4), weights (mK,))``, the ``K =
+    settings.birth_yaw_components`` yaw components of each bearing consecutive.
     """
     kappa = np.asarray(false_density, dtype=float)
     if not (volume > 0.0 and range_volume > 0.0 and np.all(kappa > 0.0)):
@@ -150,4 +162,11 @@ def birth_tracks(
     weights = (
         settings.p_birth * height_density / range_volume * settings.p_detect / (volume * kappa)
     )
-    return means, covs, weights
+    K = settings.birth_yaw_components
+    if K == 1:
+        return means, covs, weights
+    means = np.repeat(means, K, axis=0)
+    means[:, 3] = np.tile(2.0 * np.pi * np.arange(K) / K, alpha.size)
+    covs = np.repeat(covs, K, axis=0)
+    covs[:, 3, 3] = (np.pi / K) ** 2
+    return means, covs, np.repeat(weights / K, K)

@@ -145,10 +145,10 @@ class GaussianSumSettings:
     formation: FormationSettings = field(default_factory=FormationSettings)
     gate: GateSettings = field(default_factory=GateSettings)
     prune_weight: float = 1e-3
-    merge_threshold: float = 4.0
+    merge_threshold: float = 3.0
     nscan_depth: int = 3
     nscan_weight: float = 1e-3
-    max_components: int = 8
+    max_components: int = 32
     fusion: FusionMode = "decorrelated"
     registration_weight: float = 0.2
     confirm_weight: float = 0.8
@@ -602,6 +602,8 @@ class GaussianSumFuser:
             range_volume=st.known_span("range"),
             false_density=kappa[jj, bb],
         )
+        K = st.formation.birth_yaw_components
+        jj, bb = np.repeat(jj, K), np.repeat(bb, K)
         ids = self._ids(jj.size)
         return [
             Tracks(
