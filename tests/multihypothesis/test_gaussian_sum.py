@@ -175,6 +175,28 @@ def test_births_from_unknown_bearings_and_clutter() -> None:
         fus.update_bearings(np.array([[np.nan, 0.0]]), [1.0, 1.0], [0.0, 0.0])
 
 
+def test_ranges_mark_detections_gives_each_scan_its_detection_probability() -> None:
+    """One detector for range and bearing: only the ranged teammate can own a bearing."""
+    st = _settings(ranges_mark_detections=True, use_elevation=False)
+    fus = GaussianSumFuser(0, [1, 2], st)
+    bearings = np.array([[0.5], [-1.0]])
+    np.testing.assert_array_equal(fus.decide(bearings, [3.0, np.nan]), [-1, -1])  # no tracks
+    fus.direct_scan([0.0, 0.0], [3.0, np.nan], bearings)
+    assert fus.mixture(2) is None
+    mix = fus.mixture(1)
+    assert mix is not None
+    # births from both bearings (the filter cannot tell which is teammate 1), 8 yaws each
+    np.testing.assert_allclose(
+        np.sort(np.unique(np.round(np.arctan2(mix.means[:, 1], mix.means[:, 0]), 9))),
+        [-1.0, 0.5],
+    )
+    # a scan without teammate 1's range: no bearing can be teammate 1, nothing is born
+    before = fus.tracks.size
+    fus.direct_scan([0.0, 0.0], [np.nan, np.nan], np.array([[2.0]]))
+    assert fus.tracks.size <= before and fus.mixture(2) is None
+    np.testing.assert_array_equal(fus.decide(bearings, [np.nan, np.nan]), [-1, -1])
+
+
 def test_fuse_dispatches_mutual_and_indirect_and_validates() -> None:
     # single-component births (Eq. 13), so that one scan gives registrable tracks
     st = _settings()

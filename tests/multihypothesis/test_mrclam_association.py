@@ -77,6 +77,10 @@ def test_mrclam_association_on_any_mrclam_folder(
     # sanity bound: each scan holds 2 robot bearings + injected clutter, so chance is below 1/2
     assert s["association_accuracy"] is not None and s["association_accuracy"] > 0.75
     assert s["pos_median_m"] is not None and s["pos_median_m"] < 0.3
+    # seed 002's separate-sensor model is run on the same data and reported beside it
+    assert {"association_accuracy", "pos_rmse_m"} <= set(s["separate_sensors"])
+    lo, hi = s["field_of_view_rad"]
+    assert lo == -hi and 0.0 < hi <= np.pi
     assert s["bearings"]["landmark_skipped"] > 0 and s["bearings"]["robot"] > 0
     assert (out / s["figures"]["errors"]).is_file()
 

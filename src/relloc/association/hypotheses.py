@@ -91,12 +91,18 @@ class FormationSettings:
             )
 
 
+def _detection(settings: FormationSettings, p_detect: float | Array | None) -> Array:
+    """``P_D`` of this scan: ``p_detect`` when given (scalar or per item), else the setting."""
+    return np.asarray(settings.p_detect if p_detect is None else p_detect, dtype=float)
+
+
 def formation_weights(
     weights: Array,
     likelihood: Array,
     gated: NDArray[np.bool_],
     settings: FormationSettings,
     false_density: float | Array,
+    p_detect: float | Array | None = None,
 ) -> tuple[Array, Array]:
     """Unnormalised weights of false-alarm and detected tracks (module docstring).
 
@@ -107,6 +113,8 @@ def formation_weights(
         settings: formation probabilities.
         false_density: density ``κ`` of measurements not originating from the target (> 0),
             a scalar or one value per (track, measurement) pair (K, m).
+        p_detect: ``P_D`` for this scan, a scalar or one value per track (K,); ``None``:
+            ``settings.p_detect``.
 
     Returns:
         ``(w_false_alarm (K,), w_detected (K, m))`` with zeros outside the gate.
@@ -114,8 +122,9 @@ def formation_weights(
     kappa = np.asarray(false_density, dtype=float)
     if not (np.all(np.isfinite(kappa)) and np.all(kappa > 0.0)):
         raise ConfigError(f"formation_weights: false_density must be > 0, got {kappa}")
-    w_fa = weights * (1.0 - settings.p_detect * settings.p_gate)
-    w_det = np.where(gated, weights[:, None] * settings.p_detect * likelihood / kappa, 0.0)
+    pd = _detection(settings, p_detect)
+    w_fa = weights * (1.0 - pd * settings.p_gate)
+    w_det = np.where(gated, (weights * pd)[:, None] * likelihood / kappa, 0.0)
     return w_fa, w_det
 
 
@@ -129,13 +138,14 @@ def birth_tracks(
     volume: float,
     range_volume: float,
     false_density: float | Array,
+    p_detect: float | Array | None = None,
 ) -> tuple[Array, Array, Array]:
     """New tracks of Eq. 13 for bearings ``(α_k, β_k)`` with ranges ``r_k`` and heights ``h_k``.
 
     ``r`` and ``h`` are scalars or one value per bearing (several teammates at once).
     ``volume`` is the volume ``V`` of the bearing space, ``range_volume`` the extent ``V_r`` (m)
     of the range space and ``false_density`` the density ``κ`` (scalar or one value per
-    bearing).
+    bearing); ``p_detect`` is ``P_D`` (scalar or per bearing; ``None``: ``settings.p_detect``).
     Returns ``(means (mK, 4), covs (mK, 4, 4), weights (mK,))``, the ``K =
     settings.birth_yaw_components`` yaw components of each bearing consecutive.
     """
@@ -160,7 +170,11 @@ def birth_tracks(
         2.0 * np.pi * var_z
     )
     weights = (
-        settings.p_birth * height_density / range_volume * settings.p_detect / (volume * kappa)
+        settings.p_birth
+        * height_density
+        / range_volume
+        * _detection(settings, p_detect)
+        / (volume * kappa)
     )
     K = settings.birth_yaw_components
     if K == 1:

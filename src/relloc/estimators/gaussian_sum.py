@@ -127,6 +127,10 @@ class GaussianSumSettings:
             used to register ``l``'s messages (indirect fusion).
         confirm_weight, confirm_position_sigma, confirm_yaw_sigma: a filter's dominant track is
             *confirmed* when its weight and its position / yaw standard deviations pass these.
+        ranges_mark_detections: the range and the bearing come from one detector (a camera
+            reading a barcode's range and bearing): a teammate with a range in a scan has its
+            bearing in the set (``P_D = 1`` for that scan) and one without has none
+            (``P_D = 0``); ``False``: separate sensors, ``P_D = formation.p_detect``.
         known_outlier_probability: probability ``ε`` that a range or height is an outlier
             (uniform over the sensor's span; module docstring).
         max_range, max_position_sigma: tracks farther than ``max_range`` (m) or with a position
@@ -154,6 +158,7 @@ class GaussianSumSettings:
     confirm_weight: float = 0.8
     confirm_position_sigma: float = 0.3
     confirm_yaw_sigma: float = 0.35
+    ranges_mark_detections: bool = False
     known_outlier_probability: float = 0.01
     max_range: float = 20.0
     max_position_sigma: float = 5.0
@@ -408,6 +413,13 @@ class GaussianSumFuser:
             raise DataError(f"fuser {self.robot}: {what} contains inf (use NaN for missing)")
         return arr
 
+    def _bearing_detection(self, ranges: Array) -> Array:
+        """``P_D`` of the bearing set for each teammate in this scan (see the settings)."""
+        st = self.settings
+        if st.ranges_mark_detections:
+            return np.where(np.isfinite(ranges), 1.0, 0.0)
+        return np.full(len(self.teammates), st.formation.p_detect)
+
     # ------------------------------------------------------------------ prediction
 
     def predict(self, u_self: ArrayLike, u_team: ArrayLike, dt: float) -> None:
@@ -497,6 +509,7 @@ class GaussianSumFuser:
             raise DataError(f"fuser {self.robot} t={self.time:.3f}: non-finite bearing")
         r = self._per_teammate(ranges, "ranges")
         h = self._per_teammate(heights, "heights")
+        p_det = self._bearing_detection(r)
         m = Z.shape[0]
         t = self.tracks
         k = t.size
@@ -517,8 +530,10 @@ class GaussianSumFuser:
             gated = d2 <= chi2_gate(nb, st.gate.p_gate)
             near = d2 <= chi2_gate(nb, st.gate.p_birth_exclusion)
             lik = _gaussian_density(nu, np.broadcast_to(S[:, None], (k, m, nb, nb)))
-            kappa = self._false_density(lik, m)
-            w_fa, w_det = formation_weights(t.weight, lik, gated, st.formation, kappa[t.owner])
+            kappa = self._false_density(lik, m, p_det)
+            w_fa, w_det = formation_weights(
+                t.weight, lik, gated, st.formation, kappa[t.owner], p_detect=p_det[t.owner]
+            )
             fa = t.take(np.arange(k))
             fa.weight = w_fa
             fa.assoc = np.full(k, -1, dtype=np.int64)
@@ -547,15 +562,16 @@ class GaussianSumFuser:
             return
         if m:
             if not k:
-                kappa = self._false_density(np.zeros((0, m)), m)
-            parts.extend(self._births(Z, r, h, near, kappa))
+                kappa = self._false_density(np.zeros((0, m)), m, p_det)
+            parts.extend(self._births(Z, r, h, near, kappa, p_det))
         if parts:
             self.tracks = Tracks.concat(parts)
 
-    def _false_density(self, lik: Array, m: int) -> Array:
+    def _false_density(self, lik: Array, m: int, p_det: Array) -> Array:
         """``κ[j, b]``: density at bearing ``b`` of everything that is not teammate ``j``.
 
-        Clutter (``expected_clutter/V``) plus ``P_D`` times the predicted bearing density of
+        Clutter (``expected_clutter/V``) plus ``P_D`` (``p_det``, per teammate) times the
+        predicted bearing density of
         every other teammate: the mixture ``Σ_h w_h N(z_b; ẑ_h, S_h)`` of its filter when it has
         tracks, uniform ``1/V`` while it has none. A bearing that another teammate's tracks
         explain is therefore weak evidence for ``j`` (no ghost track of ``j`` can feed on it).
@@ -571,12 +587,13 @@ class GaussianSumFuser:
             np.add.at(dens, t.owner, w[:, None] * lik)
             tracked[t.owner] = True
         dens[~tracked] = 1.0 / st.bearing_volume
+        dens *= p_det[:, None]
         others = dens.sum(axis=0)[None, :] - dens
         clutter = max(st.expected_clutter, 1e-3) / st.bearing_volume
-        return clutter + st.formation.p_detect * others
+        return clutter + others
 
     def _births(
-        self, Z: Array, r: Array, h: Array, near: NDArray[np.bool_], kappa: Array
+        self, Z: Array, r: Array, h: Array, near: NDArray[np.bool_], kappa: Array, p_det: Array
     ) -> list[Tracks]:
         """New tracks (Eq. 13) from bearings outside the birth-exclusion gate of every track
         of each teammate's filter."""
@@ -587,7 +604,7 @@ class GaussianSumFuser:
         hit = np.zeros((n_team, Z.shape[0]), dtype=bool)
         if t.size:
             np.logical_or.at(hit, t.owner, near)
-        usable = np.isfinite(r) & (r > 0.0) & np.isfinite(h)
+        usable = np.isfinite(r) & (r > 0.0) & np.isfinite(h) & (p_det > 0.0)
         jj, bb = np.nonzero(~hit & usable[:, None])
         if jj.size == 0:
             return []
@@ -601,6 +618,7 @@ class GaussianSumFuser:
             volume=st.bearing_volume,
             range_volume=st.known_span("range"),
             false_density=kappa[jj, bb],
+            p_detect=p_det[jj],
         )
         K = st.formation.birth_yaw_components
         jj, bb = np.repeat(jj, K), np.repeat(bb, K)
@@ -618,19 +636,23 @@ class GaussianSumFuser:
             )
         ]
 
-    def decide(self, bearings: ArrayLike) -> IntArray:
+    def decide(self, bearings: ArrayLike, ranges: ArrayLike | None = None) -> IntArray:
         """Joint (global-nearest-neighbour) decision: which bearing is which teammate.
 
         The filters weigh every association separately; this one-to-one decision uses the
         dominant track of every filter *before* the update: cost
         ``−log(P_D N(z_b; ẑ_j, S_j)/κ)`` inside the gate (κ: clutter density), ``−log(1 − P_D P_G)``
-        for no bearing, solved by :func:`relloc.association.assignment.assign`. Returns, per
+        for no bearing, solved by :func:`relloc.association.assignment.assign`. ``ranges`` (per
+        teammate) give the scan's ``P_D`` when ``ranges_mark_detections``. Returns, per
         teammate, the bearing index or −1.
         """
         st = self.settings
         nb = len(st.bearing_rows)
         Z = np.asarray(bearings, dtype=float).reshape(-1, nb)
         n_team = len(self.teammates)
+        p_det = self._bearing_detection(
+            np.zeros(n_team) if ranges is None else self._per_teammate(ranges, "ranges")
+        )
         t = self.tracks
         cost = np.full((n_team, Z.shape[0]), np.inf)
         if t.size and Z.shape[0]:
@@ -643,9 +665,12 @@ class GaussianSumFuser:
             d2 = mahalanobis_batch(nu, S[:, None, :, :])
             kappa = max(st.expected_clutter, 1e-3) / st.bearing_volume
             c = 0.5 * d2 + 0.5 * np.log(np.linalg.det(2.0 * np.pi * S))[:, None]
-            c += np.log(kappa / st.formation.p_detect)
-            cost[t.owner[dom]] = np.where(d2 <= chi2_gate(nb, st.gate.p_gate), c, np.inf)
-        miss = np.full(n_team, -np.log(1.0 - st.formation.p_detect * st.formation.p_gate))
+            owner_pd = p_det[t.owner[dom]]
+            with np.errstate(divide="ignore"):
+                c += np.log(kappa) - np.log(owner_pd)[:, None]
+            inside = (d2 <= chi2_gate(nb, st.gate.p_gate)) & (owner_pd > 0.0)[:, None]
+            cost[t.owner[dom]] = np.where(inside, c, np.inf)
+        miss = -np.log(1.0 - p_det * st.formation.p_gate)
         return assign(cost, miss)
 
     def direct_scan(self, heights: ArrayLike, ranges: ArrayLike, bearings: ArrayLike) -> None:
@@ -655,7 +680,7 @@ class GaussianSumFuser:
         The joint decision of :meth:`decide` (on the predicted tracks) is kept in
         ``last_decision``.
         """
-        self.last_decision = self.decide(bearings)
+        self.last_decision = self.decide(bearings, ranges)
         self.update_known("height", heights)
         self.update_known("range", ranges)
         self.update_bearings(bearings, ranges, heights)
