@@ -40,8 +40,14 @@ bearing from the fuser's other filters (clutter plus ``P_D`` times their predict
 densities, :meth:`GaussianSumFuser._false_density`): the filters of one fuser are independent
 mixtures as in the paper, but a bearing that teammate ``k``'s tracks explain is weak evidence
 for ``j``. New tracks are born only from bearings outside a wide exclusion gate of ``j``'s
-tracks (``GateSettings.p_birth_exclusion``). :meth:`GaussianSumFuser.decide` gives, on top, a
-one-to-one bearing-to-teammate decision (``linear_sum_assignment``) for reporting.
+tracks (``GateSettings.p_birth_exclusion``); each is Eq. 13's Gaussian with its unknown yaw
+split into ``formation.birth_yaw_components`` components (8 by default, yaw ``2πk/8``,
+σ = π/8), so that no update is linearised about a yaw far from the truth. The scan's detection
+probability is ``formation.p_detect`` for every teammate, or, with
+``ranges_mark_detections`` (one detector gives range and bearing, like a camera reading
+barcodes), 1 for the teammates with a range in the scan and 0 for the others.
+:meth:`GaussianSumFuser.decide` gives, on top, a one-to-one bearing-to-teammate decision
+(``linear_sum_assignment``) for reporting.
 
 After the direct scan each filter is normalised and reduced (``association.mixture_reduction``
 and ``association.nscan``): prune by weight, N-scan prune track families, merge by Mahalanobis
@@ -119,7 +125,8 @@ class GaussianSumSettings:
         formation: P_D, P_G, P_B and the Eq. 13 birth covariance.
         gate: gate probability and the modified gate for uniform-yaw tracks.
         prune_weight: tracks below this normalised weight are deleted.
-        merge_threshold: squared Mahalanobis distance below which tracks are merged.
+        merge_threshold: squared Mahalanobis distance below which tracks are merged (3: the
+            yaw components of a new track, 2σ apart, stay separate).
         nscan_depth, nscan_weight: N of the N-scan pruning and the family-weight threshold.
         max_components: cap on the tracks of one filter.
         fusion: ``"decorrelated"`` (Eqs. 10/12) or ``"ci"`` (covariance intersection).
