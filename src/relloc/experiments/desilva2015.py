@@ -25,11 +25,13 @@ success_rate`` (``overall`` and per ``"L1->P2"`` pair, paper 1.0), ``time_to_fir
 ``hypotheses`` (components per filter: ``mean``, ``max``), ``pos_rmse_m`` / ``yaw_rmse_rad``
 (dominant track, t ≥ 5 s), ``wrong_association_rate`` (bearings used by the dominant track that
 came from another robot or clutter, after its first confirmation; ``joint_decision``: the same
-for the fuser's one-to-one assignment of bearings to teammates), ``no_sharing`` (the same
-figures with mutual/indirect fusion off), ``clutter_sweep`` (``"1"``, ``"10"``, ``"100"``,
-``"1000"`` → ``success_rate``, ``pos_rmse_m``, ``yaw_rmse_rad``, ``wrong_association_rate``,
-``expected_clutter_per_scan``, ``runs``), ``pd_sweep`` (``"0.95"``, ``"0.8"``, ``"0.6"`` → the
-same), ``kidnapped`` (``refound_rate``, ``time_to_refind_s``), ``fig5`` (file names).
+for the fuser's one-to-one assignment of bearings to teammates), ``consistency`` (ANEES of the
+dominant track against its own covariance and the % of NEES values above the χ²(4) 95 % bound,
+t ≥ 5 s), ``no_sharing`` (the same figures with mutual/indirect fusion off), ``clutter_sweep``
+(``"1"``, ``"10"``, ``"100"``, ``"1000"`` → ``success_rate``, ``pos_rmse_m``, ``yaw_rmse_rad``,
+``wrong_association_rate``, ``anees``, ``expected_clutter_per_scan``, ``runs``), ``pd_sweep``
+(``"0.95"``, ``"0.8"``, ``"0.6"`` → the same), ``kidnapped`` (``refound_rate``,
+``time_to_refind_s``), ``fig5`` (file names).
 """
 
 from __future__ import annotations
@@ -54,6 +56,7 @@ from relloc.experiments.output import (
 )
 from relloc.experiments.registry import ReproduceArgs
 from relloc.fusion.team import NO_BEARING, TeamRunSettings, run_team
+from relloc.metrics.consistency import anees, chi2_upper, nees, percent_beyond
 from relloc.models.motion import VelocityNoise
 from relloc.sim.multihypothesis import (
     ROBOT_NAMES,
@@ -73,7 +76,8 @@ POS_TOL_M = 0.5
 YAW_TOL_RAD = 0.5
 CLUTTER_FACTORS = (1, 10, 100, 1000)
 PD_VALUES = (0.95, 0.8, 0.6)
-KIDNAP = (3, 15.0, 3.0, -2.0, 2.0)  # P2 moved by (3 m, −2 m, 2 rad) at t = 15 s
+KIDNAP = (3, 15.0, 3.0, -2.0, 2.0)
+NEES_DOF = 4  # P2 moved by (3 m, −2 m, 2 rad) at t = 15 s
 
 
 def filter_settings(scenario: DeSilvaScenario) -> GaussianSumSettings:
@@ -112,6 +116,7 @@ class RunResult:
     used: NDArray[np.int64]
     joint_wrong: NDArray[np.int64]
     joint_used: NDArray[np.int64]
+    nees: Array
     estimate_xy: Array
     truth_xy: Array
     world_xy: Array
@@ -130,7 +135,7 @@ def _task(seed_seq: np.random.SeedSequence, run_index: int, config: RunConfig) -
     if truth is None:
         raise ModelError("desilva2015: the simulator returned no ground truth")
     out: dict[str, list[NDArray[Any]]] = {
-        k: [] for k in ("pe", "ye", "c", "conf", "tr", "w", "u", "jw", "ju", "e", "t")
+        k: [] for k in ("pe", "ye", "c", "conf", "tr", "w", "u", "jw", "ju", "e", "t", "nees")
     }
     for i in leaders:
         tr = traces[i]
@@ -144,6 +149,7 @@ def _task(seed_seq: np.random.SeedSequence, run_index: int, config: RunConfig) -
         j_used = after_conf & (tr.joint_origin != NO_BEARING)
         j_wrong = j_used & (tr.joint_origin != np.arange(tr.mean.shape[1])[None, :])
         out["jw"].append(j_wrong.sum(axis=0))
+        out["nees"].append(_dominant_nees(tr.mean, tr.cov, rel))
         out["ju"].append(j_used.sum(axis=0))
         out["pe"].append(pe)
         out["ye"].append(ye)
@@ -165,10 +171,22 @@ def _task(seed_seq: np.random.SeedSequence, run_index: int, config: RunConfig) -
         used=np.stack(out["u"]),
         joint_wrong=np.stack(out["jw"]),
         joint_used=np.stack(out["ju"]),
+        nees=np.stack(out["nees"]),
         estimate_xy=np.stack(out["e"]),
         truth_xy=np.stack(out["t"]),
         world_xy=truth[..., :2],
     )
+
+
+def _dominant_nees(mean: Array, cov: Array, truth: Array) -> Array:
+    """NEES ``eᵀ P⁻¹ e`` of the dominant track (4 states, yaw error wrapped); NaN where there is
+    no track (and at the observer itself)."""
+    out = np.full(mean.shape[:-1], np.nan)
+    has = np.isfinite(mean).all(axis=-1) & np.isfinite(truth).all(axis=-1)
+    err = mean[has] - truth[has]
+    err[:, 3] = wrap_angle(err[:, 3])
+    out[has] = nees(err, cov[has])
+    return out
 
 
 def _pairs(n_leaders: int) -> list[tuple[int, int, str]]:
@@ -192,6 +210,7 @@ def _metrics(results: list[RunResult]) -> dict[str, Any]:
     steady = t >= STEADY_FROM_S
     pe = np.stack([r.pos_err for r in results])  # (runs, leader, scan, robot)
     ye = np.stack([r.yaw_err for r in results])
+    ne = np.stack([r.nees for r in results])
     tracked = np.stack([r.tracked for r in results])
     conf = np.stack([r.confirmed for r in results])
     comps = np.stack([r.components for r in results])
@@ -214,6 +233,7 @@ def _metrics(results: list[RunResult]) -> dict[str, Any]:
             "pos_rmse_m": _rms(pe[:, li, steady, j]),
             "yaw_rmse_rad": _rms(ye[:, li, steady, j]),
             "wrong_association_rate": float(wrong[li, j] / max(used[li, j], 1)),
+            "anees": anees(ne[:, li, steady, j], NEES_DOF),
         }
         all_success.append(success[:, li, j])
         all_first.extend(first)
@@ -222,6 +242,7 @@ def _metrics(results: list[RunResult]) -> dict[str, Any]:
     robots_idx = [j for _, j, _ in _pairs(pe.shape[1])]
     pe_pairs = pe[:, leaders_idx, :, robots_idx]  # (pairs, runs, scan)
     ye_pairs = ye[:, leaders_idx, :, robots_idx]
+    ne_pairs = ne[:, leaders_idx, :, robots_idx]
     comps_all = np.stack(all_comp)
     return {
         "runs": len(results),
@@ -232,6 +253,10 @@ def _metrics(results: list[RunResult]) -> dict[str, Any]:
         "yaw_rmse_rad": _rms(ye_pairs[..., steady]),
         "wrong_association_rate": float(
             wrong[leaders_idx, robots_idx].sum() / max(used[leaders_idx, robots_idx].sum(), 1)
+        ),
+        "anees": anees(ne_pairs[..., steady], NEES_DOF),
+        "nees_percent_beyond_chi2_95": percent_beyond(
+            ne_pairs[..., steady], chi2_upper(NEES_DOF, 0.95)
         ),
         "joint_wrong_association_rate": float(
             j_wrong[leaders_idx, robots_idx].sum() / max(j_used[leaders_idx, robots_idx].sum(), 1)
@@ -307,6 +332,7 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
             "pos_rmse_m": m["pos_rmse_m"],
             "yaw_rmse_rad": m["yaw_rmse_rad"],
             "wrong_association_rate": m["wrong_association_rate"],
+            "anees": m["anees"],
             "hypotheses": m["hypotheses"],
             "expected_clutter_per_scan": scenario.expected_clutter,
             "p_detect": scenario.p_detect,
@@ -375,6 +401,12 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
             "overall": paper["wrong_association_rate"],
             "joint_decision": paper["joint_wrong_association_rate"],
             "per_pair": {k: v["wrong_association_rate"] for k, v in paper["per_pair"].items()},
+        },
+        "consistency": {
+            "anees": paper["anees"],
+            "nees_percent_beyond_chi2_95": paper["nees_percent_beyond_chi2_95"],
+            "ideal": {"anees": 1.0, "nees_percent_beyond_chi2_95": 5.0},
+            "per_pair_anees": {k: v["anees"] for k, v in paper["per_pair"].items()},
         },
         "no_sharing": {k: v for k, v in no_sharing.items() if k != "per_pair"}
         | {"success_per_pair": {k: v["success_rate"] for k, v in no_sharing["per_pair"].items()}},
@@ -564,6 +596,12 @@ def _report(summary: dict[str, Any], paper: dict[str, Any], no_sharing: dict[str
                 "—",
             ],
             ["kidnapped robot re-found", k["refound_rate"], "claimed"],
+            ["ANEES of the dominant track, t ≥ 5 s (ideal 1)", s["consistency"]["anees"], "—"],
+            [
+                "NEES above χ²(4) 95 % bound, % (ideal 5)",
+                s["consistency"]["nees_percent_beyond_chi2_95"],
+                "—",
+            ],
         ],
         digits=3,
     )
@@ -641,6 +679,11 @@ Kidnapped robot: {k["robot"]} moved by ({k["jump"]["dx_m"]} m, {k["jump"]["dy_m"
   (κ) for the other filter, so the swap can last for many seconds. The other leader sees the
   pair from elsewhere, and sharing its belief breaks the swap within the first fusion periods;
   this is what the sharing buys here.
+- The paper gives no consistency figure. Our dominant tracks are slightly over-confident against
+  their own covariance (ANEES {s["consistency"]["anees"]:.2f}, ideal 1;
+  {s["consistency"]["nees_percent_beyond_chi2_95"]:.1f} % of NEES values above the χ²(4) 95 %
+  bound, ideal 5 %): the bearing update is linearised at 3–7 m with σ = 0.06 rad, and the
+  dominant component ignores the weight left on the others.
 - Tracks farther than 20 m or with position σ above 5 m are deleted (no information left).
 - The modified gate (paper Fig. 3) is realised as the yaw-free displacement disc added to the
   innovation covariance of tracks whose yaw σ exceeds 0.5 rad.
