@@ -46,11 +46,13 @@ def test_reproduce_desilva2015_smoke(tmp_path: Path, monkeypatch: pytest.MonkeyP
         "time_to_first_confirmed_s",
         "hypotheses",
         "kidnapped",
+        "consistency",
     ):
         assert key in summary
     assert set(summary["clutter_sweep"]) == {"1", "10", "100", "1000"}
     assert set(summary["pd_sweep"]) == {"0.95", "0.8", "0.6"}
     assert 0.0 <= summary["success_rate"]["overall"] <= 1.0
+    assert summary["consistency"]["anees"] > 0.0
     report = (out / "report.md").read_text()
     for fig in summary["figures"].values():
         assert (out / fig).is_file() and fig in report
