@@ -236,6 +236,10 @@ def test_settings_are_validated() -> None:
         _settings(fusion="naive")
     with pytest.raises(ConfigError, match="max_components"):
         _settings(max_components=0)
+    with pytest.raises(ConfigError, match="ranges_mark_detections"):
+        _settings(ranges_mark_detections="yes")
+    with pytest.raises(ConfigError, match="known_outlier_probability"):
+        _settings(known_outlier_probability=1.0)
     with pytest.raises(ConfigError, match="teammates"):
         GaussianSumFuser(0, [0, 1], _settings())
 

@@ -206,6 +206,11 @@ class GaussianSumSettings:
             raise ConfigError(
                 f"GaussianSumSettings.max_components must be ≥ 1: {self.max_components}"
             )
+        if not isinstance(self.ranges_mark_detections, bool):
+            raise ConfigError(
+                "GaussianSumSettings.ranges_mark_detections must be a bool: "
+                f"{self.ranges_mark_detections!r}"
+            )
         if self.fusion not in FUSION_MODES:
             raise ConfigError(f"GaussianSumSettings.fusion: one of {FUSION_MODES}: {self.fusion}")
 
@@ -578,10 +583,10 @@ class GaussianSumFuser:
         """``κ[j, b]``: density at bearing ``b`` of everything that is not teammate ``j``.
 
         Clutter (``expected_clutter/V``) plus ``P_D`` (``p_det``, per teammate) times the
-        predicted bearing density of
-        every other teammate: the mixture ``Σ_h w_h N(z_b; ẑ_h, S_h)`` of its filter when it has
-        tracks, uniform ``1/V`` while it has none. A bearing that another teammate's tracks
-        explain is therefore weak evidence for ``j`` (no ghost track of ``j`` can feed on it).
+        predicted bearing density of every other teammate: the mixture
+        ``Σ_h w_h N(z_b; ẑ_h, S_h)`` of its filter when it has tracks, uniform ``1/V`` while it
+        has none. A bearing that another teammate's tracks explain is therefore weak evidence
+        for ``j`` (no ghost track of ``j`` can feed on it).
         """
         st = self.settings
         n_team = len(self.teammates)
