@@ -49,7 +49,7 @@ from relloc.estimators.yaw_bank import (
 from relloc.metrics.conditioning import condition_log10_batch
 from relloc.models.measurement import RangeBearingNoise
 from relloc.models.motion import VelocityNoise
-from relloc.sim.log import Log
+from relloc.sim.log import Log, Measurements
 
 Array = NDArray[np.float64]
 EventKind = Literal["created", "deleted", "recreated"]
@@ -346,6 +346,32 @@ class TrackManager:
             rec.cov.append(tr.cov.copy())
             rec.age.append(self.t - tr.created_t)
 
+    def replay(
+        self, times: Array, held: Array, measurements: Measurements, is_record: NDArray[np.bool_]
+    ) -> None:
+        """The event loop shared by :func:`track_log` and the runtime nodes.
+
+        For every event time ``times[k]`` (increasing, none before :attr:`t`): predict to it
+        with the velocities ``held[k] (n_robots, 4)`` in force since the previous event, fuse
+        the ``measurements`` (sorted by time) stamped up to it and not fused yet, delete stale
+        tracks, and record the beliefs where ``is_record[k]``.
+        """
+        ends = np.searchsorted(measurements.t, np.asarray(times) + _TIME_TOL, side="right")
+        done = 0
+        for k, t in enumerate(times):
+            self.advance(float(t), held[k])
+            for q in range(done, int(ends[k])):
+                self.measure(
+                    int(measurements.observer[q]),
+                    int(measurements.observed[q]),
+                    measurements.z[q],
+                    measurements.sigma[q],
+                )
+            done = max(done, int(ends[k]))
+            self.expire()
+            if is_record[k]:
+                self.snapshot()
+
     def results(self) -> TeamEstimates:
         """The recorded series of every pair ever tracked, in (observer, observed) order."""
         pairs = []
@@ -422,14 +448,6 @@ def track_log(
         truth_fn=truth_fn if use_truth else None,
         rng=rng,
     )
-    ptr = 0
-    for k, t in enumerate(times):
-        if k > 0:
-            manager.advance(float(t), held[k - 1])
-        while ptr < m.size and m.t[ptr] <= t + _TIME_TOL:
-            manager.measure(int(m.observer[ptr]), int(m.observed[ptr]), m.z[ptr], m.sigma[ptr])
-            ptr += 1
-        manager.expire()
-        if is_record[k]:
-            manager.snapshot()
+    # velocity in force up to each event: the one held at the previous event (none before t0)
+    manager.replay(times, np.concatenate([held[:1], held[:-1]]), m, is_record)
     return manager.results()

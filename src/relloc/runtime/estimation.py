@@ -38,6 +38,7 @@ from relloc.estimators.track_manager import (
 )
 from relloc.runtime.sources import MeasurementBatch
 from relloc.runtime.teammates import ReceivedOdometry
+from relloc.sim.log import Measurements
 
 Array = NDArray[np.float64]
 TIME_TOL = 1e-9
@@ -151,19 +152,19 @@ class TrackManagerEstimator:
             is_record = np.zeros(times.size, dtype=bool)
             if record_times.size:
                 is_record[np.searchsorted(times, record_times - TIME_TOL)] = True
-            ptr = 0
-            for k, t in enumerate(times):
-                m.advance(float(t), held[k])
-                while ptr < m_t.size and m_t[ptr] <= t + TIME_TOL:
-                    target = m_targets[ptr]
-                    if target in present:
-                        m.measure(self.me, self.roster.index(target), m_z[ptr], m_s[ptr])
-                    else:
-                        skipped += 1
-                    ptr += 1
-                m.expire()
-                if is_record[k]:
-                    m.snapshot()
+            live = np.array([tgt in present for tgt in m_targets], dtype=bool)
+            skipped = int((~live).sum())
+            fused = Measurements(
+                t=m_t[live],
+                observer=np.full(int(live.sum()), self.me, dtype=np.int64),
+                observed=np.array(
+                    [self.roster.index(tgt) for tgt, ok in zip(m_targets, live, strict=True) if ok],
+                    dtype=np.int64,
+                ),
+                z=m_z[live],
+                sigma=m_s[live],
+            )
+            m.replay(times, held, fused, is_record)
         self._counts["skipped_absent"] += skipped
         return skipped
 
