@@ -47,6 +47,7 @@ def test_reproduce_desilva2015_smoke(tmp_path: Path, monkeypatch: pytest.MonkeyP
         "hypotheses",
         "kidnapped",
         "consistency",
+        "covariance_intersection",
     ):
         assert key in summary
     assert set(summary["clutter_sweep"]) == {"1", "10", "100", "1000"}
