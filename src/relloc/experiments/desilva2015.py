@@ -696,8 +696,11 @@ Kidnapped robot: {k["robot"]} moved by ({k["jump"]["dx_m"]} m, {k["jump"]["dy_m"
   filter). With Eq. 13's single component (yaw 0, variance 4π) the first updates are linearised
   about a yaw that can be 2 rad off: after the kidnap (a 2 rad jump) the track locked onto a
   wrong yaw with σ ≈ 0.1 rad and the kidnapped robot was re-found in only 0.78 of the leader
-  runs (25 runs), against {k["refound_rate"]:.2f} with the split. At the start of a run the true
-  relative yaws lie within ±1 rad of 0, which is why the single component was enough there.
+  runs (25 runs), against {k["refound_rate"]:.2f} with the split. At the start of a run the
+  single component was enough (also with its yaw mean moved to π: 10 runs, all tracked), since
+  the oscillating relative motion makes the yaw observable within seconds; after the kidnap P2
+  moves away on a nearly straight relative path, the yaw is weakly observable and a
+  linearisation error persists.
 - New tracks are born only from bearings outside a wider exclusion gate (P = 0.9999) of the
   teammate's tracks: with P_G = 0.95 one correct bearing in 20 falls outside the update gate and
   would otherwise start a duplicate track with uniform yaw on top of a good one.
