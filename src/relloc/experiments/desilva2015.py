@@ -536,7 +536,7 @@ def _report(summary: dict[str, Any], paper: dict[str, Any], no_sharing: dict[str
     )
     sweep_rows = [
         [
-            f"λ × {k}",
+            label.format(k),
             v["expected_clutter_per_scan"],
             v["runs"],
             v["success_rate"],
@@ -545,19 +545,8 @@ def _report(summary: dict[str, Any], paper: dict[str, Any], no_sharing: dict[str
             v["wrong_association_rate"],
             v["hypotheses"]["mean"],
         ]
-        for k, v in s["clutter_sweep"].items()
-    ] + [
-        [
-            f"P_D = {k}",
-            v["expected_clutter_per_scan"],
-            v["runs"],
-            v["success_rate"],
-            v["pos_rmse_m"],
-            v["yaw_rmse_rad"],
-            v["wrong_association_rate"],
-            v["hypotheses"]["mean"],
-        ]
-        for k, v in s["pd_sweep"].items()
+        for label, sweep in (("λ × {}", s["clutter_sweep"]), ("P_D = {}", s["pd_sweep"]))
+        for k, v in sweep.items()
     ]
     sweeps = markdown_table(
         [
