@@ -347,15 +347,18 @@ class TrackManager:
             rec.age.append(self.t - tr.created_t)
 
     def replay(
-        self, times: Array, held: Array, measurements: Measurements, is_record: NDArray[np.bool_]
+        self, times: Array, held: Array, measurements: Measurements, record_times: Array
     ) -> None:
         """The event loop shared by :func:`track_log` and the runtime nodes.
 
         For every event time ``times[k]`` (increasing, none before :attr:`t`): predict to it
         with the velocities ``held[k] (n_robots, 4)`` in force since the previous event, fuse
         the ``measurements`` (sorted by time) stamped up to it and not fused yet, delete stale
-        tracks, and record the beliefs where ``is_record[k]``.
+        tracks, and record the beliefs if it is one of the ``record_times`` (each of which must
+        be among the event times).
         """
+        is_record = np.zeros(len(times), dtype=bool)
+        is_record[np.searchsorted(times, np.asarray(record_times) - _TIME_TOL)] = True
         ends = np.searchsorted(measurements.t, np.asarray(times) + _TIME_TOL, side="right")
         done = 0
         for k, t in enumerate(times):
@@ -367,7 +370,7 @@ class TrackManager:
                     measurements.z[q],
                     measurements.sigma[q],
                 )
-            done = max(done, int(ends[k]))
+            done = int(ends[k])
             self.expire()
             if is_record[k]:
                 self.snapshot()
@@ -434,8 +437,6 @@ def track_log(
     times = _merge_times(np.array([t0, t1]), record_times, m.t, *odo_times)
     times = times[(times >= t0 - _TIME_TOL) & (times <= t1 + _TIME_TOL)]
     held = np.stack([od.held_at(times + _TIME_TOL) for od in log.odometry], axis=1)
-    is_record = np.zeros(times.size, dtype=bool)
-    is_record[np.searchsorted(times, record_times - _TIME_TOL)] = True
 
     def truth_fn(i: int, j: int, t: float) -> Array:
         return log.relative_truth(i, j, t)[0]
@@ -449,5 +450,5 @@ def track_log(
         rng=rng,
     )
     # velocity in force up to each event: the one held at the previous event (none before t0)
-    manager.replay(times, np.concatenate([held[:1], held[:-1]]), m, is_record)
+    manager.replay(times, np.concatenate([held[:1], held[:-1]]), m, record_times)
     return manager.results()

@@ -149,9 +149,6 @@ class TrackManagerEstimator:
             # velocity in force from each event to the next; row 0 is the manager's current time
             anchors = np.concatenate([[m.t], times])
             held = np.stack([s.held_at(anchors + TIME_TOL) for s in streams], axis=1)
-            is_record = np.zeros(times.size, dtype=bool)
-            if record_times.size:
-                is_record[np.searchsorted(times, record_times - TIME_TOL)] = True
             live = np.array([tgt in present for tgt in m_targets], dtype=bool)
             skipped = int((~live).sum())
             fused = Measurements(
@@ -164,7 +161,7 @@ class TrackManagerEstimator:
                 z=m_z[live],
                 sigma=m_s[live],
             )
-            m.replay(times, held, fused, is_record)
+            m.replay(times, held, fused, record_times)
         self._counts["skipped_absent"] += skipped
         return skipped
 
