@@ -1,0 +1,669 @@
+"""The :class:`Recording`: what a team sensed — the one input type of every estimator.
+
+Every simulator (all four seeds) and every loader (MRCLAM, the UWB CSV, bags) produces a
+:class:`Recording`; :func:`relloc.pipeline.replay.replay` feeds it to any estimator. It holds,
+for the robots ``0 … n−1`` named in :attr:`Recording.robots`:
+
+- :class:`Odometry` per robot — body-frame velocities ``u = (v_x, v_y, v_z, ω_z)`` with their
+  time stamps and the standard deviation of their noise; ``velocity[k]`` is held over
+  ``[t[k], t[k+1])`` (zero-order hold); a unicycle reports ``(v, 0, 0, ω)``;
+- one :class:`Measurements` table of everything the sensors measured, one row per reading:
+  ``t``, ``kind`` (a :data:`KINDS` name, which fixes the meaning of the ``value`` columns),
+  ``observer``, ``target`` (a robot index, or :data:`NO_TARGET` when the reading is of a
+  landmark, is absolute, or has *unknown correspondence*), ``landmark`` (an index into
+  :attr:`Recording.landmarks` or :data:`NO_TARGET`), ``value`` and ``sigma`` (the sensor's
+  stated standard deviation per column, NaN when the sensor states none) and ``origin`` — who
+  really produced the reading (a robot index, :data:`CLUTTER`, or :data:`ORIGIN_UNKNOWN`),
+  which only scoring may read, never an estimator;
+- optional :class:`GroundTruth` per robot — poses ``(x, y, z, ψ)`` in one world frame;
+- optional static landmarks ``(L, 3)`` world positions;
+- ``meta`` (what the loader or simulator wants to state) and ``skips`` (the loader's
+  :class:`SkipReport`: rows read, kept and skipped per file and reason).
+
+Every array is validated on construction (shapes, finite numbers, strictly increasing time for
+truth and odometry, non-decreasing time for measurements, no duplicated reading of a known
+target, indices in range); a violation raises :class:`relloc.errors.DataError` naming the field
+and the first offending row.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from relloc.core.angles import circular_interp, wrap_angle
+from relloc.errors import DataError
+
+Array = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+BoolArray = NDArray[np.bool_]
+
+POSE_FIELDS = ("x", "y", "z", "yaw")
+VELOCITY_FIELDS = ("v_x", "v_y", "v_z", "w_z")
+PLATFORMS = ("ground", "aerial")
+
+#: ``target`` / ``landmark`` of a row that names no robot / no landmark.
+NO_TARGET = -1
+#: ``origin`` of a false reading (clutter).
+CLUTTER = -1
+#: ``origin`` when the truth about a reading is not known (real data, unknown correspondence).
+ORIGIN_UNKNOWN = -2
+
+#: Width of the ``value`` and ``sigma`` columns (the widest kind).
+VALUE_WIDTH = 3
+
+
+@dataclass(frozen=True)
+class MeasurementKind:
+    """What the ``value`` columns of a row of this kind mean.
+
+    ``fields`` name the columns in order (the rest of the row is NaN); ``angles`` are the
+    columns that are angles (wrapped in residuals); ``positive`` the columns that must be > 0;
+    ``needs_target``: ``"robot"`` (a known robot), ``"robot_or_landmark_or_unknown"``,
+    ``"none"`` (absolute readings such as a GPS fix).
+    """
+
+    name: str
+    fields: tuple[str, ...]
+    angles: tuple[int, ...] = ()
+    positive: tuple[int, ...] = ()
+    needs_target: str = "robot_or_landmark_or_unknown"
+
+    @property
+    def dim(self) -> int:
+        return len(self.fields)
+
+
+#: Every kind of reading relloc understands, by name.
+KINDS: Mapping[str, MeasurementKind] = MappingProxyType(
+    {
+        k.name: k
+        for k in (
+            # range, azimuth and elevation of a robot in the observer's body frame (seed 000 Eq. 2)
+            MeasurementKind(
+                "range_bearing_elevation", ("range", "azimuth", "elevation"), (1, 2), (0,)
+            ),
+            # planar range and bearing (MRCLAM camera, seed 001)
+            MeasurementKind("range_bearing", ("range", "bearing"), (1,), (0,)),
+            # planar bearing only (seed 001)
+            MeasurementKind("bearing", ("bearing",), (0,)),
+            # azimuth and elevation without range (seed 002's bearing sensor)
+            MeasurementKind("bearing_elevation", ("azimuth", "elevation"), (0, 1)),
+            # range only (UWB; seed 002's and seed 003's range sensors)
+            MeasurementKind("range", ("range",), (), (0,)),
+            # height of the target above the observer (seed 002's altimeter exchange)
+            MeasurementKind("height", ("height",), needs_target="robot"),
+            # absolute planar pose fix (GPS-like, seed 001)
+            MeasurementKind("pose", ("x", "y", "yaw"), (2,), needs_target="none"),
+            # a drone's reading of the pair {leader, target}: bearing of p_leader − p_target in
+            # the world frame and both headings (seed 003)
+            MeasurementKind(
+                "pair_sighting",
+                ("bearing", "heading_target", "heading_leader"),
+                (0, 1, 2),
+                needs_target="robot",
+            ),
+        )
+    }
+)
+KIND_NAMES: tuple[str, ...] = tuple(KINDS)
+
+
+def kind_code(name: str) -> int:
+    """The integer code stored in :attr:`Measurements.kind` for the kind ``name``."""
+    try:
+        return KIND_NAMES.index(name)
+    except ValueError:
+        raise DataError(
+            f"unknown measurement kind {name!r}; known: {', '.join(KIND_NAMES)}"
+        ) from None
+
+
+def _float_array(
+    value: object, shape_tail: tuple[int, ...], where: str, *, nan_ok: bool = False
+) -> Array:
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise DataError(f"{where}: not numeric ({exc})") from exc
+    if arr.ndim != 1 + len(shape_tail) or arr.shape[1:] != shape_tail:
+        expected = "(N" + "".join(f", {d}" for d in shape_tail) + ")"
+        raise DataError(f"{where}: expected shape {expected}, got {arr.shape}")
+    bad = np.isinf(arr) if nan_ok else ~np.isfinite(arr)
+    if bad.any():
+        row = int(np.argwhere(bad)[0][0])
+        raise DataError(f"{where}: non-finite value in row {row}")
+    arr = np.array(arr, copy=True)
+    arr.setflags(write=False)
+    return arr
+
+
+def _int_array(value: object, n: int, where: str) -> IntArray:
+    raw = np.asarray(value)
+    if raw.ndim != 1 or (raw.size and not np.issubdtype(raw.dtype, np.integer)):
+        raise DataError(f"{where}: expected a 1-D integer array")
+    if raw.shape[0] != n:
+        raise DataError(f"{where}: {raw.shape[0]} rows but {n} timestamps")
+    arr = np.array(raw, dtype=np.int64, copy=True)
+    arr.setflags(write=False)
+    return arr
+
+
+def _check_times(t: Array, where: str, *, strict: bool) -> None:
+    if t.size == 0:
+        return
+    d = np.diff(t)
+    bad = d <= 0 if strict else d < 0
+    if bad.any():
+        row = int(np.argmax(bad)) + 1
+        kind = "strictly increasing" if strict else "sorted (non-decreasing)"
+        raise DataError(
+            f"{where}: timestamps must be {kind}; row {row} has t={t[row]!r} after t={t[row - 1]!r}"
+        )
+
+
+@dataclass(frozen=True, kw_only=True)
+class GroundTruth:
+    """True poses of one robot: ``t (N,)`` strictly increasing, ``pose (N, 4)`` = (x, y, z, ψ)."""
+
+    t: Array
+    pose: Array
+    where: str = field(default="truth", compare=False, repr=False)
+
+    def __post_init__(self) -> None:
+        t = _float_array(self.t, (), f"{self.where}.t")
+        pose = _float_array(self.pose, (4,), f"{self.where}.pose")
+        if pose.shape[0] != t.shape[0]:
+            raise DataError(f"{self.where}: {t.shape[0]} timestamps but {pose.shape[0]} poses")
+        if t.size < 2:
+            raise DataError(f"{self.where}: at least two samples are needed, got {t.size}")
+        _check_times(t, f"{self.where}.t", strict=True)
+        object.__setattr__(self, "t", t)
+        object.__setattr__(self, "pose", pose)
+
+    def at(self, t: Array | float) -> Array:
+        """Poses interpolated at times ``t`` (linear in x, y, z; on the circle in ψ).
+
+        Times outside ``[t[0], t[-1]]`` raise :class:`DataError` (no extrapolation).
+        """
+        tq = np.atleast_1d(np.asarray(t, dtype=float))
+        if tq.size and (tq.min() < self.t[0] - 1e-9 or tq.max() > self.t[-1] + 1e-9):
+            raise DataError(
+                f"{self.where}: query time outside the recorded span "
+                f"[{self.t[0]:.6g}, {self.t[-1]:.6g}]: [{tq.min():.6g}, {tq.max():.6g}]"
+            )
+        out = np.empty((tq.size, 4))
+        for j in range(3):
+            out[:, j] = np.interp(tq, self.t, self.pose[:, j])
+        out[:, 3] = circular_interp(tq, self.t, self.pose[:, 3])
+        return out
+
+
+@dataclass(frozen=True, kw_only=True)
+class Odometry:
+    """Body-frame velocities of one robot: ``t (K,)``, ``velocity (K, 4)`` = (v_x, v_y, v_z, ω_z).
+
+    ``velocity[k]`` applies over ``[t[k], t[k+1])``. ``sigma (4,)`` is the standard deviation of
+    the white noise on each channel (0 for a channel known exactly, e.g. v_y of a unicycle). A
+    robot that never reported odometry has ``K = 0`` and stands still.
+    """
+
+    t: Array
+    velocity: Array
+    sigma: Array
+    where: str = field(default="odometry", compare=False, repr=False)
+
+    def __post_init__(self) -> None:
+        t = _float_array(self.t, (), f"{self.where}.t")
+        vel = _float_array(self.velocity, (4,), f"{self.where}.velocity")
+        sigma = _float_array(np.reshape(self.sigma, (1, -1)), (4,), f"{self.where}.sigma")[0]
+        if vel.shape[0] != t.shape[0]:
+            raise DataError(f"{self.where}: {t.shape[0]} timestamps but {vel.shape[0]} velocities")
+        if np.any(sigma < 0):
+            raise DataError(f"{self.where}.sigma: standard deviations must be ≥ 0, got {sigma}")
+        _check_times(t, f"{self.where}.t", strict=True)
+        object.__setattr__(self, "t", t)
+        object.__setattr__(self, "velocity", vel)
+        object.__setattr__(self, "sigma", sigma)
+
+    def held_at(self, t: Array | float) -> Array:
+        """Zero-order-hold velocities at times ``t``: the last sample at or before each time.
+
+        Times before the first sample get zero velocity (the robot has not reported motion yet).
+        """
+        tq = np.atleast_1d(np.asarray(t, dtype=float))
+        idx = np.searchsorted(self.t, tq, side="right") - 1
+        out = np.zeros((tq.size, 4))
+        ok = idx >= 0
+        out[ok] = self.velocity[idx[ok]]
+        return out
+
+    def stamp_at(self, t: Array | float) -> Array:
+        """Time stamp of the sample held at each time ``t`` (NaN before the first sample)."""
+        tq = np.atleast_1d(np.asarray(t, dtype=float))
+        idx = np.searchsorted(self.t, tq, side="right") - 1
+        out = np.full(tq.size, np.nan)
+        ok = idx >= 0
+        out[ok] = self.t[idx[ok]]
+        return out
+
+
+@dataclass(frozen=True, kw_only=True)
+class Measurements:
+    """Every reading of a team, one row each, sorted by time (module docstring).
+
+    ``t (M,)``; ``kind (M,)`` codes into :data:`KIND_NAMES`; ``observer``, ``target``,
+    ``landmark``, ``origin (M,)`` integer indices; ``value (M, 3)`` and ``sigma (M, 3)`` with the
+    columns beyond the kind's width NaN. ``origin`` defaults to ``target`` where the target is a
+    robot and to :data:`ORIGIN_UNKNOWN` elsewhere.
+    """
+
+    t: Array
+    kind: IntArray
+    observer: IntArray
+    target: IntArray
+    value: Array
+    sigma: Array
+    landmark: IntArray | None = None
+    origin: IntArray | None = None
+
+    def __post_init__(self) -> None:
+        t = _float_array(self.t, (), "measurements.t")
+        n = t.shape[0]
+        kind = _int_array(self.kind, n, "measurements.kind")
+        observer = _int_array(self.observer, n, "measurements.observer")
+        target = _int_array(self.target, n, "measurements.target")
+        landmark = _int_array(
+            np.full(n, NO_TARGET, dtype=np.int64) if self.landmark is None else self.landmark,
+            n,
+            "measurements.landmark",
+        )
+        default_origin = np.where(target >= 0, target, ORIGIN_UNKNOWN).astype(np.int64)
+        origin = _int_array(
+            default_origin if self.origin is None else self.origin, n, "measurements.origin"
+        )
+        value = _float_array(self.value, (VALUE_WIDTH,), "measurements.value", nan_ok=True)
+        sigma = _float_array(self.sigma, (VALUE_WIDTH,), "measurements.sigma", nan_ok=True)
+        for name, column in (("value", value), ("sigma", sigma)):
+            if column.shape[0] != n:
+                raise DataError(f"measurements.{name}: {column.shape[0]} rows but {n} timestamps")
+        _check_times(t, "measurements.t", strict=False)
+        bad_kind = (kind < 0) | (kind >= len(KIND_NAMES))
+        if bad_kind.any():
+            row = int(np.argmax(bad_kind))
+            raise DataError(f"measurements.kind: row {row} has unknown kind code {kind[row]}")
+        for code in np.unique(kind):
+            _check_kind_rows(KINDS[KIND_NAMES[code]], kind == code, value, sigma, target, landmark)
+        if np.any(observer < 0):
+            raise DataError(f"measurements.observer: row {int(np.argmax(observer < 0))} is < 0")
+        same = observer == target
+        if same.any():
+            raise DataError(f"measurements: row {int(np.argmax(same))} has observer == target")
+        known = (target >= 0) | (landmark >= 0)
+        if n > 1 and known.sum() > 1:
+            rows = np.flatnonzero(known)
+            key = np.stack([t[rows], kind[rows], observer[rows], target[rows], landmark[rows]], 1)
+            order = np.lexsort(key.T[::-1])
+            dup = np.all(np.diff(key[order], axis=0) == 0, axis=1)
+            if dup.any():
+                row = int(rows[order[int(np.argmax(dup)) + 1]])
+                raise DataError(
+                    f"measurements: row {row} repeats (t, kind, observer, target, landmark) of "
+                    "another row"
+                )
+        for name, arr in (
+            ("t", t),
+            ("kind", kind),
+            ("observer", observer),
+            ("target", target),
+            ("landmark", landmark),
+            ("origin", origin),
+            ("value", value),
+            ("sigma", sigma),
+        ):
+            object.__setattr__(self, name, arr)
+
+    @property
+    def size(self) -> int:
+        return int(self.t.shape[0])
+
+    def __len__(self) -> int:
+        return self.size
+
+    def select(self, mask: BoolArray | IntArray) -> Measurements:
+        """The rows picked by a boolean mask or an index array (order kept)."""
+        assert self.landmark is not None and self.origin is not None
+        return Measurements(
+            t=self.t[mask],
+            kind=self.kind[mask],
+            observer=self.observer[mask],
+            target=self.target[mask],
+            value=self.value[mask],
+            sigma=self.sigma[mask],
+            landmark=self.landmark[mask],
+            origin=self.origin[mask],
+        )
+
+    def of_kind(self, *names: str) -> Measurements:
+        """Only the rows of the named kinds."""
+        return self.select(np.isin(self.kind, [kind_code(k) for k in names]))
+
+    def kind_names(self) -> tuple[str, ...]:
+        """The kind name of every row."""
+        return tuple(KIND_NAMES[int(k)] for k in self.kind)
+
+    def values(self, name: str) -> Array:
+        """``(M, dim)`` values of the rows of kind ``name`` (the other columns dropped)."""
+        return np.asarray(self.of_kind(name).value[:, : KINDS[name].dim])
+
+    @staticmethod
+    def concatenate(parts: Sequence[Measurements]) -> Measurements:
+        """Rows of every part, sorted by time (stable: equal times keep the parts' order)."""
+        if not parts:
+            return empty_measurements()
+        t = np.concatenate([p.t for p in parts])
+        order = np.argsort(t, kind="stable")
+
+        def cat(name: str) -> NDArray[Any]:
+            return np.concatenate([getattr(p, name) for p in parts])[order]
+
+        return Measurements(
+            t=t[order],
+            kind=cat("kind"),
+            observer=cat("observer"),
+            target=cat("target"),
+            value=cat("value"),
+            sigma=cat("sigma"),
+            landmark=cat("landmark"),
+            origin=cat("origin"),
+        )
+
+
+def _check_kind_rows(
+    spec: MeasurementKind,
+    rows: BoolArray,
+    value: Array,
+    sigma: Array,
+    target: IntArray,
+    landmark: IntArray,
+) -> None:
+    """Validate the rows of one kind: used columns finite, the rest NaN, ranges > 0, σ > 0."""
+    where = f"measurements ({spec.name})"
+    idx = np.flatnonzero(rows)
+    used, unused = value[idx, : spec.dim], value[idx, spec.dim :]
+    if not np.isfinite(used).all():
+        row = int(idx[np.argwhere(~np.isfinite(used))[0][0]])
+        raise DataError(f"{where}: row {row} has a non-finite {spec.fields} value")
+    if unused.size and not np.isnan(unused).all():
+        row = int(idx[np.argwhere(~np.isnan(unused))[0][0]])
+        raise DataError(f"{where}: row {row} has values beyond the kind's {spec.dim} columns")
+    for col in spec.positive:
+        bad = ~(value[idx, col] > 0)
+        if bad.any():
+            raise DataError(f"{where}: row {int(idx[np.argmax(bad)])} has {spec.fields[col]} ≤ 0")
+    s = sigma[idx, : spec.dim]
+    bad_sigma = ~np.isnan(s) & ~(s > 0)
+    if bad_sigma.any():
+        row = int(idx[np.argwhere(bad_sigma)[0][0]])
+        raise DataError(f"{where}: row {row} has a standard deviation ≤ 0")
+    if sigma[idx, spec.dim :].size and not np.isnan(sigma[idx, spec.dim :]).all():
+        raise DataError(f"{where}: σ given beyond the kind's {spec.dim} columns")
+    has_robot, has_landmark = target[idx] >= 0, landmark[idx] >= 0
+    if (has_robot & has_landmark).any():
+        row = int(idx[np.argmax(has_robot & has_landmark)])
+        raise DataError(f"{where}: row {row} names both a robot and a landmark")
+    if spec.needs_target == "robot" and not has_robot.all():
+        row = int(idx[np.argmax(~has_robot)])
+        raise DataError(f"{where}: row {row} needs a target robot")
+    if spec.needs_target == "none" and (has_robot | has_landmark).any():
+        row = int(idx[np.argmax(has_robot | has_landmark)])
+        raise DataError(f"{where}: row {row} is absolute and must name no target")
+
+
+def empty_measurements() -> Measurements:
+    """A measurement table with no rows."""
+    z = np.zeros(0, dtype=np.int64)
+    return Measurements(
+        t=np.zeros(0),
+        kind=z,
+        observer=z,
+        target=z,
+        value=np.zeros((0, VALUE_WIDTH)),
+        sigma=np.zeros((0, VALUE_WIDTH)),
+    )
+
+
+def measurement_rows(
+    kind: str,
+    *,
+    t: Array,
+    observer: IntArray | int,
+    value: Array,
+    sigma: Array | None = None,
+    target: IntArray | int = NO_TARGET,
+    landmark: IntArray | int = NO_TARGET,
+    origin: IntArray | None = None,
+) -> Measurements:
+    """A table of rows of one kind: ``value (M, dim)``, ``sigma (M, dim)`` or ``(dim,)``
+    (NaN-padded to the table width); scalars broadcast to every row."""
+    spec = KINDS[kind] if kind in KINDS else None
+    if spec is None:
+        kind_code(kind)  # raises naming the known kinds
+        raise AssertionError  # pragma: no cover
+    t = np.asarray(t, dtype=float).reshape(-1)
+    m = t.size
+    v = np.asarray(value, dtype=float).reshape(m, spec.dim)
+    padded = np.full((m, VALUE_WIDTH), np.nan)
+    padded[:, : spec.dim] = v
+    s = np.full((m, VALUE_WIDTH), np.nan)
+    if sigma is not None:
+        s[:, : spec.dim] = np.broadcast_to(np.asarray(sigma, dtype=float), (m, spec.dim))
+
+    def ints(x: IntArray | int) -> IntArray:
+        return np.broadcast_to(np.asarray(x, dtype=np.int64), (m,)).copy()
+
+    return Measurements(
+        t=t,
+        kind=np.full(m, kind_code(kind), dtype=np.int64),
+        observer=ints(observer),
+        target=ints(target),
+        value=padded,
+        sigma=s,
+        landmark=ints(landmark),
+        origin=None if origin is None else ints(origin),
+    )
+
+
+@dataclass(frozen=True)
+class SkippedRow:
+    """One example of a skipped row: 1-based line number, reason and the raw text."""
+
+    line: int
+    reason: str
+    text: str
+
+
+@dataclass(frozen=True)
+class FileSkips:
+    """What a loader did with the rows of one file: read = kept + skipped (by reason)."""
+
+    file: str
+    rows_read: int
+    rows_kept: int
+    skipped: Mapping[str, int] = field(default_factory=dict)
+    examples: tuple[SkippedRow, ...] = ()
+
+    @property
+    def n_skipped(self) -> int:
+        return sum(self.skipped.values())
+
+
+@dataclass(frozen=True)
+class SkipReport:
+    """Rows read, kept and skipped per file and reason, with the first few examples."""
+
+    files: tuple[FileSkips, ...] = ()
+
+    @property
+    def n_skipped(self) -> int:
+        return sum(f.n_skipped for f in self.files)
+
+    def skipped_by_reason(self) -> dict[str, int]:
+        out: dict[str, int] = {}
+        for f in self.files:
+            for reason, n in f.skipped.items():
+                out[reason] = out.get(reason, 0) + n
+        return out
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "rows_skipped": self.n_skipped,
+            "by_reason": self.skipped_by_reason(),
+            "files": {
+                f.file: {
+                    "rows_read": f.rows_read,
+                    "rows_kept": f.rows_kept,
+                    "skipped": dict(f.skipped),
+                    "examples": [
+                        {"line": e.line, "reason": e.reason, "text": e.text} for e in f.examples
+                    ],
+                }
+                for f in self.files
+            },
+        }
+
+
+@dataclass(frozen=True, kw_only=True)
+class Recording:
+    """What a team sensed (module docstring). Robots are indexed ``0 … n−1``.
+
+    ``platforms[i]`` is ``"ground"`` or ``"aerial"``; ``odometry[i]`` and (if known)
+    ``truth[i]`` belong to ``robots[i]``; ``landmarks (L, 3)`` are world positions indexed by
+    the measurements' ``landmark`` column; ``source`` says where the recording came from.
+    """
+
+    robots: tuple[str, ...]
+    platforms: tuple[str, ...]
+    odometry: tuple[Odometry, ...]
+    measurements: Measurements
+    truth: tuple[GroundTruth, ...] | None = None
+    landmarks: Array = field(default_factory=lambda: np.zeros((0, 3)))
+    source: str = ""
+    meta: Mapping[str, Any] = field(default_factory=dict)
+    skips: SkipReport = field(default_factory=SkipReport)
+
+    def __post_init__(self) -> None:
+        robots = tuple(str(r) for r in self.robots)
+        if not robots:
+            raise DataError("recording.robots: a recording needs at least one robot")
+        if len(set(robots)) != len(robots):
+            raise DataError(f"recording.robots: names must be unique, got {robots}")
+        n = len(robots)
+        if len(self.platforms) != n or len(self.odometry) != n:
+            raise DataError(
+                f"recording: {len(self.platforms)} platforms and {len(self.odometry)} odometry "
+                f"streams for {n} robots"
+            )
+        for i, platform in enumerate(self.platforms):
+            if platform not in PLATFORMS:
+                raise DataError(
+                    f"recording.platforms[{i}]: must be 'ground' or 'aerial', got {platform!r}"
+                )
+        for i, od in enumerate(self.odometry):
+            if not isinstance(od, Odometry):
+                raise DataError(
+                    f"recording.odometry[{i}]: expected Odometry, got {type(od).__name__}"
+                )
+        if self.truth is not None:
+            if len(self.truth) != n:
+                raise DataError(f"recording.truth: {len(self.truth)} entries for {n} robots")
+            for i, gt in enumerate(self.truth):
+                if not isinstance(gt, GroundTruth):
+                    raise DataError(
+                        f"recording.truth[{i}]: expected GroundTruth, got {type(gt).__name__}"
+                    )
+        m = self.measurements
+        if not isinstance(m, Measurements):
+            raise DataError("recording.measurements: expected a Measurements table")
+        landmarks = _float_array(np.reshape(self.landmarks, (-1, 3)), (3,), "recording.landmarks")
+        assert m.landmark is not None and m.origin is not None
+        for name, ids, limit in (
+            ("observer", m.observer, n),
+            ("target", m.target, n),
+            ("landmark", m.landmark, landmarks.shape[0]),
+            ("origin", m.origin, n),
+        ):
+            bad = ids >= limit
+            if bad.any():
+                row = int(np.argmax(bad))
+                raise DataError(
+                    f"measurements.{name}: row {row} names unknown index {int(ids[row])} "
+                    f"(the recording has {limit})"
+                )
+        object.__setattr__(self, "robots", robots)
+        object.__setattr__(self, "platforms", tuple(self.platforms))
+        object.__setattr__(self, "odometry", tuple(self.odometry))
+        object.__setattr__(self, "truth", None if self.truth is None else tuple(self.truth))
+        object.__setattr__(self, "landmarks", landmarks)
+        object.__setattr__(self, "meta", MappingProxyType(dict(self.meta)))
+
+    @property
+    def n_robots(self) -> int:
+        return len(self.robots)
+
+    def index(self, robot: str | int) -> int:
+        """Index of a robot given its name or index (DataError if unknown)."""
+        if isinstance(robot, (int, np.integer)):
+            if 0 <= int(robot) < self.n_robots:
+                return int(robot)
+        elif robot in self.robots:
+            return self.robots.index(robot)
+        raise DataError(f"unknown robot {robot!r}; the recording has {', '.join(self.robots)}")
+
+    @property
+    def span(self) -> tuple[float, float]:
+        """The time span covered by every robot's ground truth, or else by the data."""
+        if self.truth is not None:
+            return max(float(g.t[0]) for g in self.truth), min(float(g.t[-1]) for g in self.truth)
+        stamps = [od.t for od in self.odometry if od.t.size] + [self.measurements.t]
+        t = np.concatenate(stamps) if stamps else np.zeros(0)
+        if t.size == 0:
+            raise DataError(f"recording {self.source!r}: no data, so no time span")
+        return float(t.min()), float(t.max())
+
+    def require_truth(self, what: str) -> tuple[GroundTruth, ...]:
+        """The ground truth, or a :class:`DataError` saying that ``what`` needs it."""
+        if self.truth is None:
+            raise DataError(f"{what} needs ground truth; recording {self.source!r} has none")
+        return self.truth
+
+    def relative_truth(self, observer: str | int, observed: str | int, t: Array | float) -> Array:
+        """True relative pose ``(x, y, z, φ)`` of ``observed`` in ``observer``'s body frame.
+
+        ``p = Rz(ψ_l)ᵀ (p_c − p_l)``, ``φ = wrap(ψ_c − ψ_l)`` — the state of seed 000 Eq. 1
+        (the 4-DOF ``⊖a ⊕ b`` of :func:`relloc.core.poses.relative`, vectorised over time).
+        Returns shape ``(len(t), 4)``.
+        """
+        truth = self.require_truth("relative_truth")
+        a = truth[self.index(observer)].at(t)
+        b = truth[self.index(observed)].at(t)
+        return relative_pose(a, b)
+
+
+def relative_pose(a: Array, b: Array) -> Array:
+    """Vectorised 4-DOF ``⊖a ⊕ b`` for poses ``(N, 4)``: ``b`` expressed in ``a``'s body frame."""
+    a = np.atleast_2d(a)
+    b = np.atleast_2d(b)
+    d = b[:, :3] - a[:, :3]
+    c, s = np.cos(a[:, 3]), np.sin(a[:, 3])
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    out[:, 0] = c * d[:, 0] + s * d[:, 1]
+    out[:, 1] = -s * d[:, 0] + c * d[:, 1]
+    out[:, 2] = d[:, 2]
+    out[:, 3] = wrap_angle(b[:, 3] - a[:, 3])
+    return out

@@ -1,0 +1,302 @@
+"""The one estimates record: what any estimator believed over time, as plain arrays.
+
+:class:`Estimates` holds, per (owner, subject) — the robot that estimates and the robot it
+estimates, or ``"team"`` and a robot for a centralised filter —
+
+- a :class:`BeliefSeries`: the belief recorded at the record times while it existed (``t``,
+  ``mean``, ``cov``, the track ``age`` and scalar ``info`` diagnostics), in a named frame of
+  :mod:`relloc.pipeline.frames`;
+- an :class:`UpdateSeries`: one entry per measurement update (NIS and its degrees of freedom,
+  conditioning of ``R`` and ``S``);
+
+plus the track events and the estimators' counters. It ships between processes as it is (Monte
+Carlo workers, robot nodes) and is scored by :func:`relloc.pipeline.evaluation.evaluate`.
+:class:`Recorder` builds it while a replay runs, and hands out increments for robot nodes.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from relloc.errors import ConfigError
+from relloc.pipeline.contract import Belief, TrackEvent, UpdateRecord
+
+Array = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+
+@dataclass(frozen=True, kw_only=True)
+class BeliefSeries:
+    """``owner``'s recorded belief of ``subject`` in ``frame``: ``t (K,)``, ``mean (K, d)``,
+    ``cov (K, d, d)``, ``age (K,)`` and ``info[name] (K,)``."""
+
+    owner: str
+    subject: str
+    frame: str
+    t: Array
+    mean: Array
+    cov: Array
+    age: Array
+    info: Mapping[str, Array] = field(default_factory=dict)
+
+    @property
+    def label(self) -> str:
+        return f"{self.owner}->{self.subject}"
+
+
+@dataclass(frozen=True, kw_only=True)
+class UpdateSeries:
+    """``owner``'s measurement updates of its belief of ``subject``, one entry each."""
+
+    owner: str
+    subject: str
+    t: Array
+    age: Array
+    nis: Array
+    dof: IntArray
+    cond_r: Array
+    cond_s: Array
+
+    @property
+    def label(self) -> str:
+        return f"{self.owner}->{self.subject}"
+
+
+def _empty_updates(owner: str, subject: str) -> UpdateSeries:
+    z = np.zeros(0)
+    return UpdateSeries(
+        owner=owner,
+        subject=subject,
+        t=z,
+        age=z,
+        nis=z,
+        dof=np.zeros(0, dtype=np.int64),
+        cond_r=z,
+        cond_s=z,
+    )
+
+
+@dataclass(frozen=True, kw_only=True)
+class Estimates:
+    """What one or more estimators produced over a recording (module docstring).
+
+    ``beliefs`` and ``updates`` are sorted by (owner, subject); ``events`` by time.
+    """
+
+    estimator: str
+    beliefs: tuple[BeliefSeries, ...] = ()
+    updates: tuple[UpdateSeries, ...] = ()
+    events: tuple[TrackEvent, ...] = ()
+    counts: Mapping[str, int] = field(default_factory=dict)
+
+    def series(self, owner: str, subject: str) -> BeliefSeries:
+        """The belief series of ``owner->subject`` (ConfigError if there is none)."""
+        for s in self.beliefs:
+            if (s.owner, s.subject) == (owner, subject):
+                return s
+        raise ConfigError(f"no estimates for {owner}->{subject}")
+
+    def updates_of(self, owner: str, subject: str) -> UpdateSeries:
+        """The update series of ``owner->subject`` (empty if it was never updated)."""
+        for u in self.updates:
+            if (u.owner, u.subject) == (owner, subject):
+                return u
+        return _empty_updates(owner, subject)
+
+    @property
+    def labels(self) -> tuple[str, ...]:
+        return tuple(s.label for s in self.beliefs)
+
+
+@dataclass
+class _Rows:
+    frame: str = ""
+    t: list[float] = field(default_factory=list)
+    mean: list[Array] = field(default_factory=list)
+    cov: list[Array] = field(default_factory=list)
+    age: list[float] = field(default_factory=list)
+    info: dict[str, list[float]] = field(default_factory=dict)
+    dim: int = 0
+
+
+@dataclass
+class _UpdateRows:
+    t: list[float] = field(default_factory=list)
+    age: list[float] = field(default_factory=list)
+    nis: list[float] = field(default_factory=list)
+    dof: list[int] = field(default_factory=list)
+    cond_r: list[float] = field(default_factory=list)
+    cond_s: list[float] = field(default_factory=list)
+
+
+class Recorder:
+    """Collects beliefs, updates and events while a replay runs.
+
+    :meth:`results` returns everything so far; :meth:`take_new` only what was added since its
+    previous call (a robot node ships that every report period).
+    """
+
+    def __init__(self, estimator: str) -> None:
+        self.estimator = estimator
+        self._beliefs: dict[tuple[str, str], _Rows] = {}
+        self._updates: dict[tuple[str, str], _UpdateRows] = {}
+        self._events: list[TrackEvent] = []
+        self._counts: dict[str, int] = {}
+        self._sent_beliefs: dict[tuple[str, str], int] = {}
+        self._sent_updates: dict[tuple[str, str], int] = {}
+        self._sent_events = 0
+
+    def record(self, t: float, owner: str, beliefs: Iterable[Belief]) -> None:
+        """Store ``owner``'s ``beliefs`` at time ``t``."""
+        for b in beliefs:
+            rows = self._beliefs.setdefault((owner, b.subject), _Rows(frame=b.frame))
+            if rows.frame != b.frame:
+                raise ConfigError(
+                    f"{owner}->{b.subject}: frame changed from {rows.frame} to {b.frame}"
+                )
+            rows.dim = b.mean.size
+            rows.t.append(float(t))
+            rows.mean.append(b.mean.copy())
+            rows.cov.append(b.cov.copy())
+            rows.age.append(float(b.age))
+            for name in set(rows.info) | set(b.info):
+                col = rows.info.setdefault(name, [np.nan] * (len(rows.t) - 1))
+                col.append(float(b.info.get(name, np.nan)))
+
+    def add_updates(self, owner: str, updates: Iterable[UpdateRecord]) -> None:
+        for u in updates:
+            rows = self._updates.setdefault((owner, u.subject), _UpdateRows())
+            rows.t.append(u.t)
+            rows.age.append(u.age)
+            rows.nis.append(u.nis)
+            rows.dof.append(u.dof)
+            rows.cond_r.append(u.cond_r)
+            rows.cond_s.append(u.cond_s)
+
+    def add_events(self, events: Iterable[TrackEvent]) -> None:
+        self._events.extend(events)
+
+    def count(self, counts: Mapping[str, int]) -> None:
+        """Add estimator counters (summed by name)."""
+        for k, v in counts.items():
+            self._counts[k] = self._counts.get(k, 0) + int(v)
+
+    def _belief_series(self, key: tuple[str, str], start: int) -> BeliefSeries:
+        r = self._beliefs[key]
+        d = r.dim
+        return BeliefSeries(
+            owner=key[0],
+            subject=key[1],
+            frame=r.frame,
+            t=np.asarray(r.t[start:], dtype=float),
+            mean=np.asarray(r.mean[start:], dtype=float).reshape(-1, d),
+            cov=np.asarray(r.cov[start:], dtype=float).reshape(-1, d, d),
+            age=np.asarray(r.age[start:], dtype=float),
+            info={k: np.asarray(v[start:], dtype=float) for k, v in r.info.items()},
+        )
+
+    def _update_series(self, key: tuple[str, str], start: int) -> UpdateSeries:
+        r = self._updates[key]
+        return UpdateSeries(
+            owner=key[0],
+            subject=key[1],
+            t=np.asarray(r.t[start:], dtype=float),
+            age=np.asarray(r.age[start:], dtype=float),
+            nis=np.asarray(r.nis[start:], dtype=float),
+            dof=np.asarray(r.dof[start:], dtype=np.int64),
+            cond_r=np.asarray(r.cond_r[start:], dtype=float),
+            cond_s=np.asarray(r.cond_s[start:], dtype=float),
+        )
+
+    def results(self) -> Estimates:
+        """Everything recorded so far, in (owner, subject) order."""
+        return Estimates(
+            estimator=self.estimator,
+            beliefs=tuple(self._belief_series(k, 0) for k in sorted(self._beliefs)),
+            updates=tuple(self._update_series(k, 0) for k in sorted(self._updates)),
+            events=tuple(self._events),
+            counts=dict(self._counts),
+        )
+
+    def take_new(self) -> Estimates:
+        """What was recorded since the previous call (counters: the running totals)."""
+        beliefs = []
+        for k in sorted(self._beliefs):
+            start = self._sent_beliefs.get(k, 0)
+            self._sent_beliefs[k] = len(self._beliefs[k].t)
+            if len(self._beliefs[k].t) > start:
+                beliefs.append(self._belief_series(k, start))
+        updates = []
+        for k in sorted(self._updates):
+            start = self._sent_updates.get(k, 0)
+            self._sent_updates[k] = len(self._updates[k].t)
+            if len(self._updates[k].t) > start:
+                updates.append(self._update_series(k, start))
+        events = self._events[self._sent_events :]
+        self._sent_events = len(self._events)
+        return Estimates(
+            estimator=self.estimator,
+            beliefs=tuple(beliefs),
+            updates=tuple(updates),
+            events=tuple(events),
+            counts=dict(self._counts),
+        )
+
+
+def concatenate(parts: Sequence[Estimates]) -> Estimates:
+    """Join increments of the same estimators (e.g. a node's reports) into one record."""
+    if not parts:
+        raise ConfigError("concatenate: no estimates to join")
+    beliefs: dict[tuple[str, str], list[BeliefSeries]] = {}
+    updates: dict[tuple[str, str], list[UpdateSeries]] = {}
+    for p in parts:
+        for s in p.beliefs:
+            beliefs.setdefault((s.owner, s.subject), []).append(s)
+        for u in p.updates:
+            updates.setdefault((u.owner, u.subject), []).append(u)
+
+    def cat(items: Sequence[Any], name: str) -> NDArray[Any]:
+        return np.concatenate([getattr(i, name) for i in items])
+
+    joined_beliefs = []
+    for key in sorted(beliefs):
+        items = beliefs[key]
+        names = sorted({n for s in items for n in s.info})
+        joined_beliefs.append(
+            BeliefSeries(
+                owner=key[0],
+                subject=key[1],
+                frame=items[0].frame,
+                t=cat(items, "t"),
+                mean=cat(items, "mean"),
+                cov=cat(items, "cov"),
+                age=cat(items, "age"),
+                info={
+                    n: np.concatenate([s.info.get(n, np.full(s.t.size, np.nan)) for s in items])
+                    for n in names
+                },
+            )
+        )
+    joined_updates = [
+        UpdateSeries(
+            owner=key[0],
+            subject=key[1],
+            **{
+                name: cat(updates[key], name)
+                for name in ("t", "age", "nis", "dof", "cond_r", "cond_s")
+            },
+        )
+        for key in sorted(updates)
+    ]
+    return Estimates(
+        estimator=parts[0].estimator,
+        beliefs=tuple(joined_beliefs),
+        updates=tuple(joined_updates),
+        events=tuple(e for p in parts for e in p.events),
+        counts=dict(parts[-1].counts),
+    )

@@ -1,0 +1,240 @@
+"""The one evaluation: estimates against the truth of a recording, and their pooled figures.
+
+:func:`evaluate` scores every belief series of an :class:`~relloc.pipeline.estimates.Estimates`
+against the recording's ground truth in the series' frame (:mod:`relloc.pipeline.frames`):
+
+- error ``e = x̂ − x`` with the frame's angles wrapped to [−π, π), the filter's standard
+  deviations ``σ_i = √P_ii``, NEES ``eᵀ P⁻¹ e`` (seed 000 Eq. 33) and the conditioning
+  ``log10(λmax/λmin)`` of ``P`` (seed 000 Eq. 36), at every record time;
+- and, per measurement update, the NIS with its degrees of freedom and the conditioning of
+  ``R`` and ``S`` as the estimator reported them.
+
+:func:`accuracy_and_consistency` pools evaluations (runs, pairs) over their steady-state samples
+(track age ≥ ``settle_s``): RMSE of position, yaw and every state; the share of errors inside
+±3σ; ANEES and the share of NEES beyond the single-run bound ``χ²(n, 0.95)`` (about 5 % for a
+consistent filter); ANIS and the share of NIS beyond ``χ²(m, 0.95)``.
+:func:`run_averaged_nees` gives the NEES averaged over *independent runs at one instant* — the
+only average whose 95 % band (:func:`relloc.metrics.consistency.mean_chi2_band`) is valid;
+time-correlated samples of one run pooled as if independent give a band far too narrow.
+:func:`convergence_time` is the first record time after which an error stays below a threshold.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from relloc.core.recording import Recording
+from relloc.errors import ConfigError
+from relloc.metrics.conditioning import condition_log10_batch
+from relloc.metrics.consistency import anees, chi2_upper, mean_chi2_band, nees, percent_beyond
+from relloc.metrics.errors import state_errors
+from relloc.pipeline.estimates import BeliefSeries, Estimates, UpdateSeries
+from relloc.pipeline.frames import frame
+
+Array = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+
+@dataclass(frozen=True, kw_only=True)
+class SeriesEvaluation:
+    """One (owner, subject) series scored in one run.
+
+    ``t (K,)``, ``error (K, n)`` (angles wrapped), ``sigma (K, n)``, ``nees (K,)``, ``age (K,)``,
+    ``cond_p (K,)``; per update ``update_t``, ``update_age``, ``nis``, ``nis_dof``, ``cond_r``,
+    ``cond_s``. ``platform`` is the subject's (``ground``/``aerial``).
+    """
+
+    owner: str
+    subject: str
+    platform: str
+    frame: str
+    t: Array
+    error: Array
+    sigma: Array
+    nees: Array
+    age: Array
+    cond_p: Array
+    update_t: Array
+    update_age: Array
+    nis: Array
+    nis_dof: IntArray
+    cond_r: Array
+    cond_s: Array
+
+    @property
+    def label(self) -> str:
+        return f"{self.owner}->{self.subject}"
+
+
+def evaluate_series(
+    series: BeliefSeries, updates: UpdateSeries, recording: Recording
+) -> SeriesEvaluation:
+    """Score one belief series (and its updates) against the recording's truth."""
+    f = frame(series.frame)
+    if series.mean.shape[1:] != (f.dim,):
+        raise ConfigError(
+            f"{series.label}: frame {f.name} has {f.dim} states, the series {series.mean.shape}"
+        )
+    empty = series.t.size == 0
+    truth = (
+        np.zeros((0, f.dim))
+        if empty
+        else f.truth(recording, series.owner, series.subject, series.t)
+    )
+    err = state_errors(series.mean, truth, f.angles)
+    return SeriesEvaluation(
+        owner=series.owner,
+        subject=series.subject,
+        platform=recording.platforms[recording.index(series.subject)],
+        frame=f.name,
+        t=series.t,
+        error=err,
+        sigma=np.sqrt(np.diagonal(series.cov, axis1=1, axis2=2)),
+        nees=np.zeros(0) if empty else nees(err, series.cov),
+        age=series.age,
+        cond_p=np.zeros(0) if empty else condition_log10_batch(series.cov),
+        update_t=updates.t,
+        update_age=updates.age,
+        nis=updates.nis,
+        nis_dof=updates.dof,
+        cond_r=updates.cond_r,
+        cond_s=updates.cond_s,
+    )
+
+
+def evaluate(estimates: Estimates, recording: Recording) -> tuple[SeriesEvaluation, ...]:
+    """Score every belief series of ``estimates`` (in their order)."""
+    return tuple(
+        evaluate_series(s, estimates.updates_of(s.owner, s.subject), recording)
+        for s in estimates.beliefs
+    )
+
+
+def _normalised_mean(values: Array, dof: IntArray) -> float:
+    """``mean(v) / n`` for one dof ``n`` (ANEES, ANIS); ``mean(v / n)`` for mixed dofs."""
+    if values.size == 0:
+        return float("nan")
+    if np.all(dof == dof[0]):
+        return anees(values, int(dof[0]))
+    return anees(values / dof, 1)
+
+
+def _percent_beyond_bound(values: Array, dof: IntArray, p: float = 0.95) -> float:
+    if values.size == 0:
+        return float("nan")
+    if np.all(dof == dof[0]):
+        return percent_beyond(values, chi2_upper(int(dof[0]), p))
+    bounds = np.array([chi2_upper(int(d), p) for d in dof])
+    return float(100.0 * np.mean(values > bounds))
+
+
+def accuracy_and_consistency(
+    evaluations: Sequence[SeriesEvaluation], *, settle_s: float
+) -> dict[str, Any]:
+    """Pooled accuracy and consistency of evaluations in one frame (module docstring).
+
+    Keys: ``samples``, ``position_rmse_m``, ``yaw_rmse_rad``, ``rmse`` and
+    ``within_3sigma_percent`` per state, ``anees``, ``nees_bound``, ``nees_percent_beyond``,
+    ``anis``, ``nis_bound`` (the bound of the most common NIS dof), ``nis_percent_beyond``.
+    """
+    if not evaluations:
+        raise ConfigError("accuracy_and_consistency: nothing to pool")
+    frames = {e.frame for e in evaluations}
+    if len(frames) != 1:
+        raise ConfigError(f"accuracy_and_consistency: mixed frames {sorted(frames)}")
+    f = frame(frames.pop())
+    n = f.dim
+    steady = [e.age >= settle_s for e in evaluations]
+    err = np.concatenate([e.error[s] for e, s in zip(evaluations, steady, strict=True)]).reshape(
+        -1, n
+    )
+    sig = np.concatenate([e.sigma[s] for e, s in zip(evaluations, steady, strict=True)]).reshape(
+        -1, n
+    )
+    ne = np.concatenate([e.nees[s] for e, s in zip(evaluations, steady, strict=True)])
+    keep_nis = [e.update_age >= settle_s for e in evaluations]
+    ni = np.concatenate([e.nis[k] for e, k in zip(evaluations, keep_nis, strict=True)])
+    ni_dof = np.concatenate(
+        [e.nis_dof[k] for e, k in zip(evaluations, keep_nis, strict=True)]
+    ).astype(np.int64)
+    nan = float("nan")
+    position = list(f.position)
+    common_dof = int(np.bincount(ni_dof).argmax()) if ni_dof.size else 0
+    return {
+        "samples": int(err.shape[0]),
+        "position_rmse_m": float(np.sqrt(np.mean(np.sum(err[:, position] ** 2, axis=1))))
+        if err.size
+        else nan,
+        "yaw_rmse_rad": float(np.sqrt(np.mean(err[:, f.yaw] ** 2)))
+        if err.size and f.yaw is not None
+        else nan,
+        "rmse": {
+            s: float(np.sqrt(np.mean(err[:, i] ** 2))) if err.size else nan
+            for i, s in enumerate(f.states)
+        },
+        "within_3sigma_percent": {
+            s: float(100.0 * np.mean(np.abs(err[:, i]) <= 3.0 * sig[:, i])) if err.size else nan
+            for i, s in enumerate(f.states)
+        },
+        "anees": anees(ne, n),
+        "nees_bound": chi2_upper(n, 0.95),
+        "nees_percent_beyond": percent_beyond(ne, chi2_upper(n, 0.95)),
+        "anis": _normalised_mean(ni, ni_dof),
+        "nis_bound": chi2_upper(common_dof, 0.95) if common_dof else nan,
+        "nis_percent_beyond": _percent_beyond_bound(ni, ni_dof),
+    }
+
+
+def run_averaged_nees(
+    runs: Sequence[SeriesEvaluation], *, rate_hz: float, settle_s: float
+) -> tuple[Array, Array, int]:
+    """NEES averaged over independent runs at each record time where every run has a
+    steady-state sample: ``(t, mean_nees, n_runs)`` (records on a grid at ``rate_hz``)."""
+    t0 = min((float(r.t[0]) for r in runs if r.t.size), default=0.0)
+    idx = [np.rint((r.t - t0) * rate_hz).astype(np.int64) for r in runs]
+    width = max((int(i.max()) + 1 for i in idx if i.size), default=0)
+    table = np.full((len(runs), width), np.nan)
+    for k, (r, i) in enumerate(zip(runs, idx, strict=True)):
+        steady = r.age >= settle_s
+        table[k, i[steady]] = r.nees[steady]
+    full = np.all(np.isfinite(table), axis=0)
+    t = t0 + np.arange(width) / rate_hz
+    return t[full], table[:, full].mean(axis=0), len(runs)
+
+
+def nees_band_check(
+    runs: Sequence[SeriesEvaluation], *, rate_hz: float, settle_s: float, p: float = 0.95
+) -> dict[str, Any]:
+    """Share of record times at which the run-averaged NEES lies inside its two-sided ``p``
+    band (about ``100 p`` % for a consistent filter); needs ≥ 2 independent runs."""
+    if len(runs) < 2:
+        raise ConfigError("nees_band_check: needs at least two independent runs")
+    dim = frame(runs[0].frame).dim
+    _, avg, n = run_averaged_nees(runs, rate_hz=rate_hz, settle_s=settle_s)
+    lo, hi = mean_chi2_band(dim, n, p)
+    inside = float(100.0 * np.mean((avg >= lo) & (avg <= hi))) if avg.size else float("nan")
+    return {"in_band_percent": inside, "band": [lo, hi], "runs": n, "instants": int(avg.size)}
+
+
+def convergence_time(evaluation: SeriesEvaluation, thresholds: Sequence[float]) -> float | None:
+    """Seconds from the series' first record until every state's ``|error|`` stays below its
+    threshold for good (``None`` if it never settles)."""
+    th = np.asarray(thresholds, dtype=float).reshape(-1)
+    if th.size != evaluation.error.shape[1]:
+        raise ConfigError(
+            f"convergence_time: {th.size} thresholds for {evaluation.error.shape[1]} states"
+        )
+    if evaluation.t.size == 0:
+        return None
+    above = ~np.all(np.abs(evaluation.error) < th, axis=1)
+    if not above.any():
+        return 0.0
+    last = int(np.flatnonzero(above)[-1])
+    if last == above.size - 1:
+        return None
+    return float(evaluation.t[last + 1] - evaluation.t[0])
