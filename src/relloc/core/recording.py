@@ -9,12 +9,13 @@ for the robots ``0 … n−1`` named in :attr:`Recording.robots`:
   ``[t[k], t[k+1])`` (zero-order hold); a unicycle reports ``(v, 0, 0, ω)``;
 - one :class:`Measurements` table of everything the sensors measured, one row per reading:
   ``t``, ``kind`` (a :data:`KINDS` name, which fixes the meaning of the ``value`` columns),
-  ``observer``, ``target`` (a robot index, or :data:`NO_TARGET` when the reading is of a
-  landmark, is absolute, or has *unknown correspondence*), ``landmark`` (an index into
-  :attr:`Recording.landmarks` or :data:`NO_TARGET`), ``value`` and ``sigma`` (the sensor's
-  stated standard deviation per column, NaN when the sensor states none) and ``origin`` — who
-  really produced the reading (a robot index, :data:`CLUTTER`, or :data:`ORIGIN_UNKNOWN`),
-  which only scoring may read, never an estimator;
+  ``observer`` and ``sensor`` (which of the observer's sensors, 0 for the first), ``target``
+  (a robot index, or :data:`NO_TARGET` when the reading is of a landmark, is absolute, or has
+  *unknown correspondence*), ``landmark`` (an index into :attr:`Recording.landmarks` or
+  :data:`NO_TARGET`), ``value`` and ``sigma`` (the sensor's stated standard deviation per
+  column, NaN when the sensor states none) and ``origin`` — who really produced the reading (a
+  robot index, :data:`CLUTTER`, or :data:`ORIGIN_UNKNOWN`), which only scoring may read, never
+  an estimator;
 - optional :class:`GroundTruth` per robot — poses ``(x, y, z, ψ)`` in one world frame;
 - optional static landmarks ``(L, 3)`` world positions;
 - ``meta`` (what the loader or simulator wants to state) and ``skips`` (the loader's
@@ -271,6 +272,7 @@ class Measurements:
     sigma: Array
     landmark: IntArray | None = None
     origin: IntArray | None = None
+    sensor: IntArray | None = None
 
     def __post_init__(self) -> None:
         t = _float_array(self.t, (), "measurements.t")
@@ -283,6 +285,13 @@ class Measurements:
             n,
             "measurements.landmark",
         )
+        sensor = _int_array(
+            np.zeros(n, dtype=np.int64) if self.sensor is None else self.sensor,
+            n,
+            "measurements.sensor",
+        )
+        if np.any(sensor < 0):
+            raise DataError(f"measurements.sensor: row {int(np.argmax(sensor < 0))} is < 0")
         default_origin = np.where(target >= 0, target, ORIGIN_UNKNOWN).astype(np.int64)
         origin = _int_array(
             default_origin if self.origin is None else self.origin, n, "measurements.origin"
@@ -307,14 +316,17 @@ class Measurements:
         known = (target >= 0) | (landmark >= 0)
         if n > 1 and known.sum() > 1:
             rows = np.flatnonzero(known)
-            key = np.stack([t[rows], kind[rows], observer[rows], target[rows], landmark[rows]], 1)
+            key = np.stack(
+                [t[rows], kind[rows], observer[rows], sensor[rows], target[rows], landmark[rows]],
+                axis=1,
+            )
             order = np.lexsort(key.T[::-1])
             dup = np.all(np.diff(key[order], axis=0) == 0, axis=1)
             if dup.any():
                 row = int(rows[order[int(np.argmax(dup)) + 1]])
                 raise DataError(
-                    f"measurements: row {row} repeats (t, kind, observer, target, landmark) of "
-                    "another row"
+                    f"measurements: row {row} repeats (t, kind, observer, sensor, target, "
+                    "landmark) of another row"
                 )
         for name, arr in (
             ("t", t),
@@ -323,6 +335,7 @@ class Measurements:
             ("target", target),
             ("landmark", landmark),
             ("origin", origin),
+            ("sensor", sensor),
             ("value", value),
             ("sigma", sigma),
         ):
@@ -337,7 +350,7 @@ class Measurements:
 
     def select(self, mask: BoolArray | IntArray) -> Measurements:
         """The rows picked by a boolean mask or an index array (order kept)."""
-        assert self.landmark is not None and self.origin is not None
+        assert self.landmark is not None and self.origin is not None and self.sensor is not None
         return Measurements(
             t=self.t[mask],
             kind=self.kind[mask],
@@ -347,6 +360,7 @@ class Measurements:
             sigma=self.sigma[mask],
             landmark=self.landmark[mask],
             origin=self.origin[mask],
+            sensor=self.sensor[mask],
         )
 
     def of_kind(self, *names: str) -> Measurements:
@@ -381,6 +395,7 @@ class Measurements:
             sigma=cat("sigma"),
             landmark=cat("landmark"),
             origin=cat("origin"),
+            sensor=cat("sensor"),
         )
 
 
@@ -448,6 +463,7 @@ def measurement_rows(
     target: IntArray | int = NO_TARGET,
     landmark: IntArray | int = NO_TARGET,
     origin: IntArray | None = None,
+    sensor: IntArray | int = 0,
 ) -> Measurements:
     """A table of rows of one kind: ``value (M, dim)``, ``sigma (M, dim)`` or ``(dim,)``
     (NaN-padded to the table width); scalars broadcast to every row."""
@@ -476,6 +492,7 @@ def measurement_rows(
         sigma=s,
         landmark=ints(landmark),
         origin=None if origin is None else ints(origin),
+        sensor=ints(sensor),
     )
 
 

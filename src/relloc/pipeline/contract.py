@@ -62,7 +62,9 @@ class Belief:
 
     ``frame`` names the state layout and its reference (a key of
     :data:`relloc.pipeline.frames.FRAMES`); ``age`` is the time since this belief (track) was
-    started; ``info`` carries scalar diagnostics recorded beside it (e.g. a mixture's weight).
+    started; ``info`` carries scalar diagnostics recorded beside it (e.g. a mixture's weight);
+    ``track`` tells apart several tracks one estimator runs of the same subject (e.g. filter
+    variants or initial guesses side by side; empty for the one track).
     """
 
     subject: str
@@ -71,6 +73,7 @@ class Belief:
     cov: Array
     age: float = 0.0
     info: Mapping[str, float] = field(default_factory=dict)
+    track: str = ""
 
     def __post_init__(self) -> None:
         mean = np.asarray(self.mean, dtype=float).reshape(-1)
@@ -87,7 +90,8 @@ class Belief:
 class UpdateRecord:
     """One measurement update of the belief of ``subject``: its normalised innovation squared
     ``nis = νᵀ S⁻¹ ν`` with ``dof`` degrees of freedom and ``log10`` condition numbers of ``R``
-    and ``S`` (seed 000 §7.3); ``age`` is the track's age at the update."""
+    and ``S`` (seed 000 §7.3); ``age`` is the track's age at the update; ``track`` as in
+    :class:`Belief`."""
 
     t: float
     subject: str
@@ -96,6 +100,7 @@ class UpdateRecord:
     cond_r: float
     cond_s: float
     age: float = 0.0
+    track: str = ""
 
 
 @dataclass(frozen=True)

@@ -32,8 +32,8 @@ IntArray = NDArray[np.int64]
 
 @dataclass(frozen=True, kw_only=True)
 class BeliefSeries:
-    """``owner``'s recorded belief of ``subject`` in ``frame``: ``t (K,)``, ``mean (K, d)``,
-    ``cov (K, d, d)``, ``age (K,)`` and ``info[name] (K,)``."""
+    """``owner``'s recorded belief of ``subject`` (its track ``track``) in ``frame``:
+    ``t (K,)``, ``mean (K, d)``, ``cov (K, d, d)``, ``age (K,)`` and ``info[name] (K,)``."""
 
     owner: str
     subject: str
@@ -43,10 +43,15 @@ class BeliefSeries:
     cov: Array
     age: Array
     info: Mapping[str, Array] = field(default_factory=dict)
+    track: str = ""
+
+    @property
+    def key(self) -> SeriesKey:
+        return (self.owner, self.subject, self.track)
 
     @property
     def label(self) -> str:
-        return f"{self.owner}->{self.subject}"
+        return series_label(self.key)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -61,17 +66,34 @@ class UpdateSeries:
     dof: IntArray
     cond_r: Array
     cond_s: Array
+    track: str = ""
+
+    @property
+    def key(self) -> SeriesKey:
+        return (self.owner, self.subject, self.track)
 
     @property
     def label(self) -> str:
-        return f"{self.owner}->{self.subject}"
+        return series_label(self.key)
 
 
-def _empty_updates(owner: str, subject: str) -> UpdateSeries:
+#: ``(owner, subject, track)`` — what identifies a series.
+SeriesKey = tuple[str, str, str]
+
+
+def series_label(key: SeriesKey) -> str:
+    """``owner->subject``, with ``#track`` appended when the track has a name."""
+    owner, subject, track = key
+    return f"{owner}->{subject}" + (f"#{track}" if track else "")
+
+
+def _empty_updates(key: SeriesKey) -> UpdateSeries:
     z = np.zeros(0)
+    owner, subject, track = key
     return UpdateSeries(
         owner=owner,
         subject=subject,
+        track=track,
         t=z,
         age=z,
         nis=z,
@@ -94,19 +116,19 @@ class Estimates:
     events: tuple[TrackEvent, ...] = ()
     counts: Mapping[str, int] = field(default_factory=dict)
 
-    def series(self, owner: str, subject: str) -> BeliefSeries:
-        """The belief series of ``owner->subject`` (ConfigError if there is none)."""
+    def series(self, owner: str, subject: str, track: str = "") -> BeliefSeries:
+        """The belief series of ``owner->subject#track`` (ConfigError if there is none)."""
         for s in self.beliefs:
-            if (s.owner, s.subject) == (owner, subject):
+            if s.key == (owner, subject, track):
                 return s
-        raise ConfigError(f"no estimates for {owner}->{subject}")
+        raise ConfigError(f"no estimates for {series_label((owner, subject, track))}")
 
-    def updates_of(self, owner: str, subject: str) -> UpdateSeries:
-        """The update series of ``owner->subject`` (empty if it was never updated)."""
+    def updates_of(self, owner: str, subject: str, track: str = "") -> UpdateSeries:
+        """The update series of ``owner->subject#track`` (empty if it was never updated)."""
         for u in self.updates:
-            if (u.owner, u.subject) == (owner, subject):
+            if u.key == (owner, subject, track):
                 return u
-        return _empty_updates(owner, subject)
+        return _empty_updates((owner, subject, track))
 
     @property
     def labels(self) -> tuple[str, ...]:
@@ -143,21 +165,22 @@ class Recorder:
 
     def __init__(self, estimator: str) -> None:
         self.estimator = estimator
-        self._beliefs: dict[tuple[str, str], _Rows] = {}
-        self._updates: dict[tuple[str, str], _UpdateRows] = {}
+        self._beliefs: dict[SeriesKey, _Rows] = {}
+        self._updates: dict[SeriesKey, _UpdateRows] = {}
         self._events: list[TrackEvent] = []
         self._counts: dict[str, int] = {}
-        self._sent_beliefs: dict[tuple[str, str], int] = {}
-        self._sent_updates: dict[tuple[str, str], int] = {}
+        self._sent_beliefs: dict[SeriesKey, int] = {}
+        self._sent_updates: dict[SeriesKey, int] = {}
         self._sent_events = 0
 
     def record(self, t: float, owner: str, beliefs: Iterable[Belief]) -> None:
         """Store ``owner``'s ``beliefs`` at time ``t``."""
         for b in beliefs:
-            rows = self._beliefs.setdefault((owner, b.subject), _Rows(frame=b.frame))
+            key = (owner, b.subject, b.track)
+            rows = self._beliefs.setdefault(key, _Rows(frame=b.frame))
             if rows.frame != b.frame:
                 raise ConfigError(
-                    f"{owner}->{b.subject}: frame changed from {rows.frame} to {b.frame}"
+                    f"{series_label(key)}: frame changed from {rows.frame} to {b.frame}"
                 )
             rows.dim = b.mean.size
             rows.t.append(float(t))
@@ -170,7 +193,7 @@ class Recorder:
 
     def add_updates(self, owner: str, updates: Iterable[UpdateRecord]) -> None:
         for u in updates:
-            rows = self._updates.setdefault((owner, u.subject), _UpdateRows())
+            rows = self._updates.setdefault((owner, u.subject, u.track), _UpdateRows())
             rows.t.append(u.t)
             rows.age.append(u.age)
             rows.nis.append(u.nis)
@@ -186,12 +209,13 @@ class Recorder:
         for k, v in counts.items():
             self._counts[k] = self._counts.get(k, 0) + int(v)
 
-    def _belief_series(self, key: tuple[str, str], start: int) -> BeliefSeries:
+    def _belief_series(self, key: SeriesKey, start: int) -> BeliefSeries:
         r = self._beliefs[key]
         d = r.dim
         return BeliefSeries(
             owner=key[0],
             subject=key[1],
+            track=key[2],
             frame=r.frame,
             t=np.asarray(r.t[start:], dtype=float),
             mean=np.asarray(r.mean[start:], dtype=float).reshape(-1, d),
@@ -200,11 +224,12 @@ class Recorder:
             info={k: np.asarray(v[start:], dtype=float) for k, v in r.info.items()},
         )
 
-    def _update_series(self, key: tuple[str, str], start: int) -> UpdateSeries:
+    def _update_series(self, key: SeriesKey, start: int) -> UpdateSeries:
         r = self._updates[key]
         return UpdateSeries(
             owner=key[0],
             subject=key[1],
+            track=key[2],
             t=np.asarray(r.t[start:], dtype=float),
             age=np.asarray(r.age[start:], dtype=float),
             nis=np.asarray(r.nis[start:], dtype=float),
@@ -252,13 +277,13 @@ def concatenate(parts: Sequence[Estimates]) -> Estimates:
     """Join increments of the same estimators (e.g. a node's reports) into one record."""
     if not parts:
         raise ConfigError("concatenate: no estimates to join")
-    beliefs: dict[tuple[str, str], list[BeliefSeries]] = {}
-    updates: dict[tuple[str, str], list[UpdateSeries]] = {}
+    beliefs: dict[SeriesKey, list[BeliefSeries]] = {}
+    updates: dict[SeriesKey, list[UpdateSeries]] = {}
     for p in parts:
         for s in p.beliefs:
-            beliefs.setdefault((s.owner, s.subject), []).append(s)
+            beliefs.setdefault(s.key, []).append(s)
         for u in p.updates:
-            updates.setdefault((u.owner, u.subject), []).append(u)
+            updates.setdefault(u.key, []).append(u)
 
     def cat(items: Sequence[Any], name: str) -> NDArray[Any]:
         return np.concatenate([getattr(i, name) for i in items])
@@ -271,6 +296,7 @@ def concatenate(parts: Sequence[Estimates]) -> Estimates:
             BeliefSeries(
                 owner=key[0],
                 subject=key[1],
+                track=key[2],
                 frame=items[0].frame,
                 t=cat(items, "t"),
                 mean=cat(items, "mean"),
@@ -286,6 +312,7 @@ def concatenate(parts: Sequence[Estimates]) -> Estimates:
         UpdateSeries(
             owner=key[0],
             subject=key[1],
+            track=key[2],
             **{
                 name: cat(updates[key], name)
                 for name in ("t", "age", "nis", "dof", "cond_r", "cond_s")

@@ -33,7 +33,7 @@ from relloc.errors import ConfigError
 from relloc.metrics.conditioning import condition_log10_batch
 from relloc.metrics.consistency import anees, chi2_upper, mean_chi2_band, nees, percent_beyond
 from relloc.metrics.errors import state_errors
-from relloc.pipeline.estimates import BeliefSeries, Estimates, UpdateSeries
+from relloc.pipeline.estimates import BeliefSeries, Estimates, UpdateSeries, series_label
 from relloc.pipeline.frames import frame
 
 Array = NDArray[np.float64]
@@ -51,6 +51,7 @@ class SeriesEvaluation:
 
     owner: str
     subject: str
+    track: str
     platform: str
     frame: str
     t: Array
@@ -68,7 +69,7 @@ class SeriesEvaluation:
 
     @property
     def label(self) -> str:
-        return f"{self.owner}->{self.subject}"
+        return series_label((self.owner, self.subject, self.track))
 
 
 def evaluate_series(
@@ -90,6 +91,7 @@ def evaluate_series(
     return SeriesEvaluation(
         owner=series.owner,
         subject=series.subject,
+        track=series.track,
         platform=recording.platforms[recording.index(series.subject)],
         frame=f.name,
         t=series.t,
@@ -110,8 +112,7 @@ def evaluate_series(
 def evaluate(estimates: Estimates, recording: Recording) -> tuple[SeriesEvaluation, ...]:
     """Score every belief series of ``estimates`` (in their order)."""
     return tuple(
-        evaluate_series(s, estimates.updates_of(s.owner, s.subject), recording)
-        for s in estimates.beliefs
+        evaluate_series(s, estimates.updates_of(*s.key), recording) for s in estimates.beliefs
     )
 
 
