@@ -434,17 +434,15 @@ def _figures(
     clutter_sweep: dict[str, Any],
     pd_sweep: dict[str, Any],
 ) -> dict[str, str]:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     from relloc.plotting.multihypothesis import (
         plot_relative_estimates,
         plot_series,
         plot_sweep,
         plot_world_paths,
     )
+    from relloc.plotting.setup import pyplot
+
+    plt = pyplot()
 
     files: dict[str, str] = {}
     r0 = paper_res[0]

@@ -295,13 +295,11 @@ def summarise(results: list[dict[str, Any]], n: int) -> dict[str, Any]:
 
 
 def _figures(out: Any, first: dict[str, Any], scenario: Any) -> list[tuple[str, str]]:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     from relloc.plotting.cooperative import plot_case_series, plot_topology
     from relloc.plotting.errors import plot_trajectories
+    from relloc.plotting.setup import pyplot
+
+    plt = pyplot()
 
     figs: list[tuple[str, str]] = []
     n = scenario.n_robots

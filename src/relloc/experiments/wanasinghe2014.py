@@ -627,19 +627,17 @@ def make_figures(
     summary: dict[str, Any],
 ) -> dict[str, str]:
     """Draw every figure; returns ``{key: file name}``."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     from relloc.plotting.consistency import plot_chi2_series, plot_conditioning
     from relloc.plotting.errors import plot_pose_errors_with_bounds, plot_robot_errors
+    from relloc.plotting.setup import pyplot
     from relloc.plotting.wanasinghe import (
         plot_bias_comparison,
         plot_convergence_curves,
         plot_noise_sweep,
         plot_rmse_vs_bound,
     )
+
+    plt = pyplot()
 
     files: dict[str, str] = {}
     targets = config.sim.targets
