@@ -195,7 +195,7 @@ def _spanning_edges(edges: list[tuple[int, int]], n: int) -> list[tuple[int, int
 
 
 def observability_ranks(first: dict[str, Any], n: int) -> dict[str, dict[str, Any]]:
-    """Rank of the nonlinear observability matrix (engineer O's tool) at the mid-run RPMG.
+    """Rank of the nonlinear observability matrix (``relloc.observability``) at the mid-run RPMG.
 
     Robot edges are reduced to a spanning tree of the observed RPMG (Theorem 2: any connected
     proper RPMG has the same rank); each landmark contributes one robot→landmark edge.
@@ -488,7 +488,7 @@ def _report(summary: dict[str, Any], figures: list[tuple[str, str]]) -> str:
         "Growth = mean over the last quarter / mean over the second quarter of the run (RMS "
         "position error over runs and robots, and mean 1σ position bound); *bounded* when both "
         f"are below {GROWTH_LIMIT}. {note} Observability rank: the nonlinear observability matrix "
-        "(Lie derivatives up to order 2, engineer O's `relloc.observability`) at the true "
+        "(Lie derivatives up to order 2, `relloc.observability.analysis`) at the true "
         "mid-run state with a spanning tree of the RPMG observed then.",
         f"RPMG connected during {100 * summary['rpmg']['connected_fraction']:.1f} % of the "
         f"measurement epochs; β(G) = 1 (every robot has a path to both landmarks) during "
