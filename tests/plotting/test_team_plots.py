@@ -1,9 +1,5 @@
 """Generic team plots: gaps in a series break the line; every helper draws into given axes."""
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numpy as np
 
 from relloc.plotting.consistency import plot_chi2_series, plot_conditioning
@@ -13,6 +9,9 @@ from relloc.plotting.errors import (
     plot_robot_errors,
     plot_trajectories,
 )
+from relloc.plotting.setup import pyplot
+
+plt = pyplot()
 
 
 def test_break_gaps_inserts_nan_only_at_missing_samples():

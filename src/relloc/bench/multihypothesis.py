@@ -8,9 +8,9 @@ and P_D = 0.95. The filter runs at 20 Hz and fuses a direct scan at 10 Hz, for 2
 per point after a 5 s warm-up (not timed), on one core.
 
 Baseline measured in the same run: the single-hypothesis relative EKF with *known*
-correspondence (engineer A's batched ``predict_arrays`` + ``update_tekf_arrays`` over all
-teammates), fed the same data with the true bearing of each teammate: ``baseline_ms_per_scan``
-is what the correspondence problem costs on top.
+correspondence (the batched ``predict_arrays`` + ``update_tekf_arrays`` of
+:mod:`relloc.estimators.relative` over all teammates), fed the same data with the true bearing
+of each teammate: ``baseline_ms_per_scan`` is what the correspondence problem costs on top.
 
 Reported per point: ``ms_per_scan`` (one direct scan: height, range, bearings, reduction),
 ``ms_per_predict`` (one 20 Hz prediction of all filters), ``realtime_factor`` (seconds of data

@@ -5,8 +5,8 @@ per teammate ``j``; each mixture component is a *track* with mean ``m_h``, covar
 ``P_h``, weight ``w_h``, its last association and its ancestry (for N-scan pruning). The state
 is ``RelPose4 = (x, y, z, φ)`` of ``j`` in ``i``'s body frame. Seed 002's process model (Eq. 5)
 is the same 4-DOF relative kinematics as seed 000 Eq. 1 (``θ̇ = ω_j − ω_i``, ``ż = v_zj − v_zi``),
-so the prediction is engineer A's :func:`relloc.estimators.relative.predict_arrays`, applied to
-all tracks of all teammates in one batched call; the Kalman update is A's
+so the prediction is :func:`relloc.estimators.relative.predict_arrays`, applied to all tracks
+of all teammates in one batched call; the Kalman update is
 :func:`relloc.estimators.relative.kalman_update` (Joseph form).
 
 Measurements (seed 002 Eq. 6; the paper names azimuth α and elevation β, ``relloc.models``
@@ -323,7 +323,7 @@ def predict_fusers(
     u_team: Sequence[ArrayLike],
     dt: float,
 ) -> None:
-    """Predict the tracks of several fusers in one batched call of A's ``predict_arrays``.
+    """Predict the tracks of several fusers in one batched call of ``relative.predict_arrays``.
 
     ``u_self[n]`` and ``u_team[n]`` are the inputs of ``fusers[n]`` (see
     :meth:`GaussianSumFuser.predict`). Identical to predicting each fuser on its own.

@@ -140,7 +140,21 @@ def _task(seed_seq: np.random.SeedSequence, run_index: int, config: RunConfig) -
     if truth is None:
         raise ModelError("desilva2015: the simulator returned no ground truth")
     out: dict[str, list[NDArray[Any]]] = {
-        k: [] for k in ("pe", "ye", "c", "conf", "tr", "w", "u", "jw", "ju", "e", "t", "nees")
+        field: []
+        for field in (
+            "pos_err",
+            "yaw_err",
+            "components",
+            "confirmed",
+            "tracked",
+            "wrong",
+            "used",
+            "joint_wrong",
+            "joint_used",
+            "estimate_xy",
+            "truth_xy",
+            "nees",
+        )
     }
     for i in leaders:
         tr = traces[i]
@@ -153,32 +167,32 @@ def _task(seed_seq: np.random.SeedSequence, run_index: int, config: RunConfig) -
         wrong = used & (tr.assoc_origin != np.arange(tr.mean.shape[1])[None, :])
         j_used = after_conf & (tr.joint_origin != NO_BEARING)
         j_wrong = j_used & (tr.joint_origin != np.arange(tr.mean.shape[1])[None, :])
-        out["jw"].append(j_wrong.sum(axis=0))
+        out["joint_wrong"].append(j_wrong.sum(axis=0))
         out["nees"].append(_dominant_nees(tr.mean, tr.cov, rel))
-        out["ju"].append(j_used.sum(axis=0))
-        out["pe"].append(pe)
-        out["ye"].append(ye)
-        out["c"].append(tr.components)
-        out["conf"].append(tr.confirmed)
-        out["tr"].append(tracked)
-        out["w"].append(wrong.sum(axis=0))
-        out["u"].append(used.sum(axis=0))
-        out["e"].append(tr.mean[..., :2])
-        out["t"].append(rel[..., :2])
+        out["joint_used"].append(j_used.sum(axis=0))
+        out["pos_err"].append(pe)
+        out["yaw_err"].append(ye)
+        out["components"].append(tr.components)
+        out["confirmed"].append(tr.confirmed)
+        out["tracked"].append(tracked)
+        out["wrong"].append(wrong.sum(axis=0))
+        out["used"].append(used.sum(axis=0))
+        out["estimate_xy"].append(tr.mean[..., :2])
+        out["truth_xy"].append(rel[..., :2])
     return RunResult(
         times=traces[leaders[0]].times,
-        pos_err=np.stack(out["pe"]),
-        yaw_err=np.stack(out["ye"]),
-        components=np.stack(out["c"]),
-        confirmed=np.stack(out["conf"]),
-        tracked=np.stack(out["tr"]),
-        wrong=np.stack(out["w"]),
-        used=np.stack(out["u"]),
-        joint_wrong=np.stack(out["jw"]),
-        joint_used=np.stack(out["ju"]),
+        pos_err=np.stack(out["pos_err"]),
+        yaw_err=np.stack(out["yaw_err"]),
+        components=np.stack(out["components"]),
+        confirmed=np.stack(out["confirmed"]),
+        tracked=np.stack(out["tracked"]),
+        wrong=np.stack(out["wrong"]),
+        used=np.stack(out["used"]),
+        joint_wrong=np.stack(out["joint_wrong"]),
+        joint_used=np.stack(out["joint_used"]),
         nees=np.stack(out["nees"]),
-        estimate_xy=np.stack(out["e"]),
-        truth_xy=np.stack(out["t"]),
+        estimate_xy=np.stack(out["estimate_xy"]),
+        truth_xy=np.stack(out["truth_xy"]),
         world_xy=truth[..., :2],
     )
 
@@ -434,17 +448,15 @@ def _figures(
     clutter_sweep: dict[str, Any],
     pd_sweep: dict[str, Any],
 ) -> dict[str, str]:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     from relloc.plotting.multihypothesis import (
         plot_relative_estimates,
         plot_series,
         plot_sweep,
         plot_world_paths,
     )
+    from relloc.plotting.setup import pyplot
+
+    plt = pyplot()
 
     files: dict[str, str] = {}
     r0 = paper_res[0]

@@ -455,11 +455,6 @@ def _figures(
     rec: Any,
     fit: UwbNoiseFit,
 ) -> dict[str, str]:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     from relloc.plotting.airground import (
         detection_legend_handles,
         plot_component,
@@ -467,6 +462,9 @@ def _figures(
         plot_traces,
         plot_uwb_errors,
     )
+    from relloc.plotting.setup import pyplot
+
+    plt = pyplot()
 
     files: dict[str, str] = {}
     for name, run in traces.items():

@@ -383,13 +383,11 @@ def _evaluate(
 
 
 def _figure(out: Path, traces: dict[int, Any], data: TeamData, names: list[str]) -> str:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     from relloc.plotting.multihypothesis import plot_series
+    from relloc.plotting.setup import pyplot
     from relloc.sim.multihypothesis import relative_truth
+
+    plt = pyplot()
 
     fig, axes = plt.subplots(len(traces), 1, figsize=(10, 2.2 * len(traces)), sharex=True)
     truth = _truth(data)

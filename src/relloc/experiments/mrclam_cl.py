@@ -665,13 +665,11 @@ def _targets(cases: dict[str, Any]) -> dict[str, Any]:
 def _figures(
     out: Any, ds: Any, prepared: Prepared, by_key: dict[Any, Any], cases: dict[str, Any]
 ) -> list[tuple[str, str]]:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     from relloc.plotting.cooperative import plot_case_series, plot_grouped_bars
     from relloc.plotting.errors import plot_trajectories
+    from relloc.plotting.setup import pyplot
+
+    plt = pyplot()
 
     figs: list[tuple[str, str]] = []
     fig, ax = plt.subplots(figsize=(8, 4))

@@ -61,9 +61,9 @@ def save_figure(fig: Any, out_dir: Path, name: str, *, dpi: int = 110) -> str:
     """Save a matplotlib figure as ``name.png`` in ``out_dir``, close it, return the file name."""
     filename = f"{name}.png"
     fig.savefig(prepare_out_dir(out_dir) / filename, dpi=dpi, bbox_inches="tight")
-    import matplotlib.pyplot as plt
+    from relloc.plotting.setup import pyplot
 
-    plt.close(fig)
+    pyplot().close(fig)
     return filename
 
 

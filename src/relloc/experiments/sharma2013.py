@@ -37,9 +37,9 @@ quarter by less than 20 %.
 
 from __future__ import annotations
 
-from collections import deque
 from typing import Any
 
+import networkx as nx
 import numpy as np
 from numpy.typing import NDArray
 
@@ -86,8 +86,14 @@ def _scenario():  # type: ignore[no-untyped-def]
     return sharma2013_scenario(gps_robots=(0,), duration=DURATION_S)
 
 
-def _rpmg_stats(recording: Any, t: Array, n: int) -> dict[str, float]:
-    """Fractions of detection epochs with a connected robot graph and with β(G) = 1."""
+def _rpmg_stats(recording: Any, n: int) -> dict[str, float]:
+    """Fractions of detection epochs with a connected robot graph and with β(G) = 1.
+
+    Per epoch, the undirected graph over the ``n`` robots and the landmarks (nodes ``n …``)
+    of that epoch's bearings: *connected* when all robots lie in one component (possibly
+    through a landmark), β(G) = 1 when, with at least two landmarks, every robot reaches
+    every landmark (the whole graph is one component).
+    """
     det = recording.detections
     epochs = np.unique(det.t)
     connected = 0
@@ -95,25 +101,16 @@ def _rpmg_stats(recording: Any, t: Array, n: int) -> dict[str, float]:
     n_lm = recording.landmarks_xy.shape[0]
     for te in epochs:
         sel = det.t == te
-        adj = np.eye(n + n_lm, dtype=bool)
         obs, tgt, lm = det.observer[sel], det.target_robot[sel], det.landmark[sel]
-        robot = tgt >= 0
-        adj[obs[robot], tgt[robot]] = True
-        adj[obs[~robot], n + lm[~robot]] = True
-        undirected = adj | adj.T
-        reach = _reachability(undirected)
-        connected += bool(reach[:n, :n].all())
-        beta += bool(reach[:n, n:].all()) if n_lm >= 2 else 0
+        graph = nx.Graph()
+        graph.add_nodes_from(range(n + n_lm))
+        graph.add_edges_from(
+            (int(i), int(j) if j >= 0 else n + int(k)) for i, j, k in zip(obs, tgt, lm, strict=True)
+        )
+        connected += set(range(n)) <= nx.node_connected_component(graph, 0)
+        beta += n_lm >= 2 and nx.is_connected(graph)
     k = max(len(epochs), 1)
     return {"connected_fraction": connected / k, "beta_fraction": beta / k}
-
-
-def _reachability(adj: NDArray[np.bool_]) -> NDArray[np.bool_]:
-    """Transitive closure (paths of any length) of an undirected graph."""
-    from scipy.sparse.csgraph import connected_components
-
-    _, labels = connected_components(adj.astype(np.int8), directed=False)
-    return np.asarray(labels[:, None] == labels[None, :])
 
 
 def run_once(seed_sequence: np.random.SeedSequence, run_index: int) -> dict[str, Any]:
@@ -149,7 +146,7 @@ def run_once(seed_sequence: np.random.SeedSequence, run_index: int) -> dict[str,
         }
     if run_index == 0:
         result["prior"] = sim.prior
-        result["rpmg"] = _rpmg_stats(sim.recording, sim.t, scenario.n_robots)
+        result["rpmg"] = _rpmg_stats(sim.recording, scenario.n_robots)
         result["first_edges"] = _edges_at(sim.recording, float(sim.t[1]))
         result["mid_edges"] = _edges_at(sim.recording, float(sim.t[len(sim.t) // 2]))
         k_mid = len(sim.t) // 2
@@ -175,27 +172,19 @@ def _edges_at(recording: Any, t: float) -> dict[str, list[tuple[int, int]]]:
 
 
 def _spanning_edges(edges: list[tuple[int, int]], n: int) -> list[tuple[int, int]]:
-    """A BFS spanning forest of the robot graph (keeps the symbolic rank test small)."""
-    adj: dict[int, list[tuple[int, int]]] = {i: [] for i in range(n)}
+    """Breadth-first spanning tree of robot 0's component of the robot graph (keeps the symbolic
+    rank test small); each tree edge keeps the direction ``observer → target`` it was measured
+    in (the first such bearing when both robots see each other)."""
+    graph = nx.Graph()
+    graph.add_nodes_from(range(n))
     for i, j in edges:
-        adj[i].append((i, j))
-        adj[j].append((i, j))
-    seen = {0}
-    out: list[tuple[int, int]] = []
-    queue = deque([0])
-    while queue:
-        a = queue.popleft()
-        for i, j in adj[a]:
-            b = j if i == a else i
-            if b not in seen:
-                seen.add(b)
-                out.append((i, j))
-                queue.append(b)
-    return out
+        if not graph.has_edge(i, j):
+            graph.add_edge(i, j, measured=(i, j))
+    return [graph.edges[a, b]["measured"] for a, b in nx.bfs_edges(graph, 0)]
 
 
 def observability_ranks(first: dict[str, Any], n: int) -> dict[str, dict[str, Any]]:
-    """Rank of the nonlinear observability matrix (engineer O's tool) at the mid-run RPMG.
+    """Rank of the nonlinear observability matrix (``relloc.observability``) at the mid-run RPMG.
 
     Robot edges are reduced to a spanning tree of the observed RPMG (Theorem 2: any connected
     proper RPMG has the same rank); each landmark contributes one robot→landmark edge.
@@ -295,13 +284,11 @@ def summarise(results: list[dict[str, Any]], n: int) -> dict[str, Any]:
 
 
 def _figures(out: Any, first: dict[str, Any], scenario: Any) -> list[tuple[str, str]]:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     from relloc.plotting.cooperative import plot_case_series, plot_topology
     from relloc.plotting.errors import plot_trajectories
+    from relloc.plotting.setup import pyplot
+
+    plt = pyplot()
 
     figs: list[tuple[str, str]] = []
     n = scenario.n_robots
@@ -490,7 +477,7 @@ def _report(summary: dict[str, Any], figures: list[tuple[str, str]]) -> str:
         "Growth = mean over the last quarter / mean over the second quarter of the run (RMS "
         "position error over runs and robots, and mean 1σ position bound); *bounded* when both "
         f"are below {GROWTH_LIMIT}. {note} Observability rank: the nonlinear observability matrix "
-        "(Lie derivatives up to order 2, engineer O's `relloc.observability`) at the true "
+        "(Lie derivatives up to order 2, `relloc.observability.analysis`) at the true "
         "mid-run state with a spanning tree of the RPMG observed then.",
         f"RPMG connected during {100 * summary['rpmg']['connected_fraction']:.1f} % of the "
         f"measurement epochs; β(G) = 1 (every robot has a path to both landmarks) during "

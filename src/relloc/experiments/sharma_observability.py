@@ -499,12 +499,10 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
 
 
 def _figures(out_dir: Any, fig2: dict[str, Any], bounds: dict[str, np.ndarray]) -> list[str]:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     from relloc.plotting.observability import plot_beta_sigma, plot_team_snapshot
+    from relloc.plotting.setup import pyplot
+
+    plt = pyplot()
 
     files = []
     fig, ax = plt.subplots(figsize=(8, 3.5))

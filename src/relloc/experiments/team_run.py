@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from relloc.errors import ConfigError, require
+from relloc.errors import ConfigError
 from relloc.estimators.track_manager import (
     PairEstimates,
     TeamEstimates,
@@ -358,14 +358,6 @@ def summary_rows(summary: Mapping[str, Any]) -> tuple[list[str], list[list[Any]]
     return headers, rows
 
 
-def _pyplot() -> Any:
-    matplotlib = require("matplotlib", "plot")
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
 def write_figures(
     out_dir: Path,
     results: Sequence[RunResult],
@@ -382,8 +374,9 @@ def write_figures(
         plot_robot_errors,
         plot_trajectories,
     )
+    from relloc.plotting.setup import pyplot
 
-    plt = _pyplot()
+    plt = pyplot()
     figures: list[tuple[str, str]] = []
     run0 = results[0]
     n_runs = len(results)

@@ -3,7 +3,7 @@ Syst. 2014, "Relative localization approach for combined aerial and ground robot
 
 What is run (run counts: the paper's where it gives one)
 --------------------------------------------------------
-* ``runs`` (default 20, the paper's §5 count) Monte-Carlo draws of B's built-in default team
+* ``runs`` (default 20, the paper's §5 count) Monte-Carlo draws of the built-in default team
   (:func:`relloc.sim.scenario.default_scenario`), each running every simulation filter at once
   (:mod:`relloc.experiments.wanasinghe2014_sim`): the accuracy PLKF of the four observed robots
   and Table 1 (13 initial guesses per case — the paper's count — for PLKF, TEKF and relloc's
@@ -627,19 +627,17 @@ def make_figures(
     summary: dict[str, Any],
 ) -> dict[str, str]:
     """Draw every figure; returns ``{key: file name}``."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     from relloc.plotting.consistency import plot_chi2_series, plot_conditioning
     from relloc.plotting.errors import plot_pose_errors_with_bounds, plot_robot_errors
+    from relloc.plotting.setup import pyplot
     from relloc.plotting.wanasinghe import (
         plot_bias_comparison,
         plot_convergence_curves,
         plot_noise_sweep,
         plot_rmse_vs_bound,
     )
+
+    plt = pyplot()
 
     files: dict[str, str] = {}
     targets = config.sim.targets
@@ -1034,8 +1032,8 @@ def differences(s: dict[str, Any]) -> list[str]:
     )
     return [
         "- **Accuracy (paper: 5–10 cm, 0.075–0.1 rad).** The paper does not state its odometry "
-        f"noise. With the Table-2 precise sensor and B's default odometry noise our steady-state "
-        f"position RMSE is {min(pos):.3f}–{max(pos):.3f} m and the yaw RMSE "
+        "noise. With the Table-2 precise sensor and the default scenario's odometry noise our "
+        f"steady-state position RMSE is {min(pos):.3f}–{max(pos):.3f} m and the yaw RMSE "
         f"{min(yaw):.3f}–{max(yaw):.3f} rad; {sweep_text}. We keep the scenario's noise instead "
         "of tuning it to the paper.",
         "- **Table 1.** The paper prints one number per cell, the mean over its 13 guesses; we "
@@ -1043,7 +1041,7 @@ def differences(s: dict[str, Any]) -> list[str]:
         "threshold to the known-initialisation RMSE of the same filter (PLKF here: "
         + ", ".join(f"{k} {v:.3g}" for k, v in s["table1_thresholds"]["PLKF"]["paper_rule"].items())
         + "), so it moves with the odometry noise; the trajectories "
-        "are B's default team, not the paper's (unpublished) ones. In case 4 the plain PLKF "
+        "are relloc's default team, not the paper's (unpublished) ones. In case 4 the plain PLKF "
         f"needs {t1['PLKF']['paper_rule']['phi']['mean']:.1f} updates for φ on average by Eq. 32 "
         f"(paper: 12), worst {t1['PLKF']['paper_rule']['phi']['worst']}; the TEKF "
         f"{t1['TEKF']['paper_rule']['phi']['mean']:.1f} (paper: 263), worst "
@@ -1077,9 +1075,10 @@ def differences(s: dict[str, Any]) -> list[str]:
         f"The replay averages {s['replay_runs']} sensor-noise draws; the paper's table is one run.",
         "- **Bias.** With the noisy Table-2 sensor the measured bearings inside H_pmo correlate "
         "the PLKF's gain with its pseudo-measurement noise, which pushes the range estimate "
-        "outwards; the bias-compensated PLKF (A's, after Nguyen & Doğançay 2017) subtracts the "
-        "estimated bias, the TEKF has none of this kind but linearises the bearing at the "
-        f"estimate. Radial bias on the replay (steady state): {bias_text}.",
+        "outwards; the bias-compensated PLKF (`relloc.estimators.relative`, after Nguyen & "
+        "Doğançay 2017) subtracts the estimated bias, the TEKF has none of this kind but "
+        "linearises the bearing at the estimate. Radial bias on the replay (steady state): "
+        f"{bias_text}.",
         conditioning_text(s),
         "- **PCRLB.** The bound uses the true commands and the filters' own noise models; a "
         "ratio near 1 means the PLKF is close to efficient for that state, above 1 how far "

@@ -9,7 +9,8 @@ propagation step is one batched predict per velocity-noise model
 (:func:`relloc.estimators.relative.predict_arrays`) and each measurement one batched update per
 filter kind (:meth:`relloc.estimators.relative.FilterSettings.update_arrays`) or per group of
 yaw banks (:func:`relloc.estimators.yaw_bank.update_yaw_bank`). The filters themselves are
-A's and the bank's; nothing here changes their equations.
+those of :mod:`relloc.estimators.relative` and :mod:`relloc.estimators.yaw_bank`; nothing here
+changes their equations.
 
 Time convention: ``u_l[k]``, ``u_c[k]`` drive the step ``t_k → t_{k+1}`` (zero-order hold);
 a measurement with ``step = s`` is taken at ``t_s``, i.e. after ``s`` predict steps.

@@ -1,9 +1,9 @@
 """Simulation part of the seed-000 reproduction: accuracy of the team and Table 1.
 
-One Monte-Carlo draw (:func:`team_task`) simulates the built-in default scenario (B's
-``relloc.sim``: one observing ground robot, aerial robots at +2.0 m and +1.5 m, ground robots at
-−0.1 m and −0.2 m, Table-2 case-(1) sensor at 10 Hz, 100 Hz propagation) and runs, on that one
-log, every filter the reproduction needs:
+One Monte-Carlo draw (:func:`team_task`) simulates the built-in default scenario
+(:func:`relloc.sim.scenario.default_scenario`: one observing ground robot, aerial robots at
++2.0 m and +1.5 m, ground robots at −0.1 m and −0.2 m, Table-2 case-(1) sensor at 10 Hz,
+100 Hz propagation) and runs, on that one log, every filter the reproduction needs:
 
 * **accuracy** (seed 000 §5, Figs. 3–4): a PLKF per observed robot started from the known
   pose (case 1), with σ, NEES, NIS and conditioning recorded;
@@ -61,7 +61,7 @@ KIND = {"PLKF": "plkf", "TEKF": "tekf"}
 
 @dataclass(frozen=True, kw_only=True)
 class SimSettings:
-    """What the simulation draws run (defaults: the paper's §5 set-up on B's default team).
+    """What the simulation draws run (defaults: the paper's §5 set-up on the default team).
 
     ``table1_target``: the observed robot of Table 1 (the aerial robot 2 m above the observer);
     ``n_poses``: initial guesses per case (paper: 13); ``odometry_scale``: multiplies every

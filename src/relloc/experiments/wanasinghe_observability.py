@@ -316,12 +316,10 @@ def _equation_checks() -> dict[str, dict[str, Any]]:
 
 
 def _figures(out_dir: Any, cases: dict[str, dict[str, Any]]) -> list[str]:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     from relloc.plotting.observability import plot_case_ranks, plot_subset_ranks
+    from relloc.plotting.setup import pyplot
+
+    plt = pyplot()
 
     files = []
     fig, ax = plt.subplots(figsize=(8, 5.5))

@@ -138,6 +138,22 @@ class TeamTrace:
     bearing_origin_present: NDArray[np.bool_]
 
 
+#: The per-scan arrays :func:`_record` appends and :func:`_finish` stacks: the array fields of
+#: :class:`TeamTrace`, under their own names.
+_TRACE_FIELDS = (
+    "times",
+    "scan_index",
+    "mean",
+    "cov",
+    "weight",
+    "components",
+    "confirmed",
+    "assoc_origin",
+    "joint_origin",
+    "bearing_origin_present",
+)
+
+
 def _fuser_for(robot: int, n: int, settings: GaussianSumSettings) -> GaussianSumFuser:
     return GaussianSumFuser(robot, [j for j in range(n) if j != robot], settings)
 
@@ -149,8 +165,7 @@ def run_team(
     n = data.n_robots
     fusers = {i: _fuser_for(i, n, settings) for i in data.sensing}
     rec: dict[int, dict[str, list[object]]] = {
-        i: {k: [] for k in ("t", "k", "m", "P", "w", "c", "conf", "a", "jo", "present")}
-        for i in data.sensing
+        i: {field: [] for field in _TRACE_FIELDS} for i in data.sensing
     }
     scan_ptr = 0
     scans = data.scans
@@ -190,37 +205,41 @@ def _record(
     others: list[int],
     k: int,
 ) -> None:
+    """Append the dominant track of every filter of ``fus`` after direct scan ``k`` to ``rec``."""
     n = len(others) + 1
-    m = np.full((n, 4), np.nan)
-    P = np.full((n, 4, 4), np.nan)
-    w = np.zeros(n)
-    c = np.zeros(n, dtype=np.int64)
-    conf = np.zeros(n, dtype=bool)
-    a = np.full(n, NO_BEARING, dtype=np.int64)
-    jo = np.full(n, NO_BEARING, dtype=np.int64)
+    mean = np.full((n, 4), np.nan)
+    cov = np.full((n, 4, 4), np.nan)
+    weight = np.zeros(n)
+    components = np.zeros(n, dtype=np.int64)
+    confirmed = np.zeros(n, dtype=bool)
+    assoc_origin = np.full(n, NO_BEARING, dtype=np.int64)
+    joint_origin = np.full(n, NO_BEARING, dtype=np.int64)
     present = np.zeros(n, dtype=bool)
     for local, j in enumerate(others):
         present[j] = bool(np.any(scan.origins == j))
         if fus.last_decision[local] >= 0:
-            jo[j] = int(scan.origins[fus.last_decision[local]])
+            joint_origin[j] = int(scan.origins[fus.last_decision[local]])
         s = fus.summary(j)
         if s is None:
             continue
-        m[j], P[j], w[j], c[j], conf[j] = (
-            s.belief.mean,
-            s.belief.cov,
-            s.weight,
-            s.components,
-            (s.confirmed),
-        )
+        mean[j], cov[j], weight[j] = s.belief.mean, s.belief.cov, s.weight
+        components[j], confirmed[j] = s.components, s.confirmed
         if s.assoc >= 0:
-            a[j] = int(scan.origins[s.assoc])
-    for key, val in zip(
-        ("t", "k", "m", "P", "w", "c", "conf", "a", "jo", "present"),
-        (scan.time, k, m, P, w, c, conf, a, jo, present),
-        strict=True,
-    ):
-        rec[key].append(val)
+            assoc_origin[j] = int(scan.origins[s.assoc])
+    row: dict[str, object] = {
+        "times": scan.time,
+        "scan_index": k,
+        "mean": mean,
+        "cov": cov,
+        "weight": weight,
+        "components": components,
+        "confirmed": confirmed,
+        "assoc_origin": assoc_origin,
+        "joint_origin": joint_origin,
+        "bearing_origin_present": present,
+    }
+    for field in _TRACE_FIELDS:
+        rec[field].append(row[field])
 
 
 def _finish(observer: int, rec: dict[str, list[object]], n: int) -> TeamTrace:
@@ -229,14 +248,14 @@ def _finish(observer: int, rec: dict[str, list[object]], n: int) -> TeamTrace:
 
     return TeamTrace(
         observer=observer,
-        times=arr("t", float, ()),
-        scan_index=arr("k", np.int64, ()),
-        mean=arr("m", float, (n, 4)),
-        cov=arr("P", float, (n, 4, 4)),
-        weight=arr("w", float, (n,)),
-        components=arr("c", np.int64, (n,)),
-        confirmed=arr("conf", bool, (n,)),
-        assoc_origin=arr("a", np.int64, (n,)),
-        joint_origin=arr("jo", np.int64, (n,)),
-        bearing_origin_present=arr("present", bool, (n,)),
+        times=arr("times", float, ()),
+        scan_index=arr("scan_index", np.int64, ()),
+        mean=arr("mean", float, (n, 4)),
+        cov=arr("cov", float, (n, 4, 4)),
+        weight=arr("weight", float, (n,)),
+        components=arr("components", np.int64, (n,)),
+        confirmed=arr("confirmed", bool, (n,)),
+        assoc_origin=arr("assoc_origin", np.int64, (n,)),
+        joint_origin=arr("joint_origin", np.int64, (n,)),
+        bearing_origin_present=arr("bearing_origin_present", bool, (n,)),
     )

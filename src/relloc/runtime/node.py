@@ -7,9 +7,9 @@ every robot is ready.
 
 Per clock tick ``k`` (simulated time ``t_k``; see :mod:`relloc.runtime.clock`) a node
 
-1. releases what its :class:`~relloc.runtime.faults.LinkEmulator` holds for ``t_k`` and files
-   teammates' odometry, measurements and equivalent measurements (duplicates recognised by
-   sequence number, late samples counted);
+1. releases what its :class:`~relloc.runtime.faults.LinkEmulator` holds for ``t_k``, files
+   teammates' odometry and counts their measurements and equivalent measurements (duplicates
+   recognised by sequence number, late samples counted);
 2. publishes its own odometry and measurements of the window ``[t_{k−1}, t_k)`` — one ``odom``
    and one ``meas`` batch per tick: the configured publication rate is the tick rate;
 3. filters every pending window whose inputs are in: a window ``[a, b)`` is filtered once every
@@ -36,7 +36,6 @@ from typing import Any
 
 import numpy as np
 
-from relloc.core.gaussian import Gaussian
 from relloc.errors import ConfigError
 from relloc.runtime import keys
 from relloc.runtime.estimation import TrackManagerEstimator
@@ -278,11 +277,6 @@ class RobotNode:
             if msg.kind == "odom":
                 mate.odometry.add(msg.body["stamps"], msg.body["u"])
                 mate.heard_until_s = max(mate.heard_until_s or -np.inf, msg.t)
-            elif msg.kind == "eqm":
-                mate.belief_of[msg.body["target"]] = (
-                    msg.t,
-                    Gaussian(msg.body["mean"], msg.body["cov"]),
-                )
 
     def _publish_own_sensors(self, t0: float, t1: float) -> MeasurementBatch:
         stamps, u = self.source.odometry(t0, t1)

@@ -1,4 +1,4 @@
-"""What a node knows about its teammates: presence, received odometry, beliefs they broadcast.
+"""What a node knows about its teammates: presence, received odometry, duplicate messages.
 
 The relative motion model of seed 000 (Eq. 1) needs the *observed* robot's body velocities,
 which only that robot measures — so they come over the network. :class:`ReceivedOdometry`
@@ -16,8 +16,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
-
-from relloc.core.gaussian import Gaussian
 
 Array = NDArray[np.float64]
 
@@ -87,8 +85,6 @@ class Teammate:
     odometry: ReceivedOdometry = field(default_factory=ReceivedOdometry)
     heard_until_s: float | None = None
     """End of the latest odometry window received (the header time of its ``odom``)."""
-    belief_of: dict[str, tuple[float, Gaussian]] = field(default_factory=dict)
-    """Latest equivalent measurement this teammate broadcast, per target: (time, belief)."""
 
 
 class SeenSequences:
