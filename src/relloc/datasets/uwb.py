@@ -172,6 +172,8 @@ class _BadRow(Exception):
 
 @dataclass(frozen=True)
 class _Row:
+    """One data row that passed the per-row checks, with its line number."""
+
     line: int
     t: float
     node1: int
