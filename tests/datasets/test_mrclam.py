@@ -20,9 +20,10 @@ def _write(folder: Path, name: str, rows: list[str]) -> None:
 
 
 def _small_dataset(folder: Path) -> Path:
-    """Two robots (subjects 1, 2; barcodes 5, 14) and one landmark (subject 3, barcode 63)."""
+    """Two robots (subjects 1, 2; barcodes 5, 14), one landmark (subject 3, barcode 63) and a
+    subject never seen (4, barcode 70)."""
     folder.mkdir(parents=True, exist_ok=True)
-    _write(folder, "Barcodes.dat", ["1 5", "2 14", "3 63"])
+    _write(folder, "Barcodes.dat", ["1 5", "2 14", "3 63", "4 70"])
     _write(folder, "Landmark_Groundtruth.dat", ["3 1.0 2.0 0.001 0.002"])
     for n in (1, 2):
         t = T0 + np.arange(0.0, 10.0, 0.1)
@@ -43,11 +44,14 @@ def _small_dataset(folder: Path) -> Path:
 
 
 def _replace_line(path: Path, data_row: int, text: str) -> int:
-    """Replace the data row ``data_row`` (0-based) and return its 1-based line number."""
-    lines = path.read_text().splitlines()
+    """Replace the data row ``data_row`` (0-based) and return its 1-based line number.
+
+    Lines are cut at ``\\n`` only (as the loader counts them); ``text`` is written as UTF-8.
+    """
+    lines = path.read_bytes().split(b"\n")
     line_index = 4 + data_row
-    lines[line_index] = text
-    path.write_text("\n".join(lines) + "\n")
+    lines[line_index] = text.encode("utf-8")
+    path.write_bytes(b"\n".join(lines))
     return line_index + 1
 
 
@@ -56,7 +60,7 @@ def test_clean_folder_loads_on_one_clock(tmp_path: Path) -> None:
     assert ds.robot_ids == (1, 2)
     assert ds.t0_unix == pytest.approx(T0)
     assert ds.report.n_skipped == 0
-    assert ds.barcodes == {5: 1, 14: 2, 63: 3}
+    assert ds.barcodes == {5: 1, 14: 2, 63: 3, 70: 4}
     r1 = ds.robot(1)
     assert r1.barcode == 5
     assert r1.groundtruth.t[0] == pytest.approx(0.0)
@@ -118,6 +122,41 @@ def test_odometry_holds_the_last_command(tmp_path: Path) -> None:
         ("Robot1_Measurement.dat", 2, "1000000003.0 99 1.0 0.1", "unknown barcode"),
         ("Robot1_Measurement.dat", 2, "1000000003.0 14.5 1.0 0.1", "non-integer barcode"),
         ("Robot1_Measurement.dat", 4, "1000000001.0 14 1.0 0.1", "time goes backwards"),
+        ("Robot1_Odometry.dat", 3, "1000000001.1 0.1 0.01", "time goes backwards"),
+        # ids: whole numbers in [1, 2^31 - 1] (1e19 used to wrap to a negative int64)
+        ("Barcodes.dat", 3, "1e19 70", "subject outside [1, 2147483647]"),
+        ("Barcodes.dat", 3, "4 -70", "barcode outside [1, 2147483647]"),
+        (
+            "Robot1_Measurement.dat",
+            2,
+            "1000000003.0 1e19 1.0 0.1",
+            "barcode outside [1, 2147483647]",
+        ),
+        ("Landmark_Groundtruth.dat", 0, "0 1.0 2.0 0.001 0.002", "subject outside [1, 2147483647]"),
+        # physical bounds (module docstring)
+        ("Robot1_Measurement.dat", 2, "1000000003.0 14 0 0.1", "range outside (0, 100]"),
+        ("Robot1_Measurement.dat", 2, "1000000003.0 14 -1.0 0.1", "range outside (0, 100]"),
+        ("Robot1_Measurement.dat", 2, "1000000003.0 14 1e308 0.1", "range outside (0, 100]"),
+        (
+            "Robot1_Measurement.dat",
+            2,
+            "1000000003.0 14 1.0 7.0",
+            "bearing outside [-6.28319, 6.28319]",
+        ),
+        ("Robot1_Groundtruth.dat", 5, "-1000000000.5 1.0 2.0 0.1", "time outside [0, 4294967296]"),
+        ("Robot1_Groundtruth.dat", 5, "1e10 1.0 2.0 0.1", "time outside [0, 4294967296]"),
+        ("Robot1_Groundtruth.dat", 5, "1000000000.5 1e308 2.0 0.1", "x outside [-100000, 100000]"),
+        ("Robot1_Odometry.dat", 3, "1000000001.6 -1e308 0.1", "v outside [-100, 100]"),
+        ("Robot1_Odometry.dat", 3, "1000000001.6 0.1 1e3", "omega outside [-100, 100]"),
+        ("Landmark_Groundtruth.dat", 0, "3 1.0 2.0 -0.001 0.002", "x std-dev outside [0, 100000]"),
+        ("Robot1_Groundtruth.dat", 5, "1000000000.5 1e999 2.0 0.1", "non-finite value"),
+        # only ASCII numerals: other scripts' digits, full-width digits, underscores, bad bytes
+        ("Robot1_Measurement.dat", 2, "1000000003.0 \u0661\u0664 1.0 0.1", "non-ASCII bytes"),
+        ("Robot1_Measurement.dat", 2, "1000000003.0 \uff11\uff14 1.0 0.1", "non-ASCII bytes"),
+        ("Robot1_Odometry.dat", 3, "1000000001.6 0.1 1_0", "non-numeric value"),
+        ("Robot1_Odometry.dat", 3, "1000000001.6 0.1 0x1", "non-numeric value"),
+        ("Robot1_Odometry.dat", 3, "1000000001.6 0.1\x0b0.01", "expected 3 columns"),
+        ("Robot1_Odometry.dat", 3, "1000000001.6 0.1 0.01\x1c", "non-numeric value"),
     ],
 )
 def test_bad_rows_are_counted_or_raised(
@@ -168,6 +207,178 @@ def test_unusable_folders_and_options(tmp_path: Path) -> None:
         MrclamOptions(on_bad_row="ignore")  # type: ignore[arg-type]
     ds = load_mrclam(_small_dataset(tmp_path / "one"), MrclamOptions(robots=(2,)))
     assert ds.robot_ids == (2,)
+
+
+def _data_lines(path: Path) -> list[int]:
+    """1-based numbers of the lines (cut at ``\\n`` only) that are data rows."""
+    lines = path.read_bytes().split(b"\n")
+    return [
+        i
+        for i, line in enumerate(lines, start=1)
+        if line.strip(b" \t\r") and not line.strip(b" \t\r").startswith(b"#")
+    ]
+
+
+@pytest.mark.parametrize(
+    "name",
+    [
+        "Robot1_Groundtruth.dat",
+        "Robot1_Odometry.dat",
+        "Robot2_Measurement.dat",
+        "Barcodes.dat",
+        "Landmark_Groundtruth.dat",
+    ],
+)
+def test_a_directory_in_place_of_a_file_is_named(tmp_path: Path, name: str) -> None:
+    folder = _small_dataset(tmp_path / "dir")
+    (folder / name).unlink()
+    (folder / name).mkdir()
+    with pytest.raises(DataError, match=f"{name}: not a regular file"):
+        load_mrclam(folder)
+
+
+@pytest.mark.parametrize(
+    ("content", "n_rows"),
+    [(b"", 0), (HEADER.encode(), 0), (bytes(range(256)) * 8, 8 + 1)],
+    ids=["empty", "comment-only", "binary"],
+)
+def test_odometry_without_a_usable_row_is_a_clear_error(
+    tmp_path: Path, content: bytes, n_rows: int
+) -> None:
+    """The loader refuses it (it used to load, and the runtime conversion hit an IndexError)."""
+    from relloc.runtime.dataset import mrclam_team_log
+
+    folder = _small_dataset(tmp_path / "odo")
+    (folder / "Robot1_Odometry.dat").write_bytes(content)
+    message = f"Robot1_Odometry.dat: 0 usable rows, need at least 1 \\({n_rows} of {n_rows} data"
+    with pytest.raises(DataError, match=message):
+        load_mrclam(folder)
+    with pytest.raises(DataError, match=message):
+        mrclam_team_log(folder, np.random.default_rng(0))
+
+
+def test_a_team_log_needs_two_robots(tmp_path: Path) -> None:
+    from relloc.runtime.dataset import mrclam_team_log
+
+    folder = _small_dataset(tmp_path / "one")
+    for kind in ("Groundtruth", "Odometry", "Measurement"):
+        (folder / f"Robot2_{kind}.dat").unlink()
+    with pytest.raises(DataError, match=r"at least 2 robots, the folder has \(1,\)"):
+        mrclam_team_log(folder, np.random.default_rng(0))
+
+
+@pytest.mark.parametrize(
+    ("file", "text"),
+    [
+        ("Robot1_Groundtruth.dat", "5.0 nan 1.0 0.1"),  # non-finite value
+        ("Robot1_Groundtruth.dat", "5.0 1.0 0.1"),  # expected 4 columns
+        ("Robot1_Odometry.dat", "5.0 fast 0.1"),  # non-numeric value
+        ("Robot1_Measurement.dat", "5.0 99 1.0 0.1"),  # unknown barcode
+        ("Robot2_Measurement.dat", "5.0 14.5 1.0 0.1"),  # non-integer barcode
+    ],
+)
+def test_start_time_comes_only_from_rows_kept(tmp_path: Path, file: str, text: str) -> None:
+    """A skipped first row at t = 5 s used to set the clock (duration 1e9 s)."""
+    folder = _small_dataset(tmp_path / "first")
+    _replace_line(folder / file, 0, text)
+    ds = load_mrclam(folder)
+    assert ds.report.files[file].n_skipped == 1
+    assert ds.t0_unix == pytest.approx(T0)
+    assert ds.duration == pytest.approx(9.9)
+
+
+def test_a_landmark_listed_twice_is_an_error(tmp_path: Path) -> None:
+    """Two positions for one surveyed landmark contradict each other: no row can be preferred."""
+    folder = _small_dataset(tmp_path / "twice")
+    _write(folder, "Landmark_Groundtruth.dat", ["3 1.0 2.0 0.001 0.002", "3 5.0 5.0 0.001 0.002"])
+    for mode in ("skip", "raise"):
+        with pytest.raises(
+            DataError, match=r"Landmark_Groundtruth.dat:6: landmark subject 3 listed twice \(first"
+        ):
+            load_mrclam(folder, MrclamOptions(on_bad_row=mode))  # type: ignore[arg-type]
+
+
+def test_a_barcode_listed_twice_names_both_lines(tmp_path: Path) -> None:
+    folder = _small_dataset(tmp_path / "twice")
+    _write(folder, "Barcodes.dat", ["1 5", "2 14", "3 63", "4 14"])
+    with pytest.raises(
+        DataError, match=r"Barcodes.dat:8: barcode 14 listed twice \(first at line 6"
+    ):
+        load_mrclam(folder)
+
+
+@pytest.mark.parametrize(
+    "separator", ["\x0b", "\x0c", "\x1c", "\x1d", "\x1e", "\x85", "\u2028", "\r"]
+)
+def test_line_numbers_count_only_newlines(tmp_path: Path, separator: str) -> None:
+    """Characters that Python's str.splitlines treats as line breaks do not shift line numbers."""
+    folder = _small_dataset(tmp_path / "lines")
+    path = folder / "Robot1_Odometry.dat"
+    first = _replace_line(path, 1, f"1000000001.2 0.1{separator}0.01")
+    later = _replace_line(path, 5, "1000000002.0 fast 0.01")
+    report = load_mrclam(folder).report.files["Robot1_Odometry.dat"]
+    assert report.rows_read == len(_data_lines(path)) == 40
+    assert report.rows_kept + report.n_skipped == report.rows_read
+    lines = sorted(ex.line for examples in report.examples.values() for ex in examples)
+    assert lines == [first, later] == [6, 10]
+    assert report.examples["non-numeric value"][0].line == later
+
+
+def test_undecodable_bytes_are_a_skipped_row_with_its_true_line(tmp_path: Path) -> None:
+    folder = _small_dataset(tmp_path / "bytes")
+    path = folder / "Robot2_Groundtruth.dat"
+    lines = path.read_bytes().split(b"\n")
+    lines[4 + 3] = b"1000000000.3 \xff\xfe 2.0 0.1"
+    lines[4 + 6] = b"1000000000.6 0.6 2.0 \xc3"
+    path.write_bytes(b"\n".join(lines))
+    report = load_mrclam(folder).report.files["Robot2_Groundtruth.dat"]
+    assert report.skipped == {"non-ASCII bytes": 2}
+    assert [(ex.line, ex.text) for ex in report.examples["non-ASCII bytes"]] == [
+        (8, "1000000000.3 \\xff\\xfe 2.0 0.1"),
+        (11, "1000000000.6 0.6 2.0 \\xc3"),
+    ]
+    with pytest.raises(DataError, match=r"Robot2_Groundtruth.dat:8: non-ASCII bytes"):
+        load_mrclam(folder, MrclamOptions(on_bad_row="raise"))
+
+
+def test_crlf_files_and_a_missing_final_newline_read_the_same(tmp_path: Path) -> None:
+    plain = load_mrclam(_small_dataset(tmp_path / "lf"))
+    folder = _small_dataset(tmp_path / "crlf")
+    for path in folder.iterdir():
+        path.write_bytes(path.read_bytes().rstrip(b"\n").replace(b"\n", b"\r\n"))
+    crlf = load_mrclam(folder)
+    assert crlf.report.n_skipped == 0
+    for n in plain.robot_ids:
+        np.testing.assert_array_equal(crlf.robot(n).groundtruth.t, plain.robot(n).groundtruth.t)
+        np.testing.assert_array_equal(crlf.robot(n).odometry.omega, plain.robot(n).odometry.omega)
+        np.testing.assert_array_equal(
+            crlf.robot(n).measurements.bearing, plain.robot(n).measurements.bearing
+        )
+
+
+def test_robot_file_names_need_ascii_digits_without_leading_zeros(tmp_path: Path) -> None:
+    folder = _small_dataset(tmp_path / "names")
+    for kind in ("Groundtruth", "Odometry", "Measurement"):
+        data = (folder / f"Robot2_{kind}.dat").read_bytes()
+        for number in ("\u0663", "\uff13", "03"):  # Arabic-Indic 3, full-width 3, padded 3
+            (folder / f"Robot{number}_{kind}.dat").write_bytes(data)
+    assert load_mrclam(folder).robot_ids == (1, 2)
+
+
+@pytest.mark.parametrize(
+    ("options", "field"),
+    [
+        ({"robots": ("a",)}, "robots"),
+        ({"robots": (True,)}, "robots"),
+        ({"robots": 1}, "robots"),
+        ({"max_examples": "3"}, "max_examples"),
+        ({"gap_threshold": "0.5"}, "gap_threshold"),
+        ({"gap_threshold": float("inf")}, "gap_threshold"),
+    ],
+)
+def test_bad_options_are_config_errors(options: dict[str, object], field: str) -> None:
+    with pytest.raises(ConfigError, match=field):
+        MrclamOptions(**options)  # type: ignore[arg-type]
 
 
 @pytest.fixture(scope="module")

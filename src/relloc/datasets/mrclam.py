@@ -12,20 +12,54 @@ IJRR 30(8):969–974, 2011. A folder holds
 
 ``#`` lines are comments; columns are whitespace-separated; times are Unix seconds.
 
+How a file is read
+------------------
+A file is read as bytes and cut into lines at ``\\n`` only, so the line numbers in messages are
+the ones an editor shows (``\\r``, ``\\x0b``, ``\\x1c``, ``\\x85`` or ``\\u2028`` never start a
+line). A line that is empty once spaces, tabs and carriage returns are stripped from both ends is
+*blank*; one that then starts with ``#`` is a *comment*; every other line is a **data row**, and
+:attr:`FileReport.rows_read` counts exactly these. A data row is usable when it is ASCII, holds
+the file's number of columns separated by spaces or tabs, each an ASCII decimal numeral
+(``-1.5``, ``.5``, ``2e-3``; no ``_``, no digits of other scripts; ``nan`` and ``inf`` read as
+non-finite) inside the column's bounds:
+
+====================  =========================  =============================================
+column                accepted values            why
+====================  =========================  =============================================
+time                  [0, 2³²] s                 Unix seconds, 1970 to 2106
+subject, barcode      integers in [1, 2³¹ − 1]   positive ids that no integer type wraps
+range                 (0, 100] m                 a camera range (MRCLAM's reach under 10 m)
+θ, bearing            [−2π, 2π] rad              one turn either way: (−π, π] or [0, 2π)
+x, y                  [−10⁵, 10⁵] m              a local metric frame (within 100 km)
+σx, σy                [0, 10⁵] m                 standard deviations are not negative
+v                     [−100, 100] m/s            far beyond any ground robot or drone
+ω                     [−100, 100] rad/s          16 turns a second
+====================  =========================  =============================================
+
 What the loader guarantees
 --------------------------
 - **One clock.** Every time is relative to ``t0_unix``, the earliest time stamp of any robot
-  file; the absolute offset is kept in :attr:`MrclamDataset.t0_unix`.
-- **Nothing lost silently.** A row with the wrong number of columns, a non-numeric or non-finite
-  value, a non-integer id, an unknown barcode, a time going backwards, or (ground truth and
-  odometry) a repeated time stamp is either skipped and *counted* in the :class:`LoadReport`
-  (default; the first few examples per file and reason are kept with their line numbers) or,
-  with ``MrclamOptions(on_bad_row="raise")``, raises :class:`~relloc.errors.DataError` naming
-  the file and line. Missing files and unusable tables always raise ``DataError``.
+  row the loader *kept* (a skipped row never sets it); the absolute offset is kept in
+  :attr:`MrclamDataset.t0_unix`.
+- **Nothing lost silently.** Every data row of every file is kept or skipped, and for each file
+  ``rows_read == rows_kept + n_skipped`` (:class:`FileReport`). A row that is not ASCII, has the
+  wrong number of columns, a non-numeric, non-finite or out-of-bounds value, a non-integer id,
+  an unknown barcode, a time going backwards, or (ground truth and odometry) a repeated time
+  stamp is either skipped and *counted* in the :class:`LoadReport` (default; the first few
+  examples per file and reason are kept with their line numbers) or, with
+  ``MrclamOptions(on_bad_row="raise")``, raises :class:`~relloc.errors.DataError` naming the
+  file and line.
   Measurement rows legitimately share time stamps (one camera frame sees several subjects);
-  only a time going backwards is a fault there.
+  only a time going backwards is a fault there: a row earlier than the latest kept before it.
 - **Duplicate odometry stamps**: the later row is kept (it is the command in force from then on)
   and the earlier one is counted as superseded. Duplicate ground-truth stamps keep the first.
+- **Always an error** (``DataError`` naming the file, and the line where there is one): a missing
+  file or something other than a file in its place; fewer usable rows than a table needs (1 in
+  ``Barcodes.dat`` and in each odometry file — every use of a robot starts from its commands —,
+  2 in each ground-truth file); a subject or barcode listed twice in ``Barcodes.dat``; a robot
+  without a barcode; a landmark listed twice in ``Landmark_Groundtruth.dat`` (a surveyed table
+  giving one landmark two positions contradicts itself, and no rule can say which one is true,
+  so the loader refuses the file rather than pick one).
 - **Ground truth at query times** (:meth:`GroundTruth.at`): x, y linearly interpolated, θ on the
   circle (unwrap, interpolate, wrap); each query is flagged when it lies outside the recorded span
   or inside a gap between consecutive samples longer than ``gap_threshold`` (the robot moved
@@ -36,9 +70,11 @@ What the loader guarantees
 
 from __future__ import annotations
 
+import math
+import numbers
 import re
-from collections.abc import Mapping
-from dataclasses import dataclass, field
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Literal
 
@@ -54,8 +90,17 @@ BoolArray = NDArray[np.bool_]
 
 BARCODES_FILE = "Barcodes.dat"
 LANDMARKS_FILE = "Landmark_Groundtruth.dat"
-_ROBOT_FILE = re.compile(r"^Robot(\d+)_(Groundtruth|Odometry|Measurement)\.dat$")
+_ROBOT_FILE = re.compile(r"^Robot([1-9][0-9]*)_(Groundtruth|Odometry|Measurement)\.dat$", re.ASCII)
 _ROBOT_KINDS = ("Groundtruth", "Odometry", "Measurement")
+
+# Bounds of the columns (module docstring); a value outside is a logging fault.
+MAX_UNIX_TIME_S = 2.0**32
+MAX_ID = 2**31 - 1
+MAX_RANGE_M = 100.0
+MAX_ABS_ANGLE_RAD = 2.0 * math.pi
+MAX_ABS_POSITION_M = 1e5
+MAX_ABS_SPEED_M_S = 100.0
+MAX_ABS_TURN_RATE_RAD_S = 100.0
 
 
 # ----------------------------------------------------------------------------------------------
@@ -83,18 +128,35 @@ class MrclamOptions:
     def __post_init__(self) -> None:
         if self.on_bad_row not in ("skip", "raise"):
             raise ConfigError(f"on_bad_row must be 'skip' or 'raise', got {self.on_bad_row!r}")
-        if not (np.isfinite(self.gap_threshold) and self.gap_threshold > 0):
+        if not (_is_number(self.gap_threshold) and 0 < self.gap_threshold < math.inf):
             raise ConfigError(f"gap_threshold must be a positive number, got {self.gap_threshold}")
-        if self.max_examples < 0:
-            raise ConfigError(f"max_examples must be ≥ 0, got {self.max_examples}")
+        if not (_is_integer(self.max_examples) and self.max_examples >= 0):
+            raise ConfigError(f"max_examples must be an integer ≥ 0, got {self.max_examples!r}")
         if self.robots is not None:
-            if len(self.robots) == 0 or any(int(r) < 1 for r in self.robots):
-                raise ConfigError(f"robots must be positive subject ids, got {self.robots}")
+            if not (
+                isinstance(self.robots, Sequence)
+                and len(self.robots) > 0
+                and all(_is_integer(r) and r >= 1 for r in self.robots)
+            ):
+                raise ConfigError(f"robots must be positive subject ids, got {self.robots!r}")
+
+
+def _is_number(value: object) -> bool:
+    """A real number that is not a bool."""
+    return isinstance(value, numbers.Real) and not isinstance(value, bool)
+
+
+def _is_integer(value: object) -> bool:
+    """An integer (Python or numpy) that is not a bool."""
+    return isinstance(value, numbers.Integral) and not isinstance(value, bool)
 
 
 @dataclass(frozen=True)
 class SkippedRow:
-    """One example of a skipped row: 1-based line number, reason and the raw text."""
+    """One example of a skipped row: 1-based line number, reason and the raw text.
+
+    ``text`` is the line stripped of blanks, with any non-ASCII byte written as ``\\xNN``.
+    """
 
     line: int
     reason: str
@@ -103,7 +165,11 @@ class SkippedRow:
 
 @dataclass
 class FileReport:
-    """What happened to the rows of one file."""
+    """What happened to the data rows of one file: ``rows_read == rows_kept + n_skipped``.
+
+    ``rows_read`` counts the file's data rows as the module docstring defines them (lines split
+    at ``\\n`` that are neither blank nor ``#`` comments).
+    """
 
     file: str
     rows_read: int = 0
@@ -174,15 +240,94 @@ class LoadReport:
         }
 
 
-class _RowSink:
-    """Collects skipped rows of one file, or raises at the first one in strict mode."""
+# ----------------------------------------------------------------------------------------------
+# Table parsing (vectorised on the happy path, per row only where something is wrong)
+# ----------------------------------------------------------------------------------------------
 
-    def __init__(self, path: Path, report: FileReport, options: MrclamOptions) -> None:
+_BLANK = b" \t\r"  # stripped from both ends of a line
+_SEPARATOR = re.compile(rb"[ \t]+")
+_NUMERAL = re.compile(
+    rb"[+-]?(?:(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?|(?i:nan|inf|infinity))"
+)
+# rows made only of these (joined by \n) may take the fast path
+_FAST_PATH_BYTES = b"0123456789+-.eE \t\n"
+
+
+@dataclass(frozen=True)
+class _Column:
+    """A column of a table: its name and the interval its values must lie in.
+
+    The interval is ``[low, high]``, or ``(low, high]`` when ``open_low``; ``integer`` columns
+    (ids) must also hold whole numbers.
+    """
+
+    name: str
+    low: float
+    high: float
+    open_low: bool = False
+    integer: bool = False
+
+    @property
+    def interval(self) -> str:
+        """The interval as text, e.g. ``(0, 100]``."""
+        return f"{'(' if self.open_low else '['}{_bound_text(self.low)}, {_bound_text(self.high)}]"
+
+    def accepts(self, x: FloatArray) -> tuple[BoolArray, BoolArray]:
+        """``(whole, inside)`` masks: whole numbers where required, values inside the interval."""
+        whole = x == np.round(x) if self.integer else np.ones(x.shape, dtype=bool)
+        above = x > self.low if self.open_low else x >= self.low
+        return np.asarray(whole), np.asarray(above & (x <= self.high))
+
+
+def _bound_text(x: float) -> str:
+    """A bound as text: whole numbers exactly, others to 6 significant digits."""
+    return str(int(x)) if float(x).is_integer() and abs(x) < 1e15 else f"{x:.6g}"
+
+
+_TIME = _Column("time", 0.0, MAX_UNIX_TIME_S)
+_SUBJECT = _Column("subject", 1, MAX_ID, integer=True)
+_BARCODE = _Column("barcode", 1, MAX_ID, integer=True)
+_X = _Column("x", -MAX_ABS_POSITION_M, MAX_ABS_POSITION_M)
+_Y = _Column("y", -MAX_ABS_POSITION_M, MAX_ABS_POSITION_M)
+_BARCODES_COLUMNS = (_SUBJECT, _BARCODE)
+_LANDMARK_COLUMNS = (
+    _SUBJECT,
+    _X,
+    _Y,
+    _Column("x std-dev", 0.0, MAX_ABS_POSITION_M),
+    _Column("y std-dev", 0.0, MAX_ABS_POSITION_M),
+)
+_GROUNDTRUTH_COLUMNS = (_TIME, _X, _Y, _Column("theta", -MAX_ABS_ANGLE_RAD, MAX_ABS_ANGLE_RAD))
+_ODOMETRY_COLUMNS = (
+    _TIME,
+    _Column("v", -MAX_ABS_SPEED_M_S, MAX_ABS_SPEED_M_S),
+    _Column("omega", -MAX_ABS_TURN_RATE_RAD_S, MAX_ABS_TURN_RATE_RAD_S),
+)
+_MEASUREMENT_COLUMNS = (
+    _TIME,
+    _BARCODE,
+    _Column("range", 0.0, MAX_RANGE_M, open_low=True),
+    _Column("bearing", -MAX_ABS_ANGLE_RAD, MAX_ABS_ANGLE_RAD),
+)
+
+
+class _RowSink:
+    """Collects the skipped rows of one file, or raises at the first one in strict mode."""
+
+    def __init__(
+        self, path: Path, lines: list[bytes], report: FileReport, options: MrclamOptions
+    ) -> None:
         self.path = path
+        self.lines = lines
         self.report = report
         self.options = options
 
-    def skip(self, line: int, reason: str, text: str) -> None:
+    def text(self, line: int) -> str:
+        """Line ``line`` (1-based) without its blanks, non-ASCII bytes written as ``\\xNN``."""
+        return self.lines[line - 1].strip(_BLANK).decode("ascii", errors="backslashreplace")
+
+    def skip(self, line: int, reason: str) -> None:
+        text = self.text(line)
         if self.options.on_bad_row == "raise":
             raise DataError(f"{self.path}:{line}: {reason}: {text!r}")
         self.report.skipped[reason] = self.report.skipped.get(reason, 0) + 1
@@ -190,104 +335,129 @@ class _RowSink:
         if len(kept) < self.options.max_examples:
             kept.append(SkippedRow(line, reason, text))
 
-    def skip_many(self, lines: IntArray, reason: str, texts: list[str]) -> None:
+    def skip_many(self, lines: IntArray, reason: str) -> None:
         for ln in np.asarray(lines).tolist():
-            self.skip(int(ln), reason, texts[int(ln) - 1].strip())
+            self.skip(int(ln), reason)
 
 
-# ----------------------------------------------------------------------------------------------
-# Table parsing (vectorised on the happy path, per row only where something is wrong)
-# ----------------------------------------------------------------------------------------------
-
-
-def _is_data(line: str) -> bool:
-    """A line that is neither blank nor a ``#`` comment."""
-    stripped = line.lstrip()
-    return bool(stripped) and not stripped.startswith("#")
-
-
-def _parse_fast(
-    raw: list[str], numbers: list[int], ncols: int
-) -> tuple[FloatArray | None, list[int]]:
-    """numpy's C parser over all data lines; ``None`` when any line is not ``ncols`` numbers."""
-    if not numbers:
-        return np.zeros((0, ncols)), []
+def _read_lines(path: Path) -> list[bytes]:
+    """The bytes of ``path`` cut at ``\\n`` (DataError if it is missing or not a readable file)."""
     try:
-        values = np.loadtxt([raw[i - 1] for i in numbers], dtype=float, ndmin=2, comments=None)
+        if not path.is_file():
+            what = "not a regular file" if path.exists() else "file missing"
+            raise DataError(f"{path}: {what} (an MRCLAM folder needs this file)")
+        data = path.read_bytes()
+    except OSError as exc:
+        raise DataError(f"{path}: cannot read: {exc}") from exc
+    return data.split(b"\n")
+
+
+def _parse_fast(rows: list[bytes], ncols: int) -> FloatArray | None:
+    """numpy's C parser over all rows at once; ``None`` unless every row is ``ncols`` numerals.
+
+    Only rows made of digits, ``+-.eE``, spaces and tabs are handed to numpy; on those its parser
+    accepts and reads exactly what :func:`_parse_rows` does.
+    """
+    if not rows:
+        return np.zeros((0, ncols))
+    body = b"\n".join(rows)
+    if body.translate(None, _FAST_PATH_BYTES):
+        return None
+    try:
+        values = np.loadtxt(body.decode("ascii").split("\n"), dtype=float, ndmin=2, comments=None)
     except ValueError:
-        return None, []
-    if values.shape != (len(numbers), ncols):
-        return None, []
-    return values, numbers
+        return None
+    return values if values.shape == (len(rows), ncols) else None
 
 
-def _parse_row_by_row(
-    raw: list[str], numbers: list[int], ncols: int, sink: _RowSink
-) -> tuple[FloatArray, list[int]]:
+def _parse_rows(
+    rows: list[bytes], numbers: list[int], ncols: int, sink: _RowSink
+) -> tuple[FloatArray, IntArray]:
     """Slow path for a file with bad rows: parse each row, skip (count) the unusable ones."""
-    rows: list[list[float]] = []
+    parsed: list[list[float]] = []
     kept: list[int] = []
-    for ln in numbers:
-        text = raw[ln - 1].strip()
-        toks = text.split()
-        if len(toks) != ncols:
-            sink.skip(ln, f"expected {ncols} columns", text)
+    for ln, row in zip(numbers, rows, strict=True):
+        if not row.isascii():
+            sink.skip(ln, "non-ASCII bytes")
             continue
-        try:
-            rows.append([float(t) for t in toks])
-        except ValueError:
-            sink.skip(ln, "non-numeric value", text)
+        tokens = _SEPARATOR.split(row)
+        if len(tokens) != ncols:
+            sink.skip(ln, f"expected {ncols} columns")
             continue
+        if not all(_NUMERAL.fullmatch(tok) for tok in tokens):
+            sink.skip(ln, "non-numeric value")
+            continue
+        parsed.append([float(tok) for tok in tokens])
         kept.append(ln)
-    return np.array(rows, dtype=float).reshape(len(rows), ncols), kept
+    return np.array(parsed, dtype=float).reshape(len(parsed), ncols), np.array(kept, np.int64)
+
+
+def _check_columns(
+    values: FloatArray, line_no: IntArray, columns: tuple[_Column, ...], sink: _RowSink
+) -> tuple[FloatArray, IntArray]:
+    """Keep the rows whose values are finite and inside every column's bounds (skip the rest).
+
+    Checks run in column order and each row is skipped for the first check it fails.
+    """
+    finite = np.isfinite(values).all(axis=1)
+    sink.skip_many(line_no[~finite], "non-finite value")
+    values, line_no = values[finite], line_no[finite]
+    for col, column in enumerate(columns):
+        whole, inside = column.accepts(values[:, col])
+        sink.skip_many(line_no[~whole], f"non-integer {column.name}")
+        sink.skip_many(line_no[whole & ~inside], f"{column.name} outside {column.interval}")
+        ok = whole & inside
+        values, line_no = values[ok], line_no[ok]
+    return values, line_no
 
 
 def _read_table(
-    path: Path, ncols: int, sink: _RowSink, *, min_rows: int = 0
-) -> tuple[FloatArray, IntArray, list[str]]:
-    """Parse a whitespace table into ``(values (n, ncols), 1-based line numbers, raw lines)``.
+    path: Path,
+    columns: tuple[_Column, ...],
+    report: LoadReport,
+    options: MrclamOptions,
+    *,
+    min_rows: int = 0,
+) -> tuple[FloatArray, IntArray, _RowSink]:
+    """The usable rows of a table: ``(values (n, ncols), 1-based line numbers, sink)``.
 
-    Rows with the wrong column count, a non-numeric or a non-finite value are skipped (counted).
+    Every data row is counted in the file's report (``rows_read``); unusable ones are skipped
+    there. ``sink`` is returned so that the caller can skip more rows of the same file.
     """
-    if not path.is_file():
-        raise DataError(f"{path}: file missing (an MRCLAM folder needs it)")
-    try:
-        text = path.read_text(encoding="utf-8", errors="replace")
-    except OSError as exc:
-        raise DataError(f"{path}: cannot read: {exc}") from exc
-    raw = text.splitlines()
-    numbers = [i for i, line in enumerate(raw, start=1) if _is_data(line)]
-    sink.report.rows_read = len(numbers)
-    values, keep_numbers = _parse_fast(raw, numbers, ncols)
-    if values is None:
-        values, keep_numbers = _parse_row_by_row(raw, numbers, ncols, sink)
-    line_no = np.asarray(keep_numbers, dtype=np.int64)
-    finite = np.isfinite(values).all(axis=1)
-    if not finite.all():
-        sink.skip_many(line_no[~finite], "non-finite value", raw)
-        values, line_no = values[finite], line_no[finite]
+    lines = _read_lines(path)
+    file_report = FileReport(path.name)
+    report.files[path.name] = file_report
+    sink = _RowSink(path, lines, file_report, options)
+    stripped = [line.strip(_BLANK) for line in lines]
+    numbers = [i for i, s in enumerate(stripped, start=1) if s and not s.startswith(b"#")]
+    rows = [stripped[i - 1] for i in numbers]
+    file_report.rows_read = len(rows)
+    fast = _parse_fast(rows, len(columns))
+    if fast is not None:
+        values, line_no = fast, np.array(numbers, dtype=np.int64)
+    else:
+        values, line_no = _parse_rows(rows, numbers, len(columns), sink)
+    values, line_no = _check_columns(values, line_no, columns, sink)
     if len(values) < min_rows:
         raise DataError(
             f"{path}: {len(values)} usable rows, need at least {min_rows} "
-            f"({sink.report.n_skipped} skipped)"
+            f"({file_report.n_skipped} of {file_report.rows_read} data rows skipped)"
         )
-    return values, line_no, raw
+    return values, line_no, sink
 
 
-def _integer_column(
-    values: FloatArray, col: int, line_no: IntArray, raw: list[str], sink: _RowSink, what: str
-) -> BoolArray:
-    """Mask of rows whose column ``col`` holds an integer (others are skipped, counted)."""
-    ok = values[:, col] == np.round(values[:, col])
-    if not ok.all():
-        sink.skip_many(line_no[~ok], f"non-integer {what}", raw)
-    return np.asarray(ok)
+def _reject_repeats(path: Path, what: str, keys: FloatArray, line_no: IntArray) -> None:
+    """DataError at the first key listed twice (a table names each subject or barcode once)."""
+    first: dict[int, int] = {}
+    for key, ln in zip(keys.astype(np.int64).tolist(), line_no.tolist(), strict=True):
+        if key in first:
+            raise DataError(f"{path}:{ln}: {what} {key} listed twice (first at line {first[key]})")
+        first[key] = ln
 
 
 def _monotonic_mask(
     t: FloatArray,
     line_no: IntArray,
-    raw: list[str],
     sink: _RowSink,
     *,
     duplicates: Literal["allow", "keep_first", "keep_last"],
@@ -303,7 +473,7 @@ def _monotonic_mask(
     prev_max = np.concatenate(([-np.inf], running_max[:-1]))
     keep = t >= prev_max
     if not keep.all():
-        sink.skip_many(line_no[~keep], "time goes backwards", raw)
+        sink.skip_many(line_no[~keep], "time goes backwards")
     if duplicates == "allow":
         return np.asarray(keep)
     idx = np.flatnonzero(keep)
@@ -315,7 +485,7 @@ def _monotonic_mask(
         repeat = np.concatenate((tk[:-1] == tk[1:], [False]))
         reason = "duplicate time stamp (superseded by the next row)"
     if repeat.any():
-        sink.skip_many(line_no[idx[repeat]], reason, raw)
+        sink.skip_many(line_no[idx[repeat]], reason)
         keep[idx[repeat]] = False
     return np.asarray(keep)
 
@@ -509,37 +679,22 @@ class MrclamDataset:
 # ----------------------------------------------------------------------------------------------
 
 
-def _sink(path: Path, report: LoadReport, options: MrclamOptions) -> _RowSink:
-    file_report = FileReport(path.name)
-    report.files[path.name] = file_report
-    return _RowSink(path, file_report, options)
-
-
 def _load_barcodes(folder: Path, report: LoadReport, options: MrclamOptions) -> dict[int, int]:
     """``barcode -> subject``; a barcode or subject listed twice is an error."""
     path = folder / BARCODES_FILE
-    sink = _sink(path, report, options)
-    values, line_no, raw = _read_table(path, 2, sink, min_rows=1)
-    ok = _integer_column(values, 0, line_no, raw, sink, "subject") & _integer_column(
-        values, 1, line_no, raw, sink, "barcode"
-    )
-    table: dict[int, int] = {}
-    subjects: set[int] = set()
-    for (subject, barcode), ln in zip(values[ok].astype(np.int64), line_no[ok], strict=True):
-        if int(barcode) in table or int(subject) in subjects:
-            raise DataError(f"{path}:{ln}: subject {subject} or barcode {barcode} listed twice")
-        table[int(barcode)] = int(subject)
-        subjects.add(int(subject))
-    sink.report.rows_kept = len(table)
-    return table
+    values, line_no, sink = _read_table(path, _BARCODES_COLUMNS, report, options, min_rows=1)
+    _reject_repeats(path, "subject", values[:, 0], line_no)
+    _reject_repeats(path, "barcode", values[:, 1], line_no)
+    ids = values.astype(np.int64).tolist()
+    sink.report.rows_kept = len(ids)
+    return {barcode: subject for subject, barcode in ids}
 
 
 def _load_landmarks(folder: Path, report: LoadReport, options: MrclamOptions) -> Landmarks:
+    """The landmark table; a subject listed twice is an error (module docstring)."""
     path = folder / LANDMARKS_FILE
-    sink = _sink(path, report, options)
-    values, line_no, raw = _read_table(path, 5, sink)
-    ok = _integer_column(values, 0, line_no, raw, sink, "subject")
-    values = values[ok]
+    values, line_no, sink = _read_table(path, _LANDMARK_COLUMNS, report, options)
+    _reject_repeats(path, "landmark subject", values[:, 0], line_no)
     sink.report.rows_kept = len(values)
     return Landmarks(
         subject=values[:, 0].astype(np.int64), xy=values[:, 1:3].copy(), std=values[:, 3:5].copy()
@@ -547,14 +702,19 @@ def _load_landmarks(folder: Path, report: LoadReport, options: MrclamOptions) ->
 
 
 def _discover_robots(folder: Path, options: MrclamOptions) -> list[int]:
+    """Subjects to load (found ``RobotN_*`` names or ``options.robots``), each with all 3 files."""
     if not folder.is_dir():
         raise DataError(f"{folder}: not a folder (expected an MRCLAM dataset folder)")
     found: dict[int, set[str]] = {}
-    for p in folder.iterdir():
-        m = _ROBOT_FILE.match(p.name)
+    try:
+        names = [p.name for p in folder.iterdir()]
+    except OSError as exc:
+        raise DataError(f"{folder}: cannot list the folder: {exc}") from exc
+    for name in names:
+        m = _ROBOT_FILE.match(name)
         if m:
             found.setdefault(int(m.group(1)), set()).add(m.group(2))
-    wanted = sorted(found) if options.robots is None else sorted(set(options.robots))
+    wanted = sorted(found) if options.robots is None else sorted({int(r) for r in options.robots})
     if not wanted:
         raise DataError(f"{folder}: no RobotN_Groundtruth/Odometry/Measurement.dat files")
     for n in wanted:
@@ -565,22 +725,6 @@ def _discover_robots(folder: Path, options: MrclamOptions) -> list[int]:
                 f"(robot {n} needs {', '.join(f'Robot{n}_{k}.dat' for k in _ROBOT_KINDS)})"
             )
     return wanted
-
-
-def _first_time(path: Path) -> float | None:
-    """Earliest finite time stamp in column 0 of a file (cheap scan of its first data rows)."""
-    with path.open(encoding="utf-8", errors="replace") as fh:
-        for line in fh:
-            toks = line.split()
-            if not toks or toks[0].startswith("#"):
-                continue
-            try:
-                value = float(toks[0])
-            except ValueError:
-                continue
-            if np.isfinite(value):
-                return value
-    return None
 
 
 def load_mrclam(folder: Path | str, options: MrclamOptions | None = None) -> MrclamDataset:
@@ -600,47 +744,56 @@ def load_mrclam(folder: Path | str, options: MrclamOptions | None = None) -> Mrc
         if n not in subject_to_barcode:
             raise DataError(f"{folder / BARCODES_FILE}: robot {n} has no barcode")
 
-    # The common clock: earliest time stamp of any robot file (the files are time-sorted, so
-    # this is the first row; if an early row is bad the next one is taken).
-    paths = {(n, k): folder / f"Robot{n}_{k}.dat" for n in robot_ids for k in _ROBOT_KINDS}
-    firsts = [t for t in (_first_time(p) for p in paths.values()) if t is not None]
-    if not firsts:
-        raise DataError(f"{folder}: no time stamp in any robot file")
-    t0 = float(min(firsts))
-
-    robots: dict[int, RobotData] = {}
-    for n in robot_ids:
-        robots[n] = RobotData(
+    on_unix_clock = {
+        n: RobotData(
             subject=n,
             barcode=subject_to_barcode[n],
-            groundtruth=_load_groundtruth(paths[(n, "Groundtruth")], t0, report, opts),
-            odometry=_load_odometry(paths[(n, "Odometry")], t0, report, opts),
+            groundtruth=_load_groundtruth(folder / f"Robot{n}_Groundtruth.dat", report, opts),
+            odometry=_load_odometry(folder / f"Robot{n}_Odometry.dat", report, opts),
             measurements=_load_measurements(
-                paths[(n, "Measurement")], t0, barcode_to_subject, report, opts
+                folder / f"Robot{n}_Measurement.dat", barcode_to_subject, report, opts
             ),
         )
+        for n in robot_ids
+    }
+    # The common clock: the earliest time stamp of any row kept (every ground truth has one).
+    t0 = min(_earliest_time(robot) for robot in on_unix_clock.values())
     return MrclamDataset(
         path=folder,
         t0_unix=t0,
         barcodes=dict(barcode_to_subject),
-        robots=robots,
+        robots={n: _on_clock(robot, t0) for n, robot in on_unix_clock.items()},
         landmarks=landmarks,
         report=report,
     )
 
 
-def _load_groundtruth(
-    path: Path, t0: float, report: LoadReport, opts: MrclamOptions
-) -> GroundTruth:
-    sink = _sink(path, report, opts)
-    values, line_no, raw = _read_table(path, 4, sink, min_rows=2)
-    keep = _monotonic_mask(values[:, 0], line_no, raw, sink, duplicates="keep_first")
+def _earliest_time(robot: RobotData) -> float:
+    """Earliest time stamp in any of the robot's (time-sorted, possibly empty) tables."""
+    tables = (robot.groundtruth.t, robot.odometry.t, robot.measurements.t)
+    return min(float(t[0]) for t in tables if len(t))
+
+
+def _on_clock(robot: RobotData, t0: float) -> RobotData:
+    """``robot`` with every time stamp made relative to ``t0``."""
+    return replace(
+        robot,
+        groundtruth=replace(robot.groundtruth, t=robot.groundtruth.t - t0),
+        odometry=replace(robot.odometry, t=robot.odometry.t - t0),
+        measurements=replace(robot.measurements, t=robot.measurements.t - t0),
+    )
+
+
+def _load_groundtruth(path: Path, report: LoadReport, opts: MrclamOptions) -> GroundTruth:
+    """Vicon track on the Unix clock: strictly increasing times (repeats keep the first row)."""
+    values, line_no, sink = _read_table(path, _GROUNDTRUTH_COLUMNS, report, opts, min_rows=2)
+    keep = _monotonic_mask(values[:, 0], line_no, sink, duplicates="keep_first")
     values = values[keep]
     if len(values) < 2:
         raise DataError(f"{path}: fewer than 2 usable ground-truth rows")
     sink.report.rows_kept = len(values)
     return GroundTruth(
-        t=values[:, 0] - t0,
+        t=values[:, 0].copy(),
         x=values[:, 1].copy(),
         y=values[:, 2].copy(),
         theta=values[:, 3].copy(),
@@ -648,37 +801,34 @@ def _load_groundtruth(
     )
 
 
-def _load_odometry(path: Path, t0: float, report: LoadReport, opts: MrclamOptions) -> Odometry:
-    sink = _sink(path, report, opts)
-    values, line_no, raw = _read_table(path, 3, sink)
-    keep = _monotonic_mask(values[:, 0], line_no, raw, sink, duplicates="keep_last")
+def _load_odometry(path: Path, report: LoadReport, opts: MrclamOptions) -> Odometry:
+    """Commands on the Unix clock: strictly increasing times (repeats keep the last row)."""
+    values, line_no, sink = _read_table(path, _ODOMETRY_COLUMNS, report, opts, min_rows=1)
+    keep = _monotonic_mask(values[:, 0], line_no, sink, duplicates="keep_last")
     values = values[keep]
     sink.report.rows_kept = len(values)
-    return Odometry(t=values[:, 0] - t0, v=values[:, 1].copy(), omega=values[:, 2].copy())
+    return Odometry(t=values[:, 0].copy(), v=values[:, 1].copy(), omega=values[:, 2].copy())
 
 
 def _load_measurements(
     path: Path,
-    t0: float,
     barcode_to_subject: Mapping[int, int],
     report: LoadReport,
     opts: MrclamOptions,
 ) -> Measurements:
-    sink = _sink(path, report, opts)
-    values, line_no, raw = _read_table(path, 4, sink)
-    ok = _integer_column(values, 1, line_no, raw, sink, "barcode")
-    values, line_no = values[ok], line_no[ok]
+    """Camera rows on the Unix clock with known barcodes; times non-decreasing."""
+    values, line_no, sink = _read_table(path, _MEASUREMENT_COLUMNS, report, opts)
     barcodes = values[:, 1].astype(np.int64)
     known_codes = np.fromiter(barcode_to_subject.keys(), dtype=np.int64)
     known = np.isin(barcodes, known_codes)
     if not known.all():
-        sink.skip_many(line_no[~known], "unknown barcode", raw)
+        sink.skip_many(line_no[~known], "unknown barcode")
         values, line_no, barcodes = values[known], line_no[known], barcodes[known]
-    keep = _monotonic_mask(values[:, 0], line_no, raw, sink, duplicates="allow")
+    keep = _monotonic_mask(values[:, 0], line_no, sink, duplicates="allow")
     values, barcodes = values[keep], barcodes[keep]
     sink.report.rows_kept = len(values)
     return Measurements(
-        t=values[:, 0] - t0,
+        t=values[:, 0].copy(),
         subject=_map_barcodes(barcodes, barcode_to_subject),
         barcode=barcodes,
         range=values[:, 2].copy(),

@@ -44,6 +44,8 @@ def mrclam_team_log(
     sensor = sensor or SensorSpec()
     ds = load_mrclam(folder)
     ids = ds.robot_ids
+    if len(ids) < 2:
+        raise DataError(f"{folder}: a team log needs at least 2 robots, the folder has {ids}")
     if observer not in ids:
         raise DataError(f"{folder}: observer robot {observer} not in the dataset (robots {ids})")
     order = (observer, *(i for i in ids if i != observer))
