@@ -33,15 +33,6 @@ import networkx as nx
 import numpy as np
 
 from relloc.core.angles import wrap_angle
-from relloc.experiments.montecarlo import run_monte_carlo
-from relloc.experiments.output import (
-    figure_md,
-    markdown_table,
-    prepare_out_dir,
-    save_figure,
-    write_report,
-    write_summary,
-)
 from relloc.experiments.registry import ReproduceArgs
 from relloc.models import symbolic as S
 from relloc.models.planar_measurement import RowKind, ScalarRows
@@ -57,6 +48,15 @@ from relloc.observability.rpmg import (
     name_unobservable_directions,
     team_observability,
     team_observability_matrix,
+)
+from relloc.pipeline.montecarlo import run_monte_carlo
+from relloc.pipeline.output import (
+    figure_md,
+    markdown_table,
+    prepare_out_dir,
+    save_figure,
+    write_report,
+    write_summary,
 )
 
 SENSOR = SensorSettings(sensing_range=120.0)
