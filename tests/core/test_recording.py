@@ -242,7 +242,7 @@ def test_truth_and_odometry_validation():
         )
     with pytest.raises(DataError, match="names must be unique"):
         _recording(robots=("a", "a"), measurements=empty_measurements())
-    with pytest.raises(DataError, match="recording.truth: 1 entries for 2 robots"):
+    with pytest.raises(DataError, match=r"recording\.truth: 1 entries for 2 robots"):
         _recording(truth=(_truth(),))
 
 
