@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from relloc.errors import ConfigError
-from relloc.experiments.montecarlo import run_monte_carlo
+from relloc.pipeline.montecarlo import run_monte_carlo
 
 
 def draw(seed_sequence, index, scale):

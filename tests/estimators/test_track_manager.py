@@ -1,22 +1,32 @@
 """Track manager: create on first sight, keep (predict only) within the window, delete after it,
-re-create on reappearance; several observers and observed robots; every filter; consistency."""
+re-create on reappearance; one manager per observer through the one replay loop; lazy deletion
+equals deletion after every event; rows it cannot use are counted; every filter; consistency."""
 
 import dataclasses
 
 import numpy as np
 import pytest
 
+from relloc.core.recording import (
+    GroundTruth,
+    Measurements,
+    Odometry,
+    Recording,
+    measurement_rows,
+)
 from relloc.errors import ConfigError
 from relloc.estimators.initialisation import InitPolicy
 from relloc.estimators.track_manager import (
     FILTERS,
     TrackManager,
     TrackManagerSettings,
-    track_log,
+    managers_for,
 )
 from relloc.estimators.yaw_bank import YawBankSettings
 from relloc.metrics import anees, anees_band, nees, state_errors
-from relloc.sim.log import GroundTruth, Log, Measurements, Odometry
+from relloc.pipeline.contract import Estimator, HeldOdometry
+from relloc.pipeline.estimates import Estimates
+from relloc.pipeline.replay import merge_times, record_grid, replay
 from relloc.sim.scenario import (
     RobotSpec,
     Scenario,
@@ -31,7 +41,7 @@ from relloc.sim.simulate import simulate
 SIGMA_Z = np.array([0.0068, 0.0036, 0.0036])
 
 
-def _two_robot_log(seen_windows, yaw=0.3):
+def _two_robot_recording(seen_windows, yaw=0.3, *, extra=None, truth=True):
     """Static observer at the origin; the target flies at 0.5 m/s along y, 5 m ahead, 2 m up.
     Noise-free measurements at 10 Hz only inside ``seen_windows``."""
     dt, duration = 0.01, 12.0
@@ -49,27 +59,33 @@ def _two_robot_log(seen_windows, yaw=0.3):
     tm = tm[keep]
     rel = np.column_stack([np.full(tm.size, 5.0), -3.0 + 0.5 * tm, np.full(tm.size, 2.0)])
     sigma = np.array([1e-3, 1e-2, 1e-2, 1e-2])
-    return Log(
+    rows = measurement_rows(
+        "range_bearing_elevation",
+        t=tm,
+        observer=0,
+        target=1,
+        value=range_azimuth_elevation(rel),
+        sigma=SIGMA_Z,
+    )
+    return Recording(
         robots=("l", "c"),
-        kinds=("ground", "aerial"),
-        truth=(GroundTruth(t=t, pose=observer), GroundTruth(t=t, pose=target)),
+        platforms=("ground", "aerial"),
+        truth=(GroundTruth(t=t, pose=observer), GroundTruth(t=t, pose=target)) if truth else None,
         odometry=(
             Odometry(t=t[:-1], velocity=np.zeros((t.size - 1, 4)), sigma=sigma),
             Odometry(t=t[:-1], velocity=np.tile(v_body, (t.size - 1, 1)), sigma=sigma),
         ),
-        measurements=Measurements(
-            t=tm,
-            observer=np.zeros(tm.size, dtype=np.int64),
-            observed=np.ones(tm.size, dtype=np.int64),
-            z=range_azimuth_elevation(rel),
-            sigma=np.tile(SIGMA_Z, (tm.size, 1)),
-        ),
+        measurements=rows if extra is None else Measurements.concatenate([rows, extra]),
     )
 
 
+def _track(recording, settings, rng=None, **kwargs) -> Estimates:
+    return replay(recording, managers_for(recording, settings, rng=rng), **kwargs)
+
+
 def test_track_created_kept_deleted_and_recreated():
-    log = _two_robot_log([(0.1, 2.0), (3.0, 4.0), (8.0, 12.0)])
-    est = track_log(log, TrackManagerSettings(keep_window_s=2.0))
+    rec = _two_robot_recording([(0.1, 2.0), (3.0, 4.0), (8.0, 12.0)])
+    est = _track(rec, TrackManagerSettings(keep_window_s=2.0))
     kinds = [(e.kind, round(e.t, 2)) for e in est.events]
     # gap 2.0 → 3.0 (1 s) is bridged; gap 4.0 → 8.0 exceeds the 2 s window: deleted just after
     # 6.0 s (first event time more than 2 s after the last update), re-created at 8.0 s.
@@ -77,7 +93,9 @@ def test_track_created_kept_deleted_and_recreated():
     assert kinds[1][0] == "deleted" and 6.0 < kinds[1][1] <= 6.02
     assert kinds[2] == ("recreated", 8.0)
     assert len(kinds) == 3
-    pair = est.pair("l", "c")
+    assert {(e.owner, e.subject) for e in est.events} == {("l", "c")}
+    pair = est.series("l", "c")
+    assert pair.frame == "relative_pose4" and est.estimator == "plkf"
     # Recorded while kept without measurements (2.0–3.0 s) ...
     coast = (pair.t > 2.05) & (pair.t < 2.95)
     assert coast.sum() >= 8
@@ -89,33 +107,89 @@ def test_track_created_kept_deleted_and_recreated():
     assert pair.age[np.searchsorted(pair.t, 8.0)] == pytest.approx(0.0)
     # Accurate after re-creation (noise-free measurements).
     late = pair.t > 10.0
-    truth = log.relative_truth("l", "c", pair.t[late])
+    truth = rec.relative_truth("l", "c", pair.t[late])
     err = state_errors(pair.mean[late], truth)
     assert np.max(np.abs(err[:, :3])) < 0.02 and np.max(np.abs(err[:, 3])) < 0.05
+    # one update per measurement after the first (which starts the track), NIS with 3 dof
+    updates = est.updates_of("l", "c")
+    assert updates.t.size == rec.measurements.size - 2 and set(updates.dof) == {3}
+
+
+def test_lazy_deletion_equals_deleting_after_every_event():
+    rec = _two_robot_recording([(0.1, 2.0), (3.0, 4.0), (8.0, 12.0)])
+    settings = TrackManagerSettings(keep_window_s=0.55)  # deletions between record times
+    lazy = _track(rec, settings)
+    # recording at every event (the same events: the grid, odometry and measurement times)
+    # asks for the beliefs — and so deletes — after every event
+    t0, t1 = rec.span
+    grid = record_grid(t0, t1, 10.0)
+    events = merge_times(grid, *(od.t for od in rec.odometry), rec.measurements.t)
+    every = _track(rec, settings, record_times=events[events <= t1 + 1e-9])
+    assert lazy.events == every.events
+    assert [e.kind for e in lazy.events].count("deleted") == 2
+    a, b = lazy.series("l", "c"), every.series("l", "c")
+    common = np.isin(np.round(b.t, 9), np.round(a.t, 9))
+    np.testing.assert_array_equal(a.mean, b.mean[common])
+    np.testing.assert_array_equal(a.cov, b.cov[common])
+    np.testing.assert_array_equal(a.age, b.age[common])
 
 
 @pytest.mark.parametrize("name", list(FILTERS))
 def test_every_filter_tracks_the_pair(name):
-    log = _two_robot_log([(0.1, 12.0)])
-    est = track_log(log, TrackManagerSettings(filter=name, init=InitPolicy(name="known")))
-    pair = est.pair("l", "c")
-    assert est.filter == name and pair.nis.size == 120
-    truth = log.relative_truth("l", "c", pair.t)
+    rec = _two_robot_recording([(0.1, 12.0)])
+    est = _track(rec, TrackManagerSettings(filter=name, init=InitPolicy(name="known")))
+    pair = est.series("l", "c")
+    assert est.estimator == name and est.updates_of("l", "c").nis.size == 120
+    truth = rec.relative_truth("l", "c", pair.t)
     err = state_errors(pair.mean, truth)
     assert np.max(np.abs(err[pair.t > 2.0, :3])) < 0.02
 
 
+def test_truth_based_start_needs_ground_truth():
+    rec = _two_robot_recording([(0.1, 12.0)], truth=False)
+    with pytest.raises(ConfigError, match="needs the true relative pose"):
+        _track(rec, TrackManagerSettings(init=InitPolicy(name="known")))
+    assert _track(rec, TrackManagerSettings()).series("l", "c").t.size > 100
+
+
+def test_rows_it_cannot_use_are_counted_not_fused():
+    extra = Measurements.concatenate(
+        [
+            measurement_rows("range", t=[0.5, 0.6], observer=0, target=1, value=[5.0, 5.0]),
+            measurement_rows("range_bearing_elevation", t=[0.7], observer=0, value=[[5, 0, 0]]),
+            measurement_rows("range_bearing_elevation", t=[12.0], observer=1, value=[[5, 0, 0]]),
+            measurement_rows(
+                "range_bearing_elevation", t=[0.75], observer=0, target=1, value=[[5.4, 0.0, 0.4]]
+            ),
+        ]
+    )
+    rec = _two_robot_recording([(0.1, 12.0)], extra=extra)
+    managers = managers_for(rec, TrackManagerSettings())
+    assert [m.owner for m in managers] == ["l", "c"]  # c made a reading too (of no known robot)
+    est = replay(rec, managers)
+    # each manager counts its own robot's rows only; the record sums them
+    assert est.counts == {
+        "rows_of_kind_range": 2,
+        "rows_of_unknown_target": 2,
+        "rows_without_sigma": 1,
+    }
+    assert est.labels == ("l->c",)
+    plain = _track(_two_robot_recording([(0.1, 12.0)]), TrackManagerSettings())
+    np.testing.assert_array_equal(est.series("l", "c").mean, plain.series("l", "c").mean)
+    assert plain.counts == {}
+
+
 def test_yaw_bank_resolves_a_yaw_guess_on_the_wrong_side_of_the_circle():
     # The first-measurement start guesses φ = 0; the truth is 3.0 rad away.
-    log = _two_robot_log([(0.1, 12.0)], yaw=3.0)
+    rec = _two_robot_recording([(0.1, 12.0)], yaw=3.0)
     settings = TrackManagerSettings(yaw_bank=YawBankSettings(n_components=12))
-    pair = track_log(log, settings).pair("l", "c")
-    err = state_errors(pair.mean, log.relative_truth("l", "c", pair.t))
+    pair = _track(rec, settings).series("l", "c")
+    err = state_errors(pair.mean, rec.relative_truth("l", "c", pair.t))
     assert abs(err[0, 3]) > 2.5
     assert np.max(np.abs(err[pair.t >= 3.0, 3])) < 0.1
     # A single PLKF from the same start is still stalled far from the truth (seed 000 case 4).
-    single = track_log(log, TrackManagerSettings()).pair("l", "c")
-    err1 = state_errors(single.mean, log.relative_truth("l", "c", single.t))
+    single = _track(rec, TrackManagerSettings()).series("l", "c")
+    err1 = state_errors(single.mean, rec.relative_truth("l", "c", single.t))
     assert np.min(np.abs(err1[(single.t >= 3.0) & (single.t <= 6.0), 3])) > 1.0
 
 
@@ -149,12 +223,16 @@ def test_several_observers_and_observed_robots():
         ),
     )
     sc = Scenario(robots=robots, duration_s=6.0)
-    log = simulate(sc, np.random.default_rng(0))
-    est = track_log(log, TrackManagerSettings(), rng=np.random.default_rng(1))
-    labels = {p.label for p in est.pairs}
+    rec = simulate(sc, np.random.default_rng(0))
+    managers = managers_for(rec, TrackManagerSettings(), rng=np.random.default_rng(1))
+    assert [m.owner for m in managers] == ["l1", "l2"]  # one per observing robot
+    assert all(isinstance(m, Estimator) for m in managers)
+    est = replay(rec, managers)
+    labels = set(est.labels)
     # Each observer tracks every other robot, including the other observer.
     assert labels == {f"{a}->{b}" for a in ("l1", "l2") for b in ("l1", "l2", "c1", "c2") if a != b}
     assert sum(e.kind == "created" for e in est.events) == 6
+    assert [e.t for e in est.events] == sorted(e.t for e in est.events)
 
 
 def test_statistical_consistency_on_the_default_team():
@@ -163,15 +241,15 @@ def test_statistical_consistency_on_the_default_team():
     sc = dataclasses.replace(default_scenario(), duration_s=5.0)
     values = []
     for seed in range(8):
-        log = simulate(sc, np.random.default_rng(seed))
-        est = track_log(
-            log,
+        rec = simulate(sc, np.random.default_rng(seed))
+        est = _track(
+            rec,
             TrackManagerSettings(init=InitPolicy(name="known")),
             rng=np.random.default_rng(100 + seed),
         )
-        for p in est.pairs:
+        for p in est.beliefs:
             t_end = p.t[-1:]
-            truth = log.relative_truth(p.observer, p.observed, t_end)
+            truth = rec.relative_truth(p.owner, p.subject, t_end)
             values.append(nees(state_errors(p.mean[-1:], truth), p.cov[-1:]))
     v = np.concatenate(values)
     assert v.size >= 28
@@ -181,10 +259,17 @@ def test_statistical_consistency_on_the_default_team():
 
 def test_manager_rejects_time_going_backwards_and_bad_settings():
     m = TrackManager(
-        TrackManagerSettings(), robots=("a", "b"), odometry_sigma=[(0.1,) * 4] * 2, t0=1.0
+        TrackManagerSettings(), owner="a", robots=("a", "b"), odometry_sigma=[(0.1,) * 4] * 2
     )
+    with pytest.raises(ConfigError, match="before the first advance"):
+        m.beliefs()
+    m.advance(1.0, HeldOdometry.still(2))
     with pytest.raises(ConfigError, match="time went backwards"):
-        m.advance(0.5, np.zeros((2, 4)))
+        m.advance(0.5, HeldOdometry.still(2))
+    with pytest.raises(ConfigError, match="owner 'z' is not on the team"):
+        TrackManager(
+            TrackManagerSettings(), owner="z", robots=("a", "b"), odometry_sigma=[(0.1,) * 4] * 2
+        )
     with pytest.raises(ConfigError, match="filter: must be one of"):
         TrackManagerSettings(filter="ukf")
     with pytest.raises(ConfigError, match="keep_window_s"):

@@ -100,8 +100,8 @@ def test_bank_recovers_a_yaw_error_near_pi_where_the_plkf_stalls() -> None:
     """Aerial robot of the default team, yaw guess 3.0 rad off: bank < 0.1 rad in 12 updates."""
     scenario = default_scenario()
     scenario = dataclasses.replace(scenario, robots=scenario.robots[:2], duration_s=3.0)
-    log = simulate(scenario, np.random.default_rng(7))
-    odo_l, odo_c = log.odometry
+    rec = simulate(scenario, np.random.default_rng(7))
+    odo_l, odo_c = rec.odometry
     settings = FilterSettings(
         kind="plkf",
         motion_noise=VelocityNoise(
@@ -112,12 +112,12 @@ def test_bank_recovers_a_yaw_error_near_pi_where_the_plkf_stalls() -> None:
             sigma_r=0.0068, sigma_azimuth=0.0036, sigma_elevation=0.0036
         ),
     )
-    truth0 = log.relative_truth(0, 1, 0.0)[0]
+    truth0 = rec.relative_truth(0, 1, 0.0)[0]
     guess = truth0 + np.array([0.0, 0.0, 0.0, 3.0])
     prior = Gaussian(mean=guess, cov=np.diag([0.02**2] * 3 + [math.pi**2 / 3]))
     bank = YawBankTracker(prior, settings, YawBankSettings())
     plain = RelativeTracker(prior, settings)
-    m = log.measurements
+    m = rec.measurements
     dt = float(odo_l.t[1] - odo_l.t[0])
     yaw_err: dict[str, list[float]] = {"bank": [], "plkf": []}
     i = 0
@@ -125,9 +125,9 @@ def test_bank_recovers_a_yaw_error_near_pi_where_the_plkf_stalls() -> None:
         for tracker in (bank, plain):
             tracker.predict(odo_l.velocity[k], odo_c.velocity[k], dt)
         while i < m.size and m.t[i] <= odo_l.t[k] + dt + 1e-9:
-            truth = log.relative_truth(0, 1, m.t[i])[0]
+            truth = rec.relative_truth(0, 1, m.t[i])[0]
             for name, tracker in (("bank", bank), ("plkf", plain)):
-                tracker.update(m.z[i])
+                tracker.update(m.value[i])
                 err = tracker.belief.mean[3] - truth[3]
                 yaw_err[name].append(abs(math.atan2(math.sin(err), math.cos(err))))
             i += 1

@@ -12,8 +12,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from relloc.experiments.montecarlo import run_monte_carlo
 from relloc.models.unicycle import unicycle_step
+from relloc.pipeline.montecarlo import run_monte_carlo
 
 
 def dead_reckoning_error(seed_sequence, index, n_steps, dt):

@@ -25,8 +25,8 @@ from relloc.experiments.desilva2015 import (
     _task,
     filter_settings,
 )
-from relloc.experiments.montecarlo import spawn_seeds
 from relloc.models.motion import VelocityNoise
+from relloc.pipeline.montecarlo import spawn_seeds
 from relloc.sim.multihypothesis import DeSilvaScenario
 
 NOISE = VelocityNoise(observer=(0.2, 0.2, 0.2, 0.1), observed=(0.2, 0.2, 0.2, 0.1))

@@ -1,4 +1,4 @@
-"""A recorded team (MRCLAM layout, written by the test) replayed as a runtime Log."""
+"""A recorded team (MRCLAM layout, written by the test) replayed as a runtime Recording."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from relloc.errors import DataError
-from relloc.runtime.dataset import mrclam_team_log
+from relloc.runtime.dataset import mrclam_team_recording
 from relloc.runtime.scenario import load_team
 
 T0 = 1_000_000_000.0
@@ -40,25 +40,26 @@ def _three_robot_folder(folder: Path, seconds: float = 40.0) -> Path:
     return folder
 
 
-def test_recorded_team_becomes_a_log_with_raised_planes(tmp_path):
+def test_recorded_team_becomes_a_recording_with_raised_planes(tmp_path):
     folder = _three_robot_folder(tmp_path / "team")
-    log = mrclam_team_log(folder, np.random.default_rng(0), duration_s=20.0)
-    assert log.robots == ("robot1", "robot2", "robot3")
-    assert log.span == pytest.approx((0.0, 20.0))
-    assert np.all(log.truth[0].pose[:, 2] == 0.0) and np.all(log.truth[1].pose[:, 2] == 2.0)
-    np.testing.assert_allclose(log.odometry[2].velocity[5], [0.2, 0.0, 0.0, 0.15])
-    m = log.measurements
-    assert set(m.observer.tolist()) == {0} and set(m.observed.tolist()) == {1, 2}
+    rec = mrclam_team_recording(folder, np.random.default_rng(0), duration_s=20.0)
+    assert rec.robots == ("robot1", "robot2", "robot3")
+    assert rec.span == pytest.approx((0.0, 20.0))
+    assert np.all(rec.truth[0].pose[:, 2] == 0.0) and np.all(rec.truth[1].pose[:, 2] == 2.0)
+    np.testing.assert_allclose(rec.odometry[2].velocity[5], [0.2, 0.0, 0.0, 0.15])
+    m = rec.measurements
+    assert set(m.observer.tolist()) == {0} and set(m.target.tolist()) == {1, 2}
+    assert set(m.kind_names()) == {"range_bearing_elevation"}
     assert m.size == 2 * 200  # 10 Hz for 20 s, both teammates always in view
     # synthesised from the truth with the sensor's noise: residuals are a few sigma at most
-    truth = np.stack([log.relative_truth(0, j, t)[0] for t, j in zip(m.t, m.observed, strict=True)])
-    assert np.abs(m.z[:, 0] - np.linalg.norm(truth[:, :3], axis=1)).max() < 5 * m.sigma[0, 0]
-    same = load_team(str(folder), 4).log
-    again = load_team(str(folder), 4).log
-    np.testing.assert_array_equal(same.measurements.z, again.measurements.z)
+    truth = np.stack([rec.relative_truth(0, j, t)[0] for t, j in zip(m.t, m.target, strict=True)])
+    assert np.abs(m.value[:, 0] - np.linalg.norm(truth[:, :3], axis=1)).max() < 5 * m.sigma[0, 0]
+    same = load_team(str(folder), 4).recording
+    again = load_team(str(folder), 4).recording
+    np.testing.assert_array_equal(same.measurements.value, again.measurements.value)
 
 
 def test_too_short_recording_is_a_clear_error(tmp_path):
     folder = _three_robot_folder(tmp_path / "short", seconds=12.0)
     with pytest.raises(DataError, match="share only"):
-        mrclam_team_log(folder, np.random.default_rng(0))
+        mrclam_team_recording(folder, np.random.default_rng(0))

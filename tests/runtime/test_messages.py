@@ -24,8 +24,29 @@ def _odom(n=3):
     return {"stamps": np.arange(n) * 0.01, "u": np.tile([0.3, 0.0, 0.0, 0.1], (n, 1))}
 
 
+COV = np.diag([0.1, 0.2, 0.3, 0.04])
+
+
+def _est(**overrides):
+    body = {
+        "target": "air1",
+        "track": "",
+        "frame": "relative_pose4",
+        "stamps": [0.1, 0.2],
+        "means": np.zeros((2, 4)),
+        "covs": np.stack([COV, COV]),
+        "ages": [0.0, 0.1],
+        "update_stamps": [0.1],
+        "update_ages": [0.0],
+        "nis": [2.5],
+        "update_dofs": [3],
+        "cond_r": [3.0],
+        "cond_s": [2.0],
+    }
+    return body | overrides
+
+
 def test_round_trip_every_kind():
-    cov = np.diag([0.1, 0.2, 0.3, 0.04])
     bodies = {
         "odom": _odom(),
         "meas": {
@@ -34,34 +55,22 @@ def test_round_trip_every_kind():
             "z": [[2.0, 0.1, 0.5], [3.0, -0.2, -0.05]],
             "sigma": [[0.01, 0.004, 0.004]] * 2,
         },
-        "eqm": {"target": "air1", "mean": [1.0, 2.0, 0.5, 0.1], "cov": cov},
-        "est": {
-            "target": "air1",
-            "stamps": [0.1, 0.2],
-            "means": np.zeros((2, 4)),
-            "covs": np.stack([cov, cov]),
-            "ages": [0.0, 0.1],
-            "update_stamps": [0.1],
-            "update_ages": [0.0],
-            "nis": [2.5],
-            "cond_r": [3.0],
-            "cond_s": [2.0],
-        },
+        "eqm": {"target": "air1", "mean": [1.0, 2.0, 0.5, 0.1], "cov": COV},
+        "est": _est(),
         "evt": {"stamps": [0.1], "targets": ["air1"], "kinds": ["created"]},
         "stats": {"counters": {"sent.odom": 10, "rejected.malformed": 1}},
         "tick": {"k": 5, "dt": 0.1},
         "ack": {"k": 5},
         "ctl": {"action": "kill", "robot": "air1"},
     }
+    assert SCHEMA_VERSION == 2
     for kind, body in bodies.items():
         sender = "clock" if kind in ("tick", "ctl") else "obs"
         msg = decode(encode(kind, sender, 7, 1.5, body), roster=ROSTER, key_sender=sender)
         assert (msg.kind, msg.sender, msg.seq, msg.t) == (kind, sender, 7, 1.5)
     msg = decode(encode("odom", "obs", 0, 0.0, _odom(4)), roster=ROSTER)
     np.testing.assert_array_equal(msg.body["u"], np.tile([0.3, 0.0, 0.0, 0.1], (4, 1)))
-    empty = {"target": "gnd1", "stamps": [], "means": [], "covs": [], "ages": []}
-    empty |= {"update_stamps": [0.5], "update_ages": [0.4], "nis": [1.0]}
-    empty |= {"cond_r": [1.0], "cond_s": [1.0]}
+    empty = _est(target="gnd1", stamps=[], means=[], covs=[], ages=[])
     assert decode(encode("est", "obs", 1, 0.0, empty), roster=ROSTER).body["means"].shape == (0, 4)
 
 
@@ -120,3 +129,51 @@ def test_spoofed_sender_and_inconsistent_batches():
         encode("evt", "obs", 0, 0.0, bad_evt)
     with pytest.raises(DataError, match="exceed the limit"):
         encode("odom", "obs", 0, 0.0, _odom(50), max_bytes=200)
+
+
+@pytest.mark.parametrize(
+    ("overrides", "match"),
+    [
+        ({"frame": "world_pose2"}, "not a 4-state frame"),
+        ({"frame": "nowhere"}, "not a 4-state frame"),
+        ({"update_dofs": [0]}, "update_dofs must be integers"),
+        ({"update_dofs": [2.5]}, "update_dofs must be integers"),
+        ({"update_dofs": [3, 3]}, "update batch lengths differ"),
+        ({"ages": [0.0]}, "record batch lengths differ"),
+        ({"track": 7}, "expected str"),
+    ],
+)
+def test_bad_estimate_batches_are_refused(overrides, match):
+    with pytest.raises(DataError, match=match):
+        encode("est", "obs", 0, 0.0, _est(**overrides))
+
+
+def test_estimates_travel_as_est_bodies_and_come_back_whole():
+    from relloc.pipeline.contract import Belief, UpdateRecord
+    from relloc.pipeline.estimates import Recorder
+    from relloc.runtime.messages import est_bodies, estimates_from_bodies
+
+    rec = Recorder("plkf")
+    reports = []
+    for k in range(4):
+        t = 0.1 * k
+        rec.record(t, "obs", [Belief("air1", "relative_pose4", np.full(4, t), COV, age=t)])
+        if k % 2:
+            rec.add_updates("obs", [UpdateRecord(t, "gnd1", 1.0 + k, 3, 1.0, 2.0, age=t)])
+        bodies = est_bodies(rec.take_new(), frame="relative_pose4")
+        reports += [
+            ("obs", decode(encode("est", "obs", len(reports), t, b), roster=ROSTER).body)
+            for b in bodies
+        ]
+    assert [b["target"] for _, b in reports] == ["air1", "air1", "gnd1", "air1", "air1", "gnd1"]
+    back = estimates_from_bodies("plkf", reports)
+    whole = rec.results()
+    assert back.labels == whole.labels == ("obs->air1",)
+    for got, ref in zip(back.beliefs, whole.beliefs, strict=True):
+        for name in ("t", "mean", "cov", "age"):
+            np.testing.assert_array_equal(getattr(got, name), getattr(ref, name))
+    np.testing.assert_array_equal(back.updates_of("obs", "gnd1").nis, [2.0, 4.0])
+    np.testing.assert_array_equal(back.updates_of("obs", "gnd1").dof, [3, 3])
+    # a restarted sender's second life follows its first whatever the arrival order
+    swapped = estimates_from_bodies("plkf", [reports[3], reports[0]])
+    np.testing.assert_array_equal(swapped.series("obs", "air1").t, [0.0, 0.2])

@@ -1,30 +1,45 @@
-"""A node's inputs: its own sensor slice (log or live push API) and teammates' odometry buffers."""
+"""A node's inputs: its own sensor slice (recording or live push API) and teammates' odometry
+buffers."""
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 
 import numpy as np
 import pytest
 
+from relloc.core.recording import Measurements, measurement_rows
 from relloc.errors import DataError
 from relloc.runtime.scenario import load_team
-from relloc.runtime.sources import LiveSource, LogSource
+from relloc.runtime.sources import LiveSource, RecordingSource
 from relloc.runtime.teammates import ReceivedOdometry, SeenSequences
 
 
-def test_log_source_windows_partition_the_robot_slice(trio_scenario):
-    log = load_team(str(trio_scenario(3.0)), 1).log
-    src = LogSource(log, "observer")
+def test_recording_source_windows_partition_the_robot_slice(trio_scenario):
+    rec = load_team(str(trio_scenario(3.0)), 1).recording
+    src = RecordingSource(rec, "observer")
     edges = np.arange(0, 31) * 0.1
     stamps = np.concatenate([src.odometry(a, b)[0] for a, b in itertools.pairwise(edges)])
-    np.testing.assert_array_equal(stamps, log.odometry[0].t[log.odometry[0].t < edges[-1]])
+    np.testing.assert_array_equal(stamps, rec.odometry[0].t[rec.odometry[0].t < edges[-1]])
     rows = [src.measurements(a, b) for a, b in itertools.pairwise(edges)]
     rows.append(src.measurements(edges[-1], edges[-1], inclusive=True))
-    mine = log.measurements.observer == 0
+    mine = rec.measurements.observer == 0
     assert sum(r.size for r in rows) == int(mine.sum()) > 0
     assert all(set(r.targets) <= {"flyer", "rover"} for r in rows)
-    assert LogSource(log, "flyer").measurements(0.0, 3.0).size == 0  # no sensor
+    np.testing.assert_array_equal(np.concatenate([r.z for r in rows]), rec.measurements.value[mine])
+    assert RecordingSource(rec, "flyer").measurements(0.0, 3.0).size == 0  # no sensor
+
+
+def test_recording_source_refuses_readings_a_node_cannot_send(trio_scenario):
+    rec = load_team(str(trio_scenario(3.0)), 1).recording
+    extra = measurement_rows("range", t=[0.5], observer=0, target=1, value=[2.0], sigma=0.1)
+    mixed = dataclasses.replace(
+        rec, measurements=Measurements.concatenate([rec.measurements, extra])
+    )
+    with pytest.raises(DataError, match=r"robot 'observer' has 1 readings .*\['range'\]"):
+        RecordingSource(mixed, "observer")
+    assert RecordingSource(mixed, "rover").measurements(0.0, 3.0).size == 0
 
 
 def test_live_source_push_api():
@@ -45,7 +60,7 @@ def test_live_source_push_api():
         src.push_measurement(0.5, "r2", (-1.0, 0.0, 0.0), (0.01, 0.01, 0.01))
 
 
-def test_received_odometry_holds_like_the_log_and_counts_late_and_duplicates():
+def test_received_odometry_holds_like_the_recording_and_counts_late_and_duplicates():
     buf = ReceivedOdometry()
     buf.add(np.array([0.0, 0.01, 0.02]), np.arange(12.0).reshape(3, 4))
     buf.add(np.array([0.02]), np.ones((1, 4)))  # duplicate stamp
@@ -54,6 +69,7 @@ def test_received_odometry_holds_like_the_log_and_counts_late_and_duplicates():
     np.testing.assert_array_equal(held[0], np.zeros(4))
     np.testing.assert_array_equal(held[2], [4.0, 5.0, 6.0, 7.0])
     np.testing.assert_array_equal(held[3], [8.0, 9.0, 10.0, 11.0])
+    np.testing.assert_array_equal(buf.stamp_at(np.array([-0.5, 0.015, 0.5])), [np.nan, 0.01, 0.02])
     buf.consume_until(0.02)
     np.testing.assert_array_equal(buf.held_at(np.array([0.015]))[0], [4.0, 5.0, 6.0, 7.0])
     buf.add(np.array([0.019, 0.03]), np.zeros((2, 4)))

@@ -19,7 +19,8 @@ import msgpack
 import numpy as np
 import pytest
 
-from relloc.estimators.track_manager import TrackManagerSettings, track_log
+from relloc.estimators.track_manager import TrackManagerSettings
+from relloc.pipeline.team_report import track_team
 from relloc.runtime import keys
 from relloc.runtime.faults import FaultSettings, parse_robot_event
 from relloc.runtime.launcher import TeamLauncher, TeamSettings
@@ -79,13 +80,13 @@ def test_three_robot_team_finds_itself_agrees_and_rejects_bad_messages(trio_scen
     path = trio_scenario(4.0)
     port = free_loopback_port()
     settings = TeamSettings(scenario=str(path), out_dir=tmp_path / "out", seed=3, port=port)
-    log = load_team(str(path), 3).log
-    launcher = TeamLauncher(settings, log.robots, log.span[1] - log.span[0])
+    rec = load_team(str(path), 3).recording
+    launcher = TeamLauncher(settings, rec.robots, rec.span[1] - rec.span[0])
     failures: list[BaseException] = []
 
     def inject() -> None:
         try:
-            _inject_bad_messages(settings.team, loopback_endpoint(port), log.robots)
+            _inject_bad_messages(settings.team, loopback_endpoint(port), rec.robots)
         except BaseException as exc:
             failures.append(exc)
 
@@ -98,9 +99,9 @@ def test_three_robot_team_finds_itself_agrees_and_rejects_bad_messages(trio_scen
     assert not failures, failures
 
     clock = (tmp_path / "out" / "clock.json").read_text()
-    assert all(f'"robot": "{r}"' in clock for r in log.robots)  # every robot arrived
-    per_robot = robot_messages(collected, log.robots)
-    for robot in log.robots:
+    assert all(f'"robot": "{r}"' in clock for r in rec.robots)  # every robot arrived
+    per_robot = robot_messages(collected, rec.robots)
+    for robot in rec.robots:
         m = per_robot[robot]
         assert m["processes"] == 1 and m["final_report"]
         assert m["ticks"] == 40
@@ -117,9 +118,9 @@ def test_three_robot_team_finds_itself_agrees_and_rejects_bad_messages(trio_scen
             "spoofed": 1,
             "unknown_sender": 1,
         }, reasons
-    distributed = assemble_estimates(collected, log.robots, "plkf")
-    assert {p.label for p in distributed.pairs} == {"observer->flyer", "observer->rover"}
-    reference = track_log(log, TrackManagerSettings(), rng=np.random.default_rng(run_seeds(3)[1]))
+    distributed = assemble_estimates(collected, rec.robots, "plkf")
+    assert set(distributed.labels) == {"observer->flyer", "observer->rover"}
+    reference = track_team(rec, TrackManagerSettings(), rng=np.random.default_rng(run_seeds(3)[1]))
     agree = agreement(distributed, reference)
     diagnostics = (agree, collected.stats["observer"], collected.presence)
     assert agree["max_abs_mean_diff"] < 1e-9 and agree["max_abs_cov_diff"] < 1e-9, diagnostics
@@ -133,12 +134,12 @@ def test_killed_robot_is_noticed_and_its_restart_rejoins(trio_scenario, tmp_path
         restarts=(parse_robot_event("flyer@3.5", "--restart"),),
     )
     settings = TeamSettings(scenario=str(path), out_dir=tmp_path / "out", seed=5, faults=faults)
-    log = load_team(str(path), 5).log
-    collected = TeamLauncher(settings, log.robots, log.span[1] - log.span[0]).run()
+    rec = load_team(str(path), 5).recording
+    collected = TeamLauncher(settings, rec.robots, rec.span[1] - rec.span[0]).run()
 
     assert [k["robot"] for k in collected.kills] == ["flyer"]
     assert [r["robot"] for r in collected.restarts] == ["flyer"]
-    per_robot = robot_messages(collected, log.robots)
+    per_robot = robot_messages(collected, rec.robots)
     assert per_robot["flyer"]["processes"] == 2  # two incarnations reported
     for robot in ("observer", "rover"):
         seen = (per_robot[robot], collected.presence)
@@ -152,6 +153,6 @@ def test_killed_robot_is_noticed_and_its_restart_rejoins(trio_scenario, tmp_path
     refound_t = flyer_events[2][0]
     assert 1.0 < deleted_t <= 1.0 + 2.0 + 0.3  # within the keep window after the kill
     assert refound_t >= 3.3  # back only once the robot is (one tick of filter lag)
-    distributed = assemble_estimates(collected, log.robots, "plkf")
-    flyer = distributed.pair("observer", "flyer")
+    distributed = assemble_estimates(collected, rec.robots, "plkf")
+    flyer = distributed.series("observer", "flyer")
     assert flyer.t.size and (flyer.t > 4.0).any()  # estimates after the restart

@@ -5,8 +5,8 @@ import dataclasses
 import numpy as np
 import pytest
 
+from relloc.core.recording import relative_pose
 from relloc.errors import ConfigError
-from relloc.sim.log import relative_pose
 from relloc.sim.scenario import (
     RobotSpec,
     Scenario,
@@ -24,12 +24,12 @@ def _short_default(duration=10.0):
     return dataclasses.replace(default_scenario(), duration_s=duration)
 
 
-def test_same_seed_same_log_different_seed_different_log():
+def test_same_seed_same_recording_different_seed_different_recording():
     sc = _short_default()
     a = simulate(sc, np.random.default_rng(5))
     b = simulate(sc, np.random.default_rng(5))
     c = simulate(sc, np.random.default_rng(6))
-    np.testing.assert_array_equal(a.measurements.z, b.measurements.z)
+    np.testing.assert_array_equal(a.measurements.value, b.measurements.value)
     np.testing.assert_array_equal(a.odometry[2].velocity, b.odometry[2].velocity)
     assert not np.array_equal(a.odometry[2].velocity, c.odometry[2].velocity)
     np.testing.assert_array_equal(a.truth[1].pose, c.truth[1].pose)  # truth is not random
@@ -46,11 +46,11 @@ def test_exact_integration_matches_a_circle():
 
 def test_odometry_is_commands_plus_noise_of_the_stated_sigma():
     sc = _short_default(30.0)
-    log = simulate(sc, np.random.default_rng(0))
+    rec = simulate(sc, np.random.default_rng(0))
     # The ground observer's truth: its body velocity from consecutive exact poses.
-    truth = log.truth[0].pose
+    truth = rec.truth[0].pose
     dt = 1.0 / sc.propagation_rate_hz
-    od = log.odometry[0]
+    od = rec.odometry[0]
     yaw_rate = np.diff(truth[:, 3]) / dt
     residual = od.velocity[:, 3] - yaw_rate
     sigma_w = od.sigma[3]
@@ -62,24 +62,26 @@ def test_odometry_is_commands_plus_noise_of_the_stated_sigma():
 
 def test_measurements_are_gated_by_fov_and_range_and_noise_is_right():
     sc = _short_default(60.0)
-    log = simulate(sc, np.random.default_rng(1))
+    rec = simulate(sc, np.random.default_rng(1))
     sensor = sc.robots[0].sensor
-    m = log.measurements
+    m = rec.measurements
     assert np.all(m.observer == 0)
+    assert set(m.kind_names()) == {"range_bearing_elevation"}
+    np.testing.assert_array_equal(m.origin, m.target)  # simulated: every reading is of its target
     truth_rel = relative_pose(
-        log.truth[0].at(m.t),
-        np.vstack([log.truth[j].at(t)[0] for j, t in zip(m.observed, m.t, strict=True)]),
+        rec.truth[0].at(m.t),
+        np.vstack([rec.truth[j].at(t)[0] for j, t in zip(m.target, m.t, strict=True)]),
     )
     z_true = range_azimuth_elevation(truth_rel)
     assert visible(z_true, sensor).all()
-    err = (m.z - z_true) / m.sigma
-    err[:, 1] = np.angle(np.exp(1j * (m.z[:, 1] - z_true[:, 1]))) / m.sigma[:, 1]
+    err = (m.value - z_true) / m.sigma
+    err[:, 1] = np.angle(np.exp(1j * (m.value[:, 1] - z_true[:, 1]))) / m.sigma[:, 1]
     nees = np.sum(err**2, axis=1)
     # Mean of χ²(3) over M rows: 99.9 % band ±3.3·sqrt(6/M).
     assert abs(nees.mean() - 3.0) < 3.3 * np.sqrt(6.0 / m.size)
     # Robots leave and re-enter the 120° view: fewer rows than epochs for some target.
     epochs = int(sc.duration_s * sensor.rate_hz)
-    counts = np.bincount(m.observed, minlength=5)[1:]
+    counts = np.bincount(m.target, minlength=5)[1:]
     assert counts.max() <= epochs and counts.min() < epochs
 
 
@@ -115,5 +117,5 @@ def test_leaving_the_arena_is_a_config_error_naming_the_robot():
 
 
 def test_default_trajectories_stay_in_the_arena_for_the_full_run():
-    log = simulate(default_scenario(), np.random.default_rng(2))
-    assert log.measurements.size > 0.9 * 4 * 600
+    rec = simulate(default_scenario(), np.random.default_rng(2))
+    assert rec.measurements.size > 0.9 * 4 * 600

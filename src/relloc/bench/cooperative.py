@@ -174,6 +174,6 @@ def run(quiet: bool = False) -> dict[str, Any]:
 
 
 if __name__ == "__main__":
-    from relloc.experiments.output import to_jsonable
+    from relloc.pipeline.output import to_jsonable
 
     print(json.dumps(to_jsonable(measure())))

@@ -30,8 +30,8 @@ from typing import Any
 import numpy as np
 
 from relloc.estimators.track_manager import TrackManagerSettings
-from relloc.experiments.montecarlo import run_monte_carlo
 from relloc.experiments.team_run import team_task
+from relloc.pipeline.montecarlo import run_monte_carlo
 from relloc.sim.scenario import default_scenario
 
 TEAM_SIZES = (2, 4, 6, 8, 12, 16, 24)
@@ -142,7 +142,7 @@ def monte_carlo_speedup(runs: int = 4, duration_s: float = 10.0) -> dict[str, An
     identical = all(
         np.array_equal(a.error, b.error)
         for r1, r2 in zip(results[1], results[2], strict=True)
-        for a, b in zip(r1.pairs, r2.pairs, strict=True)
+        for a, b in zip(r1.evaluations, r2.evaluations, strict=True)
     )
     return {
         "runs": runs,

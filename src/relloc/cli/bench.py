@@ -24,7 +24,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
 
 
 def run(args: argparse.Namespace) -> int:
-    from relloc.experiments.output import to_jsonable
+    from relloc.pipeline.output import to_jsonable
 
     module_name = BENCHMARKS.get(args.name)
     if module_name is None or importlib.util.find_spec(module_name) is None:

@@ -117,19 +117,19 @@ def run(args: argparse.Namespace) -> int:
 
     from relloc.errors import ConfigError
     from relloc.estimators.initialisation import InitPolicy
-    from relloc.estimators.track_manager import TrackManagerSettings
+    from relloc.estimators.track_manager import TrackManagerSettings, track_manager_of
     from relloc.runtime.estimation import TrackManagerEstimator
     from relloc.runtime.node import NodeSettings, RobotNode
     from relloc.runtime.scenario import load_team
-    from relloc.runtime.sources import LogSource
+    from relloc.runtime.sources import RecordingSource
 
-    log = load_team(args.dataset or args.scenario, args.seed).log
-    if args.robot not in log.robots:
-        raise ConfigError(f"--robot: {args.robot!r} is not in the scenario {log.robots}")
+    recording = load_team(args.dataset or args.scenario, args.seed).recording
+    if args.robot not in recording.robots:
+        raise ConfigError(f"--robot: {args.robot!r} is not in the scenario {recording.robots}")
     settings = NodeSettings(
         team=args.team,
         robot=args.robot,
-        roster=log.robots,
+        roster=recording.robots,
         transport=transport_from_args(args),
         faults=network_faults_from_args(args),
         fault_seed=args.seed,
@@ -137,18 +137,16 @@ def run(args: argparse.Namespace) -> int:
         max_bytes=args.max_bytes,
         clock_timeout_s=args.clock_timeout,
     )
-    index = log.index(args.robot)
-    estimator = TrackManagerEstimator(
+    index = recording.index(args.robot)
+    manager = track_manager_of(
+        recording,
+        args.robot,
         TrackManagerSettings(filter=args.filter, init=InitPolicy(name=args.init)),
-        robot=args.robot,
-        roster=log.robots,
-        odometry_sigma=[tuple(od.sigma) for od in log.odometry],
-        t0=log.span[0],
-        record_origin=log.span[0],
         rng=np.random.default_rng(np.random.SeedSequence([args.seed, index])),
-        truth_fn=lambda i, j, t: log.relative_truth(i, j, t)[0],
     )
-    counters = RobotNode(settings, LogSource(log, args.robot), estimator).run()
+    estimator = TrackManagerEstimator(manager, record_origin=recording.span[0])
+    source = RecordingSource(recording, args.robot)
+    counters = RobotNode(settings, source, estimator).run()
     json.dump({"robot": args.robot, "counters": counters}, sys.stdout, sort_keys=True)
     sys.stdout.write("\n")
     return 0

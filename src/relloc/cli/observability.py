@@ -71,10 +71,10 @@ def _assignments(text: str | None, names: tuple[str, ...], what: str) -> list[fl
 def run(args: argparse.Namespace) -> int:
     import json
 
-    from relloc.experiments.output import to_jsonable
     from relloc.models.symbolic import AIRGROUND_MODES
     from relloc.observability.analysis import analyse, rank_at
     from relloc.observability.builtin import ModelOptions, resolve_models
+    from relloc.pipeline.output import to_jsonable
 
     if args.order < 0 or args.samples < 1:
         raise ConfigError("--order must be ≥ 0 and --samples ≥ 1")

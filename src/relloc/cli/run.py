@@ -91,7 +91,8 @@ def run(args: argparse.Namespace) -> int:
     from relloc.errors import ConfigError
     from relloc.estimators.initialisation import FieldOfView, InitPolicy
     from relloc.estimators.track_manager import TrackManagerSettings
-    from relloc.experiments.team_run import TeamRunSettings, run_team, summary_rows
+    from relloc.experiments.team_run import TeamRunSettings, run_team
+    from relloc.pipeline.team_report import summary_rows
     from relloc.sim.scenario import default_scenario, load_scenario
 
     scenario = default_scenario() if args.scenario is None else load_scenario(args.scenario)
@@ -129,7 +130,7 @@ def run(args: argparse.Namespace) -> int:
         from rich.console import Console
         from rich.table import Table
 
-        from relloc.experiments.output import fmt
+        from relloc.pipeline.output import fmt
 
         headers, rows = summary_rows(summary)
         table = Table(

@@ -243,6 +243,11 @@ class InitPolicy:
     def uses_measurement(self) -> bool:
         return self.name == "measurement"
 
+    @property
+    def needs_truth(self) -> bool:
+        """Whether the policy starts from the true relative pose (seed 000 cases 1–3)."""
+        return self.name in _TRUTH_POLICIES
+
     def __call__(self, ctx: InitContext) -> Gaussian:
         return _POLICIES[self.name](self, ctx)
 
@@ -298,3 +303,4 @@ _POLICIES: dict[str, Callable[[InitPolicy, InitContext], Gaussian]] = {
 
 #: Names accepted by :class:`InitPolicy` (and ``relloc run --init``).
 POLICY_NAMES: tuple[str, ...] = tuple(_POLICIES)
+_TRUTH_POLICIES = frozenset({"known", "known-position", "known-yaw"})

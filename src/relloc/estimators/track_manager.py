@@ -1,28 +1,40 @@
-"""Tracks of many (observer, observed) pairs whose membership changes over time.
+"""One observing robot's tracks of its teammates, whose membership changes over time.
 
 Seed 000 §3.1 allows M observing and N observed robots whose numbers vary; §6.2 proposes that
 when an observed robot leaves the field of view its track is kept (predicted only) for a
 pre-defined window and deleted if the robot does not reappear, and that a robot seen again after
-deletion gets a new track. :class:`TrackManager` does exactly that:
+deletion gets a new track. :class:`TrackManager` does exactly that for one observing robot (its
+``owner``); a team runs one manager per observing robot (:func:`managers_for`):
 
-- a track per (observer, observed) pair is **created** on the first measurement of the pair,
-  starting from an :class:`~relloc.estimators.initialisation.InitPolicy`;
+- a track per observed robot is **created** on the owner's first measurement of it, starting
+  from an :class:`~relloc.estimators.initialisation.InitPolicy`;
 - every live track is **predicted** with both robots' body velocities (the shared predict of
   :mod:`relloc.estimators.relative`);
-- a measurement **updates** its pair's track with the selected filter — PLKF, TEKF or
+- a measurement **updates** its track with the selected filter — PLKF, TEKF or
   bias-compensated PLKF (``bcplkf``);
 - optionally, a track whose initial yaw is unknown starts as a bank of yaw hypotheses (a
   Gaussian sum over φ, :mod:`relloc.estimators.yaw_bank`) that is reweighted by every
   measurement and collapses to a single filter once one hypothesis dominates — this avoids the
   long stalls of a single filter started near the wrong yaw (seed 000 Table 1, case 4);
 - a track with no update for longer than ``keep_window_s`` is **deleted**; the next measurement
-  of the pair **re-creates** it.
+  of that robot **re-creates** it.
 
-The manager records each live track's belief on a regular grid, the NIS and the conditioning
-``log10(λmax/λmin)`` of ``R`` and ``S`` at every update, and the track events, and returns them as
-:class:`TeamEstimates` — plain arrays that can be shipped between processes and scored against
-ground truth by :mod:`relloc.experiments.team_run`. :func:`track_log` runs a manager over a
-whole :class:`~relloc.sim.log.Log`.
+The manager implements the estimator contract of :mod:`relloc.pipeline.contract`, so
+:func:`relloc.pipeline.replay.replay` (in-process) and a robot node (window by window) drive it
+alike. At an event time ``t`` it is advanced, then measured (the owner's
+``range_bearing_elevation`` rows of known targets, one at a time in row order), then stale
+tracks are deleted as of ``t``. The deletion is done lazily — when the manager next moves on
+(:meth:`TrackManager.advance`) or is asked what it holds (:meth:`TrackManager.beliefs`,
+:meth:`TrackManager.take_events`) — which deletes exactly the tracks, and stamps the deletions
+with exactly the times, that deleting after every event would: nothing changes a track between
+the end of one event and the start of the next.
+
+Beliefs are reported in frame ``relative_pose4`` (the observed robot's ``(x, y, z, φ)`` in the
+owner's body frame, seed 000 Eq. 1) with the track's age; every update reports its NIS (3 degrees
+of freedom) and the conditioning ``log10(λmax/λmin)`` of ``R`` and ``S`` (seed 000 §7.3).
+Rows of the owner that the manager cannot use — another kind, an unknown target (unknown
+correspondence or a landmark), no stated σ — are counted by reason
+(:meth:`TrackManager.take_counts`).
 """
 
 from __future__ import annotations
@@ -35,7 +47,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from relloc.core.gaussian import Gaussian
+from relloc.core.recording import KIND_NAMES, KINDS, Measurements, Recording, kind_code
 from relloc.errors import ConfigError
 from relloc.estimators.initialisation import InitContext, InitPolicy
 from relloc.estimators.relative import FilterSettings, Innovation, predict_arrays
@@ -49,15 +61,29 @@ from relloc.estimators.yaw_bank import (
 from relloc.metrics.conditioning import condition_log10_batch
 from relloc.models.measurement import RangeBearingNoise
 from relloc.models.motion import VelocityNoise
-from relloc.sim.log import Log, Measurements
+from relloc.pipeline.contract import (
+    Belief,
+    EventKind,
+    HeldOdometry,
+    Silent,
+    TrackEvent,
+    UpdateRecord,
+)
 
 Array = NDArray[np.float64]
-EventKind = Literal["created", "deleted", "recreated"]
 
 #: Filter names of ``relloc run --filter`` → update kinds of :mod:`relloc.estimators.relative`.
 FILTERS: dict[str, str] = {"plkf": "plkf", "tekf": "tekf", "bcplkf": "plkf_bc"}
 
+#: The reading the manager fuses: range, azimuth and elevation of a robot (seed 000 Eq. 2).
+MEASUREMENT_KIND = "range_bearing_elevation"
+#: Degrees of freedom of its NIS.
+MEASUREMENT_DOF = KINDS[MEASUREMENT_KIND].dim
+#: The frame of the beliefs.
+FRAME = "relative_pose4"
+
 _TIME_TOL = 1e-9
+_RBE = kind_code(MEASUREMENT_KIND)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -89,58 +115,6 @@ class TrackManagerSettings:
             raise ConfigError("init: expected an InitPolicy")
         if self.yaw_bank is not None and not isinstance(self.yaw_bank, YawBankSettings):
             raise ConfigError("yaw_bank: expected YawBankSettings or None")
-
-
-@dataclass(frozen=True)
-class TrackEvent:
-    """A change in the set of tracks: ``kind`` is created, deleted or recreated."""
-
-    t: float
-    observer: str
-    observed: str
-    kind: EventKind
-
-
-@dataclass(frozen=True, kw_only=True)
-class PairEstimates:
-    """One pair's recorded beliefs and updates.
-
-    ``t (K,)``, ``mean (K, 4)``, ``cov (K, 4, 4)`` on the recording grid while a track exists;
-    ``age (K,)`` seconds since the track was (re)created; ``update_t (U,)``,
-    ``update_age (U,)``, ``nis (U,)``, ``cond_r (U,)``, ``cond_s (U,)`` at each measurement
-    update.
-    """
-
-    observer: str
-    observed: str
-    t: Array
-    mean: Array
-    cov: Array
-    age: Array
-    update_t: Array
-    update_age: Array
-    nis: Array
-    cond_r: Array
-    cond_s: Array
-
-    @property
-    def label(self) -> str:
-        return f"{self.observer}->{self.observed}"
-
-
-@dataclass(frozen=True, kw_only=True)
-class TeamEstimates:
-    """What a team's trackers produced: per-pair series and the track events, in pair order."""
-
-    filter: str
-    pairs: tuple[PairEstimates, ...]
-    events: tuple[TrackEvent, ...]
-
-    def pair(self, observer: str, observed: str) -> PairEstimates:
-        for p in self.pairs:
-            if (p.observer, p.observed) == (observer, observed):
-                return p
-        raise ConfigError(f"no estimates for pair {observer}->{observed}")
 
 
 @dataclass
@@ -183,272 +157,251 @@ class _Track:
         )
 
 
-@dataclass
-class _Recorder:
-    t: list[float] = field(default_factory=list)
-    mean: list[Array] = field(default_factory=list)
-    cov: list[Array] = field(default_factory=list)
-    age: list[float] = field(default_factory=list)
-    update_t: list[float] = field(default_factory=list)
-    update_age: list[float] = field(default_factory=list)
-    nis: list[float] = field(default_factory=list)
-    cond_r: list[float] = field(default_factory=list)
-    cond_s: list[float] = field(default_factory=list)
+TruthFn = Callable[[int, float], Array]
+"""``truth(j, t)``: the true relative pose of robot ``j`` in the owner's body frame at ``t`` —
+only for the initialisation policies that start from the truth (seed 000 Table 1 cases 1–3)."""
 
 
-TruthFn = Callable[[int, int, float], Array]
+class TrackManager(Silent):
+    """The tracks one robot (``owner``) holds of its teammates (module docstring).
 
-
-class TrackManager:
-    """Create, predict, update and delete the tracks of a team (see module docstring).
-
-    ``robots`` names the robots (ids are indices into it); ``odometry_sigma[i]`` is robot i's
-    body-velocity noise ``(σ_vx, σ_vy, σ_vz, σ_ω)``. ``truth_fn(observer, observed, t)`` gives the
-    true relative pose for policies that need it (simulation); ``rng`` is for policies that
-    draw random guesses.
+    ``robots`` names the team (measurement indices index it); ``odometry_sigma[i]`` is robot
+    i's body-velocity noise ``(σ_vx, σ_vy, σ_vz, σ_ω)``; ``truth`` feeds the policies that
+    start from the true relative pose; ``rng`` the policies that draw random guesses.
     """
 
     def __init__(
         self,
         settings: TrackManagerSettings,
         *,
+        owner: str,
         robots: Sequence[str],
         odometry_sigma: Sequence[Sequence[float] | Array],
-        t0: float,
-        truth_fn: TruthFn | None = None,
+        truth: TruthFn | None = None,
         rng: np.random.Generator | None = None,
     ) -> None:
-        if len(odometry_sigma) != len(robots):
+        self.robots = tuple(robots)
+        if owner not in self.robots:
+            raise ConfigError(f"TrackManager: owner {owner!r} is not on the team {self.robots}")
+        if len(odometry_sigma) != len(self.robots):
             raise ConfigError("odometry_sigma: one (σ_vx, σ_vy, σ_vz, σ_ω) per robot is required")
         self.settings = settings
-        self.robots = tuple(robots)
+        self.owner = owner
+        self.name = settings.filter
+        self._me = self.robots.index(owner)
         self._sigma = [tuple(float(s) for s in sig) for sig in odometry_sigma]
-        self.t = float(t0)
-        self._truth_fn = truth_fn
+        self.t: float | None = None
+        """The time of the latest event (``None`` before the first :meth:`advance`)."""
+        self._truth = truth
         self._rng = rng
-        self._tracks: dict[tuple[int, int], _Track] = {}
-        self._records: dict[tuple[int, int], _Recorder] = {}
+        self._tracks: dict[int, _Track] = {}
+        self._ever_tracked: set[int] = set()
+        self._updates: list[UpdateRecord] = []
         self._events: list[TrackEvent] = []
-        self._settings_cache: dict[tuple[int, int, tuple[float, ...]], FilterSettings] = {}
+        self._counts: dict[str, int] = {}
+        self._settings_cache: dict[tuple[int, tuple[float, ...]], FilterSettings] = {}
 
-    # ------------------------------------------------------------------ state
-    @property
-    def live_pairs(self) -> tuple[tuple[int, int], ...]:
-        return tuple(self._tracks)
+    # ------------------------------------------------------------------ the contract
+    def advance(self, t: float, odometry: HeldOdometry) -> None:
+        """Delete the tracks stale at the previous event, then predict every live track to
+        ``t`` with the body velocities ``odometry.velocity (n_robots, 4)`` held since."""
+        t = float(t)
+        if self.t is None:
+            self.t = t
+            return
+        dt = t - self.t
+        if dt < -_TIME_TOL:
+            raise ConfigError(f"TrackManager.advance: time went backwards ({self.t} -> {t})")
+        self._expire()
+        if dt > 0.0:
+            # One track at a time: the relative filter's scalar kernels are faster than numpy
+            # on the handful of robots one observer tracks.
+            where = f"predict at t={t:.3f}"
+            u_l = odometry.velocity[self._me]
+            for j, tr in self._tracks.items():
+                tr.predict(u_l, odometry.velocity[j], dt, where)
+        self.t = max(self.t, t)
 
-    def belief(self, observer: int, observed: int) -> Gaussian:
-        tr = self._tracks[(observer, observed)]
-        return Gaussian(mean=tr.mean, cov=tr.cov)
+    def measure(self, batch: Measurements) -> None:
+        """Fuse the owner's ``range_bearing_elevation`` rows of known robots, in row order;
+        count the owner's other rows by reason."""
+        now = self._now("measure")
+        for q in np.flatnonzero(batch.observer == self._me):
+            reason = _unusable(batch, int(q))
+            if reason:
+                self._counts[reason] = self._counts.get(reason, 0) + 1
+                continue
+            self._fuse(int(batch.target[q]), batch.value[q], batch.sigma[q], now)
 
-    def _label(self, key: tuple[int, int]) -> str:
-        return f"{self.robots[key[0]]}->{self.robots[key[1]]}"
+    def beliefs(self) -> list[Belief]:
+        """Every live track's belief now (stale tracks deleted first)."""
+        now = self._now("beliefs")
+        self._expire()
+        return [
+            Belief(
+                subject=self.robots[j],
+                frame=FRAME,
+                mean=tr.mean.copy(),
+                cov=tr.cov.copy(),
+                age=now - tr.created_t,
+            )
+            for j, tr in self._tracks.items()
+        ]
 
-    def _filter_settings(self, key: tuple[int, int], sensor_sigma: Array) -> FilterSettings:
-        ck = (key[0], key[1], tuple(float(s) for s in sensor_sigma))
-        fs = self._settings_cache.get(ck)
+    def take_updates(self) -> list[UpdateRecord]:
+        out, self._updates = self._updates, []
+        return out
+
+    def take_events(self) -> list[TrackEvent]:
+        """Track events since the previous call (deletions as of the latest event included)."""
+        if self.t is not None:
+            self._expire()
+        out, self._events = self._events, []
+        return out
+
+    def take_counts(self) -> dict[str, int]:
+        """Rows of the owner not fused since the previous call, by reason."""
+        out, self._counts = self._counts, {}
+        return out
+
+    # ------------------------------------------------------------------ internals
+    def _now(self, what: str) -> float:
+        if self.t is None:
+            raise ConfigError(f"TrackManager.{what}: called before the first advance")
+        return self.t
+
+    def _filter_settings(self, j: int, sensor_sigma: Array) -> FilterSettings:
+        key = (j, tuple(float(s) for s in sensor_sigma))
+        fs = self._settings_cache.get(key)
         if fs is None:
             fs = FilterSettings(
                 kind=FILTERS[self.settings.filter],  # type: ignore[arg-type]
                 motion_noise=VelocityNoise(
-                    observer=self._sigma[key[0]],  # type: ignore[arg-type]
-                    observed=self._sigma[key[1]],  # type: ignore[arg-type]
+                    observer=self._sigma[self._me],  # type: ignore[arg-type]
+                    observed=self._sigma[j],  # type: ignore[arg-type]
                 ),
                 sensor_noise=RangeBearingNoise(
-                    sigma_r=ck[2][0], sigma_azimuth=ck[2][1], sigma_elevation=ck[2][2]
+                    sigma_r=key[1][0], sigma_azimuth=key[1][1], sigma_elevation=key[1][2]
                 ),
                 pseudo_linear_covariance=self.settings.pseudo_linear_covariance,
             )
-            self._settings_cache[ck] = fs
+            self._settings_cache[key] = fs
         return fs
 
-    # ------------------------------------------------------------------ steps
-    def advance(self, t: float, velocities: Array) -> None:
-        """Predict every live track from :attr:`t` to ``t`` with body velocities
-        ``velocities (n_robots, 4)`` held over the interval."""
-        dt = float(t) - self.t
-        if dt < -_TIME_TOL:
-            raise ConfigError(f"TrackManager.advance: time went backwards ({self.t} -> {t})")
-        if dt > 0.0:
-            # One pair at a time: the relative filter's scalar kernels are faster than numpy
-            # on the handful of pairs a robot tracks.
-            where = f"predict at t={t:.3f}"
-            for (i, j), tr in self._tracks.items():
-                tr.predict(velocities[i], velocities[j], dt, where)
-        self.t = max(self.t, float(t))
-
-    def measure(self, observer: int, observed: int, z: Array, sensor_sigma: Array) -> None:
-        """Fuse a measurement taken at :attr:`t`, creating/re-creating the track if needed."""
-        key = (int(observer), int(observed))
-        z = np.asarray(z, dtype=float)
-        sensor_sigma = np.asarray(sensor_sigma, dtype=float)
-        settings = self._filter_settings(key, sensor_sigma)
-        tr = self._tracks.get(key)
+    def _fuse(self, j: int, value: Array, sigma: Array, now: float) -> None:
+        """One measurement ``z = (r, θ, α)`` of robot ``j``, creating/re-creating its track."""
+        z = np.asarray(value[:MEASUREMENT_DOF], dtype=float)
+        sensor_sigma = np.asarray(sigma[:MEASUREMENT_DOF], dtype=float)
+        settings = self._filter_settings(j, sensor_sigma)
+        tr = self._tracks.get(j)
         if tr is None:
-            truth = self._truth_fn(key[0], key[1], self.t) if self._truth_fn else None
-            belief = self.settings.init(
-                InitContext(z=z, sensor_sigma=sensor_sigma, truth=truth, rng=self._rng)
-            )
-            bank_settings = self.settings.yaw_bank
-            bank = None
-            if bank_settings is not None and math.sqrt(belief.cov[3, 3]) >= (
-                bank_settings.spread_above
-            ):
-                bank = spread_yaw_bank(belief.mean, belief.cov, bank_settings)
-            tr = _Track(
-                mean=belief.mean.copy(),
-                cov=belief.cov.copy(),
-                created_t=self.t,
-                last_update_t=self.t,
-                settings=settings,
-                bank=bank,
-            )
-            self._tracks[key] = tr
-            kind: EventKind = "recreated" if key in self._records else "created"
-            self._records.setdefault(key, _Recorder())
-            self._events.append(
-                TrackEvent(
-                    t=self.t, observer=self.robots[key[0]], observed=self.robots[key[1]], kind=kind
-                )
-            )
+            tr = self._create(j, z, sensor_sigma, settings, now)
             if self.settings.init.uses_measurement:
                 return
         tr.settings = settings
-        inn = tr.update(z, self.settings.yaw_bank, f"{self._label(key)} at t={self.t:.3f}")
-        tr.last_update_t = self.t
-        rec = self._records[key]
-        rec.update_t.append(self.t)
-        rec.update_age.append(self.t - tr.created_t)
-        rec.nis.append(float(inn.nis))
+        label = f"{self.owner}->{self.robots[j]} at t={now:.3f}"
+        inn = tr.update(z, self.settings.yaw_bank, label)
+        tr.last_update_t = now
         cond = condition_log10_batch(np.stack([inn.meas_cov, inn.cov]))
-        rec.cond_r.append(float(cond[0]))
-        rec.cond_s.append(float(cond[1]))
-
-    def expire(self) -> None:
-        """Delete tracks not updated for more than ``keep_window_s`` (seed 000 §6.2)."""
-        window = self.settings.keep_window_s
-        for key in [k for k, tr in self._tracks.items() if self.t - tr.last_update_t > window]:
-            del self._tracks[key]
-            self._events.append(
-                TrackEvent(
-                    t=self.t,
-                    observer=self.robots[key[0]],
-                    observed=self.robots[key[1]],
-                    kind="deleted",
-                )
+        self._updates.append(
+            UpdateRecord(
+                t=now,
+                subject=self.robots[j],
+                nis=float(inn.nis),
+                dof=MEASUREMENT_DOF,
+                cond_r=float(cond[0]),
+                cond_s=float(cond[1]),
+                age=now - tr.created_t,
             )
-
-    def snapshot(self) -> None:
-        """Record every live track's belief at :attr:`t`."""
-        for key, tr in self._tracks.items():
-            rec = self._records[key]
-            rec.t.append(self.t)
-            rec.mean.append(tr.mean.copy())
-            rec.cov.append(tr.cov.copy())
-            rec.age.append(self.t - tr.created_t)
-
-    def replay(
-        self, times: Array, held: Array, measurements: Measurements, record_times: Array
-    ) -> None:
-        """The event loop shared by :func:`track_log` and the runtime nodes.
-
-        For every event time ``times[k]`` (increasing, none before :attr:`t`): predict to it
-        with the velocities ``held[k] (n_robots, 4)`` in force since the previous event, fuse
-        the ``measurements`` (sorted by time) stamped up to it and not fused yet, delete stale
-        tracks, and record the beliefs if it is one of the ``record_times`` (each of which must
-        be among the event times).
-        """
-        is_record = np.zeros(len(times), dtype=bool)
-        is_record[np.searchsorted(times, np.asarray(record_times) - _TIME_TOL)] = True
-        ends = np.searchsorted(measurements.t, np.asarray(times) + _TIME_TOL, side="right")
-        done = 0
-        for k, t in enumerate(times):
-            self.advance(float(t), held[k])
-            for q in range(done, int(ends[k])):
-                self.measure(
-                    int(measurements.observer[q]),
-                    int(measurements.observed[q]),
-                    measurements.z[q],
-                    measurements.sigma[q],
-                )
-            done = int(ends[k])
-            self.expire()
-            if is_record[k]:
-                self.snapshot()
-
-    def results(self) -> TeamEstimates:
-        """The recorded series of every pair ever tracked, in (observer, observed) order."""
-        pairs = []
-        for key in sorted(self._records):
-            r = self._records[key]
-            pairs.append(
-                PairEstimates(
-                    observer=self.robots[key[0]],
-                    observed=self.robots[key[1]],
-                    t=np.asarray(r.t, dtype=float),
-                    mean=np.asarray(r.mean, dtype=float).reshape(-1, 4),
-                    cov=np.asarray(r.cov, dtype=float).reshape(-1, 4, 4),
-                    age=np.asarray(r.age, dtype=float),
-                    update_t=np.asarray(r.update_t, dtype=float),
-                    update_age=np.asarray(r.update_age, dtype=float),
-                    nis=np.asarray(r.nis, dtype=float),
-                    cond_r=np.asarray(r.cond_r, dtype=float),
-                    cond_s=np.asarray(r.cond_s, dtype=float),
-                )
-            )
-        return TeamEstimates(
-            filter=self.settings.filter, pairs=tuple(pairs), events=tuple(self._events)
         )
 
+    def _create(
+        self, j: int, z: Array, sensor_sigma: Array, settings: FilterSettings, now: float
+    ) -> _Track:
+        truth = self._truth(j, now) if self._truth is not None else None
+        belief = self.settings.init(
+            InitContext(z=z, sensor_sigma=sensor_sigma, truth=truth, rng=self._rng)
+        )
+        bank_settings = self.settings.yaw_bank
+        bank = None
+        if bank_settings is not None and math.sqrt(belief.cov[3, 3]) >= bank_settings.spread_above:
+            bank = spread_yaw_bank(belief.mean, belief.cov, bank_settings)
+        tr = _Track(
+            mean=belief.mean.copy(),
+            cov=belief.cov.copy(),
+            created_t=now,
+            last_update_t=now,
+            settings=settings,
+            bank=bank,
+        )
+        self._tracks[j] = tr
+        kind: EventKind = "recreated" if j in self._ever_tracked else "created"
+        self._ever_tracked.add(j)
+        self._events.append(TrackEvent(t=now, owner=self.owner, subject=self.robots[j], kind=kind))
+        return tr
 
-def _merge_times(*arrays: Array) -> Array:
-    t = np.unique(np.concatenate(arrays))
-    if t.size < 2:
-        return t
-    keep = np.concatenate([[True], np.diff(t) > _TIME_TOL])
-    return t[keep]
+    def _expire(self) -> None:
+        """Delete tracks not updated for more than ``keep_window_s`` (seed 000 §6.2)."""
+        now = self._now("expire")
+        window = self.settings.keep_window_s
+        for j in [j for j, tr in self._tracks.items() if now - tr.last_update_t > window]:
+            del self._tracks[j]
+            self._events.append(
+                TrackEvent(t=now, owner=self.owner, subject=self.robots[j], kind="deleted")
+            )
 
 
-def track_log(
-    log: Log,
+def _unusable(batch: Measurements, q: int) -> str:
+    """Why row ``q`` cannot be fused (empty if it can)."""
+    if int(batch.kind[q]) != _RBE:
+        return f"rows_of_kind_{KIND_NAMES[int(batch.kind[q])]}"
+    if int(batch.target[q]) < 0:
+        return "rows_of_unknown_target"
+    if not np.all(np.isfinite(batch.sigma[q, :MEASUREMENT_DOF])):
+        return "rows_without_sigma"
+    return ""
+
+
+def managers_for(
+    recording: Recording,
     settings: TrackManagerSettings,
     *,
-    record_rate_hz: float = 10.0,
     rng: np.random.Generator | None = None,
-    use_truth: bool = True,
-) -> TeamEstimates:
-    """Run a :class:`TrackManager` over a whole log.
+) -> list[TrackManager]:
+    """One :class:`TrackManager` per robot that measures others with ``range_bearing_elevation``
+    rows, in robot order, sharing ``rng`` (so a random initialisation draws in the order of the
+    rows, which are sorted by time and observer).
 
-    Events are the union of every robot's odometry times, the measurement times and a recording
-    grid at ``record_rate_hz`` within the span covered by ground truth. Between two events every
-    track is predicted with the velocities each robot reported last (zero-order hold); at an
-    event the measurements of that instant are fused, stale tracks are deleted and, on the
-    recording grid, beliefs are recorded. ``use_truth`` lets truth-based initialisation
-    policies see the true relative pose (simulations and datasets with ground truth).
+    The policies that start from the truth get the recording's true relative poses (a
+    simulation, or a dataset with ground truth).
     """
-    if not (np.isfinite(record_rate_hz) and record_rate_hz > 0):
-        raise ConfigError(f"record_rate_hz: must be > 0, got {record_rate_hz}")
-    t0, t1 = log.span
-    n_rec = int(np.floor((t1 - t0) * record_rate_hz + _TIME_TOL))
-    record_times = t0 + np.arange(n_rec + 1) / record_rate_hz
-    m = log.measurements
-    in_span = (m.t >= t0 - _TIME_TOL) & (m.t <= t1 + _TIME_TOL)
-    m = m.select(in_span)
-    odo_times = [od.t[(od.t > t0) & (od.t < t1)] for od in log.odometry]
-    times = _merge_times(np.array([t0, t1]), record_times, m.t, *odo_times)
-    times = times[(times >= t0 - _TIME_TOL) & (times <= t1 + _TIME_TOL)]
-    held = np.stack([od.held_at(times + _TIME_TOL) for od in log.odometry], axis=1)
+    m = recording.measurements
+    observing = np.unique(m.observer[m.kind == _RBE])
+    return [
+        track_manager_of(recording, recording.robots[int(i)], settings, rng=rng) for i in observing
+    ]
 
-    def truth_fn(i: int, j: int, t: float) -> Array:
-        return log.relative_truth(i, j, t)[0]
 
-    manager = TrackManager(
+def track_manager_of(
+    recording: Recording,
+    owner: str,
+    settings: TrackManagerSettings,
+    *,
+    rng: np.random.Generator | None = None,
+) -> TrackManager:
+    """The :class:`TrackManager` of robot ``owner`` of ``recording`` (see :func:`managers_for`)."""
+    i = recording.index(owner)
+    truth: TruthFn | None = None
+    if settings.init.needs_truth and recording.truth is not None:
+
+        def truth(j: int, t: float) -> Array:
+            return recording.relative_truth(i, j, t)[0]
+
+    return TrackManager(
         settings,
-        robots=log.robots,
-        odometry_sigma=[od.sigma for od in log.odometry],
-        t0=float(times[0]),
-        truth_fn=truth_fn if use_truth else None,
+        owner=recording.robots[i],
+        robots=recording.robots,
+        odometry_sigma=[od.sigma for od in recording.odometry],
+        truth=truth,
         rng=rng,
     )
-    # velocity in force up to each event: the one held at the previous event (none before t0)
-    manager.replay(times, np.concatenate([held[:1], held[:-1]]), m, record_times)
-    return manager.results()

@@ -47,8 +47,12 @@ from numpy.typing import NDArray
 from relloc.core.angles import wrap_angle
 from relloc.errors import ModelError
 from relloc.estimators.gaussian_sum import FusionMode, GaussianSumSettings
-from relloc.experiments.montecarlo import run_monte_carlo
-from relloc.experiments.output import (
+from relloc.experiments.registry import ReproduceArgs
+from relloc.fusion.team import NO_BEARING, TeamRunSettings, run_team
+from relloc.metrics.consistency import anees, chi2_upper, nees, percent_beyond
+from relloc.models.motion import VelocityNoise
+from relloc.pipeline.montecarlo import run_monte_carlo
+from relloc.pipeline.output import (
     figure_md,
     markdown_table,
     prepare_out_dir,
@@ -56,10 +60,6 @@ from relloc.experiments.output import (
     write_report,
     write_summary,
 )
-from relloc.experiments.registry import ReproduceArgs
-from relloc.fusion.team import NO_BEARING, TeamRunSettings, run_team
-from relloc.metrics.consistency import anees, chi2_upper, nees, percent_beyond
-from relloc.models.motion import VelocityNoise
 from relloc.sim.multihypothesis import (
     ROBOT_NAMES,
     DeSilvaScenario,

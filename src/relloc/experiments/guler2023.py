@@ -55,8 +55,10 @@ from relloc.datasets.uwb_noise import (
 )
 from relloc.errors import ConfigError
 from relloc.estimators.switching_ekf import BLOCK_DIMS, SwitchingEkfSettings
-from relloc.experiments.montecarlo import run_monte_carlo
-from relloc.experiments.output import (
+from relloc.experiments.registry import ReproduceArgs
+from relloc.metrics import anees, anees_band, nees, rmse
+from relloc.pipeline.montecarlo import run_monte_carlo
+from relloc.pipeline.output import (
     figure_md,
     markdown_table,
     prepare_out_dir,
@@ -64,8 +66,6 @@ from relloc.experiments.output import (
     write_report,
     write_summary,
 )
-from relloc.experiments.registry import ReproduceArgs
-from relloc.metrics import anees, anees_band, nees, rmse
 from relloc.sim.airground import (
     AirGroundRun,
     AirGroundScenario,

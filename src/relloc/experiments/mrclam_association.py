@@ -54,14 +54,6 @@ from relloc.datasets.mrclam import MrclamDataset, fit_odometry_noise, load_mrcla
 from relloc.datasets.paths import default_mrclam_dataset
 from relloc.errors import DataError
 from relloc.estimators.gaussian_sum import GaussianSumSettings
-from relloc.experiments.output import (
-    figure_md,
-    markdown_table,
-    prepare_out_dir,
-    save_figure,
-    write_report,
-    write_summary,
-)
 from relloc.experiments.registry import ReproduceArgs
 from relloc.fusion.team import (
     CLUTTER,
@@ -73,6 +65,14 @@ from relloc.fusion.team import (
     run_team,
 )
 from relloc.models.motion import VelocityNoise
+from relloc.pipeline.output import (
+    figure_md,
+    markdown_table,
+    prepare_out_dir,
+    save_figure,
+    write_report,
+    write_summary,
+)
 
 FILTER_RATE = 20.0
 CALIBRATION_S = 60.0

@@ -57,8 +57,9 @@ from numpy.typing import NDArray
 from relloc.core.angles import wrap_angle
 from relloc.core.gaussian import Gaussian
 from relloc.errors import DataError
-from relloc.experiments.montecarlo import run_monte_carlo
-from relloc.experiments.output import (
+from relloc.experiments.registry import ReproduceArgs
+from relloc.pipeline.montecarlo import run_monte_carlo
+from relloc.pipeline.output import (
     figure_md,
     markdown_table,
     prepare_out_dir,
@@ -66,7 +67,6 @@ from relloc.experiments.output import (
     write_report,
     write_summary,
 )
-from relloc.experiments.registry import ReproduceArgs
 
 Array = NDArray[np.float64]
 

@@ -43,8 +43,9 @@ import networkx as nx
 import numpy as np
 from numpy.typing import NDArray
 
-from relloc.experiments.montecarlo import run_monte_carlo
-from relloc.experiments.output import (
+from relloc.experiments.registry import ReproduceArgs
+from relloc.pipeline.montecarlo import run_monte_carlo
+from relloc.pipeline.output import (
     figure_md,
     markdown_table,
     prepare_out_dir,
@@ -52,7 +53,6 @@ from relloc.experiments.output import (
     write_report,
     write_summary,
 )
-from relloc.experiments.registry import ReproduceArgs
 
 Array = NDArray[np.float64]
 

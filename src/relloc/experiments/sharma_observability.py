@@ -7,7 +7,7 @@ Seed 001 (Sharma, Quebe, Beard & Taylor 2013) §3–4.1:
   motions the lemmas exclude (evaluated on all Lie-derivative words up to order 2);
 - Theorems 2–4 and the disconnected / one-landmark cases on ``--runs`` random teams of five
   robots per case (default 50; the paper states the theorems, it runs no such count), each a
-  Monte-Carlo run through :func:`relloc.experiments.montecarlo.run_monte_carlo`;
+  Monte-Carlo run through :func:`relloc.pipeline.montecarlo.run_monte_carlo`;
 - the team matrix assembled from edge blocks checked against the full symbolic 3-robot model;
 - Fig. 2: five robots and two landmarks (sensing range 120 m, V = 5 m/s, T_s = 0.1 s) moving so
   that the RPMG connectivity changes; β (Eq. 22) and σ_min of the observability matrix over
@@ -33,15 +33,6 @@ import networkx as nx
 import numpy as np
 
 from relloc.core.angles import wrap_angle
-from relloc.experiments.montecarlo import run_monte_carlo
-from relloc.experiments.output import (
-    figure_md,
-    markdown_table,
-    prepare_out_dir,
-    save_figure,
-    write_report,
-    write_summary,
-)
 from relloc.experiments.registry import ReproduceArgs
 from relloc.models import symbolic as S
 from relloc.models.planar_measurement import RowKind, ScalarRows
@@ -57,6 +48,15 @@ from relloc.observability.rpmg import (
     name_unobservable_directions,
     team_observability,
     team_observability_matrix,
+)
+from relloc.pipeline.montecarlo import run_monte_carlo
+from relloc.pipeline.output import (
+    figure_md,
+    markdown_table,
+    prepare_out_dir,
+    save_figure,
+    write_report,
+    write_summary,
 )
 
 SENSOR = SensorSettings(sensing_range=120.0)

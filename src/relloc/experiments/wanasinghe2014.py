@@ -15,7 +15,7 @@ What is run (run counts: the paper's where it gives one)
   draw of sensor noise is a noisy statistic, five are a compromise with the run time.
 
 ``--runs N`` sets the team draws to N and the sweep and replay draws to ``min(N, 4)`` and
-``min(N, 5)``. Every Monte-Carlo loop goes through :func:`relloc.experiments.montecarlo.
+``min(N, 5)``. Every Monte-Carlo loop goes through :func:`relloc.pipeline.montecarlo.
 run_monte_carlo` with ``--executor``; seeds: team ``S``, replay ``S + 1``, sweep level ``i``
 ``S + 2 + i`` (``S`` = ``--seed``).
 
@@ -60,16 +60,6 @@ from numpy.typing import NDArray
 from relloc.datasets.paths import default_mrclam_dataset
 from relloc.errors import ConfigError
 from relloc.estimators.initialisation import known_pose
-from relloc.experiments.montecarlo import run_monte_carlo
-from relloc.experiments.output import (
-    figure_md,
-    fmt,
-    markdown_table,
-    prepare_out_dir,
-    save_figure,
-    write_report,
-    write_summary,
-)
 from relloc.experiments.registry import ReproduceArgs
 from relloc.experiments.wanasinghe2014_mrclam import (
     TABLE2,
@@ -90,6 +80,16 @@ from relloc.metrics.convergence import FIXED_THRESHOLDS, paper_thresholds, updat
 from relloc.metrics.errors import rmse
 from relloc.models.motion import VelocityNoise
 from relloc.observability.pcrlb import pcrlb_ratio, relative_pair_pcrlb
+from relloc.pipeline.montecarlo import run_monte_carlo
+from relloc.pipeline.output import (
+    figure_md,
+    fmt,
+    markdown_table,
+    prepare_out_dir,
+    save_figure,
+    write_report,
+    write_summary,
+)
 
 Array = NDArray[np.float64]
 

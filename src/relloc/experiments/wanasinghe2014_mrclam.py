@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.core.recording import relative_pose
 from relloc.datasets.mrclam import OdometryNoiseFit, fit_odometry_noise, load_mrclam
 from relloc.errors import ConfigError, DataError
 from relloc.estimators.initialisation import fully_unknown, pose_in_fov
@@ -45,7 +46,6 @@ from relloc.experiments.wanasinghe2014_filters import (
 )
 from relloc.models.measurement import RangeBearingNoise, range_bearing
 from relloc.models.motion import VelocityNoise
-from relloc.sim.log import relative_pose
 from relloc.sim.sensors import add_noise
 
 Array = NDArray[np.float64]

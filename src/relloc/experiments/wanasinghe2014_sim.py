@@ -28,6 +28,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.core.recording import Recording as Log
+from relloc.core.recording import relative_pose
 from relloc.errors import ConfigError
 from relloc.estimators.initialisation import (
     FieldOfView,
@@ -47,7 +49,6 @@ from relloc.experiments.wanasinghe2014_filters import (
 )
 from relloc.models.measurement import RangeBearingNoise
 from relloc.models.motion import VelocityNoise
-from relloc.sim.log import Log, relative_pose
 from relloc.sim.scenario import OdometryNoise, Scenario, SensorSpec, default_scenario
 from relloc.sim.simulate import propagation_grid, simulate
 from relloc.sim.trajectories import robot_motion

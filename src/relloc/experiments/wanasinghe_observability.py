@@ -32,7 +32,10 @@ from typing import Any
 
 import sympy as sp
 
-from relloc.experiments.output import (
+from relloc.experiments.registry import ReproduceArgs
+from relloc.models import symbolic as S
+from relloc.observability.analysis import ObservabilityResult, analyse, rank_at
+from relloc.pipeline.output import (
     figure_md,
     markdown_table,
     prepare_out_dir,
@@ -40,9 +43,6 @@ from relloc.experiments.output import (
     write_report,
     write_summary,
 )
-from relloc.experiments.registry import ReproduceArgs
-from relloc.models import symbolic as S
-from relloc.observability.analysis import ObservabilityResult, analyse, rank_at
 
 #: A generic relative state used as the witness of the rank-at-inputs counter-examples.
 WITNESS_STATE = (2.0, -1.0, 0.7, 0.4)

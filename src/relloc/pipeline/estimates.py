@@ -244,7 +244,7 @@ class Recorder:
             estimator=self.estimator,
             beliefs=tuple(self._belief_series(k, 0) for k in sorted(self._beliefs)),
             updates=tuple(self._update_series(k, 0) for k in sorted(self._updates)),
-            events=tuple(self._events),
+            events=_by_time(self._events),
             counts=dict(self._counts),
         )
 
@@ -268,9 +268,14 @@ class Recorder:
             estimator=self.estimator,
             beliefs=tuple(beliefs),
             updates=tuple(updates),
-            events=tuple(events),
+            events=_by_time(events),
             counts=dict(self._counts),
         )
+
+
+def _by_time(events: Sequence[TrackEvent]) -> tuple[TrackEvent, ...]:
+    """Events sorted by time (stable: one estimator's events at one time keep their order)."""
+    return tuple(sorted(events, key=lambda e: e.t))
 
 
 def concatenate(parts: Sequence[Estimates]) -> Estimates:

@@ -2,7 +2,7 @@
 
 Every function draws into the matplotlib ``Axes`` it is given (never creates figures) and
 returns nothing; callers arrange axes and save figures (see
-:func:`relloc.experiments.output.save_figure`). Seed 000 Figs. 3–4 are drawn with
+:func:`relloc.pipeline.output.save_figure`). Seed 000 Figs. 3–4 are drawn with
 :func:`plot_error_with_bounds` and :func:`plot_robot_errors`.
 """
 

@@ -1,11 +1,13 @@
-"""A recorded team (any MRCLAM-layout folder) as a :class:`~relloc.sim.log.Log` robots can replay.
+"""A recorded team (any MRCLAM-layout folder) as a :class:`~relloc.core.recording.Recording`.
 
 Seed 000 §6 replays real robot trajectories: the observed robot's plane is raised (2 m) so it
 behaves like a drone, the *recorded* odometry drives the filter and range / azimuth / elevation
-are synthesised from the ground truth. :func:`mrclam_team_log` does the same for a whole team:
+are synthesised from the ground truth. :func:`mrclam_team_recording` does the same for a whole
+team, so that its robots can replay it:
 
 - every robot of the folder (:func:`relloc.datasets.mrclam.load_mrclam`) becomes a robot of the
-  log — ``observer`` on the sensor plane (z = 0), every other robot on a plane ``height`` above;
+  recording — ``observer`` on the sensor plane (z = 0), every other robot on a plane ``height``
+  above;
 - the window starts ``start_after_odometry_s`` after the last robot's first odometry record and
   lasts ``duration_s`` (shortened to what every robot recorded), re-timed to start at 0;
 - truth is the Vicon pose on a ``rate_hz`` grid (yaw on the circle); odometry is each robot's
@@ -13,7 +15,7 @@ are synthesised from the ground truth. :func:`mrclam_team_log` does the same for
   (:func:`relloc.datasets.mrclam.fit_odometry_noise`);
 - the observer measures every other robot at the sensor's rate with the sensor's noise
   (:func:`relloc.sim.sensors.sense`); epochs where either robot's ground truth is in a gap are
-  skipped and counted in :attr:`Log.source`.
+  skipped and counted in :attr:`Recording.source`.
 """
 
 from __future__ import annotations
@@ -22,14 +24,14 @@ from pathlib import Path
 
 import numpy as np
 
+from relloc.core.recording import GroundTruth, Odometry, Recording, measurement_rows
 from relloc.datasets.mrclam import fit_odometry_noise, load_mrclam
 from relloc.errors import DataError
-from relloc.sim.log import GroundTruth, Log, Measurements, Odometry
 from relloc.sim.scenario import SensorSpec
 from relloc.sim.sensors import measurement_times, sense
 
 
-def mrclam_team_log(
+def mrclam_team_recording(
     folder: Path | str,
     rng: np.random.Generator,
     *,
@@ -39,8 +41,8 @@ def mrclam_team_log(
     duration_s: float = 60.0,
     rate_hz: float = 100.0,
     sensor: SensorSpec | None = None,
-) -> Log:
-    """The recorded team of ``folder`` as a log (see module docstring); robots are ``robotN``."""
+) -> Recording:
+    """The recorded team of ``folder`` (see module docstring); robots are ``robotN``."""
     sensor = sensor or SensorSpec()
     ds = load_mrclam(folder)
     ids = ds.robot_ids
@@ -100,16 +102,17 @@ def mrclam_team_log(
     m_t = np.concatenate(rows_t)
     m_j = np.concatenate(rows_j)
     idx = np.lexsort((m_j, m_t))
-    measurements = Measurements(
+    measurements = measurement_rows(
+        "range_bearing_elevation",
         t=m_t[idx],
-        observer=np.zeros(idx.size, dtype=np.int64),
-        observed=m_j[idx],
-        z=np.concatenate(rows_z)[idx],
-        sigma=np.tile(np.asarray(sensor.sigma), (idx.size, 1)),
+        observer=0,
+        target=m_j[idx],
+        value=np.concatenate(rows_z)[idx],
+        sigma=np.asarray(sensor.sigma),
     )
-    return Log(
+    return Recording(
         robots=tuple(f"robot{i}" for i in order),
-        kinds=("ground",) * len(robots),
+        platforms=("ground",) * len(robots),
         truth=tuple(truths),
         odometry=tuple(odometries),
         measurements=measurements,

@@ -77,8 +77,8 @@ class TeamSettings:
 class Collected:
     """Everything the collector received."""
 
-    estimates: dict[tuple[str, str], list[Mapping[str, Any]]] = field(default_factory=dict)
-    """Per (observer, target), the bodies of the ``est`` messages in arrival order."""
+    estimates: list[tuple[str, Mapping[str, Any]]] = field(default_factory=list)
+    """``(sender, body)`` of every ``est`` message, in arrival order."""
     events: list[tuple[float, str, str, str]] = field(default_factory=list)
     """Track events ``(t, observer, target, kind)``."""
     stats: dict[str, list[dict[str, int]]] = field(default_factory=dict)
@@ -332,8 +332,7 @@ class TeamLauncher:
             return False
         self._received[(msg.sender, msg.kind)] += 1
         if msg.kind == "est":
-            pair = (msg.sender, msg.body["target"])
-            self.collected.estimates.setdefault(pair, []).append(msg.body)
+            self.collected.estimates.append((msg.sender, msg.body))
         elif msg.kind == "evt":
             b = msg.body
             for t, target, kind in zip(b["stamps"].tolist(), b["targets"], b["kinds"], strict=True):

@@ -17,10 +17,15 @@ checked against their declared shape, ``-1`` meaning "any length". Kinds:
 - ``eqm`` — an *equivalent measurement* (seed 002 §III-6 "broadcast"): the sender's belief of
   ``target`` relative to itself, ``mean`` (4,) = (x, y, z, φ) and ``cov`` (4, 4), sent at the
   low broadcast rate (1 Hz in seed 002).
-- ``est`` — the sender's new estimates of one ``target`` for the collector (monitoring, not
-  fusion): beliefs on the recording grid ``stamps`` (n,), ``means`` (n, 4), ``covs`` (n, 4, 4),
-  track ``ages`` (n,), and its measurement updates ``update_stamps`` (m,) with the track's
-  ``update_ages``, ``nis``, ``cond_r``, ``cond_s`` (m,) (NIS, log10 condition numbers of R, S).
+- ``est`` — the sender's new estimates of one ``target`` (its track ``track``, ``""`` for the
+  one track) for the collector (monitoring, not fusion): one increment of a
+  :class:`~relloc.pipeline.estimates.BeliefSeries` — beliefs in ``frame`` (a 4-state frame of
+  :mod:`relloc.pipeline.frames`) on the recording grid ``stamps`` (n,), ``means`` (n, 4),
+  ``covs`` (n, 4, 4), track ``ages`` (n,) — and of its
+  :class:`~relloc.pipeline.estimates.UpdateSeries` — ``update_stamps`` (m,) with the track's
+  ``update_ages``, ``nis`` and its degrees of freedom ``update_dofs``, ``cond_r``, ``cond_s``
+  (m,) (log10 condition numbers of R, S). :func:`est_bodies` and :func:`estimates_from_bodies`
+  convert between these bodies and :class:`~relloc.pipeline.estimates.Estimates`.
 - ``evt`` — track events of the sender: ``stamps`` (e,), ``targets`` (e,), ``kinds`` (e,) in
   ``{"created", "deleted", "recreated"}``.
 - ``stats`` — the sender's counters (messages sent/received/rejected, estimates, tracks).
@@ -38,18 +43,23 @@ message is dropped and counted, never crashes a node). Pickle is never used for 
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from collections.abc import Collection, Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, TypeVar
 
 import msgpack
 import numpy as np
 
 from relloc.errors import DataError
+from relloc.pipeline.estimates import BeliefSeries, Estimates, SeriesKey, UpdateSeries, concatenate
+from relloc.pipeline.frames import FRAMES
 
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
+"""Version 2: ``est`` carries ``frame``, ``track`` and the NIS degrees of freedom
+``update_dofs``."""
 DEFAULT_MAX_BYTES = 65_536
 """Default size limit of one encoded message (bytes); larger payloads are rejected unread."""
 
@@ -71,6 +81,8 @@ SCHEMA: dict[str, dict[str, str | Shape]] = {
     "eqm": {"target": "str", "mean": (STATE_DIM,), "cov": (STATE_DIM, STATE_DIM)},
     "est": {
         "target": "str",
+        "track": "str",
+        "frame": "str",
         "stamps": (-1,),
         "means": (-1, STATE_DIM),
         "covs": (-1, STATE_DIM, STATE_DIM),
@@ -78,6 +90,7 @@ SCHEMA: dict[str, dict[str, str | Shape]] = {
         "update_stamps": (-1,),
         "update_ages": (-1,),
         "nis": (-1,),
+        "update_dofs": (-1,),
         "cond_r": (-1,),
         "cond_s": (-1,),
     },
@@ -88,6 +101,8 @@ SCHEMA: dict[str, dict[str, str | Shape]] = {
     "ctl": {"action": "str", "robot": "str"},
 }
 """Fields of each kind: a type name or an array shape (``-1`` = any length)."""
+
+_S = TypeVar("_S", BeliefSeries, UpdateSeries)
 
 CTL_ACTIONS = frozenset({"kill", "restart", "end"})
 EVENT_KINDS = frozenset({"created", "deleted", "recreated"})
@@ -296,9 +311,17 @@ def _check_consistency(kind: str, body: Mapping[str, Any]) -> None:
         if not (body["means"].shape[0] == body["covs"].shape[0] == body["ages"].shape[0] == n):
             raise MessageRejected("shape", "est: record batch lengths differ")
         m = body["update_stamps"].shape[0]
-        lengths = {body[k].shape[0] for k in ("update_ages", "nis", "cond_r", "cond_s")}
+        lengths = {
+            body[k].shape[0] for k in ("update_ages", "nis", "update_dofs", "cond_r", "cond_s")
+        }
         if lengths != {m}:
             raise MessageRejected("shape", "est: update batch lengths differ")
+        f = FRAMES.get(body["frame"])
+        if f is None or f.dim != STATE_DIM:
+            raise MessageRejected("malformed", f"est: {body['frame']!r} is not a 4-state frame")
+        dofs = body["update_dofs"]
+        if np.any((dofs < 1) | (dofs != np.round(dofs))):
+            raise MessageRejected("malformed", "est: update_dofs must be integers ≥ 1")
     elif kind == "evt":
         if not (len(body["targets"]) == len(body["kinds"]) == body["stamps"].shape[0]):
             raise MessageRejected("shape", "evt: batch lengths differ")
@@ -315,3 +338,95 @@ def _check_consistency(kind: str, body: Mapping[str, Any]) -> None:
         scale = max(1.0, float(np.abs(covs).max(initial=0.0)))
         if asym > 1e-9 * scale or np.any(np.diagonal(covs, axis1=-2, axis2=-1) < 0):
             raise MessageRejected("bad_covariance", f"{kind}: covariance not symmetric PSD-like")
+
+
+def est_bodies(increment: Estimates, *, frame: str) -> list[dict[str, Any]]:
+    """The ``est`` bodies of an increment of one sender's estimates: one per (target, track),
+    its new beliefs and updates together; ``frame`` names the frame of a target that has
+    updates but no new beliefs in this increment."""
+    beliefs = {s.key: s for s in increment.beliefs}
+    updates = {u.key: u for u in increment.updates}
+    bodies = []
+    for key in sorted(set(beliefs) | set(updates)):
+        b = beliefs.get(key)
+        u = updates.get(key) or increment.updates_of(*key)
+        bodies.append(
+            {
+                "target": key[1],
+                "track": key[2],
+                "frame": b.frame if b is not None else frame,
+                "stamps": b.t if b is not None else np.zeros(0),
+                "means": b.mean if b is not None else np.zeros((0, STATE_DIM)),
+                "covs": b.cov if b is not None else np.zeros((0, STATE_DIM, STATE_DIM)),
+                "ages": b.age if b is not None else np.zeros(0),
+                "update_stamps": u.t,
+                "update_ages": u.age,
+                "nis": u.nis,
+                "update_dofs": u.dof,
+                "cond_r": u.cond_r,
+                "cond_s": u.cond_s,
+            }
+        )
+    return bodies
+
+
+def estimates_from_bodies(
+    estimator: str, bodies: Collection[tuple[str, Mapping[str, Any]]]
+) -> Estimates:
+    """One :class:`Estimates` from validated ``(sender, est body)`` pairs in arrival order (a
+    sender's increments follow one another; every series is sorted by time, so a restarted
+    sender's second life follows its first)."""
+    parts = []
+    for sender, body in bodies:
+        key: SeriesKey = (sender, body["target"], body["track"])
+        beliefs: tuple[BeliefSeries, ...] = ()
+        if body["stamps"].size:
+            beliefs = (
+                BeliefSeries(
+                    owner=key[0],
+                    subject=key[1],
+                    track=key[2],
+                    frame=body["frame"],
+                    t=body["stamps"],
+                    mean=body["means"],
+                    cov=body["covs"],
+                    age=body["ages"],
+                ),
+            )
+        updates: tuple[UpdateSeries, ...] = ()
+        if body["update_stamps"].size:
+            updates = (
+                UpdateSeries(
+                    owner=key[0],
+                    subject=key[1],
+                    track=key[2],
+                    t=body["update_stamps"],
+                    age=body["update_ages"],
+                    nis=body["nis"],
+                    dof=body["update_dofs"].astype(np.int64),
+                    cond_r=body["cond_r"],
+                    cond_s=body["cond_s"],
+                ),
+            )
+        parts.append(Estimates(estimator=estimator, beliefs=beliefs, updates=updates))
+    if not parts:
+        return Estimates(estimator=estimator)
+    joined = concatenate(parts)
+    return Estimates(
+        estimator=estimator,
+        beliefs=tuple(_by_time(s) for s in joined.beliefs),
+        updates=tuple(_by_time(u) for u in joined.updates),
+    )
+
+
+def _by_time(series: _S) -> _S:
+    """A series with its rows sorted by time (stable)."""
+    order = np.argsort(series.t, kind="stable")
+    rows: dict[str, Any] = {
+        f.name: getattr(series, f.name)[order]
+        for f in dataclasses.fields(series)
+        if isinstance(getattr(series, f.name), np.ndarray)
+    }
+    if isinstance(series, BeliefSeries):
+        rows["info"] = {k: v[order] for k, v in series.info.items()}
+    return dataclasses.replace(series, **rows)

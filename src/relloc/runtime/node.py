@@ -37,10 +37,18 @@ from typing import Any
 import numpy as np
 
 from relloc.errors import ConfigError
+from relloc.estimators.track_manager import FRAME
 from relloc.runtime import keys
 from relloc.runtime.estimation import TrackManagerEstimator
 from relloc.runtime.faults import FAULTED_KINDS, FaultSettings, LinkEmulator
-from relloc.runtime.messages import DEFAULT_MAX_BYTES, Message, MessageRejected, decode, encode
+from relloc.runtime.messages import (
+    DEFAULT_MAX_BYTES,
+    Message,
+    MessageRejected,
+    decode,
+    encode,
+    est_bodies,
+)
 from relloc.runtime.sources import MeasurementBatch, SensorSource
 from relloc.runtime.teammates import ReceivedOdometry, SeenSequences, Teammate
 from relloc.runtime.transport import (
@@ -327,38 +335,24 @@ class RobotNode:
             self._filtered_until = w.end
 
     def _broadcast_beliefs(self) -> None:
-        for target, belief in self.estimator.beliefs().items():
-            self._send("eqm", {"target": target, "mean": belief.mean, "cov": belief.cov})
+        for belief in self.estimator.beliefs():
+            self._send("eqm", {"target": belief.subject, "mean": belief.mean, "cov": belief.cov})
 
     def _report(self) -> None:
         """Ship new estimates, track events and counters to the collector."""
         if not self._pubs:
             return
-        batch = self.estimator.take_new()
-        for p in batch.pairs:
-            self.counters["estimates"] += int(p.t.size)
-            self._send(
-                "est",
-                {
-                    "target": p.target,
-                    "stamps": p.t,
-                    "means": p.mean,
-                    "covs": p.cov,
-                    "ages": p.age,
-                    "update_stamps": p.update_t,
-                    "update_ages": p.update_age,
-                    "nis": p.nis,
-                    "cond_r": p.cond_r,
-                    "cond_s": p.cond_s,
-                },
-            )
-        if batch.events:
+        new = self.estimator.take_new()
+        for body in est_bodies(new, frame=FRAME):
+            self.counters["estimates"] += int(body["stamps"].size)
+            self._send("est", body)
+        if new.events:
             self._send(
                 "evt",
                 {
-                    "stamps": np.array([e.t for e in batch.events]),
-                    "targets": [e.observed for e in batch.events],
-                    "kinds": [e.kind for e in batch.events],
+                    "stamps": np.array([e.t for e in new.events]),
+                    "targets": [e.subject for e in new.events],
+                    "kinds": [e.kind for e in new.events],
                 },
             )
         self._send("stats", {"counters": self.final_counters()})

@@ -25,10 +25,10 @@ from typing import Any
 
 import numpy as np
 
-from relloc.estimators.track_manager import TeamEstimates
-from relloc.experiments.team_run import RunResult
+from relloc.core.recording import Recording
+from relloc.pipeline.estimates import Estimates
+from relloc.pipeline.team_report import RunResult
 from relloc.runtime.faults import FaultSettings
-from relloc.sim.log import Log
 
 
 def _rmse(errors: Sequence[np.ndarray]) -> float | None:
@@ -49,24 +49,24 @@ def _window_outcome(
     t2: float,
     affected: set[tuple[str, str]],
     result: RunResult,
-    estimates: TeamEstimates,
+    estimates: Estimates,
     keep_window_s: float,
     dead_observers: frozenset[str] = frozenset(),
 ) -> dict[str, Any]:
-    pairs = [p for p in result.pairs if (p.observer, p.observed) in affected]
+    pairs = [p for p in result.evaluations if (p.owner, p.subject) in affected]
     phases = {
         "before": [p.error[p.t < t1] for p in pairs],
         "during": [p.error[(p.t >= t1) & (p.t < t2)] for p in pairs],
         "after": [p.error[p.t >= t2] for p in pairs],
     }
-    events = [e for e in estimates.events if (e.observer, e.observed) in affected]
+    events = [e for e in estimates.events if (e.owner, e.subject) in affected]
     horizon = t2 + keep_window_s
     deleted = [e for e in events if e.kind == "deleted" and t1 <= e.t <= horizon]
     refound = [e for e in events if e.kind in ("created", "recreated") and e.t > t1]
     live_at_start = {
-        (p.observer, p.observed) for p in estimates.pairs if p.t.size and p.t[0] < t1 <= p.t[-1]
+        (s.owner, s.subject) for s in estimates.beliefs if s.t.size and s.t[0] < t1 <= s.t[-1]
     }
-    deleted_pairs = {(e.observer, e.observed) for e in deleted}
+    deleted_pairs = {(e.owner, e.subject) for e in deleted}
     lost = {pair for pair in live_at_start - deleted_pairs if pair[0] in dead_observers}
     return {
         "fault": name,
@@ -88,14 +88,14 @@ def _window_outcome(
 def fault_outcomes(
     faults: FaultSettings,
     result: RunResult,
-    estimates: TeamEstimates,
-    log: Log,
+    estimates: Estimates,
+    recording: Recording,
     *,
     keep_window_s: float = 2.0,
 ) -> list[dict[str, Any]]:
     """One entry per fault (see module docstring)."""
-    t_end = log.span[1]
-    all_pairs = {(p.observer, p.observed) for p in estimates.pairs}
+    t_end = recording.span[1]
+    all_pairs = {(s.owner, s.subject) for s in estimates.beliefs}
     out: list[dict[str, Any]] = []
     for p in faults.partitions:
         affected = {(a, b) for a, b in all_pairs if (a in p.side) != (b in p.side)}
@@ -130,9 +130,9 @@ def fault_outcomes(
                     f"jitter={faults.jitter_ms:g}ms duplicate={faults.duplicate:g} "
                     f"reorder={faults.reorder:g}"
                 ),
-                "window_s": [log.span[0], t_end],
-                "position_rmse_during_m": _rmse([p.error for p in result.pairs]),
-                "yaw_rmse_during_rad": _yaw_rmse([p.error for p in result.pairs]),
+                "window_s": [recording.span[0], t_end],
+                "position_rmse_during_m": _rmse([p.error for p in result.evaluations]),
+                "yaw_rmse_during_rad": _yaw_rmse([p.error for p in result.evaluations]),
                 "tracks_created": counts["created"],
                 "tracks_deleted": counts["deleted"],
                 "tracks_refound": counts["recreated"],

@@ -1,17 +1,17 @@
 """The team a runtime run replays: a scenario (built-in or TOML) or a recorded dataset folder.
 
 Every process of a team (each robot, the launcher that scores the run) calls :func:`load_team`
-with the same source and seed and gets the same :class:`~relloc.sim.log.Log` — the simulator and
-the dataset replay are deterministic for a given generator state — so each robot can read its
-own sensor slice without any sensor data crossing the network. Sources:
+with the same source and seed and gets the same :class:`~relloc.core.recording.Recording` — the
+simulator and the dataset replay are deterministic for a given generator state — so each robot
+can read its own sensor slice without any sensor data crossing the network. Sources:
 
 - ``"default"``: the built-in seed-000 team (:func:`relloc.sim.scenario.default_scenario`);
 - a ``.toml`` file: a user scenario (:func:`relloc.sim.scenario.load_scenario`);
 - a folder in MRCLAM layout: the recorded team replayed as in seed 000 §6
-  (:func:`relloc.runtime.dataset.mrclam_team_log`).
+  (:func:`relloc.runtime.dataset.mrclam_team_recording`).
 
 The seed gives run 0 of ``relloc run --seed SEED``: the simulation (or sensor-noise) stream and
-the initialisation stream of :func:`relloc.experiments.team_run.team_task`.
+the initialisation stream of its Monte-Carlo task (:func:`run_seeds`).
 """
 
 from __future__ import annotations
@@ -21,21 +21,21 @@ from pathlib import Path
 
 import numpy as np
 
+from relloc.core.recording import Recording
 from relloc.errors import ConfigError
-from relloc.experiments.montecarlo import spawn_seeds
+from relloc.pipeline.montecarlo import spawn_seeds
 from relloc.runtime.keys import check_id
-from relloc.sim.log import Log
 from relloc.sim.scenario import Scenario, default_scenario, load_scenario
 from relloc.sim.simulate import simulate
 
 
 @dataclass(frozen=True)
 class Team:
-    """A team to run: its name, its seeded log and, for simulations, its scenario."""
+    """A team to run: its name, its seeded recording and, for simulations, its scenario."""
 
     name: str
     description: str
-    log: Log
+    recording: Recording
     scenario: Scenario | None
 
 
@@ -69,15 +69,15 @@ def load_team(spec: str, seed: int) -> Team:
     """The team of a source and seed (see module docstring)."""
     rng = np.random.default_rng(run_seeds(seed)[0])
     if Path(check_source(spec)).is_dir():
-        from relloc.runtime.dataset import mrclam_team_log
+        from relloc.runtime.dataset import mrclam_team_recording
 
-        log = mrclam_team_log(spec, rng)
+        recording = mrclam_team_recording(spec, rng)
         name = f"replay of {Path(spec).name}"
-        return Team(name=name, description=log.source, log=log, scenario=None)
+        return Team(name=name, description=recording.source, recording=recording, scenario=None)
     scenario = load_team_scenario(spec)
     return Team(
         name=scenario.name,
         description=scenario.description,
-        log=simulate(scenario, rng),
+        recording=simulate(scenario, rng),
         scenario=scenario,
     )

@@ -6,14 +6,14 @@ robot time ``[t0, t1)``:
 
 - :meth:`SensorSource.odometry` → ``(stamps (n,), u (n, 4))`` samples
   ``u = (v_x, v_y, v_z, ω_z)``, each held until the next (zero-order hold, as in
-  :class:`relloc.sim.log.Odometry`);
+  :class:`relloc.core.recording.Odometry`);
 - :meth:`SensorSource.measurements` → :class:`MeasurementBatch` rows ``(t, target, z, σ)`` with
   ``z = (range, azimuth, elevation)`` in the robot's body frame (seed 000 Eq. 2).
 
 Implementations:
 
-- :class:`LogSource` — one robot's slice of a :class:`relloc.sim.log.Log` (a simulated scenario or
-  a dataset replay); deterministic.
+- :class:`RecordingSource` — one robot's slice of a :class:`relloc.core.recording.Recording` (a
+  simulated scenario or a dataset replay); deterministic.
 - :class:`LiveSource` — for a real robot: driver threads push samples as they come
   (:meth:`LiveSource.push_odometry`, :meth:`LiveSource.push_measurement`) and the node pulls
   windows. Samples older than what the node already consumed are counted in ``late`` and
@@ -37,8 +37,8 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from relloc.core.recording import Recording, kind_code
 from relloc.errors import DataError
-from relloc.sim.log import Log
 
 Array = NDArray[np.float64]
 
@@ -71,22 +71,41 @@ class SensorSource(Protocol):
         ...
 
 
-class LogSource:
-    """One robot's own streams from a :class:`~relloc.sim.log.Log`."""
+class RecordingSource:
+    """One robot's own streams from a :class:`~relloc.core.recording.Recording`.
 
-    def __init__(self, log: Log, robot: str) -> None:
+    The robot's readings travel as ``meas`` messages of range, azimuth and elevation of named
+    teammates (seed 000 Eq. 2) with their stated σ; a recording in which the robot made other
+    readings (another kind, of an unknown target, without σ) is a :class:`DataError` naming
+    what it holds.
+    """
+
+    def __init__(self, recording: Recording, robot: str) -> None:
         self.robot = robot
-        self._index = log.index(robot)
-        odo = log.odometry[self._index]
+        self._index = recording.index(robot)
+        odo = recording.odometry[self._index]
         self._odo_t, self._odo_u = odo.t, odo.velocity
         self.odometry_sigma: Array = np.asarray(odo.sigma, dtype=float)
-        m = log.measurements
+        m = recording.measurements
         mine = m.observer == self._index
+        usable = (
+            (m.kind == kind_code("range_bearing_elevation"))
+            & (m.target >= 0)
+            & np.all(np.isfinite(m.sigma), axis=1)
+        )
+        other = mine & ~usable
+        if other.any():
+            kinds = sorted({m.kind_names()[int(q)] for q in np.flatnonzero(other)})
+            raise DataError(
+                f"{recording.source or 'recording'}: robot {robot!r} has {int(other.sum())} "
+                f"readings a robot node cannot send (kinds {kinds}, no named target or no σ); "
+                "the runtime carries range_bearing_elevation readings of teammates with their σ"
+            )
         self._m_t = m.t[mine]
-        self._m_targets = tuple(log.robots[j] for j in m.observed[mine])
-        self._m_z = m.z[mine]
+        self._m_targets = tuple(recording.robots[j] for j in m.target[mine])
+        self._m_z = m.value[mine]
         self._m_sigma = m.sigma[mine]
-        self.end_time = float(log.span[1])
+        self.end_time = float(recording.span[1])
 
     def odometry(self, t0: float, t1: float) -> tuple[Array, Array]:
         lo, hi = np.searchsorted(self._odo_t, [t0, t1], side="left")

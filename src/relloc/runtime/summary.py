@@ -1,10 +1,11 @@
 """Turn what the launcher collected into the run's results.
 
-:func:`assemble_estimates` rebuilds a :class:`~relloc.estimators.track_manager.TeamEstimates` —
-the very type the in-process run produces — from the robots' ``est``/``evt`` streams, so the
-distributed run is scored by the same functions as ``relloc run``. :func:`runtime_section` adds
-what only a distributed run has: per-robot message counts (sent, received, rejected), estimate
-counts, latencies, and per-fault outcomes.
+:func:`assemble_estimates` rebuilds an :class:`~relloc.pipeline.estimates.Estimates` — the
+very record the in-process run produces — from the robots' ``est``/``evt`` streams, so the
+distributed run is scored by the same functions as ``relloc run``. :func:`robot_messages` and
+:func:`team_message_totals` add what only a distributed run has: per-robot message counts
+(sent, received, rejected), estimate counts, latencies; :func:`agreement` compares the
+distributed beliefs with the in-process ones.
 """
 
 from __future__ import annotations
@@ -15,51 +16,25 @@ from typing import Any
 import numpy as np
 
 from relloc.errors import ConfigError
-from relloc.estimators.track_manager import PairEstimates, TeamEstimates, TrackEvent
+from relloc.pipeline.contract import TrackEvent
+from relloc.pipeline.estimates import Estimates
 from relloc.runtime.launcher import Collected
+from relloc.runtime.messages import estimates_from_bodies
 
 DATA_KINDS = ("odom", "meas", "eqm")
 
 
-def _cat(bodies: Sequence[Mapping[str, Any]], name: str, tail: tuple[int, ...]) -> np.ndarray:
-    parts = [np.asarray(b[name], dtype=float).reshape((-1, *tail)) for b in bodies]
-    return np.concatenate(parts) if parts else np.zeros((0, *tail))
-
-
-def assemble_estimates(
-    collected: Collected, roster: Sequence[str], filter_name: str
-) -> TeamEstimates:
-    """One :class:`PairEstimates` per (observer, target) pair, in roster order; records sorted by
-    time (a restarted observer's second life follows its first)."""
+def assemble_estimates(collected: Collected, roster: Sequence[str], estimator: str) -> Estimates:
+    """Every robot's shipped estimates as one record (series sorted by time: a restarted
+    observer's second life follows its first); events sorted by time, then roster order."""
     order = {r: i for i, r in enumerate(roster)}
-    pairs = []
-    for (observer, target), bodies in sorted(
-        collected.estimates.items(), key=lambda kv: (order[kv[0][0]], order[kv[0][1]])
-    ):
-        t = _cat(bodies, "stamps", ())
-        ut = _cat(bodies, "update_stamps", ())
-        rec = np.argsort(t, kind="stable")
-        upd = np.argsort(ut, kind="stable")
-        pairs.append(
-            PairEstimates(
-                observer=observer,
-                observed=target,
-                t=t[rec],
-                mean=_cat(bodies, "means", (4,))[rec],
-                cov=_cat(bodies, "covs", (4, 4))[rec],
-                age=_cat(bodies, "ages", ())[rec],
-                update_t=ut[upd],
-                update_age=_cat(bodies, "update_ages", ())[upd],
-                nis=_cat(bodies, "nis", ())[upd],
-                cond_r=_cat(bodies, "cond_r", ())[upd],
-                cond_s=_cat(bodies, "cond_s", ())[upd],
-            )
-        )
+    estimates = estimates_from_bodies(estimator, collected.estimates)
     events = sorted(collected.events, key=lambda e: (e[0], order[e[1]], order[e[2]]))
-    return TeamEstimates(
-        filter=filter_name,
-        pairs=tuple(pairs),
-        events=tuple(TrackEvent(t=t, observer=o, observed=d, kind=k) for t, o, d, k in events),  # type: ignore[arg-type]
+    return Estimates(
+        estimator=estimator,
+        beliefs=estimates.beliefs,
+        updates=estimates.updates,
+        events=tuple(TrackEvent(t=t, owner=o, subject=d, kind=k) for t, o, d, k in events),  # type: ignore[arg-type]
     )
 
 
@@ -132,18 +107,18 @@ def team_message_totals(
     }
 
 
-def agreement(distributed: TeamEstimates, in_process: TeamEstimates) -> dict[str, Any]:
+def agreement(distributed: Estimates, in_process: Estimates) -> dict[str, Any]:
     """How far the distributed estimates are from the in-process ones at the same times.
 
-    Per pair: the number of common recording times, the largest absolute difference of any
+    Per series: the number of common recording times, the largest absolute difference of any
     state and of any covariance entry there, and the records only one run has.
     """
     per_pair: dict[str, Any] = {}
     worst_mean = worst_cov = 0.0
-    for ref in in_process.pairs:
+    for ref in in_process.beliefs:
         try:
-            got = distributed.pair(ref.observer, ref.observed)
-        except ConfigError:  # a pair the distributed run never tracked
+            got = distributed.series(*ref.key)
+        except ConfigError:  # a series the distributed run never recorded
             per_pair[ref.label] = {"common": 0, "only_in_process": int(ref.t.size)}
             continue
         common, i_ref, i_got = np.intersect1d(

@@ -1,9 +1,9 @@
 """``run_team``: launch a team, collect, score and write ``summary.json`` + ``report.md``.
 
-The distributed estimates are rebuilt into a
-:class:`~relloc.estimators.track_manager.TeamEstimates` and scored by the very functions of the
-in-process ``relloc run`` (:func:`relloc.experiments.team_run.build_summary` and
-:func:`~relloc.experiments.team_run.write_team_report`) on the same seeded log (run 0 of
+The distributed estimates are rebuilt into an :class:`~relloc.pipeline.estimates.Estimates`
+and scored by the very functions of the in-process ``relloc run``
+(:func:`relloc.pipeline.team_report.build_summary` and
+:func:`~relloc.pipeline.team_report.write_team_report`) on the same seeded recording (run 0 of
 ``relloc run --seed SEED``), so ``summary.json`` and ``report.md`` have the same layout. Added
 keys:
 
@@ -29,12 +29,15 @@ from typing import Any
 import numpy as np
 
 from relloc.estimators.initialisation import InitPolicy
-from relloc.estimators.track_manager import TeamEstimates, TrackManagerSettings, track_log
-from relloc.experiments.output import fmt, markdown_table, prepare_out_dir, write_report
-from relloc.experiments.team_run import (
-    TeamRunSettings,
+from relloc.estimators.track_manager import TrackManagerSettings
+from relloc.pipeline.estimates import Estimates
+from relloc.pipeline.output import fmt, markdown_table, prepare_out_dir, write_report
+from relloc.pipeline.team_report import (
+    RECORD_RATE_HZ,
+    SETTLE_S,
     build_summary,
     scenario_meta,
+    track_team,
     write_team_report,
 )
 from relloc.runtime.launcher import TeamLauncher, TeamSettings
@@ -56,35 +59,25 @@ def run_team(settings: TeamSettings) -> dict[str, Any]:
     """Run the team of ``settings`` and write its outputs; returns the summary."""
     out = prepare_out_dir(settings.out_dir)
     team = load_team(settings.scenario, settings.seed)
-    log = team.log
-    settings.faults.check_robots(log.robots)
-    t0, t1 = log.span
+    recording = team.recording
+    settings.faults.check_robots(recording.robots)
+    t0, t1 = recording.span
     tracker = TrackManagerSettings(filter=settings.filter_kind, init=InitPolicy())
-    run_settings = TeamRunSettings(runs=1, seed=settings.seed, tracker=tracker, quiet=True)
-    launcher = TeamLauncher(settings, log.robots, t1 - t0)
+    launcher = TeamLauncher(settings, recording.robots, t1 - t0)
     # the in-process reference runs in a process of its own while the team runs
     with ProcessPoolExecutor(max_workers=1, mp_context=launcher.context) as pool:
-        reference_run = pool.submit(
-            in_process_estimates, settings.scenario, settings.seed, tracker, run_settings
-        )
+        reference_run = pool.submit(in_process_estimates, settings.scenario, settings.seed, tracker)
         collected = launcher.run()
         in_process = reference_run.result()
-    distributed = assemble_estimates(collected, log.robots, settings.filter_kind)
-    meta = team_meta(team, settings, run_settings)
+    distributed = assemble_estimates(collected, recording.robots, settings.filter_kind)
+    meta = team_meta(team, settings, tracker)
     summary, results = build_summary(
-        [distributed],
-        [log],
-        settle_s=run_settings.settle_s,
-        record_rate_hz=run_settings.record_rate_hz,
-        meta=meta,
+        [distributed], [recording], settle_s=SETTLE_S, record_rate_hz=RECORD_RATE_HZ, meta=meta
     )
     reference, _ = build_summary(
-        [in_process],
-        [log],
-        settle_s=run_settings.settle_s,
-        record_rate_hz=run_settings.record_rate_hz,
+        [in_process], [recording], settle_s=SETTLE_S, record_rate_hz=RECORD_RATE_HZ
     )
-    per_robot = robot_messages(collected, log.robots)
+    per_robot = robot_messages(collected, recording.robots)
     clock_path = out / "clock.json"
     clock = json.loads(clock_path.read_text()) if clock_path.is_file() else {}
     agree = agreement(distributed, in_process)
@@ -94,7 +87,7 @@ def run_team(settings: TeamSettings) -> dict[str, Any]:
     )
     summary |= {
         "processes": {
-            "robots": len(log.robots),
+            "robots": len(recording.robots),
             "clock": 1,
             "kills": len(collected.kills),
             "restarts": len(collected.restarts),
@@ -110,14 +103,14 @@ def run_team(settings: TeamSettings) -> dict[str, Any]:
         "in_process": {"team": reference["team"], "pairs": reference["pairs"]},
         "agreement": agree,
         "faults": settings.faults.to_dict(),
-        "fault_outcomes": fault_outcomes(settings.faults, results[0], distributed, log),
+        "fault_outcomes": fault_outcomes(settings.faults, results[0], distributed, recording),
         "clock": clock,
     }
     write_team_report(
         out,
         summary,
         results,
-        title=f"relloc team up — {team.name} ({len(log.robots)} robot processes)",
+        title=f"relloc team up — {team.name} ({len(recording.robots)} robot processes)",
         arena=(team.scenario.arena.x, team.scenario.arena.y) if team.scenario else None,
         notes=[team.description] if team.description else (),
     )
@@ -126,33 +119,33 @@ def run_team(settings: TeamSettings) -> dict[str, Any]:
     return summary
 
 
-def team_meta(team: Team, settings: TeamSettings, run: TeamRunSettings) -> dict[str, Any]:
+def team_meta(team: Team, settings: TeamSettings, tracker: TrackManagerSettings) -> dict[str, Any]:
     """The settings part of ``summary.json`` (that of ``relloc run`` for a scenario)."""
     if team.scenario is not None:
-        return scenario_meta(team.scenario, run) | {"experiment": "team_up"}
-    log = team.log
+        return scenario_meta(team.scenario, seed=settings.seed, tracker=tracker) | {
+            "experiment": "team_up"
+        }
+    rec = team.recording
+    m = rec.measurements
     return {
         "experiment": "team_up",
         "scenario": team.name,
         "source": team.description,
         "seed": settings.seed,
-        "filter": run.tracker.filter,
-        "init": run.tracker.init.name,
-        "keep_window_s": run.tracker.keep_window_s,
-        "odometry_sigma": {r: log.odometry[i].sigma.tolist() for i, r in enumerate(log.robots)},
-        "sensor_sigma": {log.robots[0]: log.measurements.sigma[0].tolist()}
-        if log.measurements.size
-        else {},
+        "filter": tracker.filter,
+        "init": tracker.init.name,
+        "keep_window_s": tracker.keep_window_s,
+        "odometry_sigma": {r: rec.odometry[i].sigma.tolist() for i, r in enumerate(rec.robots)},
+        "sensor_sigma": {rec.robots[int(m.observer[0])]: m.sigma[0].tolist()} if m.size else {},
     }
 
 
-def in_process_estimates(
-    scenario: str, seed: int, tracker: TrackManagerSettings, run: TeamRunSettings
-) -> TeamEstimates:
-    """The in-process run's estimates on the same log (run 0 of ``relloc run --seed SEED``)."""
-    log = load_team(scenario, seed).log
+def in_process_estimates(scenario: str, seed: int, tracker: TrackManagerSettings) -> Estimates:
+    """The in-process run's estimates on the same recording (run 0 of ``relloc run --seed
+    SEED``)."""
+    recording = load_team(scenario, seed).recording
     rng = np.random.default_rng(run_seeds(seed)[1])
-    return track_log(log, tracker, record_rate_hz=run.record_rate_hz, rng=rng)
+    return track_team(recording, tracker, record_rate_hz=RECORD_RATE_HZ, rng=rng)
 
 
 def runtime_markdown(summary: dict[str, Any]) -> str:

@@ -3,8 +3,8 @@
 The relative motion model of seed 000 (Eq. 1) needs the *observed* robot's body velocities,
 which only that robot measures — so they come over the network. :class:`ReceivedOdometry`
 keeps the samples that arrived and answers zero-order-hold queries exactly like
-:meth:`relloc.sim.log.Odometry.held_at`: with a perfect network the node therefore feeds its
-filters the very same inputs as the in-process run. A lost sample means the previous one is
+:meth:`relloc.core.recording.Odometry.held_at`: with a perfect network the node therefore feeds
+its filters the very same inputs as the in-process run. A lost sample means the previous one is
 held longer; a sample that arrives after the node has already propagated past its time is
 counted ``late`` and not used (the past is not re-filtered).
 """
@@ -52,6 +52,19 @@ class ReceivedOdometry:
         idx = np.searchsorted(stamps, tq, side="right") - 1
         ok = idx >= 0
         out[ok] = np.asarray(self._u)[idx[ok]]
+        return out
+
+    def stamp_at(self, t: Array) -> Array:
+        """Stamp of the sample held at each time ``t`` (NaN before the first sample), as
+        :meth:`relloc.core.recording.Odometry.stamp_at`."""
+        tq = np.atleast_1d(np.asarray(t, dtype=float))
+        out = np.full(tq.size, np.nan)
+        if not self._t:
+            return out
+        stamps = np.asarray(self._t)
+        idx = np.searchsorted(stamps, tq, side="right") - 1
+        ok = idx >= 0
+        out[ok] = stamps[idx[ok]]
         return out
 
     def stamps_between(self, t0: float, t1: float, inclusive: bool = False) -> Array:

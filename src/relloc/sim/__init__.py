@@ -1,1 +1,1 @@
-"""Team simulator: scenarios, trajectories, sensors, simulate(scenario, rng) -> Log."""
+"""Team simulator: scenarios, trajectories, sensors, simulate(scenario, rng) -> Recording."""

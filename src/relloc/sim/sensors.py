@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from relloc.core.angles import wrap_angle
-from relloc.sim.log import relative_pose
+from relloc.core.recording import relative_pose
 from relloc.sim.scenario import SensorSpec
 
 Array = NDArray[np.float64]

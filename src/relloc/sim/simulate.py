@@ -1,4 +1,4 @@
-"""``simulate(scenario, rng) -> Log``: a team's truth, odometry and inter-robot measurements.
+"""``simulate(scenario, rng) -> Recording``: a team's truth, odometry and inter-robot measurements.
 
 1. Every robot's true motion is integrated exactly from its body-velocity commands on the
    propagation grid ``t_k = k Δt`` (Δt = 1 / propagation_rate_hz, seed 000 §5: 100 Hz); a
@@ -7,19 +7,21 @@
    per propagation step (the "noisy body velocities" the relative motion model consumes).
 3. Each observing robot measures each of its targets at its sensor's rate (seed 000: 10 Hz)
    from the ground truth with additive noise; targets outside the field of view or range are
-   not reported, so robots leave and re-enter view.
+   not reported, so robots leave and re-enter view. The readings are rows of kind
+   ``range_bearing_elevation`` of :class:`relloc.core.recording.Measurements`, sorted by
+   (time, observer, target).
 
 The random stream is consumed in a fixed order (odometry in robot order, then measurements in
 (observer, observed) pair order, noise drawn whether or not the target is visible), so a given
-``rng`` state always produces the same log.
+``rng`` state always produces the same recording.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from relloc.core.recording import GroundTruth, Odometry, Recording, measurement_rows
 from relloc.errors import ConfigError
-from relloc.sim.log import GroundTruth, Log, Measurements, Odometry
 from relloc.sim.scenario import Scenario
 from relloc.sim.sensors import measurement_times, sense
 from relloc.sim.trajectories import robot_motion
@@ -48,7 +50,7 @@ def _check_arena(scenario: Scenario, index: int, t: np.ndarray, poses: np.ndarra
         )
 
 
-def simulate(scenario: Scenario, rng: np.random.Generator) -> Log:
+def simulate(scenario: Scenario, rng: np.random.Generator) -> Recording:
     """Simulate ``scenario`` with randomness from ``rng`` (see module docstring)."""
     t = propagation_grid(scenario)
     truth: list[GroundTruth] = []
@@ -82,16 +84,17 @@ def simulate(scenario: Scenario, rng: np.random.Generator) -> Log:
     mo = np.concatenate(rows_obs)
     mc = np.concatenate(rows_tgt)
     order = np.lexsort((mc, mo, mt))
-    measurements = Measurements(
+    measurements = measurement_rows(
+        "range_bearing_elevation",
         t=mt[order],
         observer=mo[order],
-        observed=mc[order],
-        z=np.concatenate(rows_z)[order],
+        target=mc[order],
+        value=np.concatenate(rows_z)[order],
         sigma=np.concatenate(rows_sigma)[order],
     )
-    return Log(
+    return Recording(
         robots=names,
-        kinds=tuple(r.kind for r in scenario.robots),
+        platforms=tuple(r.kind for r in scenario.robots),
         truth=tuple(truth),
         odometry=tuple(odometry),
         measurements=measurements,

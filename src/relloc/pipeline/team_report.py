@@ -1,0 +1,477 @@
+"""The team report of relative localisation: score a team's estimates, pool runs, write it out.
+
+``relloc run`` (:mod:`relloc.experiments.team_run`) and ``relloc team up``
+(:mod:`relloc.runtime.team`) both track every robot a team observes with one
+:class:`~relloc.estimators.track_manager.TrackManager` per observing robot
+(:func:`track_team`, through :func:`relloc.pipeline.replay.replay`), score each run's
+:class:`~relloc.pipeline.estimates.Estimates` with :func:`relloc.pipeline.evaluation.evaluate`
+(:func:`score_run`), pool the runs into ``summary.json`` (:func:`summarise`,
+:func:`build_summary`) and write ``report.md`` with figures (:func:`write_team_report`).
+
+Summary keys (``summary.json``), per pair under ``pairs["observer->observed"]``, computed
+over all runs on the *steady-state* samples (track age ≥ ``settle_s``):
+
+- ``position_rmse_m``, ``yaw_rmse_rad``, ``rmse`` per state ``x, y, z, phi``;
+- ``within_3sigma_percent`` per state: share of samples with ``|e_i| ≤ 3σ_i``;
+- ``anees`` (ideal 1) and ``nees_percent_beyond`` the single-run bound ``χ²(4, 0.95)``
+  (seed 000 Table 4; about 5 % for a consistent filter);
+- ``nees_run_average_in_band_percent``: share of recording times at which the NEES averaged
+  over the ``N`` runs lies in the two-sided 95 % band of such an average (``band``; needs
+  ``N ≥ 2``; about 95 % for a consistent filter) — :func:`relloc.pipeline.evaluation.
+  nees_band_check`;
+- ``anis`` (NIS/3, ideal 1) and ``nis_percent_beyond`` ``χ²(3, 0.95)``;
+- ``max_condition_log10`` of ``P``, ``R`` and ``S`` (seed 000 §7.3; > 6 is ill-conditioned);
+- ``track_events``: created / deleted / re-created counts over all runs.
+
+``team`` holds the same accuracy and consistency numbers pooled over every pair
+(:func:`relloc.pipeline.evaluation.accuracy_and_consistency`); ``rows_not_used`` (present only
+when some were) counts the readings the trackers could not use, by reason.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from relloc.core.recording import Recording
+from relloc.errors import ConfigError
+from relloc.estimators.track_manager import (
+    FRAME,
+    MEASUREMENT_DOF,
+    TrackManagerSettings,
+    managers_for,
+)
+from relloc.metrics.conditioning import ILL_CONDITIONED_LOG10
+from relloc.pipeline.contract import TrackEvent
+from relloc.pipeline.estimates import Estimates
+from relloc.pipeline.evaluation import (
+    SeriesEvaluation,
+    accuracy_and_consistency,
+    evaluate,
+    nees_band_check,
+    run_averaged_nees,
+)
+from relloc.pipeline.frames import frame
+from relloc.pipeline.output import (
+    figure_md,
+    markdown_table,
+    prepare_out_dir,
+    save_figure,
+    write_report,
+    write_summary,
+)
+from relloc.pipeline.replay import replay
+from relloc.sim.scenario import Scenario
+
+Array = NDArray[np.float64]
+
+NEES_DOF = frame(FRAME).dim
+NIS_DOF = MEASUREMENT_DOF
+SETTLE_S = 5.0
+"""Default track age (s) after which samples count as steady state."""
+RECORD_RATE_HZ = 10.0
+"""Default rate (Hz) at which beliefs are recorded."""
+
+
+@dataclass(frozen=True, kw_only=True)
+class RunResult:
+    """One run scored: an evaluation per (observer, observed) series, the track events, the
+    rows the trackers did not use (by reason) and — run 0 only — the true planar paths
+    ``name -> (K, 4)`` for the trajectory figure."""
+
+    evaluations: tuple[SeriesEvaluation, ...]
+    events: tuple[TrackEvent, ...]
+    rows_not_used: Mapping[str, int] = field(default_factory=dict)
+    paths: dict[str, Array] | None = None
+
+
+def track_team(
+    recording: Recording,
+    tracker: TrackManagerSettings,
+    *,
+    record_rate_hz: float = RECORD_RATE_HZ,
+    rng: np.random.Generator | None = None,
+) -> Estimates:
+    """Every observing robot's tracks over the whole recording (one manager per observer)."""
+    managers = managers_for(recording, tracker, rng=rng)
+    if not managers:
+        raise ConfigError(
+            f"recording {recording.source!r}: no robot measures another, so there is nothing to "
+            "track"
+        )
+    return replay(recording, managers, record_rate_hz=record_rate_hz)
+
+
+def score_run(estimates: Estimates, recording: Recording, *, keep_paths: bool = False) -> RunResult:
+    """Score every series of one run; ``keep_paths`` adds the true paths (10 Hz) for figures."""
+    paths = None
+    if keep_paths:
+        truth = recording.require_truth("the trajectory figure")
+        t0, t1 = recording.span
+        grid = np.linspace(t0, t1, max(2, int((t1 - t0) * 10) + 1))
+        paths = {name: truth[i].at(grid) for i, name in enumerate(recording.robots)}
+    return RunResult(
+        evaluations=evaluate(estimates, recording),
+        events=estimates.events,
+        rows_not_used=dict(estimates.counts),
+        paths=paths,
+    )
+
+
+# --------------------------------------------------------------------------- pooling
+
+
+def _grid_index(t: Array, t0: float, rate: float) -> NDArray[np.int64]:
+    return np.rint((t - t0) * rate).astype(np.int64)
+
+
+def _runs_of(results: Sequence[RunResult], label: str) -> list[SeriesEvaluation]:
+    """The evaluations of one series over every run, in run order."""
+    return [e for r in results for e in r.evaluations if e.label == label]
+
+
+def _pair_summary(
+    runs: Sequence[SeriesEvaluation],
+    events: Sequence[TrackEvent],
+    *,
+    settle_s: float,
+    rate: float,
+) -> dict[str, Any]:
+    first = runs[0]
+    out = {
+        "observer": first.owner,
+        "observed": first.subject,
+        "observed_kind": first.platform,
+        **accuracy_and_consistency(runs, settle_s=settle_s),
+    }
+    if len(runs) >= 2:
+        band = nees_band_check(runs, rate_hz=rate, settle_s=settle_s)
+        out["nees_run_average_in_band_percent"] = band["in_band_percent"]
+        out["nees_run_average_band"] = band["band"]
+    out["max_condition_log10"] = {
+        "P": max((float(np.max(r.cond_p)) for r in runs if r.cond_p.size), default=float("nan")),
+        "R": max((float(np.max(r.cond_r)) for r in runs if r.cond_r.size), default=float("nan")),
+        "S": max((float(np.max(r.cond_s)) for r in runs if r.cond_s.size), default=float("nan")),
+    }
+    kinds = [e.kind for e in events if (e.owner, e.subject) == (first.owner, first.subject)]
+    out["track_events"] = {k: kinds.count(k) for k in ("created", "deleted", "recreated")}
+    return out
+
+
+def summarise(
+    results: Sequence[RunResult],
+    *,
+    settle_s: float,
+    record_rate_hz: float,
+    meta: Mapping[str, Any] | None = None,
+) -> dict[str, Any]:
+    """Pool runs into the ``summary.json`` dictionary (keys: module docstring)."""
+    if not results:
+        raise ConfigError("summarise: no runs to summarise")
+    labels = sorted({e.label for r in results for e in r.evaluations})
+    events = [e for r in results for e in r.events]
+    pairs = {
+        lab: _pair_summary(_runs_of(results, lab), events, settle_s=settle_s, rate=record_rate_hz)
+        for lab in labels
+    }
+    everything = [e for r in results for e in r.evaluations]
+    summary = {
+        **(dict(meta) if meta else {}),
+        "runs": len(results),
+        "settle_s": settle_s,
+        "record_rate_hz": record_rate_hz,
+        "pairs": pairs,
+        "team": accuracy_and_consistency(everything, settle_s=settle_s),
+        "events_run0": [
+            {"t": e.t, "observer": e.owner, "observed": e.subject, "kind": e.kind}
+            for e in results[0].events
+        ],
+    }
+    not_used: dict[str, int] = {}
+    for r in results:
+        for reason, n in r.rows_not_used.items():
+            not_used[reason] = not_used.get(reason, 0) + n
+    if any(not_used.values()):
+        summary["rows_not_used"] = not_used
+    return summary
+
+
+def build_summary(
+    estimates: Sequence[Estimates],
+    recordings: Sequence[Recording],
+    *,
+    settle_s: float = SETTLE_S,
+    record_rate_hz: float = RECORD_RATE_HZ,
+    meta: Mapping[str, Any] | None = None,
+) -> tuple[dict[str, Any], list[RunResult]]:
+    """Score estimates collected elsewhere (one :class:`Estimates` per run, with the recording
+    holding that run's ground truth) and pool them; returns ``(summary, results)`` so the
+    results can also be passed to :func:`write_team_report`."""
+    if len(estimates) != len(recordings):
+        raise ConfigError(
+            f"build_summary: {len(estimates)} estimate sets but {len(recordings)} recordings"
+        )
+    results = [
+        score_run(e, rec, keep_paths=i == 0)
+        for i, (e, rec) in enumerate(zip(estimates, recordings, strict=True))
+    ]
+    summary = summarise(results, settle_s=settle_s, record_rate_hz=record_rate_hz, meta=meta)
+    return summary, results
+
+
+# --------------------------------------------------------------------------- report
+
+
+def summary_rows(summary: Mapping[str, Any]) -> tuple[list[str], list[list[Any]]]:
+    """Headers and rows of the per-robot accuracy/consistency table (report and terminal)."""
+    headers = [
+        "pair",
+        "kind",
+        "pos RMSE m",
+        "yaw RMSE rad",
+        "min in ±3σ %",
+        "ANEES",
+        "NEES>χ²₉₅ %",
+        "avg NEES in band %",
+        "ANIS",
+        "NIS>χ²₉₅ %",
+    ]
+    rows = []
+    items = [*summary["pairs"].items(), ("team (all pairs)", summary["team"])]
+    for label, s in items:
+        within = s.get("within_3sigma_percent", {})
+        rows.append(
+            [
+                label,
+                s.get("observed_kind", ""),
+                s["position_rmse_m"],
+                s["yaw_rmse_rad"],
+                min(within.values()) if within else None,
+                s["anees"],
+                s["nees_percent_beyond"],
+                s.get("nees_run_average_in_band_percent"),
+                s["anis"],
+                s["nis_percent_beyond"],
+            ]
+        )
+    return headers, rows
+
+
+def write_figures(
+    out_dir: Path,
+    results: Sequence[RunResult],
+    *,
+    settle_s: float,
+    record_rate_hz: float,
+    arena: tuple[tuple[float, float], tuple[float, float]] | None = None,
+) -> list[tuple[str, str]]:
+    """Write the figures of a team run; returns ``(file, caption)`` pairs in report order."""
+    from relloc.metrics.errors import rmse
+    from relloc.plotting.consistency import plot_chi2_series, plot_conditioning
+    from relloc.plotting.errors import (
+        plot_pose_errors_with_bounds,
+        plot_robot_errors,
+        plot_trajectories,
+    )
+    from relloc.plotting.setup import pyplot
+
+    plt = pyplot()
+    figures: list[tuple[str, str]] = []
+    run0 = results[0]
+    n_runs = len(results)
+    for p in run0.evaluations:
+        fig, axes = plt.subplots(4, 1, figsize=(7, 7), sharex=True)
+        plot_pose_errors_with_bounds(axes, p.t, p.error, p.sigma)
+        steady = p.age >= settle_s
+        if steady.any():  # scale to the steady state; the start-up transient is clipped
+            for i, ax in enumerate(axes):
+                half = 1.3 * float(
+                    np.max(np.maximum(3 * p.sigma[steady, i], np.abs(p.error[steady, i])))
+                )
+                ax.set_ylim(-half, half)
+        axes[0].set_title(f"{p.label} ({p.platform}): error and ±3σ, run 0")
+        name = save_figure(fig, out_dir, f"error_bounds_{p.subject}")
+        figures.append(
+            (
+                name,
+                f"Error of {p.label} with the filter's ±3σ bounds (run 0); axes scaled to the "
+                "steady state, so the start-up transient is clipped.",
+            )
+        )
+
+    series = {}
+    labels = [p.label for p in run0.evaluations]
+    subjects = [p.subject for p in run0.evaluations]
+    for lab, subject in zip(labels, subjects, strict=True):
+        runs = _runs_of(results, lab)
+        t0 = min(float(r.t[0]) for r in runs if r.t.size)
+        n = max(int(_grid_index(r.t, t0, record_rate_hz).max()) + 1 for r in runs if r.t.size)
+        table = np.full((len(runs), n, 4), np.nan)
+        for k, r in enumerate(runs):
+            table[k, _grid_index(r.t, t0, record_rate_hz)] = r.error
+        series[subject] = (t0 + np.arange(n) / record_rate_hz, rmse(table, axis=0))
+    fig, axes = plt.subplots(4, 1, figsize=(7, 7), sharex=True)
+    plot_robot_errors(axes, series)
+    axes[0].set_title(f"RMSE over {n_runs} run(s), every observed robot")
+    figures.append(
+        (
+            save_figure(fig, out_dir, "errors_all"),
+            f"RMSE over {n_runs} Monte-Carlo run(s) of every observed robot.",
+        )
+    )
+
+    fig, axes = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
+    for i, (lab, subject) in enumerate(zip(labels, subjects, strict=True)):
+        runs = _runs_of(results, lab)
+        if n_runs >= 2:
+            t, avg, n = run_averaged_nees(runs, rate_hz=record_rate_hz, settle_s=settle_s)
+        else:
+            keep = runs[0].age >= settle_s
+            t, avg, n = runs[0].t[keep], runs[0].nees[keep], 1
+        plot_chi2_series(axes[0], t, avg, NEES_DOF, n_runs=n, label=subject, show_bound=i == 0)
+    p0 = run0.evaluations[0]
+    plot_chi2_series(axes[1], p0.update_t, p0.nis, NIS_DOF, label=f"NIS {p0.subject}")
+    axes[0].set_ylabel("NEES" + (" (run average)" if n_runs >= 2 else ""))
+    axes[1].set_ylabel("NIS (run 0)")
+    axes[1].set_xlabel("time (s)")
+    figures.append(
+        (
+            save_figure(fig, out_dir, "nees_nis"),
+            "NEES (steady state) with its 95 % χ² region, and the NIS of one pair with "
+            "χ²(3, 0.95).",
+        )
+    )
+
+    fig, ax = plt.subplots(figsize=(7, 3.5))
+    plot_conditioning(
+        ax,
+        {
+            f"P {p0.subject}": (p0.t, p0.cond_p),
+            f"R {p0.subject}": (p0.update_t, p0.cond_r),
+            f"S {p0.subject}": (p0.update_t, p0.cond_s),
+        },
+        threshold=ILL_CONDITIONED_LOG10,
+    )
+    figures.append(
+        (
+            save_figure(fig, out_dir, "conditioning"),
+            f"Conditioning log10(λmax/λmin) of P, R and S for {p0.label} (run 0).",
+        )
+    )
+
+    if run0.paths:
+        fig, ax = plt.subplots(figsize=(5, 8))
+        plot_trajectories(ax, run0.paths, arena=arena)
+        ax.set_title("true paths (run 0)")
+        figures.append((save_figure(fig, out_dir, "trajectories"), "True paths of the team."))
+    return figures
+
+
+def report_markdown(
+    summary: Mapping[str, Any],
+    figures: Sequence[tuple[str, str]],
+    *,
+    title: str,
+    notes: Sequence[str] = (),
+) -> str:
+    """``report.md``: settings, the per-robot table, track events, notes and figures."""
+    headers, rows = summary_rows(summary)
+    lines = [f"# {title}", ""]
+    for key in (
+        "scenario",
+        "seed",
+        "runs",
+        "filter",
+        "init",
+        "yaw_bank_components",
+        "keep_window_s",
+        "settle_s",
+    ):
+        if key in summary:
+            lines.append(f"- **{key}**: {summary[key]}")
+    if "odometry_sigma" in summary:
+        lines.append("- **odometry noise σ (v_x, v_y, v_z, ω_z)** per robot:")
+        for name, sig in summary["odometry_sigma"].items():
+            lines.append(f"  - {name}: {sig}")
+    if "sensor_sigma" in summary:
+        lines.append(f"- **sensor σ (r, θ, α)**: {summary['sensor_sigma']}")
+    lines += [
+        "",
+        "## Accuracy and consistency (steady state, all runs)",
+        "",
+        markdown_table(headers, rows),
+        "",
+        f"Steady state = samples at least {summary.get('settle_s')} s after a track was "
+        "(re)created. A consistent filter has ANEES ≈ 1 and ANIS ≈ 1, about 5 % of NEES "
+        "(NIS) values above χ²(4, 0.95) = 9.49 (χ²(3, 0.95) = 7.81), and its run-averaged "
+        "NEES inside the 95 % band about 95 % of the time. Samples of one run are correlated "
+        "in time, so these shares fluctuate more than independent draws would.",
+        "",
+        "## Track events (run 0)",
+        "",
+    ]
+    ev = summary.get("events_run0", [])
+    if ev:
+        lines.append(
+            markdown_table(
+                ["t (s)", "observer", "observed", "event"],
+                [[e["t"], e["observer"], e["observed"], e["kind"]] for e in ev],
+            )
+        )
+    else:
+        lines.append("No track events.")
+    if notes:
+        lines += ["", "## Notes", ""] + [f"- {n}" for n in notes]
+    lines += ["", "## Figures", ""]
+    for name, caption in figures:
+        lines.append(figure_md(name, caption))
+    return "\n".join(lines)
+
+
+def write_team_report(
+    out_dir: Path,
+    summary: Mapping[str, Any],
+    results: Sequence[RunResult],
+    *,
+    title: str = "relloc run",
+    arena: tuple[tuple[float, float], tuple[float, float]] | None = None,
+    notes: Sequence[str] = (),
+) -> None:
+    """Write ``summary.json``, the figures and ``report.md`` into ``out_dir``."""
+    out = prepare_out_dir(out_dir)
+    write_summary(out, summary)
+    figures = write_figures(
+        out,
+        results,
+        settle_s=float(summary["settle_s"]),
+        record_rate_hz=float(summary["record_rate_hz"]),
+        arena=arena,
+    )
+    write_report(out, report_markdown(summary, figures, title=title, notes=notes))
+
+
+def scenario_meta(
+    scenario: Scenario, *, seed: int, tracker: TrackManagerSettings
+) -> dict[str, Any]:
+    """The settings part of ``summary.json`` for a simulated scenario."""
+    observers = [r for r in scenario.robots if r.sensor is not None]
+    return {
+        "experiment": "run",
+        "scenario": scenario.name,
+        "seed": seed,
+        "filter": tracker.filter,
+        "init": tracker.init.name,
+        "keep_window_s": tracker.keep_window_s,
+        "yaw_bank_components": tracker.yaw_bank.n_components if tracker.yaw_bank else 0,
+        "pseudo_linear_covariance": tracker.pseudo_linear_covariance,
+        "duration_s": scenario.duration_s,
+        "propagation_rate_hz": scenario.propagation_rate_hz,
+        "odometry_sigma": {r.name: list(r.odometry.sigma_for(r.kind)) for r in scenario.robots},
+        "sensor_sigma": {r.name: list(r.sensor.sigma) for r in observers if r.sensor},
+        "sensor_rate_hz": {r.name: r.sensor.rate_hz for r in observers if r.sensor},
+    }
