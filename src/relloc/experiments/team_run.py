@@ -276,6 +276,12 @@ def summarise(
     """Pool Monte-Carlo runs into the ``summary.json`` dictionary (keys: module docstring)."""
     if not results:
         raise ConfigError("summarise: no runs to summarise")
+    if not any(r.pairs for r in results):
+        raise ConfigError(
+            "no results: no observing robot measured another robot in any run, so nothing was "
+            "tracked (is the run shorter than one sensor period, 1/rate_hz, or is no target "
+            "ever in view?)"
+        )
     labels = sorted({p.label for r in results for p in r.pairs})
     by_pair = {lab: [p for r in results for p in r.pairs if p.label == lab] for lab in labels}
     events = [e for r in results for e in r.events]
