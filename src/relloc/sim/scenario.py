@@ -83,9 +83,10 @@ MIN_SENSOR_SIGMA = 1e-6
 
 _ROBOT_NAME = re.compile(ROBOT_NAME_PATTERN)
 _BARE_KEY = re.compile("[A-Za-z0-9_-]{1,64}")  # a TOML bare key, short enough to print as is
-# Per-channel bound of a body velocity (v_x, v_y, v_z, ω_z) and of an initial pose (x, y, ψ).
+# Per-component bounds of a body velocity (v_x, v_y, v_z, ω_z) and of an initial pose (x, y, ψ).
 _CHANNEL_LIMITS = (MAX_SPEED_M_S, MAX_SPEED_M_S, MAX_SPEED_M_S, MAX_YAW_RATE_RAD_S)
 _POSE_LIMITS = (MAX_EXTENT_M, MAX_EXTENT_M, MAX_ANGLE_RAD)
+_XY_LIMITS = (MAX_EXTENT_M, MAX_EXTENT_M)  # a way-point; an arena interval (lower, upper)
 
 _SHORT = reprlib.Repr()
 _SHORT.maxstring = _SHORT.maxother = 60
@@ -177,7 +178,7 @@ class Arena:
 
     def __post_init__(self) -> None:
         for axis in ("x", "y", "z"):
-            lo, hi = _vector(axis, getattr(self, axis), 2, low=-MAX_EXTENT_M, high=MAX_EXTENT_M)
+            lo, hi = _bounded(axis, getattr(self, axis), _XY_LIMITS)
             if not lo < hi:
                 raise ConfigError(f"{axis}: lower bound {lo:g} must be below upper bound {hi:g}")
             _set(self, axis, (lo, hi))
@@ -321,8 +322,7 @@ class WaypointMotion:
             )
         if self.closed and len(pts) < 3:
             raise ConfigError("points: a closed path needs at least three points")
-        extent = {"low": -MAX_EXTENT_M, "high": MAX_EXTENT_M}
-        points = tuple(_vector(f"points[{i}]", p, 2, **extent) for i, p in enumerate(pts))
+        points = tuple(_bounded(f"points[{i}]", p, _XY_LIMITS) for i, p in enumerate(pts))
         _check_segments(points, closed=self.closed)
         _set(self, "points", points)
         _set(
@@ -362,8 +362,7 @@ class VelocityMotion:
             self, "amplitude", _bounded("amplitude", self.amplitude, _CHANNEL_LIMITS, signed=False)
         )
         _set(self, "period_s", _vector("period_s", self.period_s, 4, low=MIN_PERIOD_S))
-        angle = {"low": -MAX_ANGLE_RAD, "high": MAX_ANGLE_RAD}
-        _set(self, "phase_rad", _vector("phase_rad", self.phase_rad, 4, **angle))
+        _set(self, "phase_rad", _bounded("phase_rad", self.phase_rad, (MAX_ANGLE_RAD,) * 4))
 
 
 Motion = WaypointMotion | VelocityMotion
