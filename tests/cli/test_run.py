@@ -112,3 +112,54 @@ def test_bad_options_exit_2_naming_the_option(tmp_path, capsys):
     ):
         assert main(["run", "--out", out, "--quiet", *argv]) == 2
         assert message in capsys.readouterr().err
+
+
+def test_run_too_short_to_measure_exits_2_with_a_clear_message(tmp_path, capsys):
+    out = tmp_path / "o"
+    argv = ["run", "--out", str(out), "--runs", "2", "--executor", "serial", "--quiet"]
+    assert main([*argv, "--duration", "0.05"]) == 2
+    err = capsys.readouterr().err
+    assert "no results: no observing robot measured another robot in any run" in err
+    assert "Traceback" not in err and not (out / "summary.json").exists()
+
+
+def test_run_shorter_than_the_settle_time_says_so(tmp_path, capsys):
+    out = tmp_path / "o"
+    argv = ["run", "--out", str(out), "--runs", "1", "--executor", "serial", "--quiet"]
+    assert main([*argv, "--duration", "1"]) == 0
+    assert "no steady-state results: no track reached the settle time (5 s)" in (
+        capsys.readouterr().err
+    )
+    assert json.loads((out / "summary.json").read_text())["team"]["samples"] == 0
+
+
+def test_broken_scenario_files_exit_2_naming_file_and_field(tmp_path, capsys):
+    cases = {
+        "latin1.toml": (SMALL.replace('"drone"', '"dr\xf6ne"').encode("latin-1"), "not UTF-8"),
+        "deep.toml": (("x = " + "[" * 5000 + "]" * 5000 + "\n").encode(), "nested too deeply"),
+        "slash.toml": (SMALL.replace('"drone"', '"a/b"').encode(), "robots[1].name: must match"),
+        "long.toml": (
+            SMALL.replace("duration_s = 8.0", "duration_s = 1e308").encode(),
+            "(MAX_SIMULATED_STEPS)",
+        ),
+        "view.toml": (
+            SMALL.replace("max_range = 12.0", "max_range = 60.0\nmin_range = 50.0").encode(),
+            "initial guesses are drawn between the largest min_range (50 m)",
+        ),
+    }
+    for name, (content, message) in cases.items():
+        path = tmp_path / name
+        path.write_bytes(content)
+        code = main(["run", str(path), "--out", str(tmp_path / "o"), "--runs", "1", "--quiet"])
+        err = capsys.readouterr().err
+        assert code == 2, (name, err)
+        assert str(path) in err or name == "view.toml", err
+        assert message in err, (name, err)
+
+
+def test_out_below_a_file_exits_2(tmp_path, capsys):
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    argv = ["run", "--out", str(blocker / "sub"), "--runs", "1", "--executor", "serial"]
+    assert main([*argv, "--quiet", "--duration", "1"]) == 2
+    assert f"--out: cannot create {blocker / 'sub'}" in capsys.readouterr().err

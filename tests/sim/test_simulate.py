@@ -119,3 +119,13 @@ def test_leaving_the_arena_is_a_config_error_naming_the_robot():
 def test_default_trajectories_stay_in_the_arena_for_the_full_run():
     rec = simulate(default_scenario(), np.random.default_rng(2))
     assert rec.measurements.size > 0.9 * 4 * 600
+
+
+def test_measurements_stay_inside_the_simulated_span():
+    """640.5 Hz × 1 s rounds to 640 steps, so the grid ends at 0.99922 s, before the 10 Hz
+    sensor's epoch at 1 s; that epoch is not simulated (it used to make the log query truth
+    outside its span)."""
+    sc = dataclasses.replace(_short_default(1.0), propagation_rate_hz=640.5)
+    rec = simulate(sc, np.random.default_rng(0))
+    assert rec.truth is not None and rec.truth[0].t[-1] < 1.0
+    np.testing.assert_allclose(np.unique(rec.measurements.t), np.arange(1, 10) / 10.0)

@@ -12,11 +12,14 @@ figures. A bad scenario file is a configuration error (exit code 2) naming the f
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
+    from relloc.estimators.initialisation import FieldOfView
     from relloc.estimators.yaw_bank import YawBankSettings
+    from relloc.sim.scenario import Scenario
 
 DEFAULT_OUT = Path("out/run")
 
@@ -86,10 +89,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
 def run(args: argparse.Namespace) -> int:
     import dataclasses
 
-    import numpy as np
-
     from relloc.errors import ConfigError
-    from relloc.estimators.initialisation import FieldOfView, InitPolicy
+    from relloc.estimators.initialisation import InitPolicy
     from relloc.estimators.track_manager import TrackManagerSettings
     from relloc.experiments.team_run import TeamRunSettings, run_team
     from relloc.pipeline.team_report import summary_rows
@@ -101,18 +102,7 @@ def run(args: argparse.Namespace) -> int:
             scenario = dataclasses.replace(scenario, duration_s=args.duration)
         except ConfigError as exc:
             raise ConfigError(f"--duration: {exc}") from None
-    # Arbitrary initial guesses are drawn inside the narrowest sensor view, out to the
-    # shortest maximum range (capped by the arena's diagonal when a sensor is unlimited).
-    sensors = [r.sensor for r in scenario.robots if r.sensor is not None]
-    a = scenario.arena
-    diagonal = float(np.hypot(a.x[1] - a.x[0], a.y[1] - a.y[0]))
-    fov = FieldOfView(
-        fov_deg=min(s.fov_deg for s in sensors),
-        range_limits=(
-            max(s.min_range for s in sensors),
-            min(min(s.max_range for s in sensors), diagonal),
-        ),
-    )
+    fov = _guess_view(scenario)
     settings = TeamRunSettings(
         runs=args.runs,
         seed=args.seed,
@@ -126,6 +116,13 @@ def run(args: argparse.Namespace) -> int:
         quiet=args.quiet,
     )
     summary, _ = run_team(scenario, settings, args.out)
+    if summary["team"]["samples"] == 0:
+        print(
+            f"relloc: note: no steady-state results: no track reached the settle time "
+            f"({settings.settle_s:g} s) in the {scenario.duration_s:g} s run, so accuracy and "
+            "consistency are NaN; run longer",
+            file=sys.stderr,
+        )
     if not args.quiet:
         from rich.console import Console
         from rich.table import Table
@@ -149,6 +146,29 @@ def run(args: argparse.Namespace) -> int:
         console.print(table)
         console.print(f"wrote {args.out / 'summary.json'} and {args.out / 'report.md'}")
     return 0
+
+
+def _guess_view(scenario: Scenario) -> FieldOfView:
+    """Where arbitrary initial guesses are drawn: inside the narrowest sensor view, out to the
+    shortest maximum range (capped by the arena's diagonal when a sensor is unlimited)."""
+    import numpy as np
+
+    from relloc.errors import ConfigError
+    from relloc.estimators.initialisation import FieldOfView
+
+    sensors = [r.sensor for r in scenario.robots if r.sensor is not None]
+    a = scenario.arena
+    diagonal = float(np.hypot(a.x[1] - a.x[0], a.y[1] - a.y[0]))
+    near = max(s.min_range for s in sensors)
+    far = min(min(s.max_range for s in sensors), diagonal)
+    try:
+        return FieldOfView(fov_deg=min(s.fov_deg for s in sensors), range_limits=(near, far))
+    except ConfigError as exc:
+        raise ConfigError(
+            f"robots[*].sensor.min_range, max_range, arena: initial guesses are drawn between "
+            f"the largest min_range ({near:g} m) and the smallest max_range or arena diagonal "
+            f"({far:g} m), which leaves no room ({exc})"
+        ) from None
 
 
 def _yaw_bank(n_components: int) -> YawBankSettings | None:

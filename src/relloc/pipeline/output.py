@@ -39,7 +39,10 @@ def prepare_out_dir(out_dir: Path | str) -> Path:
     path = Path(out_dir)
     if path.exists() and not path.is_dir():
         raise ConfigError(f"--out: {path} exists and is not a folder")
-    path.mkdir(parents=True, exist_ok=True)
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ConfigError(f"--out: cannot create {path} ({exc.strerror or exc})") from None
     return path
 
 

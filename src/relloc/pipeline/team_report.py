@@ -173,6 +173,12 @@ def summarise(
     """Pool runs into the ``summary.json`` dictionary (keys: module docstring)."""
     if not results:
         raise ConfigError("summarise: no runs to summarise")
+    if not any(r.evaluations for r in results):
+        raise ConfigError(
+            "no results: no observing robot measured another robot in any run, so nothing was "
+            "tracked (is the run shorter than one sensor period, 1/rate_hz, or is no target "
+            "ever in view?)"
+        )
     labels = sorted({e.label for r in results for e in r.evaluations})
     events = [e for r in results for e in r.events]
     pairs = {

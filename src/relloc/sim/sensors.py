@@ -68,10 +68,13 @@ def sense(
 
 
 def measurement_times(rate_hz: float, duration_s: float) -> Array:
-    """Sensor epochs ``k / rate`` for ``k = 1, 2, …`` up to ``duration_s`` (inclusive).
+    """Sensor epochs ``k / rate`` for ``k = 1, 2, …`` up to ``duration_s`` (inclusive, to within
+    the 1e-9 s that :meth:`relloc.core.recording.GroundTruth.at` allows).
 
     The first epoch is one period after the start, so every measurement follows at least one
-    odometry interval.
+    odometry interval. The count tolerates round-off in ``duration_s · rate_hz``; at a slow
+    rate that tolerance could reach past ``duration_s``, so epochs beyond it are dropped.
     """
     n = int(np.floor(duration_s * rate_hz + 1e-9))
-    return np.arange(1, n + 1) / rate_hz
+    epochs = np.arange(1, n + 1) / rate_hz
+    return epochs[epochs <= duration_s + 1e-9]

@@ -2,7 +2,8 @@
 
 1. Every robot's true motion is integrated exactly from its body-velocity commands on the
    propagation grid ``t_k = k Δt`` (Δt = 1 / propagation_rate_hz, seed 000 §5: 100 Hz); a
-   trajectory that leaves the arena is a :class:`ConfigError` naming the robot and the time.
+   trajectory that leaves the arena or is not finite is a :class:`ConfigError` naming the
+   robot and the time.
 2. Odometry = the held command plus white Gaussian noise of the robot's per-channel σ, one draw
    per propagation step (the "noisy body velocities" the relative motion model consumes).
 3. Each observing robot measures each of its targets at its sensor's rate (seed 000: 10 Hz)
@@ -28,14 +29,20 @@ from relloc.sim.trajectories import robot_motion
 
 
 def propagation_grid(scenario: Scenario) -> np.ndarray:
-    """The odometry/truth time grid ``0, Δt, …, T`` of a scenario."""
-    n = round(scenario.duration_s * scenario.propagation_rate_hz)
-    if n < 1:
-        raise ConfigError("duration_s: shorter than one propagation step")
-    return np.arange(n + 1) / scenario.propagation_rate_hz
+    """The odometry/truth time grid ``0, Δt, …, NΔt`` of a scenario (``N = scenario.steps``)."""
+    return np.arange(scenario.steps + 1) / scenario.propagation_rate_hz
 
 
-def _check_arena(scenario: Scenario, index: int, t: np.ndarray, poses: np.ndarray) -> None:
+def _check_motion(scenario: Scenario, index: int, t: np.ndarray, poses: np.ndarray) -> None:
+    """A robot's true poses must be finite and inside the arena; else ConfigError naming it."""
+    name = scenario.robots[index].name
+    finite = np.all(np.isfinite(poses), axis=1)
+    if not finite.all():
+        k = int(np.argmin(finite))
+        raise ConfigError(
+            f"robots[{index}].motion: robot {name!r} has no defined pose at t={t[k]:.2f} s "
+            "(e.g. a way-point path that doubles back on itself has no heading at the turn)"
+        )
     arena = scenario.arena
     lo = np.array([arena.x[0], arena.y[0], arena.z[0]]) - 1e-9
     hi = np.array([arena.x[1], arena.y[1], arena.z[1]]) + 1e-9
@@ -44,7 +51,7 @@ def _check_arena(scenario: Scenario, index: int, t: np.ndarray, poses: np.ndarra
         k = int(np.argmax(outside))
         x, y, z = poses[k, :3]
         raise ConfigError(
-            f"robots[{index}].motion: robot {scenario.robots[index].name!r} leaves the arena at "
+            f"robots[{index}].motion: robot {name!r} leaves the arena at "
             f"t={t[k]:.2f} s (x={x:.2f}, y={y:.2f}, z={z:.2f}); arena x={arena.x}, y={arena.y}, "
             f"z={arena.z}"
         )
@@ -57,7 +64,7 @@ def simulate(scenario: Scenario, rng: np.random.Generator) -> Recording:
     odometry: list[Odometry] = []
     for i, spec in enumerate(scenario.robots):
         poses, commands = robot_motion(spec, t)
-        _check_arena(scenario, i, t, poses)
+        _check_motion(scenario, i, t, poses)
         truth.append(GroundTruth(t=t, pose=poses, where=f"truth[{spec.name}]"))
         sigma = np.asarray(spec.odometry.sigma_for(spec.kind))
         noisy = commands + sigma * rng.standard_normal(commands.shape)
@@ -72,7 +79,7 @@ def simulate(scenario: Scenario, rng: np.random.Generator) -> Recording:
         sensor = scenario.robots[i].sensor
         if sensor is None:  # pairs() only lists robots with a sensor
             raise ConfigError(f"robots[{i}].sensor: required to observe {tgt_name!r}")
-        tm = measurement_times(sensor.rate_hz, scenario.duration_s)
+        tm = measurement_times(sensor.rate_hz, float(t[-1]))  # within the simulated span
         z, seen = sense(truth[i].at(tm), truth[j].at(tm), sensor, rng)
         rows_t.append(tm[seen])
         rows_obs.append(np.full(int(seen.sum()), i, dtype=np.int64))

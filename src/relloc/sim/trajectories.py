@@ -82,7 +82,8 @@ class SplinePath:
         d2 = self._spline(u, 2)
         heading = np.arctan2(d1[:, 1], d1[:, 0])
         norm = np.linalg.norm(d1, axis=1)
-        curvature = (d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]) / norm**3
+        with np.errstate(divide="ignore", invalid="ignore"):  # a cusp: NaN, named by simulate()
+            curvature = (d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]) / norm**3
         return heading, curvature
 
 
