@@ -59,5 +59,7 @@ def test_bad_calls_are_config_errors():
     with pytest.raises(ConfigError, match="1 estimate sets but 2 recordings"):
         build_summary([track_team(rec, TrackManagerSettings())], [rec, rec])
     blind = dataclasses.replace(rec, measurements=rec.measurements.select(np.zeros(0, int)))
-    with pytest.raises(ConfigError, match="no robot measures another"):
-        track_team(blind, TrackManagerSettings())
+    nothing = track_team(blind, TrackManagerSettings())
+    assert nothing.beliefs == () and nothing.updates == ()
+    with pytest.raises(ConfigError, match="no results: no observing robot measured"):
+        build_summary([nothing], [blind])

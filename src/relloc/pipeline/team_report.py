@@ -97,13 +97,12 @@ def track_team(
     record_rate_hz: float = RECORD_RATE_HZ,
     rng: np.random.Generator | None = None,
 ) -> Estimates:
-    """Every observing robot's tracks over the whole recording (one manager per observer)."""
+    """Every observing robot's tracks over the whole recording (one manager per observer);
+    no estimates at all when no robot measured another (:func:`summarise` says so if no run
+    of a Monte-Carlo set tracked anything)."""
     managers = managers_for(recording, tracker, rng=rng)
     if not managers:
-        raise ConfigError(
-            f"recording {recording.source!r}: no robot measures another, so there is nothing to "
-            "track"
-        )
+        return Estimates(estimator=tracker.filter)
     return replay(recording, managers, record_rate_hz=record_rate_hz)
 
 
