@@ -352,7 +352,7 @@ def odometry_noise_summary(
         "team_note": "white noise per 100 Hz propagation step on each reported body velocity",
         "sweep": rows,
         "sweep_duration_s": config.sweep_duration_s,
-        "replay_fit": {label: dataclasses.asdict(fit) for label, fit in data.fits.items()},
+        "replay_fit": {label: fit.to_dict() for label, fit in data.fits.items()},
     }
 
 
