@@ -113,11 +113,14 @@ def _robot_samples(
 ) -> _RobotSamples:
     """The ``GRID_DT_S`` grid from 1 s after the first command (or the window start) to 1 s
     before the last ground truth (or the window end); empty when shorter than three
-    integration windows."""
-    t_lo, t_hi = window.start_s, window.end_s
-    lo = max(t_lo, float(robot.odometry.t[0]) + 1.0) if len(robot.odometry.t) else t_hi
-    hi = min(t_hi, float(robot.groundtruth.t[-1]) - 1.0)
-    t = np.arange(lo, hi, GRID_DT_S) if hi > lo + 3 * integration_s else np.zeros(0)
+    integration windows or when the robot has no odometry or no ground truth."""
+    odo, gt = robot.odometry.t, robot.groundtruth.t
+    t = np.zeros(0)
+    if len(odo) and len(gt):
+        lo = max(window.start_s, float(odo[0]) + 1.0)
+        hi = min(window.end_s, float(gt[-1]) - 1.0)
+        if hi > lo + 3 * integration_s:
+            t = np.arange(lo, hi, GRID_DT_S)
     v, w, ok = ground_truth_velocities(robot.groundtruth, t)
     return _RobotSamples(robot, t[ok], v[ok], w[ok])
 
@@ -127,7 +130,7 @@ def _scale(measured: Array, command: Array) -> float:
     return float(measured @ command) / max(float(command @ command), _TINY)
 
 
-def fit_latency(samples: list[_RobotSamples]) -> float:
+def _latency(samples: list[_RobotSamples]) -> float:
     """Grid-search latency ``τ`` minimising the normalised unexplained velocity (module doc)."""
     cost = np.zeros(LATENCY_GRID_S.size)
     for k, tau in enumerate(LATENCY_GRID_S):
@@ -193,7 +196,7 @@ def fit_odometry_model(
     samples = [_robot_samples(ds.robot(rid), window, integration_s) for rid in ds.robot_ids]
     if not any(s.t.size for s in samples):
         raise window.too_little("no odometry overlapping ground truth to fit the odometry on")
-    tau = fit_latency(samples)
+    tau = _latency(samples)
     scale_v, scale_w, rows = [], [], []
     for s in samples:
         if s.t.size == 0:
