@@ -35,9 +35,8 @@ outliers).
 
 summary.json keys: ``experiment, seed, runs (1), dataset, window_s, calibration_window_s,
 calibration_window, clutter_per_scan, field_of_view_rad, field_of_view_window, odometry_noise,
-association_accuracy`` (fraction of the bearings used by the
-dominant track of a filter that really came from that robot, after its first confirmation; per
-observer too),
+association_accuracy`` (fraction of the bearings used by the dominant track of a filter that
+really came from that robot, after its first confirmation; per observer too),
 ``pos_rmse_m`` (dominant track vs Vicon ground truth, planar position, after 10 s),
 ``yaw_rmse_rad``, ``tracked_fraction`` (scans with the dominant track within 0.5 m and 0.5 rad),
 ``separate_sensors`` (the same figures with seed 002's sensor model), ``bearings`` (counts of
