@@ -9,9 +9,9 @@ import pytest
 
 from relloc.cli import main
 from relloc.datasets.paths import default_uwb_csv
-from relloc.datasets.uwb_noise import UwbNoiseModel
 from relloc.experiments import guler2023
 from relloc.experiments.guler2023 import Plan, build_scenarios, run_scenario_once
+from relloc.models.uwb_noise import UwbNoiseModel
 from relloc.sim.airground import simulate_airground
 
 #: The TIERS fit rounded (so these tests do not need the shared data).

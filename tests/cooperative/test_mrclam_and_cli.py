@@ -72,12 +72,13 @@ def test_mrclam_missing_file_is_a_data_error(synthetic_mrclam, tmp_path, capsys)
     not default_mrclam_dataset().is_dir(), reason="shared MRCLAM_Dataset6 not available here"
 )
 def test_loader_and_cooperative_localization_on_real_mrclam():
+    from relloc.calibration.window import CalibrationWindow
     from relloc.datasets.mrclam import load_mrclam
     from relloc.estimators.cooperative import run_team
     from relloc.experiments.mrclam_cl import build_recording, case_settings, evaluate, fit_models
 
     ds = load_mrclam(default_mrclam_dataset())
-    fit = fit_models(ds, 0.0, 100.0)
+    fit = fit_models(ds, CalibrationWindow(0.0, 100.0, str(ds.path)))
     prepared = build_recording(ds, fit, np.random.default_rng(0))
     out_t = prepared.out_t[prepared.out_t <= 30.0]
     n_lm = prepared.recording.landmarks_xy.shape[0]

@@ -410,35 +410,3 @@ def test_real_run6_matches_its_documented_facts(run6) -> None:  # type: ignore[n
         assert np.all(np.diff(r.odometry.t) > 0)
         assert np.all(np.diff(r.measurements.t) >= 0)
         assert 6.0 < r.odometry.t[0] - r.groundtruth.t[0] < 17.0
-
-
-def test_odometry_noise_fit_recovers_a_known_error() -> None:
-    from relloc.datasets.mrclam import (
-        GroundTruth,
-        Measurements,
-        Odometry,
-        RobotData,
-        fit_odometry_noise,
-    )
-
-    t = np.arange(0.0, 20.0, 0.01)
-    theta = 0.3 + 0.1 * t  # turning at 0.1 rad/s while moving at 0.2 m/s
-    x = 0.2 / 0.1 * (np.sin(theta) - np.sin(0.3))
-    y = -0.2 / 0.1 * (np.cos(theta) - np.cos(0.3))
-    gt = GroundTruth(t=t, x=x, y=y, theta=np.angle(np.exp(1j * theta)), gap_threshold=0.5)
-    # odometry over-reports speed by 0.05 m/s and turn rate by 0.02 rad/s
-    odo = Odometry(t=t, v=np.full_like(t, 0.25), omega=np.full_like(t, 0.12))
-    empty = Measurements(
-        np.zeros(0), np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0), np.zeros(0)
-    )
-    robot = RobotData(subject=1, barcode=5, groundtruth=gt, odometry=odo, measurements=empty)
-    fit = fit_odometry_noise(robot, t_start=1.0, t_end=19.0, window_s=1.0)
-    assert fit.n_windows == 18
-    assert fit.bias_v == pytest.approx(-0.05, abs=1e-3)
-    assert fit.bias_w == pytest.approx(-0.02, abs=1e-4)
-    # a constant error e accumulates e·W per window: σ_eq = |e| sqrt(W / dt)
-    assert fit.sigma_v == pytest.approx(0.5, rel=0.02)
-    assert fit.sigma_w == pytest.approx(0.2, rel=0.02)
-    assert fit.sigma_lateral < 0.02
-    with pytest.raises(DataError, match="fewer than two"):
-        fit_odometry_noise(robot, t_start=1.0, t_end=2.5, window_s=1.0)

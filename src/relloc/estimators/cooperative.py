@@ -62,11 +62,13 @@ from relloc.errors import ConfigError, DataError
 from relloc.estimators.eif import ExtendedInformationFilter
 from relloc.estimators.joint_ekf import JointEkf
 from relloc.models.planar_measurement import (
+    RANGE_BIAS_FEATURES,
     LinearisedRows,
     RowKind,
     ScalarRows,
     empty_rows,
     linearise_rows,
+    range_bias_features,
 )
 from relloc.models.unicycle import unicycle_jacobians, unicycle_step
 
@@ -280,14 +282,6 @@ class OdometryModel:
         if dt <= 0:
             raise ConfigError("OdometryModel.from_discrete: dt must be > 0")
         return OdometryModel(q_v0=sigma_v**2 * dt, q_w0=sigma_w**2 * dt, max_step_s=dt)
-
-
-RANGE_BIAS_FEATURES = ("1", "η", "η²", "ρ", "ρη²")
-
-
-def range_bias_features(bearing: Array, rng: Array) -> Array:
-    """Regressors ``(1, η, η², ρ, ρ η²)`` of the range-bias model, shape ``(…, 5)``."""
-    return np.stack([np.ones_like(bearing), bearing, bearing**2, rng, rng * bearing**2], axis=-1)
 
 
 @dataclass(frozen=True, kw_only=True)

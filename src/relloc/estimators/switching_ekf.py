@@ -21,7 +21,7 @@ the Jacobian of ``(d_0i, φ̄)`` w.r.t. ``(d_0i, φ_j, d_0j, d_ij)``; θ_0 is a 
 triangle is refused (near-collinear, inconsistent ranges) the block falls back to ``[d]`` and the
 refusal is counted.
 
-Outliers. UWB ranges have a heavy positive tail (:mod:`relloc.datasets.uwb_noise`). Each block
+Outliers. UWB ranges have a heavy positive tail (:mod:`relloc.models.uwb_noise`). Each block
 is χ²-gated: it is applied only if its NIS ``νᵀS⁻¹ν`` is below the ``gate_probability``
 quantile of χ²(m); rejections are counted per block kind. Angle residuals are wrapped. The
 update itself is the Joseph-form :func:`relloc.estimators.relative.kalman_update`.

@@ -17,13 +17,15 @@ Scenarios (all closed-loop, :mod:`relloc.sim.airground`):
 - ablations on ``two_drones``: uncalibrated per-link UWB bias; no χ² gate; the filter's range σ
   set to the fitted core spread (as if the errors were white).
 
-UWB noise: fitted on the TIERS recording (:func:`relloc.datasets.paths.default_uwb_csv`) —
-bias, core spread, outlier rate and tail, correlation time — and used by the simulator. The
-paper's radios were calibrated, so the headline runs give every link the fitted common bias,
-which the filter subtracts (a team calibration); the ablation leaves each link its own bias
-drawn with the fitted link-to-link spread. The filter's range σ is the fitted spread inflated by
-``√((1+a)/(1−a))``, ``a = exp(−Δt/τ)``, the variance factor of a Gauss–Markov error averaged
-over many samples (the errors are strongly correlated, not white).
+UWB noise: fitted on the whole TIERS recording (:func:`relloc.datasets.paths.default_uwb_csv`,
+a separate calibration recording; :func:`relloc.calibration.uwb.fit_uwb_noise`, the window in
+``uwb_noise_fit.calibration_window``) — bias, core spread, outlier rate and tail, correlation
+time — and used by the simulator. The paper's radios were calibrated, so the headline runs
+give every link the fitted common bias, which the filter subtracts (a team calibration); the
+ablation leaves each link its own bias drawn with the fitted link-to-link spread. The filter's
+range σ is the fitted spread inflated by ``√((1+a)/(1−a))``, ``a = exp(−Δt/τ)``, the variance
+factor of a Gauss–Markov error averaged over many samples (the errors are strongly correlated,
+not white; :func:`relloc.calibration.inflation.gauss_markov_inflation`).
 
 Run counts: ``one_drone`` 5, ``two_drones`` 11 (paper), ``formation`` 8 (paper), 5 per sweep or
 ablation point; ``--runs N`` sets every count to N. Default wall time is a few minutes on 2 cores.
@@ -45,18 +47,16 @@ from typing import Any
 
 import numpy as np
 
+from relloc.calibration.inflation import gauss_markov_inflation
+from relloc.calibration.uwb import UwbNoiseFit, fit_uwb_noise, within_link_residuals
+from relloc.calibration.window import spanning
 from relloc.datasets.paths import default_uwb_csv
 from relloc.datasets.uwb import load_uwb_csv
-from relloc.datasets.uwb_noise import (
-    UwbNoiseFit,
-    UwbNoiseModel,
-    fit_uwb_noise,
-    within_link_residuals,
-)
 from relloc.errors import ConfigError
 from relloc.estimators.switching_ekf import BLOCK_DIMS, SwitchingEkfSettings
 from relloc.experiments.registry import ReproduceArgs
 from relloc.metrics import anees, anees_band, nees, rmse
+from relloc.models.uwb_noise import UwbNoiseModel
 from relloc.pipeline.montecarlo import run_monte_carlo
 from relloc.pipeline.output import (
     figure_md,
@@ -114,16 +114,6 @@ def hexagon_offsets(n_followers: int, side: float) -> tuple[tuple[float, float],
     return tuple(out)
 
 
-def correlation_inflation(period: float, tau: float) -> float:
-    """Variance factor ``(1+a)/(1−a)``, ``a = exp(−period/τ)``: the variance a white-noise filter
-    must assume so that averaging many samples of a Gauss–Markov error (time constant τ) is not
-    over-confident (1 when τ = 0)."""
-    if tau <= 0.0:
-        return 1.0
-    a = math.exp(-period / tau)
-    return (1.0 + a) / (1.0 - a)
-
-
 def filter_settings(
     uwb: UwbNoiseModel,
     dt: float,
@@ -137,11 +127,12 @@ def filter_settings(
     """The filter's noise model, derived from the sensor models (not tuned on the results).
 
     Correlated error parts (the UWB core, the drone's heading-hold error shared by every angle
-    it reports) get :func:`correlation_inflation` at their sampling period; white parts enter
+    it reports) get :func:`~relloc.calibration.inflation.gauss_markov_inflation` at their
+    sampling period; white parts enter
     as they are; input noise is doubled to cover the midpoint model's unmodelled slip.
     """
-    range_var = uwb.spread**2 * correlation_inflation(dt * uwb_every, uwb.correlation_time)
-    yaw_var = drone.yaw_sigma**2 * correlation_inflation(dt * camera_every, drone.yaw_tau)
+    range_var = uwb.spread**2 * gauss_markov_inflation(dt * uwb_every, uwb.correlation_time)
+    yaw_var = drone.yaw_sigma**2 * gauss_markov_inflation(dt * camera_every, drone.yaw_tau)
     return SwitchingEkfSettings(
         sigma_v=2.0 * velocity_noise[0],
         sigma_w=2.0 * velocity_noise[1],
@@ -343,7 +334,8 @@ def run_reproduction(args: ReproduceArgs, plan: Plan) -> dict[str, Any]:
     """Fit UWB noise, run every scenario, sweep and ablation; write summary, report, figures."""
     out = prepare_out_dir(args.out_dir)
     rec = load_uwb_csv(default_uwb_csv())
-    fit = fit_uwb_noise(rec)
+    window = spanning(rec.t, str(rec.path))
+    fit = fit_uwb_noise(rec, window)
     scenarios = {
         k: replace(sc, duration=sc.duration * plan.duration_scale)
         for k, sc in build_scenarios(fit.model).items()
@@ -358,7 +350,7 @@ def run_reproduction(args: ReproduceArgs, plan: Plan) -> dict[str, Any]:
             "formation": plan.formation_runs,
             "sweep_point": plan.sweep_runs,
         },
-        "uwb_noise_fit": {**fit.as_dict(), "source": str(rec.path)},
+        "uwb_noise_fit": {**fit.to_dict(), "source": str(rec.path)},
     }
     traces: dict[str, AirGroundRun | None] = {}
     counts = {
@@ -512,7 +504,9 @@ def _figures(
     files["sweeps"] = save_figure(fig, out, "sweeps")
     fig, ax = plt.subplots(figsize=(6, 3.6))
     m = fit.model
-    plot_uwb_errors(ax, within_link_residuals(rec), m.spread, m.outlier_k * m.spread)
+    plot_uwb_errors(
+        ax, within_link_residuals(rec, fit.calibration_window), m.spread, m.outlier_k * m.spread
+    )
     files["uwb_noise"] = save_figure(fig, out, "uwb_noise")
     return files
 

@@ -23,17 +23,20 @@ Odometry (commanded v, ω, held) drives the prediction at 20 Hz; mutual and indi
 at 1 Hz.
 
 Noise models: the detection probability ``P_D`` (share of camera frames showing a given
-teammate) and the odometry noise are fitted (``relloc.datasets.mrclam.fit_odometry_noise``,
-1-s windows) on a calibration window — the first ``CALIBRATION_S`` seconds after every robot
-has started moving — and the evaluation uses the next ``EVAL_S`` seconds, so no number is
-fitted on the data it is scored on. Range σ 0.2 m and bearing σ 0.03 rad follow the dataset's
-documented error levels (range error bias −0.25 … +0.2 m depending on bearing, strongly
-correlated; bearings 0.01–0.02 rad with rare outliers).
+teammate) and the odometry noise are fitted (:mod:`relloc.calibration`:
+``fit_detection_probability``, ``fit_odometry_noise`` over 1-s windows) on a calibration window
+— the first ``CALIBRATION_S`` seconds after every robot has started moving
+(``calibration_window``) — and the evaluation uses the next ``EVAL_S`` seconds, so no noise
+level is fitted on the data it is scored on. The field of view, which only sets where the
+injected clutter falls, is the widest bearing of the whole run (``field_of_view_window``).
+Range σ 0.2 m and bearing σ 0.03 rad follow the dataset's documented error levels (range error
+bias −0.25 … +0.2 m depending on bearing, strongly correlated; bearings 0.01–0.02 rad with rare
+outliers).
 
-summary.json keys: ``experiment, seed, runs (1), dataset, window_s, clutter_per_scan,
-field_of_view_rad, odometry_noise, association_accuracy`` (fraction of the bearings used by the
-dominant track of a filter that really came from that robot, after its first confirmation; per
-observer too),
+summary.json keys: ``experiment, seed, runs (1), dataset, window_s, calibration_window_s,
+calibration_window, clutter_per_scan, field_of_view_rad, field_of_view_window, odometry_noise,
+association_accuracy`` (fraction of the bearings used by the dominant track of a filter that
+really came from that robot, after its first confirmation; per observer too),
 ``pos_rmse_m`` (dominant track vs Vicon ground truth, planar position, after 10 s),
 ``yaw_rmse_rad``, ``tracked_fraction`` (scans with the dominant track within 0.5 m and 0.5 rad),
 ``separate_sensors`` (the same figures with seed 002's sensor model), ``bearings`` (counts of
@@ -49,8 +52,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.calibration.camera import fit_detection_probability, fit_field_of_view
+from relloc.calibration.odometry import fit_odometry_noise
+from relloc.calibration.window import CalibrationWindow, following, spanning
 from relloc.core.angles import wrap_angle
-from relloc.datasets.mrclam import MrclamDataset, fit_odometry_noise, load_mrclam
+from relloc.datasets.mrclam import MrclamDataset, load_mrclam
 from relloc.datasets.paths import default_mrclam_dataset
 from relloc.errors import DataError
 from relloc.estimators.gaussian_sum import GaussianSumSettings
@@ -89,13 +95,10 @@ POS_TOL_M = 0.5
 YAW_TOL_RAD = 0.5
 
 
-def _field_of_view(ds: MrclamDataset) -> float:
-    """Half-width (rad) of the camera's field of view: the largest |bearing| of any row."""
-    bearings = [np.abs(wrap_angle(ds.robot(s).measurements.bearing)) for s in ds.robot_ids]
-    widest = max((float(b.max()) for b in bearings if b.size), default=0.0)
-    if not 0.0 < widest <= np.pi:
-        raise DataError(f"mrclam-association: no usable camera bearings (widest {widest})")
-    return widest
+def _whole_run(ds: MrclamDataset, source: str) -> CalibrationWindow:
+    """From the first to the last camera row of any robot: the field of view is the widest
+    bearing the camera ever reports, so it is taken over the whole run."""
+    return spanning(np.concatenate([ds.robot(s).measurements.t for s in ds.robot_ids]), source)
 
 
 def _team_data(
@@ -185,17 +188,16 @@ def _truth(data: TeamData) -> NDArray[np.float64]:
 
 
 def _settings(
-    ds: MrclamDataset, t0: float, fov: float
+    ds: MrclamDataset, window: CalibrationWindow, fov: float
 ) -> tuple[GaussianSumSettings, dict[str, float]]:
-    fits = [
-        fit_odometry_noise(ds.robot(s), t_start=t0, t_end=t0 + CALIBRATION_S, rate_hz=FILTER_RATE)
-        for s in ds.robot_ids
-    ]
+    """Filter settings: the odometry noise (RMS over robots of the fitted σ, floored) and
+    ``P_D`` fitted on ``window``, the clutter density matching the injected clutter."""
+    fits = [fit_odometry_noise(ds.robot(s), window, rate_hz=FILTER_RATE) for s in ds.robot_ids]
     sv = max(float(np.sqrt(np.mean([f.sigma_v**2 for f in fits]))), MIN_SIGMA_V)
     sl = max(float(np.sqrt(np.mean([f.sigma_lateral**2 for f in fits]))), MIN_SIGMA_V)
     sw = max(float(np.sqrt(np.mean([f.sigma_w**2 for f in fits]))), MIN_SIGMA_W)
     sig = (sv, sl, 1e-3, sw)
-    p_detect = _detection_rate(ds, t0, t0 + CALIBRATION_S)
+    p_detect = fit_detection_probability(ds, window).p_detect
     base = GaussianSumSettings(
         velocity_noise=VelocityNoise(observer=sig, observed=sig),
         sigma_height=SIGMA_HEIGHT,
@@ -210,24 +212,6 @@ def _settings(
     return st, {"sigma_v": sv, "sigma_lateral": sl, "sigma_w": sw, "p_detect": p_detect}
 
 
-def _detection_rate(ds: MrclamDataset, t_start: float, t_end: float) -> float:
-    """``P_D``: fraction of (camera frame, other robot) pairs in which the robot is measured.
-
-    The camera has a narrow field of view, so a teammate is in few frames; assuming the
-    paper's 0.95 would make every frame without it strong evidence that a false bearing is it.
-    """
-    seen = pairs = 0
-    n_other = len(ds.robot_ids) - 1
-    for s in ds.robot_ids:
-        meas = ds.robot(s).measurements
-        sel = (meas.t >= t_start) & (meas.t < t_end)
-        frames = np.unique(meas.t[sel])
-        pairs += frames.size * n_other
-        robots = sel & ds.is_robot(meas.subject) & (meas.subject != s)
-        seen += np.unique(np.stack([meas.t[robots], meas.subject[robots]]), axis=1).shape[1]
-    return float(np.clip(seen / pairs, 0.05, 0.95)) if pairs else 0.5
-
-
 def reproduce(args: ReproduceArgs) -> dict[str, Any]:
     """Run the fusers on the dataset window; write summary.json, report.md and a figure."""
     out = prepare_out_dir(args.out_dir)
@@ -237,12 +221,14 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
     if len(starts) != len(ds.robot_ids) or len(starts) < 2:
         raise DataError(f"{folder}: needs odometry for at least two robots")
     t_cal = max(starts)
-    t_start = t_cal + CALIBRATION_S
+    calibration = following(t_cal, CALIBRATION_S, str(folder))
+    t_start = calibration.end_s
     t_end = min(t_start + EVAL_S, ds.duration)
     if t_end - t_start < 2 * WARMUP_S:
         raise DataError(f"{folder}: too short for a {EVAL_S:.0f} s evaluation after calibration")
-    fov = _field_of_view(ds)
-    settings, odo = _settings(ds, t_cal, fov)
+    fov_fit = fit_field_of_view(ds, _whole_run(ds, str(folder)))
+    fov = fov_fit.half_width_rad
+    settings, odo = _settings(ds, calibration, fov)
     rng = np.random.default_rng(args.seed)
     data, counts = _team_data(ds, t_start, t_end, fov, rng)
     names = [f"R{s}" for s in ds.robot_ids]
@@ -259,8 +245,10 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
         "dataset": str(folder),
         "window_s": [t_start, t_end],
         "calibration_window_s": [t_cal, t_start],
+        "calibration_window": calibration.to_dict(),
         "clutter_per_scan": CLUTTER_PER_SCAN,
         "field_of_view_rad": [-fov, fov],
+        "field_of_view_window": fov_fit.calibration_window.to_dict(),
         "odometry_noise": odo,
         "sigma_range_m": SIGMA_RANGE,
         "sigma_bearing_rad": SIGMA_BEARING,

@@ -17,25 +17,22 @@ Modes × anchors (``cases`` keys ``<mode>/<anchors>``):
   (robot→robot detections plus robot 1's ground-truth pose with N(0, diag(0.1 m, 0.1 m,
   0.03 rad)²) noise at 1 Hz while its ground truth lasts).
 
-Error models, fitted on the *first half* of the same run (``fit`` in summary.json) and checked
-on the second half (``heldout`` entries):
+Error models, fitted by :mod:`relloc.calibration` on the *first half* of the same run (the
+window is ``fit.calibration_window`` in summary.json) and checked on the second half
+(``heldout`` entries):
 
-- odometry: one latency ``τ`` (the commands lead the motion) found by a grid search that
-  minimises the relative squared error between ground-truth velocities and the delayed
-  commands, and per-robot scale factors ``s_v, s_ω`` by least squares at that ``τ``; white
-  input noise with variance rates ``q_v = q_v0 + k_v|v|`` and ``q_ω = q_ω0 + k_ω|ω| + k_ωv|v|``
-  fitted by non-negative least squares on the squared displacement and heading errors of the
-  calibrated odometry over 1 s windows (``E[D²] = q W``);
-- bearings: a per-robot camera offset (median residual) and ``σ_η`` from the median absolute
-  deviation (robust to the rare outliers, which the χ² gate removes);
-- ranges: a bias ``b(η, ρ) = c·(1, η, η², ρ, ρη²)`` (least squares on residuals below 1 m),
-  then ``σ_r`` from the MAD of what is left;
+- odometry (:func:`relloc.calibration.odometry.fit_odometry_model`): one latency ``τ`` (the
+  commands lead the motion), per-robot scale factors ``s_v, s_ω`` and white input noise with
+  variance rates ``q_v = q_v0 + k_v|v|`` and ``q_ω = q_ω0 + k_ω|ω| + k_ωv|v|``, the rates fitted
+  over integration windows as long as the expected wait for the next landmark detection
+  (:func:`relloc.calibration.camera.landmark_wait_s`, clipped to [0.5, 10] s);
+- camera (:func:`relloc.calibration.camera.fit_camera`): a per-robot bearing offset and ``σ_η``
+  (median, MAD), a range bias ``b(η, ρ) = c·(1, η, η², ρ, ρη²)`` and ``σ_r``;
 - correlation: consecutive residuals are strongly correlated (lag-correlations in
-  ``fit.correlation``). A filter that treats N correlated readings as independent counts
-  their information N times. We keep at most one range per (observer, target) pair every
-  ``T_r`` seconds, with ``T_r`` the lag at which the fitted range-residual correlation falls to
-  1/e, and inflate ``σ_η`` by ``√((1 + ρ)/(1 − ρ))``, the AR(1) variance-inflation factor for
-  the bearing correlation ``ρ`` between consecutive used readings of a pair.
+  ``fit.correlation``); a filter that treats N correlated readings as independent over-counts
+  their information. We keep at most one range per (observer, target) pair every
+  ``RANGE_INTERVAL_S`` and inflate both variances by the Bartlett factor ``1 + 2 Σ ρ(kΔ)`` at
+  the readings' spacing (:mod:`relloc.calibration.inflation`).
 
 summary.json keys: ``cases.<mode>/<anchors>``: ``pos_rmse_m`` and ``heading_rmse_rad`` (per robot
 "1"…"5" and ``mean`` = arithmetic mean over robots), ``final_pos_err_m`` (same layout),
@@ -47,16 +44,18 @@ summary.json keys: ``cases.<mode>/<anchors>``: ``pos_rmse_m`` and ``heading_rmse
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from relloc.core.angles import wrap_angle
+from relloc.calibration.camera import CameraFit, fit_camera, landmark_wait_s
+from relloc.calibration.inflation import CORRELATION_HORIZON_S
+from relloc.calibration.odometry import OdometryModelFit, fit_odometry_model
+from relloc.calibration.window import CalibrationWindow, leading_fraction
 from relloc.core.gaussian import Gaussian
-from relloc.errors import DataError
 from relloc.experiments.registry import ReproduceArgs
 from relloc.pipeline.montecarlo import run_monte_carlo
 from relloc.pipeline.output import (
@@ -75,7 +74,6 @@ INITIAL_SIGMA = (0.02, 0.02, 0.01)
 GPS_SIGMA = (0.1, 0.1, 0.03)
 GPS_PERIOD_S = 1.0
 RANGE_INTERVAL_S = 1.0
-CORRELATION_HORIZON_S = 10.0
 P_GATE = 0.999
 MODES = ("dead_reckoning", "bearing", "range_bearing")
 ANCHORS = ("none", "2_landmarks", "all_landmarks", "gps_robot1")
@@ -86,273 +84,43 @@ TARGET_NEES_PCT = 10.0
 
 
 # ----------------------------------------------------------------------------------------------
-# Fitting the error models on the data
+# The error models, fitted by relloc.calibration on the first half of the run
 # ----------------------------------------------------------------------------------------------
 
 
 @dataclass(frozen=True)
 class FittedModels:
-    """Everything fitted on ``[t_lo, t_hi]`` of the run (see the module docstring)."""
+    """The odometry and camera models, both fitted on one calibration window."""
 
-    t_lo: float
-    t_hi: float
-    latency_s: float
-    scale_v: tuple[float, ...]
-    scale_w: tuple[float, ...]
-    q_v0: float
-    k_v: float
-    q_w0: float
-    k_w: float
-    k_wv: float
-    odometry_window_s: float
-    bearing_offset: tuple[float, ...]
-    sigma_bearing_raw: float
-    bearing_inflation: float
-    sigma_bearing: float
-    range_bias_coeffs: tuple[float, ...]
-    sigma_range_raw: float
-    range_inflation: float
-    sigma_range: float
-    range_interval_s: float
-    correlation: dict[str, dict[str, float]]
-    n_residuals: int
+    odometry: OdometryModelFit
+    camera: CameraFit
+
+    @property
+    def window(self) -> CalibrationWindow:
+        """The window both models were fitted on."""
+        return self.odometry.calibration_window
+
+    def to_dict(self) -> dict[str, Any]:
+        """``summary.json["fit"]``: the window's ends, every fitted value, the window."""
+        odometry = {k: v for k, v in self.odometry.to_dict().items() if k != "calibration_window"}
+        camera = {k: v for k, v in self.camera.to_dict().items() if k != "calibration_window"}
+        return {
+            "t_lo": self.window.start_s,
+            "t_hi": self.window.end_s,
+            **odometry,
+            **camera,
+            "calibration_window": self.window.to_dict(),
+        }
 
 
-def _gt_velocities(gt: Any, t: Array, h: float = 0.05) -> tuple[Array, Array, Array]:
-    """Forward speed and turn rate from central differences of the ground truth."""
-    q0, q1, qm = gt.at(t - h), gt.at(t + h), gt.at(t)
-    v = (np.cos(qm.theta) * (q1.x - q0.x) + np.sin(qm.theta) * (q1.y - q0.y)) / (2 * h)
-    w = np.asarray(wrap_angle(q1.theta - q0.theta)) / (2 * h)
-    return v, w, q0.valid & q1.valid & qm.valid
-
-
-def fit_odometry(ds: Any, t_lo: float, t_hi: float, window_s: float) -> dict[str, Any]:
-    """Latency, per-robot scales and white-noise variance rates of the odometry, the rates
-    fitted on the integrated errors over ``window_s`` windows."""
-    from scipy.optimize import nnls
-
-    grids = []
-    for rid in ds.robot_ids:
-        r = ds.robot(rid)
-        lo = max(t_lo, float(r.odometry.t[0]) + 1.0) if len(r.odometry.t) else t_hi
-        hi = min(t_hi, float(r.groundtruth.t[-1]) - 1.0)
-        t = np.arange(lo, hi, 0.02) if hi > lo + 3 * window_s else np.zeros(0)
-        v, w, ok = _gt_velocities(r.groundtruth, t)
-        grids.append((r, t[ok], v[ok], w[ok]))
-    if not any(g[1].size for g in grids):
-        raise DataError("mrclam-cl: no odometry overlapping ground truth in the fit span")
-    taus = np.arange(0.0, 0.5001, 0.01)
-    cost = np.zeros(taus.size)
-    for k, tau in enumerate(taus):
-        for r, t, v, w in grids:
-            if t.size == 0:
-                continue
-            vc, wc = r.odometry.at(t - tau)
-            for meas, cmd in ((v, vc), (w, wc)):
-                s = (meas @ cmd) / max(cmd @ cmd, 1e-12)
-                cost[k] += np.sum((meas - s * cmd) ** 2) / max(meas @ meas, 1e-12)
-    tau = float(taus[int(np.argmin(cost))])
-    scale_v, scale_w = [], []
-    rows_v, rows_w, rhs_v, rhs_w = [], [], [], []
-    steps = max(round(window_s / 0.02), 1)
-    for r, t, v, w in grids:
-        if t.size == 0:
-            scale_v.append(1.0)
-            scale_w.append(1.0)
-            continue
-        vc, wc = r.odometry.at(t - tau)
-        sv = float((v @ vc) / max(vc @ vc, 1e-12))
-        sw = float((w @ wc) / max(wc @ wc, 1e-12))
-        scale_v.append(sv)
-        scale_w.append(sw)
-        # Windowed integrated errors from ground-truth displacements (no differentiation noise).
-        n_win = t.size // steps
-        tw = t[: n_win * steps].reshape(n_win, steps)
-        contiguous = np.isclose(tw[:, -1] - tw[:, 0], (steps - 1) * 0.02)
-        t0, t1 = tw[:, 0], tw[:, -1] + 0.02
-        g0, g1 = r.groundtruth.at(t0), r.groundtruth.at(t1)
-        ok = contiguous & g0.valid & g1.valid
-        vcw, wcw = r.odometry.at(tw.reshape(-1) - tau)
-        vcw = sv * vcw.reshape(n_win, steps)
-        wcw = sw * wcw.reshape(n_win, steps)
-        dtheta = np.asarray(wrap_angle(g1.theta - g0.theta))
-        mid = g0.theta + 0.5 * dtheta
-        fwd = np.cos(mid) * (g1.x - g0.x) + np.sin(mid) * (g1.y - g0.y)
-        d_v = fwd - vcw.sum(axis=1) * 0.02
-        d_w = dtheta - wcw.sum(axis=1) * 0.02
-        speed, turn = np.abs(vcw).mean(axis=1), np.abs(wcw).mean(axis=1)
-        W = 0.02 * steps
-        rows_v.append(np.column_stack([np.ones(ok.sum()), speed[ok]]))
-        rhs_v.append(d_v[ok] ** 2 / W)
-        rows_w.append(np.column_stack([np.ones(ok.sum()), turn[ok], speed[ok]]))
-        rhs_w.append(d_w[ok] ** 2 / W)
-    cv, _ = nnls(np.vstack(rows_v), np.concatenate(rhs_v))
-    cw, _ = nnls(np.vstack(rows_w), np.concatenate(rhs_w))
-    floor = 1e-6
-    return {
-        "latency_s": tau,
-        "scale_v": tuple(scale_v),
-        "scale_w": tuple(scale_w),
-        "q_v0": max(float(cv[0]), floor),
-        "k_v": float(cv[1]),
-        "q_w0": max(float(cw[0]), floor),
-        "k_w": float(cw[1]),
-        "k_wv": float(cw[2]),
-        "odometry_window_s": float(window_s),
-    }
-
-
-@dataclass(frozen=True)
-class Residuals:
-    """Camera residuals against ground truth: one row per usable detection."""
-
-    observer: NDArray[np.int64]
-    subject: NDArray[np.int64]
-    t: Array
-    range: Array
-    bearing: Array
-    range_error: Array
-    bearing_error: Array
-
-
-def camera_residuals(ds: Any, t_lo: float, t_hi: float) -> Residuals:
-    """``z − h(truth)`` of every detection in ``[t_lo, t_hi]`` whose truth is valid."""
-    lm = {int(s): xy for s, xy in zip(ds.landmarks.subject, ds.landmarks.xy, strict=True)}
-    cols: list[list[Array]] = [[] for _ in range(7)]
-    for index, rid in enumerate(ds.robot_ids):
-        m = ds.robot(rid).measurements
-        sel = (m.t >= t_lo) & (m.t <= t_hi)
-        t, subj = m.t[sel], m.subject[sel]
-        q = ds.robot(rid).groundtruth.at(t)
-        tx, ty = np.full(t.size, np.nan), np.full(t.size, np.nan)
-        ok = q.valid.copy()
-        for s in np.unique(subj):
-            k = subj == s
-            if int(s) in lm:
-                tx[k], ty[k] = lm[int(s)]
-            elif int(s) in ds.robots:
-                qq = ds.robot(int(s)).groundtruth.at(t[k])
-                tx[k], ty[k] = qq.x, qq.y
-                ok[k] &= qq.valid
-            else:
-                ok[k] = False
-        dx, dy = tx - q.x, ty - q.y
-        er = m.range[sel] - np.hypot(dx, dy)
-        eb = np.asarray(wrap_angle(m.bearing[sel] - (np.arctan2(dy, dx) - q.theta)))
-        for c, v in zip(
-            cols,
-            (np.full(t.size, index), subj, t, m.range[sel], m.bearing[sel], er, eb),
-            strict=True,
-        ):
-            c.append(v[ok])
-    arr = [np.concatenate(c) for c in cols]
-    return Residuals(
-        arr[0].astype(np.int64), arr[1].astype(np.int64), arr[2], arr[3], arr[4], arr[5], arr[6]
+def fit_models(ds: Any, window: CalibrationWindow) -> FittedModels:
+    """Fit every error model on ``window``; the odometry's variance rates over the expected
+    wait for the next landmark detection (clipped to [0.5 s, the correlation horizon])."""
+    integration_s = float(np.clip(landmark_wait_s(ds, window), 0.5, CORRELATION_HORIZON_S))
+    return FittedModels(
+        odometry=fit_odometry_model(ds, window, integration_s),
+        camera=fit_camera(ds, window, range_interval_s=RANGE_INTERVAL_S),
     )
-
-
-def _mad_sigma(x: Array) -> float:
-    return float(1.4826 * np.median(np.abs(x - np.median(x))))
-
-
-def lag_correlation(res: Residuals, values: Array, keep: NDArray[np.bool_], lag: float) -> float:
-    """Correlation of a residual with the same pair's residual ``lag`` seconds later (±0.25 s)."""
-    a, b = [], []
-    key = res.observer * 1000 + res.subject
-    for k in np.unique(key[keep]):
-        idx = np.flatnonzero((key == k) & keep)
-        tt, vv = res.t[idx], values[idx]
-        j = np.searchsorted(tt, tt + lag)
-        ok = j < tt.size
-        ok[ok] &= np.abs(tt[j[ok]] - tt[ok] - lag) < 0.25
-        a.append(vv[ok])
-        b.append(vv[j[ok]])
-    x, y = np.concatenate(a), np.concatenate(b)
-    if x.size < 10:
-        return 0.0
-    return float(np.corrcoef(x, y)[0, 1])
-
-
-def fit_camera(res: Residuals, n_robots: int) -> dict[str, Any]:
-    """Bearing offsets and σ, range bias and σ, and the residual correlation (module doc)."""
-    from relloc.estimators.cooperative import range_bias_features
-
-    if res.t.size < 20:
-        raise DataError("mrclam-cl: fewer than 20 detections with ground truth in the fit span")
-    good_b = np.abs(res.bearing_error) < 0.1
-    offsets = []
-    for i in range(n_robots):
-        sel = good_b & (res.observer == i)
-        offsets.append(float(np.median(res.bearing_error[sel])) if sel.sum() > 10 else 0.0)
-    eb = res.bearing_error - np.asarray(offsets)[res.observer]
-    sigma_b = _mad_sigma(eb[good_b])
-    good_r = np.abs(res.range_error) < 1.0
-    X = range_bias_features(res.bearing, res.range)
-    coeffs, *_ = np.linalg.lstsq(X[good_r], res.range_error[good_r], rcond=None)
-    er = res.range_error - X @ coeffs
-    sigma_r = _mad_sigma(er[good_r])
-    lags = (0.25, 0.5, 1.0, 2.0, 5.0, 10.0)
-    rho_r = {lag: lag_correlation(res, er, good_r, lag) for lag in lags}
-    rho_b = {lag: lag_correlation(res, eb, good_b, lag) for lag in lags}
-    # Typical spacing of consecutive detections of one pair (the bearings' sampling interval).
-    key = res.observer * 1000 + res.subject
-    order = np.lexsort((res.t, key))
-    gaps = np.diff(res.t[order])[np.diff(key[order]) == 0]
-    spacing = float(np.median(gaps)) if gaps.size else lags[0]
-    f_b = inflation_factor(rho_b, spacing)
-    f_r = inflation_factor(rho_r, max(spacing, RANGE_INTERVAL_S))
-    return {
-        "bearing_offset": tuple(offsets),
-        "sigma_bearing_raw": sigma_b,
-        "bearing_inflation": f_b,
-        "sigma_bearing": sigma_b * np.sqrt(f_b),
-        "range_bias_coeffs": tuple(float(c) for c in coeffs),
-        "sigma_range_raw": sigma_r,
-        "range_inflation": f_r,
-        "sigma_range": sigma_r * np.sqrt(f_r),
-        "range_interval_s": RANGE_INTERVAL_S,
-        "correlation": {
-            "range": {f"{lag:g}s": v for lag, v in rho_r.items()},
-            "bearing": {f"{lag:g}s": v for lag, v in rho_b.items()},
-            "pair_spacing_s": {"median": spacing},
-        },
-        "n_residuals": int(res.t.size),
-    }
-
-
-def inflation_factor(rho: dict[float, float], spacing: float) -> float:
-    """Variance inflation ``1 + 2 Σ_{k≥1} ρ(k Δ)`` for readings ``Δ`` apart (Bartlett).
-
-    A filter that treats correlated readings as independent over-counts their information by
-    this factor (the integrated autocorrelation time in samples); ``ρ`` is interpolated linearly
-    between the measured lags, clipped at 0, and taken as 0 beyond ``CORRELATION_HORIZON_S``.
-    """
-    lags = np.array(sorted(rho))
-    values = np.clip(np.array([rho[lag] for lag in lags]), 0.0, 1.0)
-    k = np.arange(spacing, CORRELATION_HORIZON_S + 1e-9, spacing)
-    return float(1.0 + 2.0 * np.sum(np.interp(k, lags, values, left=values[0], right=0.0)))
-
-
-def detection_gap_s(ds: Any, t_lo: float, t_hi: float) -> float:
-    """Expected wait from a random instant to a robot's next landmark detection, ``Σg²/(2Σg)``
-    over the gaps ``g`` between its landmark detections: the horizon odometry must bridge."""
-    num = den = 0.0
-    lm = set(int(s) for s in ds.landmarks.subject)
-    for rid in ds.robot_ids:
-        m = ds.robot(rid).measurements
-        t = np.unique(m.t[np.isin(m.subject, list(lm)) & (m.t >= t_lo) & (m.t <= t_hi)])
-        g = np.diff(np.concatenate([[t_lo], t, [t_hi]]))
-        num += float(np.sum(g**2))
-        den += float(np.sum(g))
-    return num / (2.0 * den) if den > 0 else 1.0
-
-
-def fit_models(ds: Any, t_lo: float, t_hi: float) -> FittedModels:
-    """Fit every error model on ``[t_lo, t_hi]``."""
-    window = float(np.clip(detection_gap_s(ds, t_lo, t_hi), 0.5, CORRELATION_HORIZON_S))
-    odo = fit_odometry(ds, t_lo, t_hi, window)
-    cam = fit_camera(camera_residuals(ds, t_lo, t_hi), len(ds.robot_ids))
-    return FittedModels(t_lo=t_lo, t_hi=t_hi, **odo, **cam)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -389,8 +157,8 @@ def build_recording(ds: Any, fit: FittedModels, rng: np.random.Generator) -> Pre
     odometry = tuple(
         OdometryStream(
             ds.robot(rid).odometry.t,
-            fit.scale_v[i] * ds.robot(rid).odometry.v,
-            fit.scale_w[i] * ds.robot(rid).odometry.omega,
+            fit.odometry.scale_v[i] * ds.robot(rid).odometry.v,
+            fit.odometry.scale_w[i] * ds.robot(rid).odometry.omega,
         )
         for i, rid in enumerate(robots)
     )
@@ -409,7 +177,7 @@ def build_recording(ds: Any, fit: FittedModels, rng: np.random.Generator) -> Pre
         lk = np.array(
             [lm_index.get(int(s), -1) if k else -1 for s, k in zip(subj, is_lm, strict=True)]
         )
-        bearing = m.bearing - fit.bearing_offset[index[rid]]
+        bearing = m.bearing - fit.camera.bearing_offset[index[rid]]
         for c, v in zip(
             cols,
             (m.t, np.full(len(m), index[rid]), tr, lk, m.range, bearing),
@@ -464,20 +232,20 @@ def case_settings(mode: str, anchors: str, fit: FittedModels, two: tuple[int, in
     from relloc.estimators.cooperative import OdometryModel, PipelineSettings, SensorModel
 
     odometry = OdometryModel(
-        q_v0=fit.q_v0,
-        q_w0=fit.q_w0,
-        k_v=fit.k_v,
-        k_w=fit.k_w,
-        k_wv=fit.k_wv,
-        latency_s=fit.latency_s,
+        q_v0=fit.odometry.q_v0,
+        q_w0=fit.odometry.q_w0,
+        k_v=fit.odometry.k_v,
+        k_w=fit.odometry.k_w,
+        k_wv=fit.odometry.k_wv,
+        latency_s=fit.odometry.latency_s,
         max_hold_s=1.0,
         max_step_s=0.05,
     )
     sensor = SensorModel(
-        sigma_bearing=fit.sigma_bearing,
-        sigma_range0=fit.sigma_range,
-        range_bias_coeffs=fit.range_bias_coeffs,
-        range_min_interval_s=fit.range_interval_s,
+        sigma_bearing=fit.camera.sigma_bearing,
+        sigma_range0=fit.camera.sigma_range,
+        range_bias_coeffs=fit.camera.range_bias_coeffs,
+        range_min_interval_s=fit.camera.range_interval_s,
     )
     anchor_set = {
         "none": (),
@@ -578,8 +346,9 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
     folder = Path(args.dataset) if args.dataset is not None else default_mrclam_dataset()
     ds = load_mrclam(folder)
     t0 = max(float(ds.robot(r).groundtruth.t[0]) for r in ds.robot_ids)
-    t_mid = t0 + 0.5 * (float(ds.duration) - t0)
-    fit = fit_models(ds, t0, t_mid)
+    window = leading_fraction(t0, float(ds.duration), 0.5, str(folder))
+    t_mid = window.end_s
+    fit = fit_models(ds, window)
     prepared = build_recording(ds, fit, np.random.default_rng(args.seed))
     n_lm = prepared.recording.landmarks_xy.shape[0]
     keys = [("dead_reckoning", "none")] + [(m, a) for m in MODES[1:] for a in ANCHORS]
@@ -628,7 +397,7 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
         "dataset": str(folder),
         "robots": list(ds.robot_ids),
         "two_landmarks": [prepared.landmark_subjects[k] for k in prepared.two_landmarks],
-        "fit": asdict(fit),
+        "fit": fit.to_dict(),
         "cases": cases,
         "targets": targets,
         "paper_reference": {"joint_ekf_pos_rmse_m": 0.13, "dead_reckoning_pos_rmse_m": 2.7},

@@ -26,7 +26,8 @@ summary.json keys
 state, fraction of updates with the error inside ±3σ per state, ANEES with its 95 % band, NIS %
 beyond χ²(3, 0.95), and ``paper`` (5–10 cm, 0.075–0.1 rad);
 ``odometry_noise``: the σ used by the team, the sweep (σ_v, σ_ω and the position/yaw RMSE of
-each robot per scale) and the σ fitted for the replay;
+each robot per scale) and the σ fitted for the replay (``replay_fit``, each with its
+``calibration_window``);
 ``table1[case][filter][rule][state] = {mean, median, worst}`` for case2–4, PLKF/TEKF, rules
 ``paper_rule`` (Eq. 32) and ``fixed`` (0.05 m, 0.1 rad), plus ``table1[case][filter]["paper"]``;
 a guess that never converges counts as (updates + 1) and is counted in
@@ -352,7 +353,7 @@ def odometry_noise_summary(
         "team_note": "white noise per 100 Hz propagation step on each reported body velocity",
         "sweep": rows,
         "sweep_duration_s": config.sweep_duration_s,
-        "replay_fit": {label: dataclasses.asdict(fit) for label, fit in data.fits.items()},
+        "replay_fit": {label: fit.to_dict() for label, fit in data.fits.items()},
     }
 
 

@@ -12,8 +12,9 @@ sensor settings. Here the same is done with two robots of any MRCLAM-layout data
   the observed robot's plane raised by ``height``; measurement epochs falling in a ground-truth
   gap are skipped (counted);
 * the **odometry noise** the filters assume is fitted from the recording itself
-  (:func:`relloc.datasets.mrclam.fit_odometry_noise`: equivalent white noise over 1 s windows,
-  over each robot's whole recording), not chosen to match a paper number;
+  (:func:`relloc.calibration.odometry.fit_odometry_noise`: equivalent white noise over 1 s
+  windows, over each robot's whole recording — the calibration window, stated with each fit in
+  ``odometry_noise.replay_fit``), not chosen to match a paper number;
 * each Monte-Carlo draw adds fresh sensor noise for the four Table-2 settings and starts the
   PLKF, the bias-compensated PLKF and the TEKF from one arbitrary pose drawn in the field of
   view (seed 000 §6: unknown initialisation), together with relloc's yaw bank from the same
@@ -34,8 +35,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.calibration.odometry import OdometryNoiseFit, fit_odometry_noise
+from relloc.calibration.window import odometry_and_truth
 from relloc.core.recording import relative_pose
-from relloc.datasets.mrclam import OdometryNoiseFit, fit_odometry_noise, load_mrclam
+from relloc.datasets.mrclam import load_mrclam
 from relloc.errors import ConfigError, DataError
 from relloc.estimators.initialisation import fully_unknown, pose_in_fov
 from relloc.experiments.wanasinghe2014_filters import (
@@ -164,13 +167,15 @@ def prepare_replay(settings: ReplaySettings) -> ReplayData:
     ql, qc = obs.groundtruth.at(t), tgt.groundtruth.at(t)
     pose_l = np.stack([ql.x, ql.y, np.zeros_like(ql.x), ql.theta], axis=-1)
     pose_c = np.stack([qc.x, qc.y, np.full_like(qc.x, settings.height), qc.theta], axis=-1)
-    fits = {}
-    for label, robot in (("observer", obs), ("observed", tgt)):
-        t0 = max(robot.odometry.t[0], robot.groundtruth.t[0])
-        t1 = min(robot.odometry.t[-1], robot.groundtruth.t[-1])
-        fits[label] = fit_odometry_noise(
-            robot, t_start=t0, t_end=t1, rate_hz=settings.rate_hz, window_s=settings.noise_window_s
+    fits = {
+        label: fit_odometry_noise(
+            robot,
+            odometry_and_truth(robot, f"{ds.path}: robot {robot.subject}"),
+            rate_hz=settings.rate_hz,
+            window_s=settings.noise_window_s,
         )
+        for label, robot in (("observer", obs), ("observed", tgt))
+    }
     return ReplayData(
         source=f"{ds.path} robots {settings.observer} → {settings.observed}",
         t=t,

@@ -9,7 +9,11 @@ known landmark). With ``Δx = x_j − x_i``, ``Δy = y_j − y_i``, ``q = Δx² 
 
 - range: ``ρ_ij = √q`` with ``∂ρ/∂(x_i, y_i, ψ_i) = (−Δx/ρ, −Δy/ρ, 0)``,
   ``∂ρ/∂(x_j, y_j) = (Δx/ρ, Δy/ρ)``;
-- GPS-like absolute pose: ``h(X_i) = X_i``, ``H = I₃`` (heading residual wrapped).
+- GPS-like absolute pose: ``h(X_i) = X_i``, ``H = I₃`` (heading residual wrapped);
+- range bias of the camera (:func:`range_bias_features`): the measured range reads
+  ``ρ + b(η, ρ)`` with ``b = c · (1, η, η², ρ, ρη²)``, a smooth function of where the target
+  sits in the image and how far it is (the coefficients are fitted by
+  :mod:`relloc.calibration.camera`).
 
 All functions accept a leading batch dimension. The joint (team) form used by the cooperative
 filters is a stack of *scalar rows* (:class:`ScalarRows`): every row depends on at most two robot
@@ -99,6 +103,15 @@ def range_bearing_jacobians(observer: Array, target_xy: Array) -> tuple[Array, A
     Ro, Rt = range_jacobians(observer, target_xy)
     Bo, Bt = bearing_jacobians(observer, target_xy)
     return np.stack([Ro, Bo], axis=-2), np.stack([Rt, Bt], axis=-2)
+
+
+#: Regressors of the camera's range-bias model ``b(η, ρ) = c · (1, η, η², ρ, ρη²)``.
+RANGE_BIAS_FEATURES = ("1", "η", "η²", "ρ", "ρη²")
+
+
+def range_bias_features(bearing: Array, rng: Array) -> Array:
+    """Regressors ``(1, η, η², ρ, ρ η²)`` of the range-bias model, shape ``(…, 5)``."""
+    return np.stack([np.ones_like(bearing), bearing, bearing**2, rng, rng * bearing**2], axis=-1)
 
 
 def pose_measurement(pose: Array) -> tuple[Array, Array]:

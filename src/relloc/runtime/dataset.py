@@ -12,7 +12,8 @@ team, so that its robots can replay it:
   lasts ``duration_s`` (shortened to what every robot recorded), re-timed to start at 0;
 - truth is the Vicon pose on a ``rate_hz`` grid (yaw on the circle); odometry is each robot's
   recorded ``(v, ω)`` held on that grid, with the white-noise σ fitted from the recording itself
-  (:func:`relloc.datasets.mrclam.fit_odometry_noise`);
+  (:func:`relloc.calibration.odometry.fit_odometry_noise` over everywhere the robot has both
+  odometry and ground truth);
 - the observer measures every other robot at the sensor's rate with the sensor's noise
   (:func:`relloc.sim.sensors.sense`); epochs where either robot's ground truth is in a gap are
   skipped and counted in :attr:`Recording.source`.
@@ -24,8 +25,10 @@ from pathlib import Path
 
 import numpy as np
 
+from relloc.calibration.odometry import fit_odometry_noise
+from relloc.calibration.window import odometry_and_truth
 from relloc.core.recording import GroundTruth, Odometry, Recording, measurement_rows
-from relloc.datasets.mrclam import fit_odometry_noise, load_mrclam
+from relloc.datasets.mrclam import load_mrclam
 from relloc.errors import DataError
 from relloc.sim.scenario import SensorSpec
 from relloc.sim.sensors import measurement_times, sense
@@ -80,8 +83,7 @@ def mrclam_team_recording(
         u[:, 0], u[:, 3] = v, w
         fit = fit_odometry_noise(
             robot,
-            t_start=max(float(robot.odometry.t[0]), float(robot.groundtruth.t[0])),
-            t_end=min(float(robot.odometry.t[-1]), float(robot.groundtruth.t[-1])),
+            odometry_and_truth(robot, f"{ds.path}: robot {robot.subject}"),
             rate_hz=rate_hz,
         )
         odometries.append(

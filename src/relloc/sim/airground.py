@@ -16,7 +16,7 @@ Per tick ``k`` (period ``dt``, the filters' 20 Hz of the paper):
    midpoint ``p_0 − r_des,i / 2`` (or the measured midpoint when both robots are in view), with the
    leader's velocity as feed-forward.
 4. **Sensing.** UWB ranges between every pair of UGVs every ``uwb_every`` ticks, with errors from
-   the fitted real-data model (:func:`relloc.datasets.uwb_noise.sample_range_errors`: bias,
+   the fitted real-data model (:func:`relloc.models.uwb_noise.sample_range_errors`: bias,
    correlated core, outliers). A camera frame every ``camera_every`` ticks: a drone detects a
    pair ``{R_0, R_i}`` only if its altitude is inside the detection band and both robots'
    markers lie inside the footprint (``|Δx| ≤ z tan(hfov/2) − margin``, same for y), each with
@@ -40,7 +40,6 @@ from numpy.typing import NDArray
 from relloc.control.drone_schedule import DroneSchedule, Policy
 from relloc.control.formation import FormationSettings, Frame, desired_relative, formation_command
 from relloc.core.gaussian import Gaussian
-from relloc.datasets.uwb_noise import UwbNoiseModel, sample_range_errors
 from relloc.errors import ConfigError
 from relloc.estimators.switching_ekf import (
     FilterCounters,
@@ -52,6 +51,7 @@ from relloc.estimators.switching_ekf import (
 from relloc.geometry.triangle import side_of
 from relloc.models.airground import drone_step
 from relloc.models.unicycle import unicycle_step
+from relloc.models.uwb_noise import UwbNoiseModel, sample_range_errors
 
 Array = NDArray[np.float64]
 PathKind = Literal["arc", "s_curve", "straight"]

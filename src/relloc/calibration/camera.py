@@ -1,0 +1,324 @@
+"""Camera error models fitted against ground truth: bearing offset and noise, range bias and
+noise, the residuals' time correlation, the detection probability and the field of view.
+
+**Residuals** (:func:`camera_residuals`). Every detection ``z = (ρ̃, η̃)`` in the window whose
+observer's and target's ground truth are valid (a landmark's position is known) gives
+``e_ρ = ρ̃ − ρ(truth)`` and ``e_η = wrap(η̃ − η(truth))``, with ``ρ, η`` of
+:mod:`relloc.models.planar_measurement`.
+
+**Fit** (:func:`fit_camera`):
+
+- bearing: a per-robot camera offset, the median of ``e_η`` over ``|e_η| < BEARING_INLIER_RAD``
+  (0 with ``MIN_OFFSET_ROWS`` rows or fewer), and ``σ_η = 1.4826·MAD`` of what is left — medians
+  and MADs so that the rare wrong-barcode outliers, which the filter's χ² gate removes, do not
+  set the core;
+- range: the bias ``b(η, ρ) = c·(1, η, η², ρ, ρη²)`` (:func:`~relloc.models.planar_measurement.
+  range_bias_features`) by least squares on the residuals ``|e_ρ| < RANGE_INLIER_M``, then
+  ``σ_ρ = 1.4826·MAD`` of ``e_ρ − b``;
+- correlation: the correlation of a residual with the same (observer, target) pair's residual
+  ``lag`` seconds later (:func:`lag_correlation`) at ``CORRELATION_LAGS_S``. Consecutive
+  residuals are strongly correlated, so a filter that treats them as independent over-counts
+  their information; the variance inflation :func:`~relloc.calibration.inflation.
+  autocorrelation_inflation` at the readings' spacing (the median gap between consecutive
+  detections of a pair for bearings, at least the caller's ``range_interval_s`` for ranges —
+  the filter keeps one range per pair per interval) gives the σ the filter should assume,
+  ``σ·√f``.
+
+**Detection probability** (:func:`fit_detection_probability`): ``P_D`` = the share of (camera
+frame, other robot) pairs in which that robot is detected — the camera's narrow field of view
+makes this far below the 0.95 often assumed, and assuming 0.95 would make every frame without
+a teammate strong evidence that a false bearing is it.
+
+**Field of view** (:func:`fit_field_of_view`): the half-width, the widest ``|η̃|`` of any
+detection in the window.
+
+**Landmark wait** (:func:`landmark_wait_s`): the expected time from a random instant to a
+robot's next landmark detection, the horizon over which odometry must carry the pose.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from relloc.calibration.inflation import autocorrelation_inflation
+from relloc.calibration.window import CalibrationWindow
+from relloc.core.angles import wrap_angle
+from relloc.datasets.mrclam import MrclamDataset
+from relloc.errors import ConfigError
+from relloc.models.planar_measurement import range_bias_features
+
+Array = NDArray[np.float64]
+
+#: Gaussian-consistent MAD scale.
+MAD_SCALE = 1.4826
+#: Fewest residuals in the window for a camera fit.
+MIN_RESIDUALS = 20
+#: Bearing residuals beyond this (rad) are outliers for the offset and σ_η fits.
+BEARING_INLIER_RAD = 0.1
+#: Range residuals beyond this (m) are outliers for the bias and σ_ρ fits.
+RANGE_INLIER_M = 1.0
+#: A robot's bearing offset needs more inlier rows than this (else 0).
+MIN_OFFSET_ROWS = 10
+#: Lags (s) at which the residual correlation is measured.
+CORRELATION_LAGS_S = (0.25, 0.5, 1.0, 2.0, 5.0, 10.0)
+#: A later residual counts as ``lag`` later when it is within this (s) of ``t + lag``.
+LAG_TOLERANCE_S = 0.25
+#: Fewest residual pairs for a lag correlation (else 0).
+MIN_LAG_PAIRS = 10
+#: Clip of the detection probability (a pair never / always seen is not evidence of 0 or 1).
+P_DETECT_LIMITS = (0.05, 0.95)
+#: ``P_D`` when the window holds no camera frame.
+P_DETECT_UNKNOWN = 0.5
+
+
+@dataclass(frozen=True)
+class CameraResiduals:
+    """Camera residuals against ground truth: one row per usable detection; ``observer`` is
+    the robot's index in ``ds.robot_ids``, ``subject`` the detected subject."""
+
+    observer: NDArray[np.int64]
+    subject: NDArray[np.int64]
+    t: Array
+    range: Array
+    bearing: Array
+    range_error: Array
+    bearing_error: Array
+
+    def pair_key(self) -> NDArray[np.int64]:
+        """One integer per (observer, subject) pair."""
+        return np.asarray(self.observer * 1000 + self.subject, dtype=np.int64)
+
+
+def camera_residuals(ds: MrclamDataset, window: CalibrationWindow) -> CameraResiduals:
+    """``z − h(truth)`` of every detection in ``window`` whose truth is valid."""
+    lm = {int(s): xy for s, xy in zip(ds.landmarks.subject, ds.landmarks.xy, strict=True)}
+    cols: list[list[Array]] = [[] for _ in range(7)]
+    for index, rid in enumerate(ds.robot_ids):
+        m = ds.robot(rid).measurements
+        sel = window.contains(m.t)
+        t, subj = m.t[sel], m.subject[sel]
+        q = ds.robot(rid).groundtruth.at(t)
+        tx, ty = np.full(t.size, np.nan), np.full(t.size, np.nan)
+        ok = q.valid.copy()
+        for s in np.unique(subj):
+            k = subj == s
+            if int(s) in lm:
+                tx[k], ty[k] = lm[int(s)]
+            elif int(s) in ds.robots:
+                qq = ds.robot(int(s)).groundtruth.at(t[k])
+                tx[k], ty[k] = qq.x, qq.y
+                ok[k] &= qq.valid
+            else:
+                ok[k] = False
+        dx, dy = tx - q.x, ty - q.y
+        er = m.range[sel] - np.hypot(dx, dy)
+        eb = np.asarray(wrap_angle(m.bearing[sel] - (np.arctan2(dy, dx) - q.theta)))
+        for c, v in zip(
+            cols,
+            (np.full(t.size, index), subj, t, m.range[sel], m.bearing[sel], er, eb),
+            strict=True,
+        ):
+            c.append(v[ok])
+    arr = [np.concatenate(c) for c in cols]
+    return CameraResiduals(
+        arr[0].astype(np.int64), arr[1].astype(np.int64), arr[2], arr[3], arr[4], arr[5], arr[6]
+    )
+
+
+def mad_sigma(x: Array) -> float:
+    """Robust σ: ``1.4826 · median(|x − median(x)|)``."""
+    return float(MAD_SCALE * np.median(np.abs(x - np.median(x))))
+
+
+def lag_correlation(
+    res: CameraResiduals, values: Array, keep: NDArray[np.bool_], lag: float
+) -> float:
+    """Correlation of ``values`` with the same pair's value ``lag`` seconds later (within
+    ``LAG_TOLERANCE_S``), over the rows ``keep``; 0 with fewer than ``MIN_LAG_PAIRS`` pairs."""
+    a, b = [], []
+    key = res.pair_key()
+    for k in np.unique(key[keep]):
+        idx = np.flatnonzero((key == k) & keep)
+        tt, vv = res.t[idx], values[idx]
+        j = np.searchsorted(tt, tt + lag)
+        ok = j < tt.size
+        ok[ok] &= np.abs(tt[j[ok]] - tt[ok] - lag) < LAG_TOLERANCE_S
+        a.append(vv[ok])
+        b.append(vv[j[ok]])
+    x, y = np.concatenate(a), np.concatenate(b)
+    if x.size < MIN_LAG_PAIRS:
+        return 0.0
+    return float(np.corrcoef(x, y)[0, 1])
+
+
+def pair_spacing_s(res: CameraResiduals) -> float:
+    """Median gap between consecutive detections of one pair (the bearings' sampling
+    interval); the first correlation lag when no pair is detected twice."""
+    key = res.pair_key()
+    order = np.lexsort((res.t, key))
+    gaps = np.diff(res.t[order])[np.diff(key[order]) == 0]
+    return float(np.median(gaps)) if gaps.size else CORRELATION_LAGS_S[0]
+
+
+@dataclass(frozen=True)
+class CameraFit:
+    """Bearing offsets (rad, per robot in ``ds.robot_ids`` order) and σ, range-bias
+    coefficients and σ, each σ raw (MAD) and inflated for the residual correlation
+    (``sigma = sigma_raw·√inflation``), the range interval the inflation assumes, the measured
+    lag correlations and how many residuals entered."""
+
+    calibration_window: CalibrationWindow
+    bearing_offset: tuple[float, ...]
+    sigma_bearing_raw: float
+    bearing_inflation: float
+    sigma_bearing: float
+    range_bias_coeffs: tuple[float, ...]
+    sigma_range_raw: float
+    range_inflation: float
+    sigma_range: float
+    range_interval_s: float
+    correlation: dict[str, dict[str, float]]
+    n_residuals: int
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON-ready record (the window as ``calibration_window``)."""
+        return {**asdict(self), "calibration_window": self.calibration_window.to_dict()}
+
+
+def _bearing_offsets(res: CameraResiduals, good: NDArray[np.bool_], n_robots: int) -> Array:
+    """Median inlier bearing residual per observer (0 with too few rows)."""
+    offsets = []
+    for i in range(n_robots):
+        sel = good & (res.observer == i)
+        offsets.append(
+            float(np.median(res.bearing_error[sel])) if sel.sum() > MIN_OFFSET_ROWS else 0.0
+        )
+    return np.asarray(offsets)
+
+
+def fit_camera(
+    ds: MrclamDataset, window: CalibrationWindow, *, range_interval_s: float
+) -> CameraFit:
+    """Fit the camera's bearing and range error models on ``window`` (module docstring)."""
+    if not (np.isfinite(range_interval_s) and range_interval_s >= 0):
+        raise ConfigError(f"fit_camera: range_interval_s must be ≥ 0, got {range_interval_s}")
+    res = camera_residuals(ds, window)
+    if res.t.size < MIN_RESIDUALS:
+        raise window.too_little(f"fewer than {MIN_RESIDUALS} detections with ground truth")
+    good_b = np.abs(res.bearing_error) < BEARING_INLIER_RAD
+    offsets = _bearing_offsets(res, good_b, len(ds.robot_ids))
+    eb = res.bearing_error - offsets[res.observer]
+    sigma_b = mad_sigma(eb[good_b])
+    good_r = np.abs(res.range_error) < RANGE_INLIER_M
+    X = range_bias_features(res.bearing, res.range)
+    coeffs, *_ = np.linalg.lstsq(X[good_r], res.range_error[good_r], rcond=None)
+    er = res.range_error - X @ coeffs
+    sigma_r = mad_sigma(er[good_r])
+    rho_r = {lag: lag_correlation(res, er, good_r, lag) for lag in CORRELATION_LAGS_S}
+    rho_b = {lag: lag_correlation(res, eb, good_b, lag) for lag in CORRELATION_LAGS_S}
+    spacing = pair_spacing_s(res)
+    f_b = autocorrelation_inflation(rho_b, spacing)
+    f_r = autocorrelation_inflation(rho_r, max(spacing, range_interval_s))
+    return CameraFit(
+        calibration_window=window,
+        bearing_offset=tuple(float(o) for o in offsets),
+        sigma_bearing_raw=sigma_b,
+        bearing_inflation=f_b,
+        sigma_bearing=float(sigma_b * np.sqrt(f_b)),
+        range_bias_coeffs=tuple(float(c) for c in coeffs),
+        sigma_range_raw=sigma_r,
+        range_inflation=f_r,
+        sigma_range=float(sigma_r * np.sqrt(f_r)),
+        range_interval_s=range_interval_s,
+        correlation={
+            "range": {f"{lag:g}s": v for lag, v in rho_r.items()},
+            "bearing": {f"{lag:g}s": v for lag, v in rho_b.items()},
+            "pair_spacing_s": {"median": spacing},
+        },
+        n_residuals=int(res.t.size),
+    )
+
+
+@dataclass(frozen=True)
+class DetectionProbabilityFit:
+    """``P_D`` (clipped to ``P_DETECT_LIMITS``) and the counts it came from."""
+
+    calibration_window: CalibrationWindow
+    p_detect: float
+    frames: int
+    pairs: int
+    detected_pairs: int
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON-ready record (the window as ``calibration_window``)."""
+        return {**asdict(self), "calibration_window": self.calibration_window.to_dict()}
+
+
+def fit_detection_probability(
+    ds: MrclamDataset, window: CalibrationWindow
+) -> DetectionProbabilityFit:
+    """``P_D``: the share of (camera frame, other robot) pairs in ``window`` in which that
+    robot is detected (a frame is a distinct measurement time stamp of an observer)."""
+    seen = pairs = frames = 0
+    n_other = len(ds.robot_ids) - 1
+    for s in ds.robot_ids:
+        meas = ds.robot(s).measurements
+        sel = window.contains(meas.t)
+        n_frames = np.unique(meas.t[sel]).size
+        frames += n_frames
+        pairs += n_frames * n_other
+        robots = sel & ds.is_robot(meas.subject) & (meas.subject != s)
+        seen += np.unique(np.stack([meas.t[robots], meas.subject[robots]]), axis=1).shape[1]
+    p = float(np.clip(seen / pairs, *P_DETECT_LIMITS)) if pairs else P_DETECT_UNKNOWN
+    return DetectionProbabilityFit(
+        calibration_window=window, p_detect=p, frames=frames, pairs=pairs, detected_pairs=seen
+    )
+
+
+@dataclass(frozen=True)
+class FieldOfViewFit:
+    """Half-width (rad) of the camera's field of view: the widest ``|bearing|`` in the window."""
+
+    calibration_window: CalibrationWindow
+    half_width_rad: float
+    n_bearings: int
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON-ready record (the window as ``calibration_window``)."""
+        return {**asdict(self), "calibration_window": self.calibration_window.to_dict()}
+
+
+def fit_field_of_view(ds: MrclamDataset, window: CalibrationWindow) -> FieldOfViewFit:
+    """The widest ``|wrap(bearing)|`` of any detection in ``window`` (DataError when there is
+    no bearing or the widest is 0)."""
+    bearings = []
+    for s in ds.robot_ids:
+        m = ds.robot(s).measurements
+        bearings.append(np.abs(wrap_angle(m.bearing[window.contains(m.t)])))
+    widest = max((float(b.max()) for b in bearings if b.size), default=0.0)
+    if not 0.0 < widest <= np.pi:
+        raise window.too_little(f"no usable camera bearings (widest {widest})")
+    return FieldOfViewFit(
+        calibration_window=window,
+        half_width_rad=widest,
+        n_bearings=int(sum(b.size for b in bearings)),
+    )
+
+
+def landmark_wait_s(ds: MrclamDataset, window: CalibrationWindow) -> float:
+    """Expected wait from a random instant in ``window`` to a robot's next landmark detection,
+    ``Σg²/(2Σg)`` over the gaps ``g`` between its landmark detections (the window's ends
+    included) pooled over robots: the horizon odometry must bridge (1 s without any gap)."""
+    t_lo, t_hi = window.start_s, window.end_s
+    num = den = 0.0
+    lm = set(int(s) for s in ds.landmarks.subject)
+    for rid in ds.robot_ids:
+        m = ds.robot(rid).measurements
+        t = np.unique(m.t[np.isin(m.subject, list(lm)) & window.contains(m.t)])
+        g = np.diff(np.concatenate([[t_lo], t, [t_hi]]))
+        num += float(np.sum(g**2))
+        den += float(np.sum(g))
+    return num / (2.0 * den) if den > 0 else 1.0

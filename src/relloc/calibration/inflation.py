@@ -1,0 +1,59 @@
+"""Noise inflation for time-correlated errors.
+
+A Kalman-type filter assumes each reading's error independent of the others. When the errors
+of readings ``Δ`` apart are correlated, ``ρ(kΔ) = corr(e_t, e_{t+kΔ})``, the mean of ``N``
+readings has variance ``(σ²/N)·f`` for large ``N``, with the variance inflation factor
+(Bartlett; the integrated autocorrelation time in samples)
+
+    f = 1 + 2 Σ_{k≥1} ρ(kΔ).
+
+A filter that uses the readings as independent with variance ``σ²`` over-counts their
+information ``f``-fold; giving it ``f σ²`` instead makes its long-run averaging honest (a short
+burst of readings is then under-weighted, the price of keeping a white-noise filter).
+
+- :func:`autocorrelation_inflation`: ``f`` from a measured autocorrelation at a few lags
+  (interpolated linearly between them, clipped at 0, taken as 0 beyond
+  ``CORRELATION_HORIZON_S``) — for residuals whose correlation is measured, not modelled;
+- :func:`gauss_markov_inflation`: the closed form for a first-order Gauss–Markov error of time
+  constant ``τ`` sampled every ``Δ``: ``ρ(kΔ) = aᵏ`` with ``a = exp(−Δ/τ)``, so
+  ``f = 1 + 2a/(1 − a) = (1 + a)/(1 − a)`` (1 when τ = 0, white).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+
+import numpy as np
+
+from relloc.errors import ConfigError
+
+#: Lags beyond this (s) are taken as uncorrelated by :func:`autocorrelation_inflation`.
+CORRELATION_HORIZON_S = 10.0
+
+
+def autocorrelation_inflation(
+    rho: Mapping[float, float], spacing: float, horizon_s: float = CORRELATION_HORIZON_S
+) -> float:
+    """``f = 1 + 2 Σ_{k≥1, kΔ ≤ horizon} ρ(kΔ)`` for readings ``Δ = spacing`` apart, with ``ρ``
+    the correlation measured at the lags ``rho`` (s → correlation), interpolated linearly,
+    clipped to [0, 1], held at its first value below the first lag and 0 beyond the last."""
+    if not rho:
+        raise ConfigError("autocorrelation_inflation: no measured lag correlation")
+    if not (math.isfinite(spacing) and spacing > 0):
+        raise ConfigError(f"autocorrelation_inflation: spacing must be > 0, got {spacing}")
+    lags = np.array(sorted(rho))
+    values = np.clip(np.array([rho[lag] for lag in lags]), 0.0, 1.0)
+    k = np.arange(spacing, horizon_s + 1e-9, spacing)
+    return float(1.0 + 2.0 * np.sum(np.interp(k, lags, values, left=values[0], right=0.0)))
+
+
+def gauss_markov_inflation(period: float, tau: float) -> float:
+    """``(1 + a)/(1 − a)``, ``a = exp(−period/τ)``, for a Gauss–Markov error of time constant
+    ``tau`` sampled every ``period`` (1 when ``tau = 0``)."""
+    if tau <= 0.0:
+        return 1.0
+    if not (math.isfinite(period) and period > 0):
+        raise ConfigError(f"gauss_markov_inflation: period must be > 0, got {period}")
+    a = math.exp(-period / tau)
+    return (1.0 + a) / (1.0 - a)

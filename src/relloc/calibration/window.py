@@ -1,0 +1,114 @@
+"""The calibration window: the stretch of data an error model is fitted on, stated with the fit.
+
+A fitted error model means little without the data it was fitted on. The real-data
+experiments fit on one stretch of a recording and evaluate on another (or fit on a separate
+recording), and every fit record carries a :class:`CalibrationWindow` so that summary.json says
+which. A window is the closed time interval ``[start_s, end_s]`` (seconds, on the recording's
+own clock) of ``source`` (the file or folder it was cut from, and the robot where it matters):
+an event at time ``t`` is in the window when ``start_s ≤ t ≤ end_s``, and fits that resample
+on a time grid use grid points inside it.
+
+How the experiments choose their windows (one function each, so the choice reads as a
+sentence where it is made):
+
+- :func:`leading_fraction` — the first ``fraction`` of a span (mrclam-cl: the first half of
+  the run; the second half is the held-out check);
+- :func:`following` — ``length_s`` seconds from a start (mrclam-association: the first
+  minute after every robot has started moving; the evaluation starts where it ends);
+- :func:`spanning` — from the first to the last time of a recording (a separate calibration
+  recording such as the UWB one, or a fit that deliberately uses the whole run);
+- :func:`odometry_and_truth` — where one robot has both odometry and ground truth (fits that
+  use a robot's whole recording, as the seed-000 replay does).
+
+A window with ``end_s ≤ start_s`` (or a non-finite end) is refused with :class:`ConfigError`;
+a fit whose window holds too little data refuses with :class:`DataError` naming the window.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from relloc.datasets.mrclam import RobotData
+from relloc.errors import ConfigError, DataError
+
+
+@dataclass(frozen=True)
+class CalibrationWindow:
+    """``[start_s, end_s]`` (s, the recording's clock) of ``source``; see the module docstring."""
+
+    start_s: float
+    end_s: float
+    source: str
+
+    def __post_init__(self) -> None:
+        where = f"CalibrationWindow of {self.source!r}"
+        if not self.source:
+            raise ConfigError("CalibrationWindow.source: must name the data it was cut from")
+        if not (math.isfinite(self.start_s) and math.isfinite(self.end_s)):
+            raise ConfigError(
+                f"{where}: start_s and end_s must be finite, got [{self.start_s}, {self.end_s}]"
+            )
+        if not self.end_s > self.start_s:
+            raise ConfigError(
+                f"{where}: empty window [{self.start_s:g}, {self.end_s:g}] s (end_s ≤ start_s)"
+            )
+
+    @property
+    def duration_s(self) -> float:
+        """``end_s − start_s``."""
+        return float(self.end_s - self.start_s)
+
+    def contains(self, t: ArrayLike) -> NDArray[np.bool_]:
+        """Mask of the times ``start_s ≤ t ≤ end_s``."""
+        tt = np.asarray(t, dtype=float)
+        return np.asarray((tt >= self.start_s) & (tt <= self.end_s))
+
+    def describe(self) -> str:
+        """One line for reports and error messages."""
+        return f"[{self.start_s:.2f}, {self.end_s:.2f}] s of {self.source}"
+
+    def too_little(self, what: str) -> DataError:
+        """The error a fit raises when this window holds too little ``what`` to fit on."""
+        return DataError(f"calibration window {self.describe()}: {what}")
+
+    def to_dict(self) -> dict[str, float | str]:
+        """JSON-ready ``{"start_s", "end_s", "source"}``."""
+        return {"start_s": float(self.start_s), "end_s": float(self.end_s), "source": self.source}
+
+
+def leading_fraction(
+    start_s: float, end_s: float, fraction: float, source: str
+) -> CalibrationWindow:
+    """The first ``fraction`` of ``[start_s, end_s]``: ``[start_s, start_s + fraction·(end_s −
+    start_s)]`` (the rest of the span is left for evaluation)."""
+    if not 0.0 < fraction <= 1.0:
+        raise ConfigError(f"leading_fraction: fraction must be in (0, 1], got {fraction}")
+    return CalibrationWindow(start_s, start_s + fraction * (end_s - start_s), source)
+
+
+def following(start_s: float, length_s: float, source: str) -> CalibrationWindow:
+    """``[start_s, start_s + length_s]``."""
+    return CalibrationWindow(start_s, start_s + length_s, source)
+
+
+def spanning(t: ArrayLike, source: str) -> CalibrationWindow:
+    """From the first to the last of the times ``t`` (a whole recording)."""
+    tt = np.asarray(t, dtype=float)
+    if tt.size == 0:
+        raise DataError(f"{source}: no time stamps, so no calibration window")
+    return CalibrationWindow(float(tt.min()), float(tt.max()), source)
+
+
+def odometry_and_truth(robot: RobotData, source: str) -> CalibrationWindow:
+    """``[max(first odometry, first ground truth), min(last odometry, last ground truth)]`` of
+    ``robot``: everywhere it has both."""
+    odo, gt = robot.odometry.t, robot.groundtruth.t
+    if len(odo) == 0 or len(gt) == 0:
+        raise DataError(f"{source}: robot {robot.subject} lacks odometry or ground truth")
+    return CalibrationWindow(
+        max(float(odo[0]), float(gt[0])), min(float(odo[-1]), float(gt[-1])), source
+    )

@@ -1,0 +1,67 @@
+"""CalibrationWindow: validation, membership, how windows are chosen and stated."""
+
+import json
+
+import numpy as np
+import pytest
+
+from relloc.calibration.window import (
+    CalibrationWindow,
+    following,
+    leading_fraction,
+    odometry_and_truth,
+    spanning,
+)
+from relloc.datasets.mrclam import GroundTruth, Odometry
+from relloc.errors import ConfigError, DataError
+
+
+@pytest.mark.parametrize(
+    ("start", "end", "match"),
+    [
+        (5.0, 5.0, "empty window"),
+        (5.0, 4.0, "empty window"),
+        (float("nan"), 4.0, "finite"),
+        (0.0, float("inf"), "finite"),
+    ],
+)
+def test_an_empty_or_non_finite_window_is_refused(start, end, match):
+    with pytest.raises(ConfigError, match=match):
+        CalibrationWindow(start, end, "run6")
+
+
+def test_a_window_must_name_its_source():
+    with pytest.raises(ConfigError, match="source"):
+        CalibrationWindow(0.0, 1.0, "")
+
+
+def test_the_window_is_closed_and_states_itself():
+    w = CalibrationWindow(1.0, 3.0, "run6")
+    assert w.contains([0.5, 1.0, 2.0, 3.0, 3.5]).tolist() == [False, True, True, True, False]
+    assert w.duration_s == 2.0
+    assert json.loads(json.dumps(w.to_dict())) == {"start_s": 1.0, "end_s": 3.0, "source": "run6"}
+    err = w.too_little("no rows")
+    assert isinstance(err, DataError) and "[1.00, 3.00] s of run6: no rows" in str(err)
+
+
+def test_window_choices():
+    assert leading_fraction(10.0, 30.0, 0.5, "r") == CalibrationWindow(10.0, 20.0, "r")
+    assert following(10.0, 60.0, "r") == CalibrationWindow(10.0, 70.0, "r")
+    assert spanning(np.array([3.0, 1.0, 7.0]), "r") == CalibrationWindow(1.0, 7.0, "r")
+    with pytest.raises(ConfigError, match="fraction"):
+        leading_fraction(0.0, 1.0, 0.0, "r")
+    with pytest.raises(DataError, match="no time stamps"):
+        spanning(np.zeros(0), "r")
+    with pytest.raises(ConfigError, match="empty window"):
+        spanning(np.array([2.0, 2.0]), "r")  # one instant is no window
+
+
+def test_odometry_and_truth_is_where_a_robot_has_both(synthetic):
+    t = np.arange(0.0, 10.0, 0.1)
+    gt = GroundTruth(t=t, x=t, y=t, theta=0 * t, gap_threshold=0.5)
+    odo = Odometry(t=np.array([2.0, 12.0]), v=np.zeros(2), omega=np.zeros(2))
+    w = odometry_and_truth(synthetic.robot(1, gt, odo), "run6: robot 1")
+    assert (w.start_s, w.end_s, w.source) == (2.0, float(t[-1]), "run6: robot 1")
+    empty = Odometry(t=np.zeros(0), v=np.zeros(0), omega=np.zeros(0))
+    with pytest.raises(DataError, match="robot 1 lacks odometry"):
+        odometry_and_truth(synthetic.robot(1, gt, empty), "run6")

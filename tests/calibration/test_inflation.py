@@ -1,0 +1,41 @@
+"""Variance inflation for time-correlated errors: the measured-autocorrelation sum and the
+Gauss–Markov closed form agree, and both reduce to 1 for white errors."""
+
+import math
+
+import pytest
+
+from relloc.calibration.inflation import autocorrelation_inflation, gauss_markov_inflation
+from relloc.errors import ConfigError
+
+
+def test_gauss_markov_closed_form_is_the_limit_of_the_autocorrelation_sum():
+    period, tau = 0.1, 1.2
+    a = math.exp(-period / tau)
+    n = 2000  # a^n is negligible
+    rho = {k * period: a**k for k in range(1, n + 1)}
+    measured = autocorrelation_inflation(rho, period, horizon_s=n * period)
+    assert measured == pytest.approx(gauss_markov_inflation(period, tau), rel=1e-9)
+    assert gauss_markov_inflation(period, tau) == pytest.approx((1 + a) / (1 - a))
+
+
+def test_white_errors_need_no_inflation():
+    assert gauss_markov_inflation(0.1, 0.0) == 1.0
+    assert autocorrelation_inflation({0.5: 0.0, 1.0: -0.1, 5.0: 0.0}, 0.5) == 1.0
+
+
+def test_autocorrelation_sum_interpolates_and_stops_at_the_horizon():
+    # ρ = 0.5 at 1 s, 0 from 2 s: readings 0.5 s apart see ρ(0.5) = 0.5 (held below the first
+    # lag), ρ(1) = 0.5, ρ(1.5) = 0.25 and nothing after → f = 1 + 2·1.25
+    rho = {1.0: 0.5, 2.0: 0.0, 10.0: 0.0}
+    assert autocorrelation_inflation(rho, 0.5) == pytest.approx(3.5)
+    assert autocorrelation_inflation({1.0: 0.5}, 0.5, horizon_s=0.5) == pytest.approx(2.0)
+
+
+def test_bad_inputs_are_refused():
+    with pytest.raises(ConfigError, match="no measured lag"):
+        autocorrelation_inflation({}, 0.5)
+    with pytest.raises(ConfigError, match="spacing"):
+        autocorrelation_inflation({1.0: 0.5}, 0.0)
+    with pytest.raises(ConfigError, match="period"):
+        gauss_markov_inflation(0.0, 1.0)

@@ -1,0 +1,99 @@
+"""Odometry fits recover known latency, scales and noise from seeded synthetic robots, and
+refuse windows without enough data."""
+
+import numpy as np
+import pytest
+
+from relloc.calibration.odometry import fit_odometry_model, fit_odometry_noise
+from relloc.calibration.window import CalibrationWindow
+from relloc.datasets.mrclam import GroundTruth, Odometry
+from relloc.errors import ConfigError, DataError
+
+
+def test_odometry_noise_fit_recovers_a_known_error(synthetic):
+    t = np.arange(0.0, 20.0, 0.01)
+    theta = 0.3 + 0.1 * t  # turning at 0.1 rad/s while moving at 0.2 m/s
+    x = 0.2 / 0.1 * (np.sin(theta) - np.sin(0.3))
+    y = -0.2 / 0.1 * (np.cos(theta) - np.cos(0.3))
+    gt = GroundTruth(t=t, x=x, y=y, theta=np.angle(np.exp(1j * theta)), gap_threshold=0.5)
+    # odometry over-reports speed by 0.05 m/s and turn rate by 0.02 rad/s
+    odo = Odometry(t=t, v=np.full_like(t, 0.25), omega=np.full_like(t, 0.12))
+    robot = synthetic.robot(1, gt, odo)
+    window = CalibrationWindow(1.0, 19.0, "synthetic robot 1")
+    fit = fit_odometry_noise(robot, window, window_s=1.0)
+    assert fit.n_windows == 18
+    assert fit.calibration_window == window
+    assert fit.to_dict()["calibration_window"] == window.to_dict()
+    assert fit.bias_v == pytest.approx(-0.05, abs=1e-3)
+    assert fit.bias_w == pytest.approx(-0.02, abs=1e-4)
+    # a constant error e accumulates e·W per window: σ_eq = |e| sqrt(W / dt)
+    assert fit.sigma_v == pytest.approx(0.5, rel=0.02)
+    assert fit.sigma_w == pytest.approx(0.2, rel=0.02)
+    assert fit.sigma_lateral < 0.02
+    with pytest.raises(DataError, match=r"calibration window \[1.00, 2.50\].*fewer than two"):
+        fit_odometry_noise(robot, CalibrationWindow(1.0, 2.5, "synthetic"), window_s=1.0)
+
+
+def test_odometry_noise_fit_recovers_white_input_noise(synthetic):
+    rng = np.random.default_rng(3)
+    robot = synthetic.commanded_robot(1, rng, duration=200.0, sigma_v=0.05, sigma_w=0.1)
+    fit = fit_odometry_noise(robot, CalibrationWindow(1.0, 199.0, "synthetic"), rate_hz=100.0)
+    # per-step white noise of σ at the fit's own rate is σ_eq = σ (198 windows: ±5 %)
+    assert fit.sigma_v == pytest.approx(0.05, rel=0.15)
+    assert fit.sigma_w == pytest.approx(0.1, rel=0.15)
+    assert abs(fit.bias_v) < 0.01 and abs(fit.bias_w) < 0.02
+
+
+def test_odometry_noise_fit_refuses_windows_without_ground_truth(synthetic):
+    t = np.concatenate([np.arange(0.0, 1.0, 0.01), np.arange(9.0, 10.0, 0.01)])
+    gt = GroundTruth(t=t, x=0 * t, y=0 * t, theta=0 * t, gap_threshold=0.5)
+    odo = Odometry(t=t, v=0 * t, omega=0 * t)
+    robot = synthetic.robot(4, gt, odo)
+    with pytest.raises(DataError, match="robot 4: ground truth has gaps in every window"):
+        fit_odometry_noise(robot, CalibrationWindow(1.0, 9.0, "synthetic"))
+    with pytest.raises(ConfigError, match="rate_hz"):
+        fit_odometry_noise(robot, CalibrationWindow(1.0, 9.0, "synthetic"), rate_hz=0.0)
+
+
+def test_odometry_model_recovers_latency_scales_and_noise_rate(synthetic):
+    rng = np.random.default_rng(7)
+    q_v, q_w = 1e-4, 4e-4  # variance rates (m²/s, rad²/s) of the white input noise
+    dt = 0.01
+    robots = [
+        synthetic.commanded_robot(
+            subject,
+            rng,
+            duration=200.0,
+            latency=0.2,
+            scale_v=0.9,
+            scale_w=1.1,
+            sigma_v=np.sqrt(q_v / dt),
+            sigma_w=np.sqrt(q_w / dt),
+            dt=dt,
+            command_period=4.0,
+        )
+        for subject in (1, 2)
+    ]
+    ds = synthetic.dataset(robots)
+    window = CalibrationWindow(0.0, 200.0, "synthetic")
+    fit = fit_odometry_model(ds, window, integration_s=1.0)
+    assert fit.calibration_window == window and fit.odometry_window_s == 1.0
+    assert fit.latency_s == pytest.approx(0.2, abs=0.011)
+    # (central differences of the ground truth round the command steps off: ~1 % low)
+    assert fit.scale_v == pytest.approx((0.9, 0.9), rel=0.02)
+    assert fit.scale_w == pytest.approx((1.1, 1.1), rel=0.02)
+    # the rate at the typical command (|v| ≈ 0.25 m/s, |ω| ≈ 0.25 rad/s) is the true one
+    rate_v = fit.q_v0 + fit.k_v * 0.25
+    rate_w = fit.q_w0 + fit.k_w * 0.25 + fit.k_wv * 0.25
+    assert rate_v == pytest.approx(q_v, rel=0.3)
+    assert rate_w == pytest.approx(q_w, rel=0.3)
+    assert set(fit.to_dict()) >= {"latency_s", "scale_v", "q_v0", "calibration_window"}
+
+
+def test_odometry_model_refuses_a_window_without_ground_truth(synthetic):
+    rng = np.random.default_rng(1)
+    ds = synthetic.dataset([synthetic.commanded_robot(1, rng, duration=20.0)])
+    with pytest.raises(DataError, match=r"\[50.00, 80.00\] s of synthetic: no odometry"):
+        fit_odometry_model(ds, CalibrationWindow(50.0, 80.0, "synthetic"), integration_s=1.0)
+    with pytest.raises(ConfigError, match="integration_s"):
+        fit_odometry_model(ds, CalibrationWindow(0.0, 20.0, "synthetic"), integration_s=0.0)
