@@ -246,7 +246,7 @@ def test_odometry_without_a_usable_row_is_a_clear_error(
     tmp_path: Path, content: bytes, n_rows: int
 ) -> None:
     """The loader refuses it (it used to load, and the runtime conversion hit an IndexError)."""
-    from relloc.runtime.dataset import mrclam_team_log
+    from relloc.runtime.dataset import mrclam_team_recording
 
     folder = _small_dataset(tmp_path / "odo")
     (folder / "Robot1_Odometry.dat").write_bytes(content)
@@ -254,17 +254,17 @@ def test_odometry_without_a_usable_row_is_a_clear_error(
     with pytest.raises(DataError, match=message):
         load_mrclam(folder)
     with pytest.raises(DataError, match=message):
-        mrclam_team_log(folder, np.random.default_rng(0))
+        mrclam_team_recording(folder, np.random.default_rng(0))
 
 
 def test_a_team_log_needs_two_robots(tmp_path: Path) -> None:
-    from relloc.runtime.dataset import mrclam_team_log
+    from relloc.runtime.dataset import mrclam_team_recording
 
     folder = _small_dataset(tmp_path / "one")
     for kind in ("Groundtruth", "Odometry", "Measurement"):
         (folder / f"Robot2_{kind}.dat").unlink()
     with pytest.raises(DataError, match=r"at least 2 robots, the folder has \(1,\)"):
-        mrclam_team_log(folder, np.random.default_rng(0))
+        mrclam_team_recording(folder, np.random.default_rng(0))
 
 
 @pytest.mark.parametrize(

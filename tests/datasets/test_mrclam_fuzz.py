@@ -32,7 +32,7 @@ from relloc.datasets.mrclam import (
     load_mrclam,
 )
 from relloc.errors import ConfigError, DataError
-from relloc.runtime.dataset import mrclam_team_log
+from relloc.runtime.dataset import mrclam_team_recording
 
 T0 = 1_000_000_000.0
 HEADER = [b"# MRCLAM-layout fuzz file", b"# Time [s]  ...  (comment lines are not rows)"]
@@ -256,7 +256,7 @@ def test_the_unmutated_folders_load_without_a_skip() -> None:
             root = write(apply(_clean_files(seconds), []), Path(tmp) / f"ds{seconds}")
             ds = load_mrclam(root, MrclamOptions(on_bad_row="raise"))
             assert ds.robot_ids == (1, 2, 3) and ds.report.n_skipped == 0
-        log = mrclam_team_log(root, np.random.default_rng(0), duration_s=12.0)
+        log = mrclam_team_recording(root, np.random.default_rng(0), duration_s=12.0)
         assert log.span == (0.0, 12.0)
 
 
@@ -322,12 +322,15 @@ def test_fast_and_row_by_row_parsing_accept_and_read_the_same_numerals(token: st
 
 @settings(derandomize=True, max_examples=25, deadline=None, database=None)
 @given(folder=folders(ROW_KINDS + LINE_KINDS + FILE_KINDS, seconds=20.0, max_mutations=3))
-def test_the_runtime_team_log_raises_only_relloc_errors(folder: dict[str, bytes | None]) -> None:
+def test_the_runtime_team_recording_raises_only_relloc_errors(
+    folder: dict[str, bytes | None],
+) -> None:
     with tempfile.TemporaryDirectory() as tmp:
         root = write(folder, Path(tmp) / "ds")
         try:
-            log = mrclam_team_log(root, np.random.default_rng(0), duration_s=12.0)
+            rec = mrclam_team_recording(root, np.random.default_rng(0), duration_s=12.0)
         except (DataError, ConfigError):
             return
-    assert len(log.robots) >= 2
-    assert np.isfinite(log.measurements.z).all()
+    assert len(rec.robots) >= 2
+    m = rec.measurements
+    assert np.isfinite(m.value[:, :3]).all() and set(m.kind_names()) <= {"range_bearing_elevation"}

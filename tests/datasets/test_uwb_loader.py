@@ -12,9 +12,10 @@ import numpy as np
 import pytest
 from uwb_samples import HEADER, check_recording, tiers_lines, tiers_text
 
+from relloc.calibration.uwb import fit_uwb_noise
+from relloc.calibration.window import spanning
 from relloc.datasets.paths import shared_data_dir
 from relloc.datasets.uwb import MAX_TIME_GAP, UwbRecording, load_uwb_csv
-from relloc.datasets.uwb_noise import fit_uwb_noise
 from relloc.errors import DataError
 
 Row = tuple[float, int, int, float, float]
@@ -105,7 +106,7 @@ def test_stray_quote_in_the_shared_test_recording_is_reported_as_one_row(tmp_pat
     data = b"\n".join(lines)
     rec = _load(tmp_path, data)
     assert (rec.data_rows, rec.n_rows, rec.skipped.count) == (1098, 1097, 1)
-    summary = fit_uwb_noise(rec).as_dict()
+    summary = fit_uwb_noise(rec, spanning(rec.t, str(rec.path))).to_dict()
     assert (summary["n_rows"], summary["rows_skipped"]) == (1097, 1)
 
 
