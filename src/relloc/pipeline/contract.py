@@ -18,6 +18,10 @@ the network). At every event time ``t`` the loop calls, in this order,
 After the loop (and whenever a node ships a report), :meth:`Estimator.take_updates` and
 :meth:`Estimator.take_events` hand over the per-update diagnostics (NIS, conditioning of ``R``
 and ``S``) and the track events (created, deleted, re-created) recorded since the last call.
+An estimator that counts what it did not use (rows of a kind it does not model, of an unknown
+target, ...) may also offer ``take_counts() -> dict[str, int]`` (the counts since the last call;
+:class:`Silent` gives none); the loop adds them to :attr:`Estimates.counts
+<relloc.pipeline.estimates.Estimates.counts>`.
 
 Estimators keep no reference to the truth and never read :attr:`Measurements.origin`.
 """
@@ -153,3 +157,6 @@ class Silent:
 
     def take_events(self) -> list[TrackEvent]:
         return []
+
+    def take_counts(self) -> dict[str, int]:
+        return {}

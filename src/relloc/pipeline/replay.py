@@ -87,6 +87,9 @@ def run_events(
     for est in estimators:
         recorder.add_updates(est.owner, est.take_updates())
         recorder.add_events(est.take_events())
+        take_counts = getattr(est, "take_counts", None)  # optional (see the contract)
+        if take_counts is not None:
+            recorder.count(take_counts())
 
 
 def _record_marks(
