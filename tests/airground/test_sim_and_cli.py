@@ -4,6 +4,7 @@ follows the drones' broadcasts; the drones fly their schedule; the reproduction 
 through the CLI."""
 
 import json
+import pickle
 from dataclasses import replace
 
 import numpy as np
@@ -66,6 +67,9 @@ def test_recording_holds_the_team_its_commands_and_readings():
     np.testing.assert_array_equal(rec.odometry[0].velocity[0], [0.1, 0.0, 0.0, 0.04])
     assert run.formation_error.shape == (sc.n_steps, 4, 2)
     assert run.estimates.labels == tuple(f"R_{i}->R_0" for i in range(1, 5))
+    # a run ships back from a Monte-Carlo worker
+    shipped = pickle.loads(pickle.dumps(run))
+    assert shipped.recording.meta == rec.meta and shipped.recording.robots == rec.robots
 
 
 @pytest.mark.parametrize("yaw", [0.0, 0.3])

@@ -337,7 +337,8 @@ class SwitchingEkf(Silent):
         self._counts[key] = self._counts.get(key, 0) + 1
 
     def _tick_inputs(self, batch: Measurements) -> TickInputs:
-        """The tick's inputs from the rows of the batch; rows it cannot use are counted."""
+        """The tick's inputs from the rows of the batch (each sighting also refreshes its pair
+        in the held set S); rows it cannot use are counted."""
         me, leader = self._me, self._leader
         ranges: dict[tuple[int, int], float] = {}
         sightings = []
