@@ -19,7 +19,7 @@ becomes formation error.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Literal
 
 import numpy as np
@@ -82,3 +82,34 @@ def formation_command(
     v = max(v, -settings.v_max)
     omega = max(-settings.w_max, min(settings.w_max, settings.heading_gain * delta))
     return v, omega
+
+
+@dataclass(frozen=True, kw_only=True)
+class FormationController:
+    """The followers' formation controller: follower ``R_i`` (i = 1..N) holds ``offsets[i-1]``
+    (in ``frame``) from its own estimate, with :func:`formation_command`."""
+
+    offsets: tuple[tuple[float, float], ...]
+    frame: Frame
+    settings: FormationSettings = field(default_factory=FormationSettings)
+
+    def __post_init__(self) -> None:
+        if not self.offsets:
+            raise ConfigError("FormationController.offsets: need at least one follower")
+        desired_relative(np.zeros(2), 0.0, self.frame)  # raises on an unknown frame
+
+    def commands(self, estimates: Array, leader_u: tuple[float, float]) -> Array:
+        """``(N, 2)`` commands ``(v_i, ω_i)`` from the followers' estimates ``(N, 4)``
+        ``[r_x, r_y, θ_i, θ_0]`` and the leader's broadcast command ``(v_0, ω_0)``."""
+        x = np.asarray(estimates, dtype=float)
+        if x.shape != (len(self.offsets), 4):
+            raise ConfigError(
+                f"FormationController: estimates of shape {x.shape} for "
+                f"{len(self.offsets)} followers (expected ({len(self.offsets)}, 4))"
+            )
+        return np.array(
+            [
+                formation_command(x[i], np.array(off), self.frame, leader_u, self.settings)
+                for i, off in enumerate(self.offsets)
+            ]
+        )

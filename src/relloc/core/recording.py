@@ -629,6 +629,18 @@ class Recording:
         object.__setattr__(self, "landmarks", landmarks)
         object.__setattr__(self, "meta", MappingProxyType(dict(self.meta)))
 
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickle support (recordings ship to Monte-Carlo workers): ``meta`` is stored as a
+        plain dict, since its read-only view cannot be pickled."""
+        state = dict(self.__dict__)
+        state["meta"] = dict(self.meta)
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        for name, value in state.items():
+            object.__setattr__(self, name, value)
+        object.__setattr__(self, "meta", MappingProxyType(dict(state["meta"])))
+
     @property
     def n_robots(self) -> int:
         return len(self.robots)

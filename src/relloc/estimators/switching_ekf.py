@@ -1,14 +1,29 @@
 """Multi-rate switching EKF of a follower UGV (seed 003, Section 3.1 and Algorithm 1).
 
-Follower ``R_i`` estimates ``x = [r_x, r_y, θ_i, θ_0]`` (:mod:`relloc.models.airground`). Every
-filter tick it predicts with Eq. 3 from both robots' commands; then it picks the measurement
-model of Eq. 4 from what the drones broadcast this tick (the set ``S`` of detected pairs):
+Follower ``R_i`` estimates ``x = [r_x, r_y, θ_i, θ_0]`` (:mod:`relloc.models.airground`; the
+frame ``airground_follower`` of :mod:`relloc.pipeline.frames`) and implements the estimator
+contract (:mod:`relloc.pipeline.contract`):
 
-- ``sw = 1`` — ``{R_0, R_i} ∈ S``: ``[d, φ, θ_i, θ_0]``;
-- ``sw = 2`` — ``S ≠ ∅`` but not its own pair: ``[d, φ̄, θ_0]`` with φ̄ from the triangle of
-  Fig. 3 (:func:`relloc.geometry.triangle_bearing`), using the detected pair whose triangle is
-  best conditioned (largest ``sin α_0``);
-- ``sw = 3`` — ``S = ∅``: ``[d]``.
+- :meth:`SwitchingEkf.advance` predicts with Eq. 3 from both robots' commands — its own and the
+  leader's ``(v, 0, 0, ω)`` rows of the held odometry, ``u = [v_i, ω_i, v_0, ω_0]``;
+- :meth:`SwitchingEkf.measure` builds the tick's :class:`TickInputs` from the batch — the
+  ``range`` rows between UGVs (its own range to the leader, the leader's and its own ranges to
+  the other followers) and the drones' ``pair_sighting`` rows of pairs {R_0, R_j} — and picks
+  the measurement model of Eq. 4 from the set ``S`` of detected pairs the drones broadcast:
+
+  - ``sw = 1`` — ``{R_0, R_i} ∈ S``: ``[d, φ, θ_i, θ_0]``;
+  - ``sw = 2`` — ``S ≠ ∅`` but not its own pair: ``[d, φ̄, θ_0]`` with φ̄ from the triangle of
+    Fig. 3 (:func:`relloc.geometry.triangle_bearing`), using the detected pair whose triangle is
+    best conditioned (largest ``sin α_0``);
+  - ``sw = 3`` — ``S = ∅``: ``[d]``.
+
+  A drone broadcasts ``S`` with every camera frame, so a pair stays in ``S`` for one frame
+  period after its sighting (:attr:`SwitchingEkfSettings.sighting_hold`); a frame that does not
+  see it again drops it;
+- :meth:`SwitchingEkf.beliefs` gives the belief of the leader with the mode ``sw`` in force in
+  its ``info``; :meth:`SwitchingEkf.take_updates` one record per block update (NIS and its
+  dof, conditioning of ``R`` and ``S``); :meth:`SwitchingEkf.take_counts` the blocks applied
+  and gated out per kind, the triangle refusals and the rows it could not use.
 
 Multi-rate: the filter ticks faster than the UWB and the camera; a component enters only when a
 fresh reading arrived this tick (a tick may carry nothing and is a pure prediction).
@@ -30,7 +45,7 @@ update itself is the Joseph-form :func:`relloc.estimators.relative.kalman_update
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import lru_cache
 
@@ -40,6 +55,8 @@ from scipy.stats import chi2
 
 from relloc.core.angles import wrap_angle
 from relloc.core.gaussian import Gaussian
+from relloc.core.linalg import condition_log10
+from relloc.core.recording import Measurements, kind_code
 from relloc.errors import ConfigError, DataError
 from relloc.estimators.relative import kalman_update
 from relloc.geometry.triangle import TriangleBearing, triangle_bearing
@@ -54,16 +71,26 @@ from relloc.models.airground import (
     range_h,
     relative_step,
 )
+from relloc.pipeline.contract import Belief, HeldOdometry, Silent, UpdateRecord
 
 Array = NDArray[np.float64]
 #: Block kinds counted by the filter, with their measurement dimension.
 BLOCK_DIMS = {"range": 1, "camera": 3, "triangle": 2, "leader_heading": 1}
 BLOCKS = tuple(BLOCK_DIMS)
+#: Name of the estimator (``Estimates.estimator``) and the frame of its beliefs.
+NAME = "switching_ekf"
+FRAME = "airground_follower"
+#: Times closer than this are one instant (as in the replay loop).
+TIME_TOL = 1e-9
 
 
 @dataclass(frozen=True, kw_only=True)
 class SwitchingEkfSettings:
-    """Noise levels the filter assumes, calibration, gate. Lengths in m, angles in rad."""
+    """Noise levels the filter assumes, calibration, gate. Lengths in m, angles in rad.
+
+    ``sighting_hold`` (s): how long a pair sighting keeps its pair in the broadcast set ``S`` —
+    the drones' camera frame period (a frame that does not see the pair again drops it).
+    """
 
     sigma_v: float = 0.02
     sigma_w: float = 0.04
@@ -73,9 +100,17 @@ class SwitchingEkfSettings:
     heading_sigma: float = 0.03
     gate_probability: float | None = 0.999
     min_sin: float = 0.2
+    sighting_hold: float = 0.1
 
     def __post_init__(self) -> None:
-        for name in ("sigma_v", "sigma_w", "range_sigma", "bearing_sigma", "heading_sigma"):
+        for name in (
+            "sigma_v",
+            "sigma_w",
+            "range_sigma",
+            "bearing_sigma",
+            "heading_sigma",
+            "sighting_hold",
+        ):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
                 raise ConfigError(f"SwitchingEkfSettings.{name}: must be > 0, got {value!r}")
@@ -94,8 +129,9 @@ class SwitchingEkfSettings:
 
 @dataclass(frozen=True, kw_only=True)
 class PairSighting:
-    """A drone's broadcast for one detected pair {R_0, R_j}: bearing φ_j of ``p_0 − p_j`` in F_G
-    and the headings θ_j, θ_0 it read from the patterns."""
+    """A drone's broadcast for one detected pair {R_0, R_j} (a ``pair_sighting`` row): bearing
+    φ_j of ``p_0 − p_j`` in F_G and the headings θ_j, θ_0 it read from the patterns; ``follower``
+    is R_j's robot index."""
 
     follower: int
     bearing: float
@@ -105,23 +141,20 @@ class PairSighting:
 
 @dataclass(frozen=True, kw_only=True)
 class TickInputs:
-    """Everything follower ``i`` receives in one filter tick.
+    """Everything follower ``i`` received in one filter tick, taken from the batch.
 
-    ``u = [v_i, ω_i, v_0, ω_0]``; ``detected``: the followers j whose pair {R_0, R_j} is in the
-    drones' latest broadcast set S (held between camera frames; it sets sw); ``range_0i``: own
-    fresh raw UWB range to the leader (None if none this tick); ``ranges_0j[j]`` /
-    ``ranges_ij[j]``: fresh raw ranges leader–R_j and R_i–R_j broadcast by the team;
-    ``sightings``: the pair readings of a camera frame taken this tick (empty between frames);
-    ``sides[j]``: on which side of the line R_0R_j follower i sits (formation layout, ±1).
+    ``detected``: the followers j (robot indices) whose pair {R_0, R_j} is in the drones' broadcast
+    set S (held between camera frames; it sets sw); ``range_0i``: own fresh raw UWB range to the
+    leader (None if none this tick); ``ranges_0j[j]`` / ``ranges_ij[j]``: fresh raw ranges
+    leader–R_j and R_i–R_j of the team; ``sightings``: the pair readings of a camera frame taken
+    this tick (empty between frames), in the order of the batch.
     """
 
-    u: Array
     detected: tuple[int, ...] = ()
     range_0i: float | None = None
     ranges_0j: Mapping[int, float] = field(default_factory=dict)
     ranges_ij: Mapping[int, float] = field(default_factory=dict)
     sightings: tuple[PairSighting, ...] = ()
-    sides: Mapping[int, int] = field(default_factory=dict)
 
 
 def select_mode(follower: int, detected: tuple[int, ...]) -> Mode:
@@ -180,67 +213,181 @@ def gated_update(
 
 
 @dataclass
-class FilterCounters:
-    """Per-follower bookkeeping: ticks per mode, accepted/rejected blocks, triangle refusals."""
+class BlockDiagnostics:
+    """What the estimates record has no column for: the NIS of every block summed per block
+    kind (applied or gated out; the counts say how many) and the first few reasons a triangle
+    was refused."""
 
-    mode_ticks: dict[int, int] = field(default_factory=lambda: {1: 0, 2: 0, 3: 0})
-    accepted: dict[str, int] = field(default_factory=lambda: dict.fromkeys(BLOCKS, 0))
-    rejected: dict[str, int] = field(default_factory=lambda: dict.fromkeys(BLOCKS, 0))
-    triangle_refusals: int = 0
+    nis_sum: dict[str, float] = field(default_factory=lambda: dict.fromkeys(BLOCKS, 0.0))
     refusal_examples: list[str] = field(default_factory=list)
-    nis: dict[str, list[float]] = field(default_factory=lambda: {b: [] for b in BLOCKS})
 
 
-class SwitchingEkf:
-    """Thin stateful wrapper: one follower's belief, its settings and its counters."""
+#: How many triangle refusals keep their reason in :attr:`BlockDiagnostics.refusal_examples`.
+MAX_REFUSAL_EXAMPLES = 5
 
-    def __init__(self, follower: int, prior: Gaussian, settings: SwitchingEkfSettings) -> None:
-        if follower < 1:
-            raise ConfigError(f"SwitchingEkf.follower: follower ids start at 1, got {follower}")
-        if prior.mean.shape != (STATE_DIM,):
-            raise DataError(f"SwitchingEkf R_{follower}: prior mean must have shape (4,)")
-        self.follower = follower
-        self.belief = prior
-        self.settings = settings
-        self.counters = FilterCounters()
 
-    def _apply(
-        self, kind: str, z: Array, h: Array, H: Array, R: Array, angles: tuple[bool, ...], t: float
+class SwitchingEkf(Silent):
+    """Follower ``owner``'s switching EKF of the leader (module docstring).
+
+    ``robots``: the team's robot names, indexed as in the measurement rows; ``prior``: the
+    belief at ``t0``; ``sides[name]``: on which side (±1) of the line R_0R_j the follower sits
+    for each other follower R_j (from the formation layout; distances cannot tell).
+    """
+
+    name = NAME
+
+    def __init__(
+        self,
+        *,
+        robots: Sequence[str],
+        owner: str,
+        leader: str,
+        prior: Gaussian,
+        settings: SwitchingEkfSettings,
+        sides: Mapping[str, int],
+        t0: float = 0.0,
     ) -> None:
-        res = gated_update(
-            self.belief,
-            z,
-            h,
-            H,
-            R,
-            angles,
-            self.settings.gate_probability,
-            where=f"R_{self.follower} {kind} update at t={t:.3f}s",
+        names = tuple(robots)
+        for role, robot in (("owner", owner), ("leader", leader), *(("sides", r) for r in sides)):
+            if robot not in names:
+                raise ConfigError(f"SwitchingEkf.{role}: unknown robot {robot!r}; team: {names}")
+        if owner == leader:
+            raise ConfigError(f"SwitchingEkf: {owner} cannot follow itself")
+        if prior.mean.shape != (STATE_DIM,):
+            raise DataError(f"SwitchingEkf {owner}: prior mean must have shape (4,)")
+        for robot, side in sides.items():
+            if side not in (1, -1):
+                raise ConfigError(f"SwitchingEkf.sides[{robot!r}]: must be +1 or -1, got {side}")
+        if not math.isfinite(t0):
+            raise ConfigError(f"SwitchingEkf.t0: not finite ({t0})")
+        self.owner = owner
+        self.leader = leader
+        self.settings = settings
+        self.belief = prior
+        self.diagnostics = BlockDiagnostics()
+        self._names = names
+        self._me = names.index(owner)
+        self._leader = names.index(leader)
+        self._sides = {names.index(r): side for r, side in sides.items()}
+        self._t0 = float(t0)
+        self._t = float(t0)
+        self._last_sighting: dict[int, float] = {}
+        self._updates: list[UpdateRecord] = []
+        self._counts: dict[str, int] = {}
+
+    # ------------------------------------------------------------------ the estimator contract
+
+    def advance(self, t: float, odometry: HeldOdometry) -> None:
+        """Predict from the previous event to ``t`` with ``u = [v_i, ω_i, v_0, ω_0]``."""
+        dt = float(t) - self._t
+        if not dt > -TIME_TOL:
+            raise DataError(f"SwitchingEkf {self.owner}: time went back from {self._t} to {t}")
+        if dt > 0.0:
+            v = np.asarray(odometry.velocity, dtype=float)
+            if v.shape != (len(self._names), 4):
+                raise DataError(
+                    f"SwitchingEkf {self.owner} at t={t:.3f}s: odometry of {v.shape[0]} robots "
+                    f"for a team of {len(self._names)}"
+                )
+            u = v[[self._me, self._me, self._leader, self._leader], [0, 3, 0, 3]]
+            if not np.all(np.isfinite(u)):
+                raise DataError(f"SwitchingEkf {self.owner} at t={t:.3f}s: bad input u={u}")
+            self.belief = predict(self.belief, u, dt, self.settings)
+            self._t = float(t)
+
+    def measure(self, batch: Measurements) -> None:
+        """Update with the readings of the current tick (module docstring)."""
+        self._update(self._tick_inputs(batch))
+
+    def beliefs(self) -> list[Belief]:
+        """The belief of the leader, with the mode ``sw`` in force in ``info``."""
+        return [
+            Belief(
+                subject=self.leader,
+                frame=FRAME,
+                mean=self.belief.mean,
+                cov=self.belief.cov,
+                age=self._t - self._t0,
+                info={"sw": float(self.mode())},
+            )
+        ]
+
+    def take_updates(self) -> list[UpdateRecord]:
+        out, self._updates = self._updates, []
+        return out
+
+    def take_counts(self) -> dict[str, int]:
+        """Blocks applied / gated out per kind (``range_applied``, ``camera_rejected``, …),
+        ``triangle_refusals`` and ``rows_ignored``, since the previous call."""
+        out, self._counts = self._counts, {}
+        return out
+
+    # ------------------------------------------------------------------ the filter
+
+    def detected(self) -> tuple[int, ...]:
+        """The broadcast set S now: the followers whose pair was sighted within the hold."""
+        hold = self.settings.sighting_hold - TIME_TOL
+        return tuple(sorted(j for j, s in self._last_sighting.items() if self._t - s < hold))
+
+    def mode(self) -> Mode:
+        """The mode sw in force now (Eq. 4 from the broadcast set S)."""
+        return select_mode(self._me, self.detected())
+
+    def _count(self, key: str) -> None:
+        self._counts[key] = self._counts.get(key, 0) + 1
+
+    def _tick_inputs(self, batch: Measurements) -> TickInputs:
+        """The tick's inputs from the rows of the batch (each sighting also refreshes its pair
+        in the held set S); rows it cannot use are counted."""
+        me, leader = self._me, self._leader
+        ranges: dict[tuple[int, int], float] = {}
+        sightings = []
+        for k in range(batch.size):
+            kind, a, b = int(batch.kind[k]), int(batch.observer[k]), int(batch.target[k])
+            pair = (min(a, b), max(a, b))
+            if kind == _RANGE and b >= 0 and (me in pair or leader in pair) and pair not in ranges:
+                ranges[pair] = float(batch.value[k, 0])
+            elif kind == _PAIR_SIGHTING and b != leader:
+                bearing, heading_follower, heading_leader = (float(v) for v in batch.value[k])
+                sightings.append(
+                    PairSighting(
+                        follower=b,
+                        bearing=bearing,
+                        heading_follower=heading_follower,
+                        heading_leader=heading_leader,
+                    )
+                )
+                self._last_sighting[b] = self._t
+            else:
+                self._count("rows_ignored")
+
+        def ranges_from(hub: int) -> dict[int, float]:
+            """Ranges hub–R_j for every robot j other than this follower and the leader."""
+            out = {}
+            for (a, b), d in ranges.items():
+                j = b if a == hub else a if b == hub else None
+                if j is not None and j not in (me, leader):
+                    out[j] = d
+            return out
+
+        return TickInputs(
+            detected=self.detected(),
+            range_0i=ranges.get((min(me, leader), max(me, leader))),
+            ranges_0j=ranges_from(leader),
+            ranges_ij=ranges_from(me),
+            sightings=tuple(sightings),
         )
-        self.belief = res.belief
-        self.counters.nis[kind].append(res.nis)
-        (self.counters.accepted if res.accepted else self.counters.rejected)[kind] += 1
 
-    def _range_block(self, d: float, t: float) -> None:
-        dh, Hd = range_h(self.belief.mean)
-        R = np.array([[self.settings.range_sigma**2]])
-        self._apply("range", np.array([d]), np.array([dh]), Hd, R, (False,), t)
-
-    def tick(self, inputs: TickInputs, dt: float, t: float) -> Mode:
-        """Predict over ``dt``, pick sw from the broadcast set S, update with fresh readings."""
+    def _update(self, inputs: TickInputs) -> None:
+        """Pick sw from the broadcast set S and update with the tick's fresh readings."""
         s = self.settings
-        u = np.asarray(inputs.u, dtype=float)
-        if u.shape != (4,) or not np.all(np.isfinite(u)):
-            raise DataError(f"SwitchingEkf R_{self.follower} at t={t:.3f}s: bad input u={u}")
-        self.belief = predict(self.belief, u, dt, s)
-        mode = select_mode(self.follower, inputs.detected)
-        self.counters.mode_ticks[int(mode)] += 1
+        mode = select_mode(self._me, inputs.detected)
         d = None if inputs.range_0i is None else inputs.range_0i - s.range_bias
-        own = [p for p in inputs.sightings if p.follower == self.follower]
-        others = [p for p in inputs.sightings if p.follower != self.follower]
+        own = [p for p in inputs.sightings if p.follower == self._me]
+        others = [p for p in inputs.sightings if p.follower != self._me]
         if mode is Mode.PAIR_SEEN:
             if d is not None:
-                self._range_block(d, t)
+                self._range_block(d)
             if own:
                 x = self.belief.mean
                 parts = [bearing_h(x), heading_h(x, TH_I), heading_h(x, TH_0)]
@@ -248,51 +395,85 @@ class SwitchingEkf:
                 R = np.diag([s.bearing_sigma**2, s.heading_sigma**2, s.heading_sigma**2])
                 h = np.array([p[0] for p in parts])
                 H = np.vstack([p[1] for p in parts])
-                self._apply("camera", z, h, H, R, (True, True, True), t)
+                self._apply("camera", z, h, H, R, (True, True, True))
         elif mode is Mode.OTHER_PAIR_SEEN:
             if d is not None and others:
-                self._update_other_pair(inputs, others, d, t)
+                self._update_other_pair(inputs, others, d)
             elif d is not None:
-                self._range_block(d, t)
+                self._range_block(d)
             if others:
                 th0, H0 = heading_h(self.belief.mean, TH_0)
                 R = np.array([[s.heading_sigma**2]])
                 z = np.array([others[0].heading_leader])
-                self._apply("leader_heading", z, np.array([th0]), H0, R, (True,), t)
+                self._apply("leader_heading", z, np.array([th0]), H0, R, (True,))
         elif d is not None:
-            self._range_block(d, t)
-        return mode
+            self._range_block(d)
 
-    def _update_other_pair(
-        self, inputs: TickInputs, others: list[PairSighting], d: float, t: float
+    def _apply(
+        self, kind: str, z: Array, h: Array, H: Array, R: Array, angles: tuple[bool, ...]
     ) -> None:
+        """One gated block update, recorded (NIS, dof, conditioning of R and S) and counted."""
+        prior = self.belief
+        res = gated_update(
+            prior,
+            z,
+            h,
+            H,
+            R,
+            angles,
+            self.settings.gate_probability,
+            where=f"{self.owner} {kind} update at t={self._t:.3f}s",
+        )
+        self.belief = res.belief
+        self._updates.append(
+            UpdateRecord(
+                t=self._t,
+                subject=self.leader,
+                nis=res.nis,
+                dof=res.dim,
+                cond_r=condition_log10(R),
+                cond_s=condition_log10(H @ prior.cov @ H.T + R),
+                age=self._t - self._t0,
+            )
+        )
+        self.diagnostics.nis_sum[kind] += res.nis
+        self._count(f"{kind}_{'applied' if res.accepted else 'rejected'}")
+
+    def _range_block(self, d: float) -> None:
+        dh, Hd = range_h(self.belief.mean)
+        R = np.array([[self.settings.range_sigma**2]])
+        self._apply("range", np.array([d]), np.array([dh]), Hd, R, (False,))
+
+    def _update_other_pair(self, inputs: TickInputs, others: list[PairSighting], d: float) -> None:
         """sw = 2: joint ``[d_0i, φ̄]`` block from the best-conditioned triangle (or ``[d]``)."""
         s = self.settings
         best: TriangleBearing | None = None
         reasons = []
         for sighting in others:
             j = sighting.follower
-            if j not in inputs.ranges_0j or j not in inputs.ranges_ij or j not in inputs.sides:
-                reasons.append(f"R_{j}: ranges to R_{j} not fresh")
+            name = self._names[j]
+            if j not in inputs.ranges_0j or j not in inputs.ranges_ij or j not in self._sides:
+                reasons.append(f"{name}: ranges to {name} not fresh")
                 continue
             tri = triangle_bearing(
                 sighting.bearing,
                 inputs.ranges_0j[j] - s.range_bias,
                 d,
                 inputs.ranges_ij[j] - s.range_bias,
-                inputs.sides[j],
+                self._sides[j],
                 min_sin=s.min_sin,
             )
             if not tri.ok:
-                reasons.append(f"R_{j}: {tri.reason}")
+                reasons.append(f"{name}: {tri.reason}")
                 continue
             if best is None or math.sin(tri.interior_angle) > math.sin(best.interior_angle):
                 best = tri
         if best is None or best.bearing is None:
-            self.counters.triangle_refusals += 1
-            if len(self.counters.refusal_examples) < 5:
-                self.counters.refusal_examples.append(f"t={t:.2f}s: " + "; ".join(reasons))
-            self._range_block(d, t)
+            self._count("triangle_refusals")
+            examples = self.diagnostics.refusal_examples
+            if len(examples) < MAX_REFUSAL_EXAMPLES:
+                examples.append(f"t={self._t:.2f}s: " + "; ".join(reasons))
+            self._range_block(d)
             return
         g_phi, g_a, g_b, g_c = best.d_bearing  # ∂φ̄/∂(φ_j, d_0j, d_0i, d_ij)
         # raw w = (d_0i, φ_j, d_0j, d_ij); y = (d_0i, φ̄)
@@ -309,5 +490,8 @@ class SwitchingEkf:
             np.vstack([Hd, Hp]),
             R,
             (False, True),
-            t,
         )
+
+
+_RANGE = kind_code("range")
+_PAIR_SIGHTING = kind_code("pair_sighting")

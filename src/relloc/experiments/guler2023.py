@@ -2,7 +2,9 @@
 
 ``relloc reproduce guler2023 --out DIR [--runs N] [--seed S] [--executor E]``
 
-Scenarios (all closed-loop, :mod:`relloc.sim.airground`):
+Scenarios (all closed-loop, :func:`relloc.sim.airground.simulate_airground`, each follower
+running :class:`relloc.estimators.switching_ekf.SwitchingEkf` and, where the followers hold the
+formation themselves, :class:`relloc.control.formation.FormationController`):
 
 - ``one_drone`` (paper §4.1, Fig. 4): leader + four followers in a hexagon (leader in front,
   side 0.7 m: the largest whose farthest pair fits the footprint, :func:`hexagon_side`),
@@ -37,12 +39,21 @@ holds ``rmse_m`` (follower → ``x``/``y``, mean over runs of the per-run Eq. 5 
 ``rmse_m_max_over_runs``, ``mode_fraction`` (``sw1``/``sw2``/``sw3``, over followers, ticks and
 runs), ``formation_rmse_m`` (true ``r − r_des``), ``anees_position`` with its 95 % band,
 ``gate_rejections`` and ``triangle_refusals``, and the paper's value where it gives one.
+
+Scoring: the estimation RMSE per follower and axis (and of θ_i) is
+:func:`relloc.pipeline.evaluation.accuracy_and_consistency` of the follower's series of the
+run's :class:`~relloc.pipeline.estimates.Estimates`; the NEES is that of the relative position
+(the ``r`` block of the evaluation's error and the belief's covariance), pooled over followers,
+ticks and runs; the mode fractions come from the ``sw`` the beliefs carry, block and refusal
+counts from the estimates' counters, the NIS per block kind and the refusal reasons from the
+filters' :class:`~relloc.estimators.switching_ekf.BlockDiagnostics`.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -50,13 +61,17 @@ import numpy as np
 from relloc.calibration.inflation import gauss_markov_inflation
 from relloc.calibration.uwb import UwbNoiseFit, fit_uwb_noise, within_link_residuals
 from relloc.calibration.window import spanning
+from relloc.control.formation import FormationController, FormationSettings
+from relloc.core.gaussian import Gaussian
 from relloc.datasets.paths import default_uwb_csv
 from relloc.datasets.uwb import load_uwb_csv
 from relloc.errors import ConfigError
-from relloc.estimators.switching_ekf import BLOCK_DIMS, SwitchingEkfSettings
+from relloc.estimators.switching_ekf import BLOCK_DIMS, BLOCKS, SwitchingEkf, SwitchingEkfSettings
 from relloc.experiments.registry import ReproduceArgs
+from relloc.geometry.triangle import side_of
 from relloc.metrics import anees, anees_band, nees, rmse
 from relloc.models.uwb_noise import UwbNoiseModel
+from relloc.pipeline.evaluation import SeriesEvaluation, accuracy_and_consistency, evaluate
 from relloc.pipeline.montecarlo import run_monte_carlo
 from relloc.pipeline.output import (
     figure_md,
@@ -72,6 +87,7 @@ from relloc.sim.airground import (
     CameraSettings,
     DroneSettings,
     LeaderPath,
+    robot_names,
     simulate_airground,
 )
 
@@ -141,11 +157,25 @@ def filter_settings(
         bearing_sigma=math.sqrt(cam.bearing_sigma**2 + yaw_var),
         heading_sigma=math.sqrt(cam.heading_sigma**2 + yaw_var),
         gate_probability=gate,
+        sighting_hold=dt * camera_every,
     )
 
 
-def build_scenarios(uwb: UwbNoiseModel) -> dict[str, AirGroundScenario]:
-    """The three paper scenarios with the fitted UWB model."""
+@dataclass(frozen=True, kw_only=True)
+class Case:
+    """One simulated configuration: the world, the followers' filter and their controller."""
+
+    scenario: AirGroundScenario
+    filter: SwitchingEkfSettings
+    formation: FormationSettings = field(default_factory=FormationSettings)
+
+    def with_scenario(self, **changes: Any) -> Case:
+        """The same case with scenario fields changed (``duration``, ``n_drones``, …)."""
+        return replace(self, scenario=replace(self.scenario, **changes))
+
+
+def build_cases(uwb: UwbNoiseModel) -> dict[str, Case]:
+    """The three paper scenarios with the fitted UWB model, and the filter derived from it."""
     cam, drone = CameraSettings(), DroneSettings()
     vel = (0.01, 0.02)
     filt = filter_settings(uwb, 0.05, 2, 2, cam, drone, vel)
@@ -154,13 +184,12 @@ def build_scenarios(uwb: UwbNoiseModel) -> dict[str, AirGroundScenario]:
         "camera": cam,
         "drone": drone,
         "velocity_noise": vel,
-        "filter": filt,
         "dt": 0.05,
         "uwb_every": 2,
         "camera_every": 2,
     }
     hexo = hexagon_offsets(4, hexagon_side(cam, drone.altitude))
-    return {
+    scenarios = {
         "one_drone": AirGroundScenario(
             offsets=hexo,
             offset_frame="leader",
@@ -197,6 +226,7 @@ def build_scenarios(uwb: UwbNoiseModel) -> dict[str, AirGroundScenario]:
             **common,
         ),
     }
+    return {name: Case(scenario=sc, filter=filt) for name, sc in scenarios.items()}
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -216,30 +246,83 @@ class RunSummary:
     traces: AirGroundRun | None
 
 
+def follower_sides(sc: AirGroundScenario, follower: int) -> dict[str, int]:
+    """On which side of the line R_0R_j follower ``R_i`` sits, for every other follower R_j,
+    from the formation layout (leader-frame and global layouts are rotations of each other, so
+    the sign is the same)."""
+    names = robot_names(sc)
+    own = tuple(-np.asarray(sc.offsets[follower - 1], dtype=float))
+    return {
+        names[j]: side_of((0.0, 0.0), tuple(-np.asarray(sc.offsets[j - 1], dtype=float)), own)
+        for j in range(1, sc.n_followers + 1)
+        if j != follower
+    }
+
+
+class FilterFactory:
+    """Builds each follower's :class:`SwitchingEkf` for :func:`simulate_airground` and keeps
+    them (their diagnostics are read after the run)."""
+
+    def __init__(self, case: Case) -> None:
+        self.case = case
+        self.filters: list[SwitchingEkf] = []
+
+    def __call__(self, robots: Sequence[str], owner: str, prior: Gaussian) -> SwitchingEkf:
+        f = SwitchingEkf(
+            robots=robots,
+            owner=owner,
+            leader=robots[0],
+            prior=prior,
+            settings=self.case.filter,
+            sides=follower_sides(self.case.scenario, robots.index(owner)),
+        )
+        self.filters.append(f)
+        return f
+
+
+def simulate_case(case: Case, rng: np.random.Generator) -> tuple[AirGroundRun, list[SwitchingEkf]]:
+    """One closed-loop run of ``case``: the run and the followers' filters."""
+    sc = case.scenario
+    controller = (
+        FormationController(offsets=sc.offsets, frame=sc.offset_frame, settings=case.formation)
+        if sc.control == "formation"
+        else None
+    )
+    factory = FilterFactory(case)
+    return simulate_airground(sc, factory, controller, rng), factory.filters
+
+
+def follower_evaluations(run: AirGroundRun) -> list[SeriesEvaluation]:
+    """Each follower's series of the run scored against the truth, in follower order."""
+    by_owner = {e.owner: e for e in evaluate(run.estimates, run.recording)}
+    return [by_owner[owner] for owner in run.priors]
+
+
 def run_scenario_once(
-    seed_seq: np.random.SeedSequence, run_index: int, scenario: AirGroundScenario, keep_traces: bool
+    seed_seq: np.random.SeedSequence, run_index: int, case: Case, keep_traces: bool
 ) -> RunSummary:
     """Monte-Carlo task: simulate one run and reduce it (top level, picklable)."""
-    run = simulate_airground(scenario, np.random.default_rng(seed_seq))
-    err_pos = run.estimates[..., :2] - run.true_state[..., :2]
-    err_head = np.angle(np.exp(1j * (run.estimates[..., 2] - run.true_state[..., 2])))
-    form = run.true_state[..., :2] - run.desired
-    n = scenario.n_followers
-    ticks = np.array([sum(c.mode_ticks[s] for c in run.counters) for s in (1, 2, 3)], dtype=float)
-    accepted = {k: sum(c.accepted[k] for c in run.counters) for k in run.counters[0].accepted}
-    rejected = {k: sum(c.rejected[k] for c in run.counters) for k in run.counters[0].rejected}
-    examples = tuple(e for c in run.counters for e in c.refusal_examples)[:3]
+    run, filters = simulate_case(case, np.random.default_rng(seed_seq))
+    evals = follower_evaluations(run)
+    scores = [accuracy_and_consistency([e], settle_s=0.0)["rmse"] for e in evals]
+    leader = run.recording.robots[0]
+    covs = [run.estimates.series(e.owner, leader).cov for e in evals]
+    nees_position = np.stack(
+        [nees(e.error[:, :2], c[:, :2, :2]) for e, c in zip(evals, covs, strict=True)], axis=1
+    )
+    modes = np.concatenate([run.estimates.series(e.owner, leader).info["sw"] for e in evals])
+    counts = run.estimates.counts
     return RunSummary(
-        rmse=rmse(err_pos, axis=0).reshape(n, 2),
-        formation_rmse=rmse(form, axis=0).reshape(n, 2),
-        heading_rmse=rmse(err_head, axis=0).reshape(n),
-        mode_ticks=ticks,
-        nees_position=nees(err_pos, run.covariances[..., :2, :2]).reshape(-1),
-        accepted=accepted,
-        rejected=rejected,
-        nis_sums={k: float(sum(sum(c.nis[k]) for c in run.counters)) for k in BLOCK_DIMS},
-        triangle_refusals=sum(c.triangle_refusals for c in run.counters),
-        refusal_examples=examples,
+        rmse=np.array([[s["r_x"], s["r_y"]] for s in scores]),
+        formation_rmse=rmse(run.formation_error, axis=0),
+        heading_rmse=np.array([s["theta_i"] for s in scores]),
+        mode_ticks=np.array([np.count_nonzero(modes == sw) for sw in (1, 2, 3)], dtype=float),
+        nees_position=nees_position.reshape(-1),
+        accepted={k: counts.get(f"{k}_applied", 0) for k in BLOCKS},
+        rejected={k: counts.get(f"{k}_rejected", 0) for k in BLOCKS},
+        nis_sums={k: float(sum(f.diagnostics.nis_sum[k] for f in filters)) for k in BLOCKS},
+        triangle_refusals=counts.get("triangle_refusals", 0),
+        refusal_examples=tuple(e for f in filters for e in f.diagnostics.refusal_examples)[:3],
         traces=run if (keep_traces and run_index == 0) else None,
     )
 
@@ -287,7 +370,7 @@ def summarise(results: list[RunSummary]) -> dict[str, Any]:
 
 def _run(
     name: str,
-    scenario: AirGroundScenario,
+    case: Case,
     n_runs: int,
     seed: int,
     args: ReproduceArgs,
@@ -298,7 +381,7 @@ def _run(
         n_runs,
         seed,
         executor=args.executor,
-        task_args=(scenario, keep_traces),
+        task_args=(case, keep_traces),
         description=f"guler2023 {name}",
         quiet=args.quiet,
     )
@@ -336,9 +419,9 @@ def run_reproduction(args: ReproduceArgs, plan: Plan) -> dict[str, Any]:
     rec = load_uwb_csv(default_uwb_csv())
     window = spanning(rec.t, str(rec.path))
     fit = fit_uwb_noise(rec, window)
-    scenarios = {
-        k: replace(sc, duration=sc.duration * plan.duration_scale)
-        for k, sc in build_scenarios(fit.model).items()
+    cases = {
+        k: c.with_scenario(duration=c.scenario.duration * plan.duration_scale)
+        for k, c in build_cases(fit.model).items()
     }
     seeds = np.random.SeedSequence(args.seed).generate_state(8)
     summary: dict[str, Any] = {
@@ -358,8 +441,8 @@ def run_reproduction(args: ReproduceArgs, plan: Plan) -> dict[str, Any]:
         "two_drones": plan.two_drones_runs,
         "formation": plan.formation_runs,
     }
-    for k, (name, sc) in enumerate(scenarios.items()):
-        summary[name], traces[name] = _run(name, sc, counts[name], int(seeds[k]), args, True)
+    for k, (name, case) in enumerate(cases.items()):
+        summary[name], traces[name] = _run(name, case, counts[name], int(seeds[k]), args, True)
     summary["one_drone"]["paper"] = {
         "t_m_s": PAPER["one_drone_t_m_s"],
         "note": "paper shows one run (Fig. 4) and gives no RMSE for it",
@@ -372,10 +455,10 @@ def run_reproduction(args: ReproduceArgs, plan: Plan) -> dict[str, Any]:
         "formation_rmse_bound_m": PAPER["formation_rmse_bound_m"],
         "estimation_rmse_bound_m": PAPER["experiments_rmse_bound_m"],
     }
-    base = scenarios["two_drones"]
+    base = cases["two_drones"]
     summary["sweep_dwell_time"] = _sweep(
         "t_m",
-        [replace(base, dwell_time=v) for v in plan.dwell_times],
+        [base.with_scenario(dwell_time=v) for v in plan.dwell_times],
         plan.dwell_times,
         plan.sweep_runs,
         int(seeds[3]),
@@ -383,21 +466,21 @@ def run_reproduction(args: ReproduceArgs, plan: Plan) -> dict[str, Any]:
     )
     summary["sweep_drones"] = _sweep(
         "M",
-        [replace(base, n_drones=v) for v in plan.drone_counts],
+        [base.with_scenario(n_drones=v) for v in plan.drone_counts],
         plan.drone_counts,
         plan.sweep_runs,
         int(seeds[4]),
         args,
     )
     ablations = {
-        "ablation_uwb_link_bias": replace(base, uwb_link_bias=True),
+        "ablation_uwb_link_bias": base.with_scenario(uwb_link_bias=True),
         "ablation_no_gate": replace(base, filter=replace(base.filter, gate_probability=None)),
         "ablation_white_range_model": replace(
             base, filter=replace(base.filter, range_sigma=fit.model.spread)
         ),
     }
-    for k, (name, sc) in enumerate(ablations.items()):
-        block, _ = _run(name, sc, plan.sweep_runs, int(seeds[5 + k]), args)
+    for k, (name, case) in enumerate(ablations.items()):
+        block, _ = _run(name, case, plan.sweep_runs, int(seeds[5 + k]), args)
         summary[name] = {
             key: block[key]
             for key in (
@@ -418,15 +501,15 @@ def run_reproduction(args: ReproduceArgs, plan: Plan) -> dict[str, Any]:
 
 def _sweep(
     label: str,
-    scenarios: list[AirGroundScenario],
+    cases: list[Case],
     values: tuple[float, ...] | tuple[int, ...],
     n_runs: int,
     seed: int,
     args: ReproduceArgs,
 ) -> dict[str, Any]:
     points = []
-    for value, sc in zip(values, scenarios, strict=True):
-        block, _ = _run(f"{label}={value}", sc, n_runs, seed, args)
+    for value, case in zip(values, cases, strict=True):
+        block, _ = _run(f"{label}={value}", case, n_runs, seed, args)
         points.append(
             {
                 label: value,
@@ -463,21 +546,22 @@ def _figures(
         if run is None:
             continue
         fig, ax = plt.subplots(figsize=(6, 5))
-        plot_traces(ax, run.truth, run.drones)
+        plot_traces(ax, run.recording)
         ax.set_title(f"{name}: traces (run 0)")
         files[f"traces_{name}"] = save_figure(fig, out, f"traces_{name}")
-        n = run.estimates.shape[1]
+        evals = follower_evaluations(run)
+        leader = run.recording.robots[0]
+        series = [run.estimates.series(e.owner, leader) for e in evals]
+        detected = np.stack([s.info["sw"] == 1 for s in series], axis=1)
+        n = len(evals)
         fig, axes = plt.subplots(n, 3, figsize=(13, 2.1 * n + 0.6), sharex=True, squeeze=False)
         labels = ("r_x [m]", "r_y [m]", "θ_i [rad]")
-        for i in range(n):
+        for i, (e, s) in enumerate(zip(evals, series, strict=True)):
+            # the truth on the estimate's branch of the angles: x̂ − wrapped error
+            truth = s.mean - e.error
             for c in range(3):
                 plot_component(
-                    axes[i, c],
-                    run.t,
-                    run.estimates[:, i, c],
-                    run.true_state[:, i, c],
-                    run.detected,
-                    f"R{i + 1} {labels[c]}",
+                    axes[i, c], s.t, s.mean[:, c], truth[:, c], detected, f"R{i + 1} {labels[c]}"
                 )
         for c in range(3):
             axes[-1, c].set_xlabel("t [s]")

@@ -130,7 +130,8 @@ def _percent_beyond_bound(values: Array, dof: IntArray, p: float = 0.95) -> floa
         return float("nan")
     if np.all(dof == dof[0]):
         return percent_beyond(values, chi2_upper(int(dof[0]), p))
-    bounds = np.array([chi2_upper(int(d), p) for d in dof])
+    dofs, which = np.unique(dof, return_inverse=True)
+    bounds = np.array([chi2_upper(int(d), p) for d in dofs])[which]
     return float(100.0 * np.mean(values > bounds))
 
 

@@ -12,6 +12,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.core.recording import Recording
+
 Array = NDArray[np.float64]
 
 #: Background colour of "pair {R_0, R_i} detected" per follower (paper: green, blue, black, cyan).
@@ -66,18 +68,19 @@ def detection_legend_handles(n_followers: int) -> list[Any]:
     return handles
 
 
-def plot_traces(ax: Any, truth: Array, drones: Array) -> None:
-    """UGV paths ``truth (T, N+1, 3)`` (leader thick) and drone paths ``drones (T, M, 3)``."""
-    for i in range(truth.shape[1]):
-        ax.plot(
-            truth[:, i, 0],
-            truth[:, i, 1],
-            lw=2.2 if i == 0 else 1.2,
-            label="R0 (leader)" if i == 0 else f"R{i}",
-        )
-        ax.plot(truth[0, i, 0], truth[0, i, 1], "ko", ms=3)
-    for j in range(drones.shape[1]):
-        ax.plot(drones[:, j, 0], drones[:, j, 1], "k--", lw=0.7, label=f"D{j + 1}")
+def plot_traces(ax: Any, recording: Recording) -> None:
+    """Paths of every robot of ``recording``: UGVs solid (the leader, robot 0, thick), drones
+    dashed; a dot marks each UGV's start."""
+    truth = recording.require_truth("plot_traces")
+    for i, (name, platform, gt) in enumerate(
+        zip(recording.robots, recording.platforms, truth, strict=True)
+    ):
+        x, y = gt.pose[:, 0], gt.pose[:, 1]
+        if platform == "aerial":
+            ax.plot(x, y, "k--", lw=0.7, label=name)
+            continue
+        ax.plot(x, y, lw=2.2 if i == 0 else 1.2, label=f"{name} (leader)" if i == 0 else name)
+        ax.plot(x[0], y[0], "ko", ms=3)
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")

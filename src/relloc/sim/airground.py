@@ -1,11 +1,15 @@
 """Closed-loop simulator of the air-ground team of seed 003 (leader, N followers, M drones).
 
-Per tick ``k`` (period ``dt``, the filters' 20 Hz of the paper):
+:func:`simulate_airground` is given the followers' estimators (one per follower, each built by
+the caller's factory and driven through the estimator contract of
+:mod:`relloc.pipeline.contract`) and their controller. Per tick ``k`` (period ``dt``, the
+filters' 20 Hz of the paper) it
 
 1. **Commands.** The leader follows its path (constant arc, or an S-shaped curve with
    ``ω_0(t) = ω̄ sin(2πt/T)``). Followers are either externally commanded to move rigidly with
-   the leader on the arc (``control="external"``) or run :func:`relloc.control.formation_command`
-   on *their own estimate* (``control="formation"``).
+   the leader on the arc (``control="external"``) or commanded by the controller from *their
+   own estimates* (``control="formation"``, e.g.
+   :class:`relloc.control.formation.FormationController`).
 2. **Motion.** Every UGV moves with its commands perturbed by white velocity noise (slip,
    actuation), :func:`relloc.models.unicycle.unicycle_step`. Each drone flies at a constant
    heading (ψ̄ = 0, the x-axis of F_G) with :func:`relloc.models.airground.drone_step` toward
@@ -15,47 +19,62 @@ Per tick ``k`` (period ``dt``, the filters' 20 Hz of the paper):
    follower plus the layout) and dead-reckons it in between. Its commanded point is the scheduled
    midpoint ``p_0 − r_des,i / 2`` (or the measured midpoint when both robots are in view), with the
    leader's velocity as feed-forward.
-4. **Sensing.** UWB ranges between every pair of UGVs every ``uwb_every`` ticks, with errors from
-   the fitted real-data model (:func:`relloc.models.uwb_noise.sample_range_errors`: bias,
-   correlated core, outliers). A camera frame every ``camera_every`` ticks: a drone detects a
-   pair ``{R_0, R_i}`` only if its altitude is inside the detection band and both robots'
-   markers lie inside the footprint (``|Δx| ≤ z tan(hfov/2) − margin``, same for y), each with
-   probability ``p_detect``; it then broadcasts φ_i, θ_i, θ_0 with white noise plus its own slowly
-   varying heading-hold error (common to the three angles).
-5. **Estimation.** Each follower's :class:`relloc.estimators.switching_ekf.SwitchingEkf` ticks.
+4. **Sensing** — the tick's readings, one :class:`~relloc.core.recording.Measurements` batch:
+   ``range`` rows between every pair of UGVs every ``uwb_every`` ticks (observer < target), with
+   errors from the fitted real-data model (:func:`relloc.models.uwb_noise.sample_range_errors`:
+   bias, correlated core, outliers); a camera frame every ``camera_every`` ticks: a drone
+   detects a pair ``{R_0, R_i}`` only if its altitude is inside the detection band and both
+   robots' markers lie inside the footprint (``|Δx| ≤ z tan(hfov/2) − margin``, same for y),
+   each with probability ``p_detect``; it then broadcasts a ``pair_sighting`` row (observer the
+   drone, target R_i): the bearing φ_i of ``p_0 − p_i`` in F_G and the headings θ_i, θ_0, with
+   white noise plus its own slowly varying heading-hold error (common to the three angles).
+5. **Estimation.** The estimators are driven through the contract by
+   :func:`relloc.pipeline.replay.run_events` over the one event at the end of the tick: advance
+   with the UGVs' commands as odometry ``(v, 0, 0, ω)`` (a drone's: its commanded planar
+   velocity ``(v_x, v_y, 0, 0)`` along F_G, its commanded heading), measure the batch, record
+   the beliefs. The simulator imports the contract, never an estimator.
 
-The result holds the full traces (truth, drones, estimates, covariances, modes, detections).
+This tick loop is the closed-loop counterpart of :func:`relloc.pipeline.replay.replay`: the
+result's :class:`~relloc.core.recording.Recording` holds the truth, the commands as odometry and
+every reading, and replaying it through fresh estimators started from the same priors gives the
+same estimates (the controller only closes the loop; it reads nothing the recording lacks).
 All randomness comes from the generator passed in.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import Literal, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
 from relloc.control.drone_schedule import DroneSchedule, Policy
-from relloc.control.formation import FormationSettings, Frame, desired_relative, formation_command
+from relloc.control.formation import Frame, desired_relative
 from relloc.core.gaussian import Gaussian
-from relloc.errors import ConfigError
-from relloc.estimators.switching_ekf import (
-    FilterCounters,
-    PairSighting,
-    SwitchingEkf,
-    SwitchingEkfSettings,
-    TickInputs,
+from relloc.core.recording import (
+    GroundTruth,
+    Measurements,
+    Odometry,
+    Recording,
+    empty_measurements,
+    measurement_rows,
 )
-from relloc.geometry.triangle import side_of
+from relloc.errors import ConfigError
 from relloc.models.airground import drone_step
 from relloc.models.unicycle import unicycle_step
 from relloc.models.uwb_noise import UwbNoiseModel, sample_range_errors
+from relloc.pipeline.contract import Estimator
+from relloc.pipeline.estimates import Estimates, Recorder
+from relloc.pipeline.replay import run_events
 
 Array = NDArray[np.float64]
 PathKind = Literal["arc", "s_curve", "straight"]
 Control = Literal["external", "formation"]
+#: The frame the followers' beliefs must be in for the controller (:mod:`relloc.pipeline.frames`).
+FOLLOWER_FRAME = "airground_follower"
 
 
 def _positive(owner: str, **values: float) -> None:
@@ -156,7 +175,11 @@ class LeaderPath:
 @dataclass(frozen=True, kw_only=True)
 class AirGroundScenario:
     """One air-ground run. ``offsets[i-1]`` is follower i's desired ``r = p_0 − p_i``
-    (``offset_frame`` says in which frame); the team starts in that formation."""
+    (``offset_frame`` says in which frame); the team starts in that formation. ``control``:
+    the followers are commanded rigidly on the leader's arc (``"external"``) or by the
+    controller given to :func:`simulate_airground` (``"formation"``). Each follower's estimator
+    starts from a guess drawn around the truth with ``init_position_sigma`` /
+    ``init_heading_sigma`` (also its stated prior covariance)."""
 
     offsets: tuple[tuple[float, float], ...]
     offset_frame: Frame = "leader"
@@ -180,8 +203,6 @@ class AirGroundScenario:
     uwb_link_bias: bool = False
     camera: CameraSettings = field(default_factory=CameraSettings)
     drone: DroneSettings = field(default_factory=DroneSettings)
-    formation: FormationSettings = field(default_factory=FormationSettings)
-    filter: SwitchingEkfSettings = field(default_factory=SwitchingEkfSettings)
     init_position_sigma: float = 0.2
     init_heading_sigma: float = 0.15
 
@@ -230,7 +251,7 @@ class AirGroundScenario:
 
     @property
     def n_steps(self) -> int:
-        """Number of filter ticks."""
+        """Number of ticks."""
         return round(self.duration / self.dt)
 
     def schedule(self) -> DroneSchedule:
@@ -244,27 +265,38 @@ class AirGroundScenario:
         )
 
 
+class FollowerController(Protocol):
+    """Commands ``(N, 2)`` ``(v_i, ω_i)`` of the followers from their estimates ``(N, 4)``
+    ``[r_x, r_y, θ_i, θ_0]`` and the leader's broadcast command ``(v_0, ω_0)``."""
+
+    def commands(self, estimates: Array, leader_u: tuple[float, float]) -> Array: ...
+
+
+#: Builds follower ``owner``'s estimator from the team's robot names and its prior at t = 0.
+EstimatorFactory = Callable[[Sequence[str], str, Gaussian], Estimator]
+
+
 @dataclass(frozen=True, kw_only=True)
 class AirGroundRun:
-    """Traces of one run. Index ``[k]`` is after tick k; followers are columns 0..N−1 (= R_1..R_N).
+    """One closed-loop run.
 
-    ``truth[k, 0]`` is the leader's pose; ``estimates[k, i-1]`` follower i's ``[r_x, r_y, θ_i,
-    θ_0]``; ``true_state`` the same quantities from ground truth; ``modes[k, i-1]`` its sw;
-    ``detected[k, i-1]`` whether {R_0, R_i} is in the drones' latest broadcast; ``targets[k, j]``
-    drone j's scheduled follower.
+    ``recording``: truth of every robot (UGVs ``(x, y, 0, θ)``, drones ``(x, y, z, ψ)`` with ψ
+    the heading-hold error) at ``t = k dt``, the commands as odometry and every reading;
+    ``estimates``: the followers' beliefs at every tick ``k ≥ 1``; ``priors[owner]``: the belief
+    each follower's estimator started from; ``formation_error (K, N, 2)``: the true
+    ``r − r_des`` of every follower at the same ticks (the controller's figure of merit).
     """
 
-    t: Array
-    truth: Array
-    drones: Array
-    estimates: Array
-    covariances: Array
-    true_state: Array
-    desired: Array
-    modes: NDArray[np.int64]
-    detected: NDArray[np.bool_]
-    targets: NDArray[np.int64]
-    counters: tuple[FilterCounters, ...]
+    recording: Recording
+    estimates: Estimates
+    priors: Mapping[str, Gaussian]
+    formation_error: Array
+
+
+def robot_names(sc: AirGroundScenario) -> tuple[str, ...]:
+    """The team in recording order: ``R_0`` (leader), ``R_1 … R_N``, then ``D_1 … D_M``."""
+    ugvs = tuple(f"R_{i}" for i in range(sc.n_followers + 1))
+    return ugvs + tuple(f"D_{j}" for j in range(1, sc.n_drones + 1))
 
 
 def _initial_poses(sc: AirGroundScenario) -> Array:
@@ -302,200 +334,311 @@ def _in_footprint(cam: CameraSettings, drone: Array, point: Array) -> bool:
     return abs(point[0] - drone[0]) <= hx and abs(point[1] - drone[1]) <= hy
 
 
-def simulate_airground(sc: AirGroundScenario, rng: np.random.Generator) -> AirGroundRun:
-    """Run one closed-loop simulation (see module docstring)."""
+def _check_controller(sc: AirGroundScenario, controller: FollowerController | None) -> None:
+    if sc.control == "formation" and controller is None:
+        raise ConfigError("simulate_airground: control='formation' needs a follower controller")
+    if sc.control == "external" and controller is not None:
+        raise ConfigError(
+            "simulate_airground: control='external' commands the followers rigidly; "
+            "pass no controller"
+        )
+
+
+def _follower_estimates(estimators: Sequence[Estimator], leader: str) -> Array:
+    """``(N, 4)`` means of the followers' beliefs of the leader (what the controller reads)."""
+    out = np.zeros((len(estimators), 4))
+    for i, est in enumerate(estimators):
+        found = [b for b in est.beliefs() if b.subject == leader and b.frame == FOLLOWER_FRAME]
+        if not found:
+            raise ConfigError(
+                f"simulate_airground: {est.owner}'s estimator holds no {FOLLOWER_FRAME} belief "
+                f"of {leader}"
+            )
+        out[i] = found[0].mean
+    return out
+
+
+def simulate_airground(
+    sc: AirGroundScenario,
+    make_estimator: EstimatorFactory,
+    controller: FollowerController | None,
+    rng: np.random.Generator,
+) -> AirGroundRun:
+    """Run one closed-loop simulation (module docstring).
+
+    ``make_estimator(robots, owner, prior)`` builds each follower's estimator (called for
+    ``R_1 … R_N`` in order); ``controller`` commands the followers when
+    ``sc.control == "formation"`` (``None`` for ``"external"``).
+    """
+    _check_controller(sc, controller)
     n, m, dt, steps = sc.n_followers, sc.n_drones, sc.dt, sc.n_steps
+    names = robot_names(sc)
     schedule = sc.schedule()
     offsets = np.array(sc.offsets, dtype=float)
     poses = _initial_poses(sc)
     poses0 = poses.copy()
     # UWB links: every unordered UGV pair (a < b), errors drawn for every UWB epoch up front.
     links = [(a, b) for a in range(n + 1) for b in range(a + 1, n + 1)]
-    link_index = {pair: k for k, pair in enumerate(links)}
     n_epochs = steps // sc.uwb_every + 1
     range_err = sample_range_errors(
         sc.uwb, n_epochs, len(links), dt * sc.uwb_every, rng, link_bias=sc.uwb_link_bias
     )
-    # Sides of follower i w.r.t. the line R_0 R_j, from the formation layout (leader frame and
-    # global layouts are rotations of each other, so the sign is the same).
-    sides = {
-        (i, j): side_of((0.0, 0.0), tuple(-offsets[j - 1]), tuple(-offsets[i - 1]))
-        for i in range(1, n + 1)
-        for j in range(1, n + 1)
-        if i != j
-    }
-    # Filters, initialised around the truth with the stated prior.
-    filters = []
+    # Estimators, started from a guess drawn around the truth with the stated prior.
+    priors: dict[str, Gaussian] = {}
     p0_sig = np.array([sc.init_position_sigma] * 2 + [sc.init_heading_sigma] * 2)
     for i in range(1, n + 1):
         true_x = np.array([*(poses[0, :2] - poses[i, :2]), poses[i, 2], poses[0, 2]])
         mean = true_x + p0_sig * rng.standard_normal(4)
-        filters.append(SwitchingEkf(i, Gaussian(mean, np.diag(p0_sig**2)), sc.filter))
-    # Drones start hovering above their first midpoint; each keeps a track of the leader pose.
-    drones = np.zeros((m, 3))
-    first = schedule.targets(0)
-    for j in range(m):
-        r = desired_relative(offsets[first[j] - 1], poses[0, 2], sc.offset_frame)
-        drones[j, :2] = poses[0, :2] - 0.5 * r
-        drones[j, 2] = sc.drone.altitude
-    leader_track = np.tile(poses[0], (m, 1))
-    alt_dev = np.zeros(m)
-    yaw_err = rng.normal(0.0, sc.drone.yaw_sigma, m)
-    a_alt = math.exp(-dt / sc.drone.altitude_tau)
-    a_yaw = math.exp(-dt / sc.drone.yaw_tau)
-    detected: tuple[int, ...] = ()
-
-    out_t = np.arange(1, steps + 1, dtype=np.float64) * dt
-    truth = np.zeros((steps, n + 1, 3))
-    drone_tr = np.zeros((steps, m, 3))
-    est = np.zeros((steps, n, 4))
-    cov = np.zeros((steps, n, 4, 4))
-    true_state = np.zeros((steps, n, 4))
-    desired = np.zeros((steps, n, 2))
-    modes = np.zeros((steps, n), dtype=np.int64)
-    det = np.zeros((steps, n), dtype=bool)
-    targets = np.zeros((steps, m), dtype=np.int64)
+        priors[names[i]] = Gaussian(mean, np.diag(p0_sig**2))
+    estimators = [make_estimator(names, owner, prior) for owner, prior in priors.items()]
+    for owner, est in zip(priors, estimators, strict=True):
+        if est.owner != owner:
+            raise ConfigError(f"simulate_airground: the estimator for {owner} says {est.owner}")
+    drones = _Drones.start(sc, poses, offsets, rng)
+    times = np.arange(steps + 1, dtype=np.float64) * dt
+    truth = np.zeros((steps + 1, n + 1 + m, 4))
+    truth[0] = _truth_row(poses, drones)
+    commands = np.zeros((steps, n + 1 + m, 4))
+    formation_error = np.zeros((steps, n, 2))
+    batches: list[Measurements] = []
+    recorder = Recorder("+".join(sorted({e.name for e in estimators})))
     sv, sw = sc.velocity_noise
 
     for k in range(steps):
-        t = k * dt
+        t = float(times[k])
         v0, w0 = sc.leader.command(t)
         # 1. commands
-        if sc.control == "external":
+        if controller is None:
             u_f = _rigid_commands(sc, poses0, v0, w0)
         else:
-            u_f = np.array(
-                [
-                    formation_command(
-                        filters[i].belief.mean, offsets[i], sc.offset_frame, (v0, w0), sc.formation
-                    )
-                    for i in range(n)
-                ]
+            u_f = np.asarray(
+                controller.commands(_follower_estimates(estimators, names[0]), (v0, w0)),
+                dtype=float,
             )
         u_cmd = np.vstack([[v0, w0], u_f])
         # 2. motion (actual = commanded + noise)
         u_act = u_cmd + rng.standard_normal(u_cmd.shape) * np.array([sv, sw])
         poses = unicycle_step(poses, u_act, dt)
-        tgt = schedule.targets(k)
-        for j in range(m):
-            leader_track[j] = unicycle_step(leader_track[j], np.array([v0, w0]), dt)
-            r = desired_relative(offsets[tgt[j] - 1], float(leader_track[j, 2]), sc.offset_frame)
-            command = leader_track[j, :2] - 0.5 * r
-            ff = v0 * np.array([math.cos(leader_track[j, 2]), math.sin(leader_track[j, 2])])
-            drones[j, :2], _ = drone_step(
-                drones[j, :2], command, dt, gain=sc.drone.gain, v_max=sc.drone.v_max, feedforward=ff
-            )
-            alt_dev[j] = (
-                a_alt * alt_dev[j]
-                + sc.drone.altitude_sigma * math.sqrt(1 - a_alt**2) * rng.standard_normal()
-            )
-            drones[j, 2] = sc.drone.altitude + alt_dev[j]
-            yaw_err[j] = (
-                a_yaw * yaw_err[j]
-                + sc.drone.yaw_sigma * math.sqrt(1 - a_yaw**2) * rng.standard_normal()
-            )
-        # 3.-4. sensing
-        ranges: dict[tuple[int, int], float] = {}
+        drones.fly(sc, schedule.targets(k), (v0, w0), offsets, rng)
+        # 3.-4. sensing, stamped at the end of the tick
+        t1 = float(times[k + 1])
+        parts = []
         if k % sc.uwb_every == 0:
-            epoch = k // sc.uwb_every
-            for (a, b), li in link_index.items():
-                d_true = float(np.hypot(*(poses[a, :2] - poses[b, :2])))
-                ranges[(a, b)] = max(1e-3, d_true + float(range_err[epoch, li]))
-        sightings: list[PairSighting] = []
+            parts.append(_uwb_ranges(t1, poses, links, range_err[k // sc.uwb_every]))
         if k % sc.camera_every == 0:
-            seen: set[int] = set()
-            for j in range(m):
-                z = float(drones[j, 2])
-                if not sc.camera.min_altitude <= z <= sc.camera.max_altitude:
-                    continue
-                visible = [
-                    i
-                    for i in range(n + 1)
-                    if _in_footprint(sc.camera, drones[j], poses[i, :2])
-                    and rng.random() < sc.camera.p_detect
-                ]
-                _update_leader_track(leader_track, j, visible, poses, offsets, sc, rng)
-                if 0 not in visible:
-                    continue
-                for i in visible:
-                    if i == 0 or i in seen:
-                        continue
-                    seen.add(i)
-                    rel = poses[0, :2] - poses[i, :2]
-                    cam_sig, head_sig = sc.camera.bearing_sigma, sc.camera.heading_sigma
-                    sightings.append(
-                        PairSighting(
-                            follower=i,
-                            bearing=math.atan2(rel[1], rel[0])
-                            + yaw_err[j]
-                            + cam_sig * rng.standard_normal(),
-                            heading_follower=poses[i, 2]
-                            + yaw_err[j]
-                            + head_sig * rng.standard_normal(),
-                            heading_leader=poses[0, 2]
-                            + yaw_err[j]
-                            + head_sig * rng.standard_normal(),
-                        )
-                    )
-            detected = tuple(sorted(seen))
-        # 5. estimation
-        for i in range(1, n + 1):
-            fresh = bool(ranges)
-            tick = TickInputs(
-                u=np.array([*u_cmd[i], v0, w0]),
-                detected=detected,
-                range_0i=ranges.get((0, i)) if fresh else None,
-                ranges_0j={j: ranges[(0, j)] for j in range(1, n + 1) if j != i and fresh},
-                ranges_ij={
-                    j: ranges[(min(i, j), max(i, j))] for j in range(1, n + 1) if j != i and fresh
-                },
-                sightings=tuple(sightings),
-                sides={j: sides[(i, j)] for j in range(1, n + 1) if j != i},
-            )
-            modes[k, i - 1] = int(filters[i - 1].tick(tick, dt, t + dt))
+            parts.append(drones.camera_frame(sc, t1, poses, offsets, rng))
+        batch = Measurements.concatenate(parts) if parts else empty_measurements()
+        batches.append(batch)
+        # 5. estimation: the one event at the end of the tick
+        commands[k, : n + 1, 0] = u_cmd[:, 0]
+        commands[k, : n + 1, 3] = u_cmd[:, 1]
+        commands[k, n + 1 :, :2] = drones.velocity
+        run_events(
+            estimators,
+            times[k + 1 : k + 2],
+            commands[k][None],
+            np.full((1, n + 1 + m), t),
+            batch,
+            times[k + 1 : k + 2],
+            recorder,
+        )
         # record
-        truth[k] = poses
-        drone_tr[k] = drones
-        targets[k] = tgt
+        truth[k + 1] = _truth_row(poses, drones)
         for i in range(1, n + 1):
-            est[k, i - 1] = filters[i - 1].belief.mean
-            cov[k, i - 1] = filters[i - 1].belief.cov
-            true_state[k, i - 1] = [*(poses[0, :2] - poses[i, :2]), poses[i, 2], poses[0, 2]]
-            desired[k, i - 1] = desired_relative(offsets[i - 1], poses[0, 2], sc.offset_frame)
-            det[k, i - 1] = i in detected
+            desired = desired_relative(offsets[i - 1], poses[0, 2], sc.offset_frame)
+            formation_error[k, i - 1] = (poses[0, :2] - poses[i, :2]) - desired
     return AirGroundRun(
-        t=out_t,
-        truth=truth,
-        drones=drone_tr,
-        estimates=est,
-        covariances=cov,
-        true_state=true_state,
-        desired=desired,
-        modes=modes,
-        detected=det,
-        targets=targets,
-        counters=tuple(f.counters for f in filters),
+        recording=_recording(sc, names, times, truth, commands, batches),
+        estimates=recorder.results(),
+        priors=priors,
+        formation_error=formation_error,
     )
 
 
-def _update_leader_track(
-    track: Array,
-    j: int,
-    visible: list[int],
-    poses: Array,
-    offsets: Array,
+def _truth_row(poses: Array, drones: _Drones) -> Array:
+    """Poses ``(x, y, z, ψ)`` of the UGVs (on the ground) and the drones (ψ: heading-hold error)."""
+    ugv = np.column_stack([poses[:, :2], np.zeros(poses.shape[0]), poses[:, 2]])
+    return np.vstack([ugv, np.column_stack([drones.position, drones.yaw_error])])
+
+
+def _uwb_ranges(
+    t: float, poses: Array, links: list[tuple[int, int]], errors: Array
+) -> Measurements:
+    """One UWB epoch: a ``range`` row per link ``(a, b)`` (a < b), true distance plus the
+    link's error of this epoch (kept positive)."""
+    d = [
+        max(1e-3, float(np.hypot(*(poses[a, :2] - poses[b, :2]))) + float(errors[li]))
+        for li, (a, b) in enumerate(links)
+    ]
+    return measurement_rows(
+        "range",
+        t=np.full(len(links), t),
+        observer=np.array([a for a, _ in links], dtype=np.int64),
+        target=np.array([b for _, b in links], dtype=np.int64),
+        value=np.array(d),
+    )
+
+
+def _recording(
     sc: AirGroundScenario,
-    rng: np.random.Generator,
-) -> None:
-    """Re-anchor drone j's leader track on what its camera sees (leader first, else a follower
-    plus the formation layout); headings are read from the markers."""
-    sig = sc.drone.midpoint_sigma
-    if 0 in visible:
-        track[j, :2] = poses[0, :2] + sig * rng.standard_normal(2)
-        track[j, 2] = poses[0, 2] + sc.camera.heading_sigma * rng.standard_normal()
-        return
-    if visible:
-        i = visible[0]
-        theta0 = float(track[j, 2])
-        r = desired_relative(offsets[i - 1], theta0, sc.offset_frame)
-        track[j, :2] = poses[i, :2] + r + sig * rng.standard_normal(2)
+    names: tuple[str, ...],
+    times: Array,
+    truth: Array,
+    commands: Array,
+    batches: list[Measurements],
+) -> Recording:
+    n_ugv = sc.n_followers + 1
+    sv, sw = sc.velocity_noise
+    sigma = [np.array([sv, 0.0, 0.0, sw])] * n_ugv + [np.zeros(4)] * sc.n_drones
+    return Recording(
+        robots=names,
+        platforms=("ground",) * n_ugv + ("aerial",) * sc.n_drones,
+        odometry=tuple(
+            Odometry(
+                t=times[:-1], velocity=commands[:, r], sigma=sigma[r], where=f"{name} commands"
+            )
+            for r, name in enumerate(names)
+        ),
+        measurements=Measurements.concatenate(batches),
+        truth=tuple(
+            GroundTruth(t=times, pose=truth[:, r], where=f"{name} truth")
+            for r, name in enumerate(names)
+        ),
+        source="sim.airground",
+        meta={"common_frame_yaw": 0.0, "dt": sc.dt},
+    )
+
+
+@dataclass(kw_only=True)
+class _Drones:
+    """The drones' state: ``position (M, 3)`` (x, y, z), commanded planar ``velocity (M, 2)``,
+    each drone's ``leader_track (M, 3)`` (its estimate of the leader's pose), the altitude
+    deviation and the heading-hold error ``yaw_error (M,)`` (both Gauss–Markov)."""
+
+    position: Array
+    velocity: Array
+    leader_track: Array
+    altitude_deviation: Array
+    yaw_error: Array
+
+    @staticmethod
+    def start(
+        sc: AirGroundScenario, poses: Array, offsets: Array, rng: np.random.Generator
+    ) -> _Drones:
+        """Hovering above their first midpoints at the set altitude, tracking the true leader."""
+        m = sc.n_drones
+        position = np.zeros((m, 3))
+        first = sc.schedule().targets(0)
+        for j in range(m):
+            r = desired_relative(offsets[first[j] - 1], poses[0, 2], sc.offset_frame)
+            position[j, :2] = poses[0, :2] - 0.5 * r
+            position[j, 2] = sc.drone.altitude
+        return _Drones(
+            position=position,
+            velocity=np.zeros((m, 2)),
+            leader_track=np.tile(poses[0], (m, 1)),
+            altitude_deviation=np.zeros(m),
+            yaw_error=rng.normal(0.0, sc.drone.yaw_sigma, m),
+        )
+
+    def fly(
+        self,
+        sc: AirGroundScenario,
+        targets: tuple[int, ...],
+        leader_u: tuple[float, float],
+        offsets: Array,
+        rng: np.random.Generator,
+    ) -> None:
+        """One tick: dead-reckon the leader track with the leader's broadcast command, fly
+        toward the scheduled midpoint ``p_0 − r_des / 2`` with the leader's velocity as
+        feed-forward, let altitude and heading-hold error wander."""
+        dt, d = sc.dt, sc.drone
+        a_alt = math.exp(-dt / d.altitude_tau)
+        a_yaw = math.exp(-dt / d.yaw_tau)
+        v0, _ = leader_u
+        for j in range(sc.n_drones):
+            track = self.leader_track
+            track[j] = unicycle_step(track[j], np.array(leader_u), dt)
+            r = desired_relative(offsets[targets[j] - 1], float(track[j, 2]), sc.offset_frame)
+            command = track[j, :2] - 0.5 * r
+            ff = v0 * np.array([math.cos(track[j, 2]), math.sin(track[j, 2])])
+            self.position[j, :2], self.velocity[j] = drone_step(
+                self.position[j, :2], command, dt, gain=d.gain, v_max=d.v_max, feedforward=ff
+            )
+            self.altitude_deviation[j] = (
+                a_alt * self.altitude_deviation[j]
+                + d.altitude_sigma * math.sqrt(1 - a_alt**2) * rng.standard_normal()
+            )
+            self.position[j, 2] = d.altitude + self.altitude_deviation[j]
+            self.yaw_error[j] = (
+                a_yaw * self.yaw_error[j]
+                + d.yaw_sigma * math.sqrt(1 - a_yaw**2) * rng.standard_normal()
+            )
+
+    def camera_frame(
+        self,
+        sc: AirGroundScenario,
+        t: float,
+        poses: Array,
+        offsets: Array,
+        rng: np.random.Generator,
+    ) -> Measurements:
+        """One camera frame of every drone: a ``pair_sighting`` row per detected pair
+        {R_0, R_i} (the first drone that sees a pair reports it); re-anchors the leader tracks."""
+        n, cam = sc.n_followers, sc.camera
+        seen: list[int] = []
+        observers: list[int] = []
+        values: list[tuple[float, float, float]] = []
+        for j in range(sc.n_drones):
+            if not cam.min_altitude <= float(self.position[j, 2]) <= cam.max_altitude:
+                continue
+            visible = [
+                i
+                for i in range(n + 1)
+                if _in_footprint(cam, self.position[j], poses[i, :2])
+                and rng.random() < cam.p_detect
+            ]
+            self._update_leader_track(j, visible, poses, offsets, sc, rng)
+            if 0 not in visible:
+                continue
+            yaw = self.yaw_error[j]
+            for i in visible:
+                if i == 0 or i in seen:
+                    continue
+                seen.append(i)
+                observers.append(n + 1 + j)
+                rel = poses[0, :2] - poses[i, :2]
+                bearing = (
+                    math.atan2(rel[1], rel[0]) + yaw + cam.bearing_sigma * rng.standard_normal()
+                )
+                heading_i = poses[i, 2] + yaw + cam.heading_sigma * rng.standard_normal()
+                heading_0 = poses[0, 2] + yaw + cam.heading_sigma * rng.standard_normal()
+                values.append((bearing, heading_i, heading_0))
+        return measurement_rows(
+            "pair_sighting",
+            t=np.full(len(seen), t),
+            observer=np.array(observers, dtype=np.int64),
+            target=np.array(seen, dtype=np.int64),
+            value=np.array(values, dtype=float).reshape(-1, 3),
+        )
+
+    def _update_leader_track(
+        self,
+        j: int,
+        visible: list[int],
+        poses: Array,
+        offsets: Array,
+        sc: AirGroundScenario,
+        rng: np.random.Generator,
+    ) -> None:
+        """Re-anchor drone j's leader track on what its camera sees (leader first, else a
+        follower plus the formation layout); headings are read from the markers."""
+        track, sig = self.leader_track, sc.drone.midpoint_sigma
+        if 0 in visible:
+            track[j, :2] = poses[0, :2] + sig * rng.standard_normal(2)
+            track[j, 2] = poses[0, 2] + sc.camera.heading_sigma * rng.standard_normal()
+            return
+        if visible:
+            i = visible[0]
+            r = desired_relative(offsets[i - 1], float(track[j, 2]), sc.offset_frame)
+            track[j, :2] = poses[i, :2] + r + sig * rng.standard_normal(2)
