@@ -162,6 +162,8 @@ def test_measure_uses_its_rows_and_counts_the_rest() -> None:
     assert est.take_counts() == {}
     with pytest.raises(DataError, match="names robot 5"):
         est.measure(measurement_rows("range", t=t, observer=0, target=5, value=[1.0]))
+    with pytest.raises(DataError, match="odometry of 2 robots"):
+        est.advance(1.0, HeldOdometry.still(2))
 
 
 _KIND = st.sampled_from(KIND_NAMES)

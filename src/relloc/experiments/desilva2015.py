@@ -16,6 +16,14 @@ P_D 0.8, 0.6) and the kidnapped-robot configuration use the paper's 25 runs each
 about 2.5 CPU-s each, so the default command takes about 6 minutes on 2 cores); ``--runs N``
 sets every count to N. The λ × 1 and P_D 0.95 points of the sweeps are the ``paper`` runs.
 
+Each run: :func:`relloc.sim.multihypothesis.simulate` gives a
+:class:`~relloc.core.recording.Recording`; the leaders'
+:class:`~relloc.fusion.gaussian_sum_estimator.GaussianSumEstimator` s are replayed over it by
+:func:`relloc.pipeline.replay.replay`, recording their dominant tracks at their scan times; the
+:class:`~relloc.pipeline.estimates.Estimates` are scored by
+:func:`relloc.experiments.multihypothesis_scores.leader_scores` (errors and NEES from
+:mod:`relloc.pipeline.evaluation`, the true origins of the bearings used from the recording).
+
 A filter *tracks* its teammate at a scan when its dominant track lies within 0.5 m and 0.5 rad
 of the truth; a teammate is *found and tracked to the end* in a run when it is tracked in
 ≥ 90 % of the scans of the last 10 s. A track is *confirmed* (for the time to the first
@@ -104,7 +112,9 @@ class RunConfig:
 
 @dataclass(frozen=True)
 class RunResult:
-    """Per-run outcome, indexed ``[leader, scan, robot]`` (leader = 0 for L1, 1 for L2)."""
+    """Per-run outcome, indexed ``[leader, scan, robot]`` (leader = 0 for L1, 1 for L2);
+    ``wrong``/``used`` (and the joint decision's) are counts per ``[leader, robot]``,
+    ``world_xy (T, robot, 2)`` the true paths."""
 
     times: Array
     pos_err: Array

@@ -3,12 +3,14 @@
 ``relloc reproduce mrclam-association --out DIR [--dataset PATH] [--seed S]``
 
 Real data (Leung, Barfoot & Liu, IJRR 2011; any folder in MRCLAM layout, default run 6): every
-robot runs a fuser (:class:`~relloc.estimators.gaussian_sum.GaussianSumFuser`) with one
-Gaussian-sum filter per other robot, as in seed 002. The camera rows of one time stamp form a
-scan. Each robot-to-robot row keeps its *range* with its barcode (known correspondence, like the
-paper's ranging sensor) but its *bearing* goes, without the barcode, into the scan's bearing
-set, together with ``CLUTTER_PER_SCAN`` injected false bearings (Poisson, seeded), uniform over
-the camera's field of view (the widest |bearing| of any row, ±0.59 rad in run 6; the filter's
+robot runs a fuser (:class:`~relloc.fusion.gaussian_sum_estimator.GaussianSumEstimator`) with
+one Gaussian-sum filter per other robot, as in seed 002. The dataset becomes a
+:class:`~relloc.core.recording.Recording` (:func:`_mrclam_recording`), whose camera rows of one
+time stamp (a camera frame) form a scan (:func:`_hidden_correspondence`). Each robot-to-robot
+row keeps its *range* with its barcode (known correspondence, like the paper's ranging sensor)
+but its *bearing* goes, without the barcode, into the scan's bearing set, together with
+``CLUTTER_PER_SCAN`` injected false bearings (Poisson, seeded), uniform over the camera's field
+of view (the widest |bearing| of any row, ±0.59 rad in run 6; the filter's
 clutter density is set to match). Range and bearing come from one camera detection, so the
 fuser runs with ``ranges_mark_detections``: a robot with a range in a frame has its bearing in
 the set, one without has none. The same data are also run with seed 002's separate-sensor model
@@ -19,8 +21,10 @@ persistent false bearings they are a different problem (mapping) from the unifor
 seed 002 — with them in the bearing set the filters latch onto landmarks (tried: association
 accuracy ≈ 0.1). The robots are
 planar: the bearing sensor is azimuth-only and the height difference is a known 0 ± 1 cm.
-Odometry (commanded v, ω, held) drives the prediction at 20 Hz; mutual and indirect fusion run
-at 1 Hz.
+Odometry (commanded v, ω, held) drives the prediction on a 20 Hz filter clock
+(:func:`relloc.pipeline.replay.replay` with ``clock``): the frames stamped since the previous
+tick are fused at a tick, each as its own scan, and the beliefs are recorded at the ticks that
+fused a frame of their robot; mutual and indirect fusion run at 1 Hz.
 
 Noise models: the detection probability ``P_D`` (share of camera frames showing a given
 teammate) and the odometry noise are fitted (``relloc.datasets.mrclam.fit_odometry_noise``,
@@ -37,7 +41,10 @@ observer too),
 ``pos_rmse_m`` (dominant track vs Vicon ground truth, planar position, after 10 s),
 ``yaw_rmse_rad``, ``tracked_fraction`` (scans with the dominant track within 0.5 m and 0.5 rad),
 ``separate_sensors`` (the same figures with seed 002's sensor model), ``bearings`` (counts of
-robot, landmark and injected bearings, scans with several robots), ``load_report``.
+robot, landmark and injected bearings, scans with several robots, ``unknown_subject``: camera
+rows of no other robot and no landmark, skipped by the conversion, and ``truth_missing``:
+filter ticks × robots inside a Vicon gap longer than the dataset's gap threshold, scored
+against the interpolated pose), ``scans`` (camera frames used), ``load_report``.
 """
 
 from __future__ import annotations

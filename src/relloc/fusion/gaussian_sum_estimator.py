@@ -156,6 +156,11 @@ class GaussianSumEstimator:
             self._t = self._t0 = t
             return
         u = odometry.velocity
+        if u.shape != (len(self.robots), 4):
+            raise DataError(
+                f"{self.owner} (gaussian_sum): odometry of {u.shape[0]} robots, "
+                f"expected {len(self.robots)} {self.robots}"
+            )
         self.fuser.predict(u[self.index], u[self._team], t - self._t)
         self._t = t
 
