@@ -21,7 +21,6 @@ from relloc.experiments.desilva2015 import (
     FINAL_WINDOW_S,
     KIDNAP,
     RunConfig,
-    _dominant_nees,
     _task,
     filter_settings,
 )
@@ -276,16 +275,6 @@ def test_kidnapped_robot_is_refound(run: int) -> None:
     assert np.all(frac[:, KIDNAP[0]] >= 0.9), frac
     just_after = (result.times > KIDNAP[1]) & (result.times < KIDNAP[1] + 0.3)
     assert not result.tracked[:, just_after, KIDNAP[0]].all()
-
-
-def test_dominant_nees_wraps_yaw_and_skips_missing_tracks() -> None:
-    mean = np.array([[[1.0, 0.0, 0.0, np.pi - 0.1], [np.nan] * 4]])
-    truth = np.array([[[0.0, 0.0, 0.0, -np.pi + 0.1], [1.0, 1.0, 0.0, 0.0]]])
-    cov = np.broadcast_to(np.diag([1.0, 1.0, 1.0, 0.04]), (1, 2, 4, 4))
-    out = _dominant_nees(mean, cov, truth)
-    # position error 1 m with σ 1 m, yaw error −0.2 rad (wrapped) with σ 0.2 rad: 1 + 1
-    np.testing.assert_allclose(out[0, 0], 2.0)
-    assert np.isnan(out[0, 1])
 
 
 def test_filter_settings_follow_the_scenario() -> None:

@@ -98,3 +98,34 @@ def test_mrclam_association_names_a_missing_folder(tmp_path: Path) -> None:
         ]
     )
     assert code == 3
+
+
+def test_hidden_correspondence_turns_frames_into_scans(tmp_path: Path) -> None:
+    from relloc.core.recording import CLUTTER, NO_TARGET
+    from relloc.datasets.mrclam import load_mrclam
+
+    folder = _synthetic_folder(tmp_path / "data", np.random.default_rng(1))
+    raw = mrclam_association._mrclam_recording(load_mrclam(folder))
+    assert raw.robots == ("1", "2", "3") and raw.landmarks.shape == (1, 3)
+    camera = raw.measurements.of_kind("range_bearing")
+    rec, counts = mrclam_association._hidden_correspondence(
+        raw, 5.0, 15.0, 0.5, np.random.default_rng(2)
+    )
+    m = rec.measurements
+    window = (camera.t >= 5.0) & (camera.t < 15.0)
+    robot_rows = window & (camera.target >= 0)
+    frames = {
+        (float(t), int(o)) for t, o in zip(camera.t[window], camera.observer[window], strict=True)
+    }
+    assert counts["robot"] == robot_rows.sum() == m.of_kind("range").size
+    assert counts["landmark_skipped"] == int((window & (camera.landmark >= 0)).sum())
+    assert m.of_kind("height").size == 2 * len(frames)  # 0 to each of the two other robots
+    bearings = m.of_kind("bearing")
+    assert np.all(bearings.target == NO_TARGET)
+    assert int((bearings.origin == CLUTTER).sum()) == counts["injected"]
+    assert np.all(np.abs(bearings.value[bearings.origin == CLUTTER, 0]) <= 0.5)
+    # a robot's bearing keeps its value and names its robot as origin (scoring only)
+    for r in np.flatnonzero(robot_rows)[:20]:
+        same = (bearings.t == camera.t[r]) & (bearings.observer == camera.observer[r])
+        hit = same & (bearings.value[:, 0] == camera.value[r, 1])
+        assert bearings.origin[hit].tolist() == [camera.target[r]]

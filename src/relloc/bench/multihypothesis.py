@@ -22,16 +22,20 @@ is the real-time factor with 10 teammates and 100× clutter.
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from relloc.core.angles import wrap_angle
-from relloc.estimators.gaussian_sum import GaussianSumFuser
+from relloc.core.recording import Measurements, Odometry, Recording, measurement_rows
 from relloc.estimators.relative import predict_arrays, update_tekf_arrays
 from relloc.experiments.desilva2015 import filter_settings
+from relloc.fusion.gaussian_sum_estimator import GaussianSumEstimator
 from relloc.models.measurement import RangeBearingNoise
+from relloc.pipeline.contract import Belief, HeldOdometry, TrackEvent, UpdateRecord
+from relloc.pipeline.replay import replay
 from relloc.sim.multihypothesis import DeSilvaScenario
 
 Array = NDArray[np.float64]
@@ -41,12 +45,19 @@ CLUTTER_FACTORS = (1, 10, 100, 1000)
 WARMUP_S = 5.0
 TIMED_S = 20.0
 SEED = 2026
+#: sensor index of the known-correspondence (range, azimuth, elevation) rows the baseline uses
+BASELINE_SENSOR = 1
 
 
-def _scenario_data(
-    n: int, factor: int, rng: np.random.Generator
-) -> tuple[DeSilvaScenario, Array, Array, list[tuple[Array, Array, Array, Array]]]:
-    """Teammate world states, measured velocities and per-scan (heights, ranges, bearings)."""
+def _recording(n: int, factor: int, rng: np.random.Generator) -> tuple[DeSilvaScenario, Recording]:
+    """Observer ``R0`` at rest and ``n`` teammates driving around it (module docstring).
+
+    Step ``k`` moves the teammates over ``[k dt, (k+1) dt)`` with the measured velocities
+    ``u[k]`` (odometry stamped ``k dt``); every second step ends with a scan at ``(k+1) dt``:
+    heights and ranges (known correspondence), the shuffled bearing set (unknown
+    correspondence) and, for the baseline, each seen teammate's true range with its measured
+    bearing as a known-correspondence ``"range_bearing_elevation"`` row.
+    """
     sc = DeSilvaScenario(clutter_density=1e-7 * factor)
     dt = 1.0 / sc.filter_rate
     steps = round((WARMUP_S + TIMED_S) * sc.filter_rate)
@@ -60,15 +71,17 @@ def _scenario_data(
     u_true[..., 0] = speed
     u_true[..., 3] = turn
     u_meas = u_true + rng.normal(size=u_true.shape) * np.array(sc.velocity_sigmas)
-    scans = []
     every = round(sc.filter_rate / sc.direct_rate)
     sa = np.sqrt(sc.var_azimuth)
+    team = np.arange(1, n + 1)
+    parts: list[Measurements] = []
     for k in range(steps):
         pos[:, 0] += speed * dt * np.cos(yaw)
         pos[:, 1] += speed * dt * np.sin(yaw)
         yaw = yaw + turn * dt
         if k % every:
             continue
+        t = (k + 1) * dt
         r = np.linalg.norm(pos, axis=1)
         seen = rng.random(n) < sc.p_detect
         az = np.arctan2(pos[:, 1], pos[:, 0]) + sa * rng.normal(size=n)
@@ -79,76 +92,140 @@ def _scenario_data(
         )
         own = np.stack([wrap_angle(az), el], -1)
         bearings = np.concatenate([own[seen], clutter])
+        origin = np.concatenate([team[seen], np.full(n_cl, -1)])
         ranges = np.where(
             rng.random(n) < sc.p_detect, r + sc.sigma_range * rng.normal(size=n), np.nan
         )
         heights = pos[:, 2] + sc.sigma_height * rng.normal(size=n)
-        known = np.concatenate([r[:, None], own], axis=1)
-        known[~seen] = np.nan
-        scans.append((heights, ranges, bearings[rng.permutation(len(bearings))], known))
-    return sc, u_meas, np.zeros(4), scans
+        order = rng.permutation(len(bearings))
+        ranged = np.isfinite(ranges)
+        parts += [
+            measurement_rows("height", t=np.full(n, t), observer=0, target=team, value=heights),
+            measurement_rows(
+                "range",
+                t=np.full(ranged.sum(), t),
+                observer=0,
+                target=team[ranged],
+                value=ranges[ranged],
+            ),
+            measurement_rows(
+                "bearing_elevation",
+                t=np.full(order.size, t),
+                observer=0,
+                value=bearings[order],
+                origin=origin[order],
+            ),
+            measurement_rows(
+                "range_bearing_elevation",
+                t=np.full(seen.sum(), t),
+                observer=0,
+                target=team[seen],
+                value=np.concatenate([r[:, None], own], axis=1)[seen],
+                sensor=BASELINE_SENSOR,
+            ),
+        ]
+    stamps: Array = np.arange(steps, dtype=np.float64) * dt
+    sigma = np.array(sc.velocity_sigmas)
+    odometry = [Odometry(t=stamps, velocity=np.zeros((steps, 4)), sigma=sigma)]
+    odometry += [Odometry(t=stamps, velocity=u_meas[:, j], sigma=sigma) for j in range(n)]
+    return sc, Recording(
+        robots=tuple(f"R{j}" for j in range(n + 1)),
+        platforms=("ground",) + ("aerial",) * n,
+        odometry=tuple(odometry),
+        measurements=Measurements.concatenate(parts),
+        source="bench.multihypothesis",
+    )
+
+
+class _Timed:
+    """An estimator that times another's ``advance`` (one prediction of all filters) and
+    ``measure`` (one direct scan) in process CPU time, for events after ``from_t``."""
+
+    def __init__(self, inner: GaussianSumEstimator, from_t: float) -> None:
+        self.inner = inner
+        self.owner = inner.owner
+        self.name = inner.name
+        self.from_t = from_t
+        self._t = 0.0
+        self.predict_s = self.scan_s = 0.0
+        self.predicts = self.scans = 0
+
+    def advance(self, t: float, odometry: HeldOdometry) -> None:
+        self._t = t
+        t0 = time.process_time()
+        self.inner.advance(t, odometry)
+        if t > self.from_t:
+            self.predict_s += time.process_time() - t0
+            self.predicts += 1
+
+    def measure(self, batch: Measurements) -> None:
+        t0 = time.process_time()
+        self.inner.measure(batch)
+        if self._t > self.from_t:
+            self.scan_s += time.process_time() - t0
+            self.scans += 1
+
+    def beliefs(self) -> Sequence[Belief]:
+        return self.inner.beliefs()
+
+    def outbox(self) -> list[Any]:
+        return self.inner.outbox()
+
+    def receive(self, messages: Sequence[Any]) -> None:
+        self.inner.receive(messages)
+
+    def take_updates(self) -> list[UpdateRecord]:
+        return self.inner.take_updates()
+
+    def take_events(self) -> list[TrackEvent]:
+        return self.inner.take_events()
 
 
 def _one_point(n: int, factor: int) -> dict[str, Any]:
     rng = np.random.default_rng([SEED, n, factor])
-    sc, u_meas, u_self, scans = _scenario_data(n, factor, rng)
-    fus = GaussianSumFuser(0, list(range(1, n + 1)), filter_settings(sc))
+    sc, rec = _recording(n, factor, rng)
     dt = 1.0 / sc.filter_rate
-    every = round(sc.filter_rate / sc.direct_rate)
-    warm = round(WARMUP_S * sc.filter_rate)
-    t_pred = t_scan = 0.0
-    n_pred = n_scan = 0
-    comps: list[int] = []
-    for k in range(u_meas.shape[0]):
-        timed = k >= warm
-        t0 = time.process_time()
-        fus.predict(u_self, u_meas[k], dt)
-        t1 = time.process_time()
-        if timed:
-            t_pred += t1 - t0
-            n_pred += 1
-        if k % every == 0:
-            heights, ranges, bearings, _ = scans[k // every]
-            t0 = time.process_time()
-            fus.direct_scan(heights, ranges, bearings)
-            t1 = time.process_time()
-            if timed:
-                t_scan += t1 - t0
-                n_scan += 1
-                counts = np.bincount(fus.tracks.owner, minlength=n)
-                comps.extend(counts.tolist())
-    cpu = t_pred + t_scan
-    base_ms = _baseline_ms_per_scan(sc, u_meas, u_self, scans, warm, every)
+    timed = _Timed(GaussianSumEstimator(rec.robots, 0, filter_settings(sc)), WARMUP_S + 1e-9)
+    scans = np.unique(rec.measurements.t)
+    record = scans[scans > timed.from_t]
+    estimates = replay(rec, [timed], record_times=record, end=len(rec.odometry[0].t) * dt)
+    comps = np.zeros((record.size, n), dtype=np.int64)
+    for s in estimates.beliefs:
+        comps[np.searchsorted(record, s.t), rec.index(s.subject) - 1] = s.info["components"]
+    cpu = timed.predict_s + timed.scan_s
     return {
         "teammates": n,
         "clutter_factor": factor,
         "expected_clutter_per_scan": sc.expected_clutter,
-        "ms_per_scan": 1e3 * t_scan / max(n_scan, 1),
-        "ms_per_predict": 1e3 * t_pred / max(n_pred, 1),
+        "ms_per_scan": 1e3 * timed.scan_s / max(timed.scans, 1),
+        "ms_per_predict": 1e3 * timed.predict_s / max(timed.predicts, 1),
         "realtime_factor": TIMED_S / cpu if cpu > 0 else float("inf"),
-        "baseline_ms_per_scan": base_ms,
+        "baseline_ms_per_scan": _baseline_ms_per_scan(sc, rec, timed.from_t),
         "components_mean": float(np.mean(comps)),
         "components_max": int(np.max(comps)),
     }
 
 
-def _baseline_ms_per_scan(
-    sc: DeSilvaScenario,
-    u_meas: Array,
-    u_self: Array,
-    scans: list[tuple[Array, Array, Array, Array]],
-    warm: int,
-    every: int,
-) -> float:
-    """Known-correspondence EKF (one track per teammate) on the same data: ms per scan."""
-    n = u_meas.shape[1]
+def _baseline_ms_per_scan(sc: DeSilvaScenario, rec: Recording, from_t: float) -> float:
+    """Known-correspondence EKF (one track per teammate) on the same recording: ms per scan."""
+    n = rec.n_robots - 1
     st = filter_settings(sc)
     noise = RangeBearingNoise(
         sigma_r=sc.sigma_range,
         sigma_azimuth=st.sigma_azimuth,
         sigma_elevation=st.sigma_elevation,
     )
-    first = scans[0][3]
+    m = rec.measurements
+    known = np.flatnonzero(m.sensor == BASELINE_SENSOR)
+    scan_t = np.unique(m.t)
+
+    def z_at(t: float) -> Array:
+        z = np.full((n, 3), np.nan)
+        rows = known[m.t[known] == t]
+        z[m.target[rows] - 1] = m.value[rows]
+        return z
+
+    first = z_at(scan_t[0])
     mean = np.zeros((n, 4))
     ok = np.isfinite(first[:, 0])
     cb = np.cos(np.nan_to_num(first[:, 2]))
@@ -157,20 +234,26 @@ def _baseline_ms_per_scan(
     mean[:, 0] = np.where(ok, mean[:, 0], 3.0)
     cov = np.broadcast_to(np.diag([0.1, 0.1, 0.05, 4 * np.pi]), (n, 4, 4)).copy()
     dt = 1.0 / sc.filter_rate
+    u_self = rec.odometry[0].velocity
+    u_team = np.stack([od.velocity for od in rec.odometry[1:]], axis=1)
+    step_end = rec.odometry[0].t + dt
+    at = np.minimum(np.searchsorted(scan_t, step_end - 1e-9), scan_t.size - 1)
+    scan_of_step = np.where(np.abs(scan_t[at] - step_end) < 1e-9, at, -1)
     t_scan = 0.0
     n_scan = 0
-    for k in range(u_meas.shape[0]):
-        mean, cov = predict_arrays(mean, cov, u_self, u_meas[k], dt, st.velocity_noise)
-        if k % every == 0:
-            z = scans[k // every][3]
-            sel = np.flatnonzero(np.isfinite(z).all(axis=1))
-            t0 = time.process_time()
-            if sel.size:
-                m, P, _ = update_tekf_arrays(mean[sel], cov[sel], z[sel], noise)
-                mean[sel], cov[sel] = m, P
-            if k >= warm:
-                t_scan += time.process_time() - t0
-                n_scan += 1
+    for k, s in enumerate(scan_of_step):
+        mean, cov = predict_arrays(mean, cov, u_self[k], u_team[k], dt, st.velocity_noise)
+        if s < 0:
+            continue
+        z = z_at(float(scan_t[s]))
+        sel = np.flatnonzero(np.isfinite(z).all(axis=1))
+        t0 = time.process_time()
+        if sel.size:
+            mm, P, _ = update_tekf_arrays(mean[sel], cov[sel], z[sel], noise)
+            mean[sel], cov[sel] = mm, P
+        if step_end[k] > from_t:
+            t_scan += time.process_time() - t0
+            n_scan += 1
     return 1e3 * t_scan / max(n_scan, 1)
 
 
@@ -196,6 +279,7 @@ def run(quiet: bool = False) -> dict[str, Any]:
             "clutter ×",
             "clutter/scan",
             "ms/scan",
+            "baseline ms/scan",
             "ms/predict",
             "× real time",
             "comp. mean",

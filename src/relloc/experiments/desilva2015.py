@@ -16,6 +16,14 @@ P_D 0.8, 0.6) and the kidnapped-robot configuration use the paper's 25 runs each
 about 2.5 CPU-s each, so the default command takes about 6 minutes on 2 cores); ``--runs N``
 sets every count to N. The λ × 1 and P_D 0.95 points of the sweeps are the ``paper`` runs.
 
+Each run: :func:`relloc.sim.multihypothesis.simulate` gives a
+:class:`~relloc.core.recording.Recording`; the leaders'
+:class:`~relloc.fusion.gaussian_sum_estimator.GaussianSumEstimator` s are replayed over it by
+:func:`relloc.pipeline.replay.replay`, recording their dominant tracks at their scan times; the
+:class:`~relloc.pipeline.estimates.Estimates` are scored by
+:func:`relloc.experiments.multihypothesis_scores.leader_scores` (errors and NEES from
+:mod:`relloc.pipeline.evaluation`, the true origins of the bearings used from the recording).
+
 A filter *tracks* its teammate at a scan when its dominant track lies within 0.5 m and 0.5 rad
 of the truth; a teammate is *found and tracked to the end* in a run when it is tracked in
 ≥ 90 % of the scans of the last 10 s. A track is *confirmed* (for the time to the first
@@ -44,12 +52,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from relloc.core.angles import wrap_angle
-from relloc.errors import ModelError
+from relloc.core.recording import Recording
 from relloc.estimators.gaussian_sum import FusionMode, GaussianSumSettings
+from relloc.experiments.multihypothesis_scores import NO_READING, LeaderScores, leader_scores
 from relloc.experiments.registry import ReproduceArgs
-from relloc.fusion.team import NO_BEARING, TeamRunSettings, run_team
-from relloc.metrics.consistency import anees, chi2_upper, nees, percent_beyond
+from relloc.fusion.gaussian_sum_estimator import bearing_kind, scan_times, team
+from relloc.metrics.consistency import anees, chi2_upper, percent_beyond
 from relloc.models.motion import VelocityNoise
 from relloc.pipeline.montecarlo import run_monte_carlo
 from relloc.pipeline.output import (
@@ -60,12 +68,8 @@ from relloc.pipeline.output import (
     write_report,
     write_summary,
 )
-from relloc.sim.multihypothesis import (
-    ROBOT_NAMES,
-    DeSilvaScenario,
-    relative_truth,
-    simulate,
-)
+from relloc.pipeline.replay import replay
+from relloc.sim.multihypothesis import ROBOT_NAMES, DeSilvaScenario, simulate
 
 Array = NDArray[np.float64]
 
@@ -78,8 +82,9 @@ POS_TOL_M = 0.5
 YAW_TOL_RAD = 0.5
 CLUTTER_FACTORS = (1, 10, 100, 1000)
 PD_VALUES = (0.95, 0.8, 0.6)
-KIDNAP = (3, 15.0, 3.0, -2.0, 2.0)
-NEES_DOF = 4  # P2 moved by (3 m, −2 m, 2 rad) at t = 15 s
+KIDNAP = (3, 15.0, 3.0, -2.0, 2.0)  # P2 moved by (3 m, −2 m, 2 rad) at t = 15 s
+NEES_DOF = 4
+FUSION_PERIOD_S = 1.0
 
 
 def filter_settings(scenario: DeSilvaScenario) -> GaussianSumSettings:
@@ -107,7 +112,9 @@ class RunConfig:
 
 @dataclass(frozen=True)
 class RunResult:
-    """Per-run outcome, indexed ``[leader, scan, robot]`` (leader = 0 for L1, 1 for L2)."""
+    """Per-run outcome, indexed ``[leader, scan, robot]`` (leader = 0 for L1, 1 for L2);
+    ``wrong``/``used`` (and the joint decision's) are counts per ``[leader, robot]``,
+    ``world_xy (T, robot, 2)`` the true paths."""
 
     times: Array
     pos_err: Array
@@ -126,85 +133,73 @@ class RunResult:
 
 
 def _task(seed_seq: np.random.SeedSequence, run_index: int, config: RunConfig) -> RunResult:
-    """Simulate and filter one run (top-level, picklable)."""
+    """Simulate one run, replay it through the leaders' fusers and score it (top-level,
+    picklable)."""
     del run_index
     rng = np.random.default_rng(seed_seq)
-    data = simulate(config.scenario, rng)
-    traces = run_team(
-        data,
-        replace(filter_settings(config.scenario), fusion=config.fusion),
-        TeamRunSettings(sharing=config.sharing),
-    )
+    recording = simulate(config.scenario, rng)
+    settings = replace(filter_settings(config.scenario), fusion=config.fusion)
     leaders = config.scenario.sensing
-    truth = data.truth
-    if truth is None:
-        raise ModelError("desilva2015: the simulator returned no ground truth")
-    out: dict[str, list[NDArray[Any]]] = {
-        field: []
-        for field in (
-            "pos_err",
-            "yaw_err",
-            "components",
-            "confirmed",
-            "tracked",
-            "wrong",
-            "used",
-            "joint_wrong",
-            "joint_used",
-            "estimate_xy",
-            "truth_xy",
-            "nees",
-        )
-    }
-    for i in leaders:
-        tr = traces[i]
-        rel = relative_truth(truth[tr.scan_index], i)
-        pe = np.linalg.norm(tr.mean[..., :3] - rel[..., :3], axis=-1)
-        ye = np.abs(wrap_angle(tr.mean[..., 3] - rel[..., 3]))
-        tracked = (pe <= POS_TOL_M) & (ye <= YAW_TOL_RAD)
-        after_conf = np.cumsum(tr.confirmed, axis=0) > 0
-        used = after_conf & (tr.assoc_origin != NO_BEARING)
-        wrong = used & (tr.assoc_origin != np.arange(tr.mean.shape[1])[None, :])
-        j_used = after_conf & (tr.joint_origin != NO_BEARING)
-        j_wrong = j_used & (tr.joint_origin != np.arange(tr.mean.shape[1])[None, :])
-        out["joint_wrong"].append(j_wrong.sum(axis=0))
-        out["nees"].append(_dominant_nees(tr.mean, tr.cov, rel))
-        out["joint_used"].append(j_used.sum(axis=0))
-        out["pos_err"].append(pe)
-        out["yaw_err"].append(ye)
-        out["components"].append(tr.components)
-        out["confirmed"].append(tr.confirmed)
-        out["tracked"].append(tracked)
-        out["wrong"].append(wrong.sum(axis=0))
-        out["used"].append(used.sum(axis=0))
-        out["estimate_xy"].append(tr.mean[..., :2])
-        out["truth_xy"].append(rel[..., :2])
+    times = scan_times(recording.measurements, recording.robots, leaders, settings)
+    estimates = replay(
+        recording,
+        team(
+            recording.robots,
+            leaders,
+            settings,
+            sharing=config.sharing,
+            fusion_period=FUSION_PERIOD_S,
+        ),
+        record_times=times,
+    )
+    kind = bearing_kind(settings)
+    scores = [
+        leader_scores(estimates, recording, i, times[recording.robots[i]], kind) for i in leaders
+    ]
+    return _run_result(scores, recording)
+
+
+def _run_result(scores: list[LeaderScores], recording: Recording) -> RunResult:
+    """The per-run figures of every leader's scores (leaders scan at the same times)."""
+    out: dict[str, list[NDArray[Any]]] = {}
+
+    def add(name: str, value: NDArray[Any]) -> None:
+        out.setdefault(name, []).append(value)
+
+    own = np.arange(recording.n_robots)[None, :]
+    for sc in scores:
+        pe = np.linalg.norm(sc.error[..., :3], axis=-1)
+        ye = np.abs(sc.error[..., 3])
+        after_conf = np.cumsum(sc.confirmed, axis=0) > 0
+        used = after_conf & (sc.assoc_origin != NO_READING)
+        j_used = after_conf & (sc.joint_origin != NO_READING)
+        add("pos_err", pe)
+        add("yaw_err", ye)
+        add("nees", sc.nees)
+        add("components", sc.components)
+        add("confirmed", sc.confirmed)
+        add("tracked", (pe <= POS_TOL_M) & (ye <= YAW_TOL_RAD))
+        add("used", used.sum(axis=0))
+        add("wrong", (used & (sc.assoc_origin != own)).sum(axis=0))
+        add("joint_used", j_used.sum(axis=0))
+        add("joint_wrong", (j_used & (sc.joint_origin != own)).sum(axis=0))
+        add("estimate_xy", sc.estimate[..., :2])
+        add("truth_xy", _relative_truth_xy(recording, sc.observer, sc.t))
+    assert recording.truth is not None
     return RunResult(
-        times=traces[leaders[0]].times,
-        pos_err=np.stack(out["pos_err"]),
-        yaw_err=np.stack(out["yaw_err"]),
-        components=np.stack(out["components"]),
-        confirmed=np.stack(out["confirmed"]),
-        tracked=np.stack(out["tracked"]),
-        wrong=np.stack(out["wrong"]),
-        used=np.stack(out["used"]),
-        joint_wrong=np.stack(out["joint_wrong"]),
-        joint_used=np.stack(out["joint_used"]),
-        nees=np.stack(out["nees"]),
-        estimate_xy=np.stack(out["estimate_xy"]),
-        truth_xy=np.stack(out["truth_xy"]),
-        world_xy=truth[..., :2],
+        times=scores[0].t,
+        **{name: np.stack(values) for name, values in out.items()},
+        world_xy=np.stack([g.pose[:, :2] for g in recording.truth], axis=1),
     )
 
 
-def _dominant_nees(mean: Array, cov: Array, truth: Array) -> Array:
-    """NEES ``eᵀ P⁻¹ e`` of the dominant track (4 states, yaw error wrapped); NaN where there is
-    no track (and at the observer itself)."""
-    out = np.full(mean.shape[:-1], np.nan)
-    has = np.isfinite(mean).all(axis=-1) & np.isfinite(truth).all(axis=-1)
-    err = mean[has] - truth[has]
-    err[:, 3] = wrap_angle(err[:, 3])
-    out[has] = nees(err, cov[has])
+def _relative_truth_xy(recording: Recording, observer: int, t: Array) -> Array:
+    """True planar positions ``(S, n, 2)`` of every robot in ``observer``'s frame (NaN in its
+    own column)."""
+    out = np.full((t.size, recording.n_robots, 2), np.nan)
+    for j in range(recording.n_robots):
+        if j != observer:
+            out[:, j] = recording.relative_truth(observer, j, t)[:, :2]
     return out
 
 

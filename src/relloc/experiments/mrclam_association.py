@@ -3,12 +3,14 @@
 ``relloc reproduce mrclam-association --out DIR [--dataset PATH] [--seed S]``
 
 Real data (Leung, Barfoot & Liu, IJRR 2011; any folder in MRCLAM layout, default run 6): every
-robot runs a fuser (:class:`~relloc.estimators.gaussian_sum.GaussianSumFuser`) with one
-Gaussian-sum filter per other robot, as in seed 002. The camera rows of one time stamp form a
-scan. Each robot-to-robot row keeps its *range* with its barcode (known correspondence, like the
-paper's ranging sensor) but its *bearing* goes, without the barcode, into the scan's bearing
-set, together with ``CLUTTER_PER_SCAN`` injected false bearings (Poisson, seeded), uniform over
-the camera's field of view (the widest |bearing| of any row, ±0.59 rad in run 6; the filter's
+robot runs a fuser (:class:`~relloc.fusion.gaussian_sum_estimator.GaussianSumEstimator`) with
+one Gaussian-sum filter per other robot, as in seed 002. The dataset becomes a
+:class:`~relloc.core.recording.Recording` (:func:`_mrclam_recording`), whose camera rows of one
+time stamp (a camera frame) form a scan (:func:`_hidden_correspondence`). Each robot-to-robot
+row keeps its *range* with its barcode (known correspondence, like the paper's ranging sensor)
+but its *bearing* goes, without the barcode, into the scan's bearing set, together with
+``CLUTTER_PER_SCAN`` injected false bearings (Poisson, seeded), uniform over the camera's field
+of view (the widest |bearing| of any row, ±0.59 rad in run 6; the filter's
 clutter density is set to match). Range and bearing come from one camera detection, so the
 fuser runs with ``ranges_mark_detections``: a robot with a range in a frame has its bearing in
 the set, one without has none. The same data are also run with seed 002's separate-sensor model
@@ -19,8 +21,10 @@ persistent false bearings they are a different problem (mapping) from the unifor
 seed 002 — with them in the bearing set the filters latch onto landmarks (tried: association
 accuracy ≈ 0.1). The robots are
 planar: the bearing sensor is azimuth-only and the height difference is a known 0 ± 1 cm.
-Odometry (commanded v, ω, held) drives the prediction at 20 Hz; mutual and indirect fusion run
-at 1 Hz.
+Odometry (commanded v, ω, held) drives the prediction on a 20 Hz filter clock
+(:func:`relloc.pipeline.replay.replay` with ``clock``): the frames stamped since the previous
+tick are fused at a tick, each as its own scan, and the beliefs are recorded at the ticks that
+fused a frame of their robot; mutual and indirect fusion run at 1 Hz.
 
 Noise models: the detection probability ``P_D`` (share of camera frames showing a given
 teammate) and the odometry noise are fitted (:mod:`relloc.calibration`:
@@ -40,7 +44,10 @@ really came from that robot, after its first confirmation; per observer too),
 ``pos_rmse_m`` (dominant track vs Vicon ground truth, planar position, after 10 s),
 ``yaw_rmse_rad``, ``tracked_fraction`` (scans with the dominant track within 0.5 m and 0.5 rad),
 ``separate_sensors`` (the same figures with seed 002's sensor model), ``bearings`` (counts of
-robot, landmark and injected bearings, scans with several robots), ``load_report``.
+robot, landmark and injected bearings, scans with several robots, ``unknown_subject``: camera
+rows of no other robot and no landmark, skipped by the conversion, and ``truth_missing``:
+filter ticks × robots inside a Vicon gap longer than the dataset's gap threshold, scored
+against the interpolated pose), ``scans`` (camera frames used), ``load_report``.
 """
 
 from __future__ import annotations
@@ -55,21 +62,24 @@ from numpy.typing import NDArray
 from relloc.calibration.camera import fit_detection_probability, fit_field_of_view
 from relloc.calibration.odometry import fit_odometry_noise
 from relloc.calibration.window import CalibrationWindow, following, spanning
-from relloc.core.angles import wrap_angle
+from relloc.core.recording import (
+    CLUTTER,
+    NO_TARGET,
+    FileSkips,
+    GroundTruth,
+    Measurements,
+    Odometry,
+    Recording,
+    SkipReport,
+    measurement_rows,
+)
 from relloc.datasets.mrclam import MrclamDataset, load_mrclam
 from relloc.datasets.paths import default_mrclam_dataset
 from relloc.errors import DataError
 from relloc.estimators.gaussian_sum import GaussianSumSettings
+from relloc.experiments.multihypothesis_scores import NO_READING, LeaderScores, leader_scores
 from relloc.experiments.registry import ReproduceArgs
-from relloc.fusion.team import (
-    CLUTTER,
-    NO_BEARING,
-    DirectScan,
-    TeamData,
-    TeamRunSettings,
-    TeamTrace,
-    run_team,
-)
+from relloc.fusion.gaussian_sum_estimator import bearing_kind, scan_times, team
 from relloc.models.motion import VelocityNoise
 from relloc.pipeline.output import (
     figure_md,
@@ -79,6 +89,9 @@ from relloc.pipeline.output import (
     write_report,
     write_summary,
 )
+from relloc.pipeline.replay import feed_ticks, replay
+
+Array = NDArray[np.float64]
 
 FILTER_RATE = 20.0
 CALIBRATION_S = 60.0
@@ -93,6 +106,7 @@ MIN_SIGMA_V = 0.02
 MIN_SIGMA_W = 0.02
 POS_TOL_M = 0.5
 YAW_TOL_RAD = 0.5
+FUSION_PERIOD_S = 1.0
 
 
 def _whole_run(ds: MrclamDataset, source: str) -> CalibrationWindow:
@@ -101,90 +115,178 @@ def _whole_run(ds: MrclamDataset, source: str) -> CalibrationWindow:
     return spanning(np.concatenate([ds.robot(s).measurements.t for s in ds.robot_ids]), source)
 
 
-def _team_data(
-    ds: MrclamDataset, t_start: float, t_end: float, fov: float, rng: np.random.Generator
-) -> tuple[TeamData, dict[str, int]]:
-    """Filter grid, odometry, scans (hidden bearing barcodes, clutter) and truth."""
-    ids = list(ds.robot_ids)
-    n = len(ids)
-    index = {s: k for k, s in enumerate(ids)}
-    times = np.arange(t_start, t_end, 1.0 / FILTER_RATE)
-    vel = np.zeros((times.size, n, 4))
-    truth = np.full((times.size, n, 4), np.nan)
-    for s, k in index.items():
-        rob = ds.robot(s)
-        v, w = rob.odometry.at(times)
-        vel[:, k, 0] = v
-        vel[:, k, 3] = w
-        q = rob.groundtruth.at(times)
-        truth[:, k, 0], truth[:, k, 1], truth[:, k, 3] = q.x, q.y, q.theta
-        truth[~q.valid, k] = np.nan
-        truth[q.valid, k, 2] = 0.0
-    counts = {
-        "robot": 0,
-        "landmark_skipped": 0,
-        "injected": 0,
-        "unknown_subject": 0,
-        "scans_with_several_robots": 0,
-    }
-    scans: list[DirectScan] = []
-    for s, i in index.items():
-        meas = ds.robot(s).measurements
-        sel = (meas.t >= t_start) & (meas.t < times[-1])
-        t_m, subj, rng_m, brg = meas.t[sel], meas.subject[sel], meas.range[sel], meas.bearing[sel]
-        for stamp in np.unique(t_m):
-            rows = np.flatnonzero(t_m == stamp)
-            ranges = np.full(n, np.nan)
-            heights = np.zeros(n)
-            heights[i] = np.nan
-            bearings: list[float] = []
-            origins: list[int] = []
-            for r in rows:
-                sub = int(subj[r])
-                if sub in index and sub != s:
-                    j = index[sub]
-                    if np.isnan(ranges[j]):
-                        ranges[j] = rng_m[r]
-                    bearings.append(float(brg[r]))
-                    origins.append(j)
-                    counts["robot"] += 1
-                elif ds.is_robot(np.array([sub]))[0]:
-                    counts["unknown_subject"] += 1
-                else:
-                    counts["landmark_skipped"] += 1
-            counts["scans_with_several_robots"] += int(len(origins) >= 2)
-            n_cl = rng.poisson(CLUTTER_PER_SCAN)
-            counts["injected"] += n_cl
-            bearings.extend(rng.uniform(-fov, fov, n_cl).tolist())
-            origins.extend([CLUTTER] * n_cl)
-            order = rng.permutation(len(bearings))
-            k = min(int(np.searchsorted(times, stamp)), times.size - 1)
-            scans.append(
-                DirectScan(
-                    time=float(times[k]),
-                    observer=i,
-                    heights=heights,
-                    ranges=ranges,
-                    bearings=np.asarray(bearings, dtype=float).reshape(-1, 1)[order],
-                    origins=np.asarray(origins, dtype=np.int64)[order],
-                )
+# ---------------------------------------------------------------------------------------------
+# MRCLAM → Recording. TEMPORARY: the one shared conversion, relloc.datasets.mrclam.to_recording
+# (being added in parallel), replaces this function at merge; it follows the same rules.
+# ---------------------------------------------------------------------------------------------
+
+#: Skip reasons of :func:`_mrclam_recording` (counted per measurement file).
+UNMAPPED_SUBJECT = "subject is neither another robot nor a landmark"
+REPEATED_READING = "repeated reading of one subject in one camera frame"
+
+
+def _mrclam_recording(ds: MrclamDataset) -> Recording:
+    """The dataset as a :class:`~relloc.core.recording.Recording`.
+
+    Robots ``"1"`` … (their subject ids) on the ground; odometry ``(v, 0, 0, ω)`` as commanded
+    (no noise stated: ``sigma`` 0); every camera reading a ``"range_bearing"`` row of another
+    robot (``target``) or of a landmark (``landmark``, in the order of the landmark file,
+    positions ``(x, y, 0)``), ``sigma`` not stated; Vicon truth ``(x, y, 0, θ)``. A reading of
+    no other robot and no landmark, or of a subject already read in that frame, is skipped and
+    counted per measurement file.
+    """
+    robots = ds.robot_ids
+    lm_index = {int(s): k for k, s in enumerate(ds.landmarks.subject)}
+    parts, files = [], []
+    for observer, rid in enumerate(robots):
+        m = ds.robot(rid).measurements
+        index = {r: i for i, r in enumerate(robots) if r != rid}
+        target = np.array([index.get(int(s), NO_TARGET) for s in m.subject], dtype=np.int64)
+        landmark = np.array([lm_index.get(int(s), NO_TARGET) for s in m.subject], dtype=np.int64)
+        mapped = (target != NO_TARGET) | (landmark != NO_TARGET)
+        first = np.zeros(len(m), dtype=bool)
+        key = np.stack([m.t, m.subject.astype(float)], axis=1)
+        first[np.unique(key, axis=0, return_index=True)[1]] = True
+        keep = mapped & first
+        parts.append(
+            measurement_rows(
+                "range_bearing",
+                t=m.t[keep],
+                observer=observer,
+                target=target[keep],
+                landmark=landmark[keep],
+                value=np.column_stack([m.range[keep], m.bearing[keep]]),
             )
-    scans.sort(key=lambda sc: (sc.time, sc.observer))
-    truth_filled = np.where(np.isfinite(truth), truth, 0.0)
-    data = TeamData(
-        times=times,
-        velocities=vel,
-        sensing=tuple(range(n)),
-        scans=tuple(scans),
-        truth=truth_filled,
+        )
+        skipped = {
+            UNMAPPED_SUBJECT: int((~mapped).sum()),
+            REPEATED_READING: int((mapped & ~first).sum()),
+        }
+        files.append(
+            FileSkips(
+                file=f"Robot{rid}_Measurement.dat",
+                rows_read=len(m),
+                rows_kept=int(keep.sum()),
+                skipped={k: v for k, v in skipped.items() if v},
+            )
+        )
+    odometry, truth = [], []
+    for rid in robots:
+        od, g = ds.robot(rid).odometry, ds.robot(rid).groundtruth
+        zero = np.zeros(len(od.t))
+        odometry.append(
+            Odometry(
+                t=od.t,
+                velocity=np.column_stack([od.v, zero, zero, od.omega]),
+                sigma=np.zeros(4),
+                where=f"Robot{rid}_Odometry.dat",
+            )
+        )
+        truth.append(
+            GroundTruth(
+                t=g.t,
+                pose=np.column_stack([g.x, g.y, np.zeros(len(g.t)), g.theta]),
+                where=f"Robot{rid}_Groundtruth.dat",
+            )
+        )
+    return Recording(
+        robots=tuple(str(rid) for rid in robots),
+        platforms=("ground",) * len(robots),
+        odometry=tuple(odometry),
+        measurements=Measurements.concatenate(parts),
+        truth=tuple(truth),
+        landmarks=np.column_stack([ds.landmarks.xy, np.zeros(len(ds.landmarks.subject))]),
+        source=str(ds.path),
+        meta={"robot_subjects": tuple(robots)},
+        skips=SkipReport(files=tuple(files)),
     )
-    return data, counts | {"truth_missing": int(np.isnan(truth[..., 0]).sum())}
 
 
-def _truth(data: TeamData) -> NDArray[np.float64]:
-    if data.truth is None:
-        raise DataError("mrclam-association: the replay has no ground truth")
-    return data.truth
+# ---------------------------------------------------------------------------------------------
+
+
+def _hidden_correspondence(
+    rec: Recording, t_start: float, t_last: float, fov: float, rng: np.random.Generator
+) -> tuple[Recording, dict[str, int]]:
+    """Seed 002's sensing from the camera frames stamped in ``[t_start, t_last)``.
+
+    Every frame of a robot becomes a scan: the range of each robot it read (known
+    correspondence, ``"range"`` rows), a height difference of 0 to every other robot (planar,
+    ``"height"`` rows) and the set of bearings of unknown correspondence (``"bearing"`` rows,
+    ``origin`` the robot read) with Poisson(``CLUTTER_PER_SCAN``) false bearings uniform over
+    ``±fov`` added (``origin`` ``CLUTTER``), shuffled. Landmark readings are not used (counted).
+    """
+    m = rec.measurements.of_kind("range_bearing")
+    assert m.landmark is not None
+    n = rec.n_robots
+    counts = {"robot": 0, "landmark_skipped": 0, "injected": 0, "scans_with_several_robots": 0}
+    known: dict[str, list[tuple[float, int, int, float]]] = {"height": [], "range": []}
+    bearings: list[tuple[float, int, int, float]] = []
+    for i in range(n):
+        mine = (m.observer == i) & (m.t >= t_start) & (m.t < t_last)
+        for stamp in np.unique(m.t[mine]):
+            rows = np.flatnonzero(mine & (m.t == stamp))
+            robot = rows[m.target[rows] >= 0]
+            counts["robot"] += robot.size
+            counts["landmark_skipped"] += int((m.landmark[rows] >= 0).sum())
+            counts["scans_with_several_robots"] += int(robot.size >= 2)
+            t = float(stamp)
+            known["height"].extend((t, i, j, 0.0) for j in range(n) if j != i)
+            known["range"].extend((t, i, int(m.target[r]), float(m.value[r, 0])) for r in robot)
+            scan = [(int(m.target[r]), float(m.value[r, 1])) for r in robot]
+            n_clutter = int(rng.poisson(CLUTTER_PER_SCAN))
+            counts["injected"] += n_clutter
+            scan.extend((CLUTTER, float(b)) for b in rng.uniform(-fov, fov, n_clutter))
+            bearings.extend((t, i, *scan[k]) for k in rng.permutation(len(scan)))
+    parts = []
+    for kind, rows_of_kind in known.items():
+        a = _by_time(np.array(rows_of_kind, dtype=float).reshape(-1, 4))
+        parts.append(
+            measurement_rows(
+                kind,
+                t=a[:, 0],
+                observer=a[:, 1].astype(np.int64),
+                target=a[:, 2].astype(np.int64),
+                value=a[:, 3],
+            )
+        )
+    b = _by_time(np.array(bearings, dtype=float).reshape(-1, 4))
+    parts.append(
+        measurement_rows(
+            "bearing",
+            t=b[:, 0],
+            observer=b[:, 1].astype(np.int64),
+            origin=b[:, 2].astype(np.int64),
+            value=b[:, 3],
+        )
+    )
+    hidden = replace(
+        rec,
+        measurements=Measurements.concatenate(parts),
+        meta={**rec.meta, "clutter_per_scan": CLUTTER_PER_SCAN, "field_of_view_rad": fov},
+    )
+    return hidden, counts
+
+
+def _by_time(columns: Array) -> Array:
+    """Rows whose first column is the time, sorted by it (stable: a scan keeps its order)."""
+    return columns[np.argsort(columns[:, 0], kind="stable")]
+
+
+def _run(rec: Recording, settings: GaussianSumSettings, clock: Array) -> list[LeaderScores]:
+    """Every robot's fuser on the filter clock; the scores of each observer, recorded at the
+    ticks its scans are fed at."""
+    sensing = list(range(rec.n_robots))
+    stamps = scan_times(rec.measurements, rec.robots, sensing, settings)
+    times = {name: np.unique(feed_ticks(st, clock)) for name, st in stamps.items()}
+    estimates = replay(
+        rec,
+        team(rec.robots, sensing, settings, fusion_period=FUSION_PERIOD_S),
+        clock=clock,
+        record_times=times,
+    )
+    kind = bearing_kind(settings)
+    return [leader_scores(estimates, rec, i, times[rec.robots[i]], kind) for i in sensing]
 
 
 def _settings(
@@ -229,15 +331,23 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
     fov_fit = fit_field_of_view(ds, _whole_run(ds, str(folder)))
     fov = fov_fit.half_width_rad
     settings, odo = _settings(ds, calibration, fov)
+    clock = np.arange(t_start, t_end, 1.0 / FILTER_RATE)
     rng = np.random.default_rng(args.seed)
-    data, counts = _team_data(ds, t_start, t_end, fov, rng)
-    names = [f"R{s}" for s in ds.robot_ids]
-    traces = run_team(data, settings, TeamRunSettings())
-    combined, rows = _evaluate(traces, data, names)
-    separate_traces = run_team(
-        data, replace(settings, ranges_mark_detections=False), TeamRunSettings()
+    rec, counts = _hidden_correspondence(_mrclam_recording(ds), t_start, clock[-1], fov, rng)
+    counts["unknown_subject"] = rec.skips.skipped_by_reason().get(UNMAPPED_SUBJECT, 0)
+    counts["truth_missing"] = sum(
+        int((~ds.robot(s).groundtruth.at(clock).valid).sum()) for s in ds.robot_ids
     )
-    separate, _ = _evaluate(separate_traces, data, names)
+    n_scans = sum(
+        st.size
+        for st in scan_times(rec.measurements, rec.robots, range(rec.n_robots), settings).values()
+    )
+    names = [f"R{name}" for name in rec.robots]
+    scores = _run(rec, settings, clock)
+    combined, rows = _evaluate(scores, clock[0], names)
+    separate, _ = _evaluate(
+        _run(rec, replace(settings, ranges_mark_detections=False), clock), clock[0], names
+    )
     summary: dict[str, Any] = {
         "experiment": "mrclam-association",
         "seed": args.seed,
@@ -255,10 +365,10 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
         **combined,
         "separate_sensors": {k: v for k, v in separate.items() if k != "per_observer"},
         "bearings": counts,
-        "scans": len(data.scans),
+        "scans": n_scans,
         "load_report": ds.report.to_dict(),
     }
-    fig_name = _figure(out, traces, data, names)
+    fig_name = _figure(out, scores, clock[0], names)
     summary["figures"] = {"errors": fig_name}
     write_summary(out, summary)
     table = markdown_table(
@@ -291,7 +401,7 @@ odometry-noise calibration window), seed {args.seed}. Bearings of robots lose th
 are mixed with {counts["injected"]} injected false bearings, uniform over the camera's field of
 view ±{fov:.2f} rad ({CLUTTER_PER_SCAN} per scan on average); ranges keep their barcodes;
 {counts["landmark_skipped"]} landmark rows are not used. {counts["scans_with_several_robots"]} of
-{len(data.scans)} scans hold bearings of two or more robots.
+{n_scans} scans hold bearings of two or more robots.
 
 Two sensor models on the same data. *Camera* (the default): range and bearing come from one
 detection, so a robot with a range in a frame has its bearing in the frame's set (P_D = 1) and
@@ -320,32 +430,28 @@ models the filter assumes are approximations (see the noise fit).
 
 
 def _evaluate(
-    traces: dict[int, TeamTrace], data: TeamData, names: list[str]
+    scores: list[LeaderScores], t0: float, names: list[str]
 ) -> tuple[dict[str, Any], list[list[Any]]]:
-    """Association accuracy and tracking error of one team run, overall and per observer."""
-    from relloc.sim.multihypothesis import relative_truth
-
-    truth = _truth(data)
+    """Association accuracy and tracking error of one team run, overall and per observer
+    (planar position error; records from ``WARMUP_S`` after ``t0``)."""
     rows, all_pe, all_ye, all_tr = [], [], [], []
     used_total = correct_total = j_used_total = j_correct_total = 0
     per_obs: dict[str, Any] = {}
-    for i, tr in traces.items():
-        rel = relative_truth(truth[tr.scan_index], i)
-        pe = np.linalg.norm(tr.mean[..., :2] - rel[..., :2], axis=-1)
-        ye = np.abs(wrap_angle(tr.mean[..., 3] - rel[..., 3]))
-        after = (tr.times - data.times[0]) >= WARMUP_S
-        conf = np.cumsum(tr.confirmed, axis=0) > 0
-        own = np.arange(len(names))[None, :]
-        used = conf & (tr.assoc_origin != NO_BEARING)
-        u, c = int(used.sum()), int((used & (tr.assoc_origin == own)).sum())
+    own = np.arange(len(names))[None, :]
+    for sc in scores:
+        i = sc.observer
+        pe = np.linalg.norm(sc.error[..., :2], axis=-1)
+        ye = np.abs(sc.error[..., 3])
+        after = (sc.t - t0) >= WARMUP_S
+        conf = np.cumsum(sc.confirmed, axis=0) > 0
+        used = conf & (sc.assoc_origin != NO_READING)
+        u, c = int(used.sum()), int((used & (sc.assoc_origin == own)).sum())
         used_total += u
         correct_total += c
-        j_used = conf & (tr.joint_origin != NO_BEARING)
-        j_used[:, i] = False
+        j_used = conf & (sc.joint_origin != NO_READING)
         j_used_total += int(j_used.sum())
-        j_correct_total += int((j_used & (tr.joint_origin == own)).sum())
+        j_correct_total += int((j_used & (sc.joint_origin == own)).sum())
         ok = np.isfinite(pe) & after[:, None]
-        ok[:, i] = False
         tracked = (pe <= POS_TOL_M) & (ye <= YAW_TOL_RAD)
         per_obs[names[i]] = {
             "association_accuracy": c / u if u else None,
@@ -370,20 +476,16 @@ def _evaluate(
     return figures, rows
 
 
-def _figure(out: Path, traces: dict[int, Any], data: TeamData, names: list[str]) -> str:
+def _figure(out: Path, scores: list[LeaderScores], t0: float, names: list[str]) -> str:
     from relloc.plotting.multihypothesis import plot_series
     from relloc.plotting.setup import pyplot
-    from relloc.sim.multihypothesis import relative_truth
 
     plt = pyplot()
 
-    fig, axes = plt.subplots(len(traces), 1, figsize=(10, 2.2 * len(traces)), sharex=True)
-    truth = _truth(data)
-    for ax, (i, tr) in zip(np.atleast_1d(axes), traces.items(), strict=True):
-        rel = relative_truth(truth[tr.scan_index], i)
-        pe = np.linalg.norm(tr.mean[..., :2] - rel[..., :2], axis=-1)
+    fig, axes = plt.subplots(len(scores), 1, figsize=(10, 2.2 * len(scores)), sharex=True)
+    for ax, sc in zip(np.atleast_1d(axes), scores, strict=True):
+        i = sc.observer
+        pe = np.linalg.norm(sc.error[..., :2], axis=-1)
         series = {names[j]: np.maximum(pe[:, j], 1e-3) for j in range(len(names)) if j != i}
-        plot_series(
-            ax, tr.times - data.times[0], series, ylabel=f"{names[i]}: error (m)", log10=True
-        )
+        plot_series(ax, sc.t - t0, series, ylabel=f"{names[i]}: error (m)", log10=True)
     return save_figure(fig, out, "mrclam_association_errors")

@@ -1,1 +1,2 @@
-"""Fusion of beliefs between robots: pose composition, covariance intersection, de-correlation."""
+"""Fusion of beliefs between robots: pose composition, covariance intersection, de-correlation,
+equivalent-measurement messages, and seed 002's distributed fuser as a contract estimator."""

@@ -8,6 +8,11 @@ received. At each event ``t_k`` every estimator is advanced with the velocities 
 ``t_{k−1}`` (each robot's last report at or before ``t_{k−1}``: zero-order hold), then given the
 readings stamped in ``(t_{k−1}, t_k]`` that were not given yet, then its outbox is delivered to
 the other estimators; at record times the beliefs are recorded.
+
+An estimator that runs on a fixed clock (seed 002's filter steps at 20 Hz) is replayed with
+``clock``: the events are then the clock's ticks only, and every reading is fed at the first
+tick at or after its stamp (several readings of one sensor may arrive at one tick, each with its
+own stamp).
 """
 
 from __future__ import annotations
@@ -25,6 +30,16 @@ from relloc.pipeline.estimates import Estimates, Recorder
 Array = NDArray[np.float64]
 TIME_TOL = 1e-9
 """Event times closer than this are one event."""
+
+
+def feed_ticks(stamps: Array, ticks: Array) -> Array:
+    """The tick at which :func:`run_events` feeds a reading stamped at each of ``stamps``: the
+    first tick at or after the stamp (ConfigError for a stamp after the last tick)."""
+    t = np.asarray(ticks, dtype=float)
+    at = np.searchsorted(t, np.asarray(stamps, dtype=float) - TIME_TOL)
+    if np.any(at >= t.size):
+        raise ConfigError("feed_ticks: a reading is stamped after the last tick")
+    return np.asarray(t[at])
 
 
 def merge_times(*arrays: Array) -> Array:
@@ -122,21 +137,31 @@ def replay(
     start: float | None = None,
     end: float | None = None,
     name: str | None = None,
+    clock: Array | None = None,
 ) -> Estimates:
     """Run ``estimators`` over ``recording`` from ``start`` to ``end`` (default: its span).
 
     ``record_times`` default to a grid at ``record_rate_hz`` from ``start``; they are added to
-    the event times. Returns the :class:`~relloc.pipeline.estimates.Estimates` of all of them.
+    the event times. With a ``clock`` (strictly increasing tick times) the events are its ticks
+    inside the window, the window defaults to ``[clock[0], clock[-1]]``, the record times
+    (default: every tick) must be ticks, and readings are fed at the first tick at or after
+    their stamp (module docstring). Returns the
+    :class:`~relloc.pipeline.estimates.Estimates` of all of them.
     """
     if not estimators:
         raise ConfigError("replay: no estimators given")
-    span0, span1 = recording.span
+    ticks = None if clock is None else _clock_ticks(clock)
+    span0, span1 = recording.span if ticks is None else (float(ticks[0]), float(ticks[-1]))
     t0 = span0 if start is None else float(start)
     t1 = span1 if end is None else float(end)
     if not (np.isfinite(t0) and np.isfinite(t1) and t1 >= t0):
         raise ConfigError(f"replay: the window [{t0}, {t1}] is empty or not finite")
+    if ticks is not None:
+        ticks = ticks[(ticks >= t0 - TIME_TOL) & (ticks <= t1 + TIME_TOL)]
+        if ticks.size == 0:
+            raise ConfigError(f"replay: no clock tick inside the window [{t0}, {t1}]")
     if record_times is None:
-        record_times = record_grid(t0, t1, record_rate_hz)
+        record_times = record_grid(t0, t1, record_rate_hz) if ticks is None else ticks
     all_record = (
         np.concatenate([np.asarray(v, dtype=float) for v in record_times.values()] or [np.zeros(0)])
         if isinstance(record_times, Mapping)
@@ -144,9 +169,12 @@ def replay(
     )
     m = recording.measurements
     m = m.select((m.t >= t0 - TIME_TOL) & (m.t <= t1 + TIME_TOL))
-    odo_times = [od.t[(od.t > t0) & (od.t < t1)] for od in recording.odometry]
-    times = merge_times(np.array([t0, t1]), all_record, m.t, *odo_times)
-    times = times[(times >= t0 - TIME_TOL) & (times <= t1 + TIME_TOL)]
+    if ticks is None:
+        odo_times = [od.t[(od.t > t0) & (od.t < t1)] for od in recording.odometry]
+        times = merge_times(np.array([t0, t1]), all_record, m.t, *odo_times)
+        times = times[(times >= t0 - TIME_TOL) & (times <= t1 + TIME_TOL)]
+    else:
+        times = ticks
     # the velocity in force up to each event: the one held at the previous event (none before t0)
     before = np.concatenate([times[:1], times[:-1]]) + TIME_TOL
     held = np.stack([od.held_at(before) for od in recording.odometry], axis=1)
@@ -154,3 +182,13 @@ def replay(
     recorder = Recorder(name or "+".join(sorted({e.name for e in estimators})))
     run_events(estimators, times, held, stamps, m, record_times, recorder)
     return recorder.results()
+
+
+def _clock_ticks(clock: Array) -> Array:
+    """The ``clock`` argument of :func:`replay` as a validated, strictly increasing array."""
+    ticks = np.asarray(clock, dtype=float)
+    if ticks.ndim != 1 or ticks.size == 0 or not np.isfinite(ticks).all():
+        raise ConfigError("replay: clock must be a non-empty 1-D array of finite times")
+    if ticks.size > 1 and not np.all(np.diff(ticks) > TIME_TOL):
+        raise ConfigError("replay: clock ticks must be strictly increasing")
+    return ticks

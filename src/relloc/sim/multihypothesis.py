@@ -27,19 +27,33 @@ The path (Fig. 4 of the paper is not given numerically): the group drives a wide
 0.04 rad/s) and every robot adds its own zero-mean speed and turn-rate oscillations (so the
 relative poses keep changing, which makes the relative yaw observable), pods also oscillate in
 height. A *kidnap* moves one robot's true pose by a fixed offset at a given time.
+
+:func:`simulate` gives a :class:`~relloc.core.recording.Recording`: every robot's measured body
+velocities on the filter grid (odometry), the leaders' scans as measurement rows at the scan
+times — ``"height"`` and ``"range"`` rows of a known teammate (``target``) and
+``"bearing_elevation"`` rows of unknown correspondence (``target`` ``NO_TARGET``, in the shuffled
+order of the set; ``origin`` the robot that produced the bearing or ``CLUTTER``, for scoring
+only) — and the true poses on the filter grid.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
 
 from relloc.core.angles import wrap_angle
 from relloc.core.poses import compose, relative
+from relloc.core.recording import (
+    CLUTTER,
+    GroundTruth,
+    Measurements,
+    Odometry,
+    Recording,
+    measurement_rows,
+)
 from relloc.errors import ConfigError
-from relloc.fusion.team import CLUTTER, DirectScan, TeamData
 
 Array = NDArray[np.float64]
 
@@ -197,7 +211,7 @@ def zoh_velocities(poses: Array, dt: float) -> Array:
     return np.concatenate([u, u[-1:]], axis=0)
 
 
-def simulate(scenario: DeSilvaScenario, rng: np.random.Generator) -> TeamData:
+def simulate(scenario: DeSilvaScenario, rng: np.random.Generator) -> Recording:
     """Simulate one run: truth, noisy velocities and the leaders' direct scans."""
     dt = 1.0 / scenario.filter_rate
     n_steps = round(scenario.duration * scenario.filter_rate) + 1
@@ -206,18 +220,22 @@ def simulate(scenario: DeSilvaScenario, rng: np.random.Generator) -> TeamData:
     u_true = zoh_velocities(truth, dt)
     if scenario.kidnap is not None:
         truth = _kidnap(truth, times, scenario.kidnap)
-    u_meas = u_true + rng.normal(size=u_true.shape) * np.array(scenario.velocity_sigmas)
+    sigmas = np.array(scenario.velocity_sigmas)
+    u_meas = u_true + rng.normal(size=u_true.shape) * sigmas
     every = round(scenario.filter_rate / scenario.direct_rate)
-    scans = []
+    rows = _Rows()
     for k in range(every, n_steps, every):
         for i in scenario.sensing:
-            scans.append(_scan(scenario, truth[k], i, float(times[k]), rng))
-    return TeamData(
-        times=times,
-        velocities=u_meas,
-        sensing=scenario.sensing,
-        scans=tuple(scans),
-        truth=truth,
+            _scan(scenario, truth[k], i, float(times[k]), rng, rows)
+    robots = range(len(ROBOT_NAMES))
+    return Recording(
+        robots=ROBOT_NAMES,
+        platforms=tuple("ground" if j in scenario.sensing else "aerial" for j in robots),
+        odometry=tuple(Odometry(t=times, velocity=u_meas[:, j], sigma=sigmas) for j in robots),
+        measurements=rows.table(scenario),
+        truth=tuple(GroundTruth(t=times, pose=truth[:, j]) for j in robots),
+        source="sim.multihypothesis",
+        meta={"sensing": scenario.sensing},
     )
 
 
@@ -235,36 +253,71 @@ def _kidnap(truth: Array, times: Array, kidnap: tuple[int, float, float, float, 
     return out
 
 
-def relative_truth(truth: Array, observer: int) -> Array:
-    """True ``RelPose4`` of every robot in ``observer``'s frame: ``(T, n, 4)``, yaw wrapped."""
-    out = np.full(truth.shape, np.nan)
-    for k in range(truth.shape[0]):
-        for j in range(truth.shape[1]):
-            if j != observer:
-                out[k, j], _, _ = relative(truth[k, observer], truth[k, j])
-    out[..., 3] = wrap_angle(out[..., 3])
-    return out
+@dataclass
+class _Rows:
+    """The leaders' readings as columns: ``(t, observer, target, value)`` of the heights and
+    the ranges, ``(t, observer, origin, azimuth, elevation)`` of the bearings."""
+
+    height: list[tuple[float, int, int, float]] = field(default_factory=list)
+    range: list[tuple[float, int, int, float]] = field(default_factory=list)
+    bearing: list[tuple[float, int, int, float, float]] = field(default_factory=list)
+
+    def table(self, scenario: DeSilvaScenario) -> Measurements:
+        """One measurement table (sorted by time; a scan's bearings keep their order)."""
+        sa, se = np.sqrt(scenario.var_azimuth), np.sqrt(scenario.var_elevation)
+        parts = []
+        for kind, rows, sigma in (
+            ("height", self.height, [scenario.sigma_height]),
+            ("range", self.range, [scenario.sigma_range]),
+        ):
+            col = np.array(rows, dtype=float).reshape(-1, 4)
+            parts.append(
+                measurement_rows(
+                    kind,
+                    t=col[:, 0],
+                    observer=col[:, 1].astype(np.int64),
+                    target=col[:, 2].astype(np.int64),
+                    value=col[:, 3],
+                    sigma=np.array(sigma),
+                )
+            )
+        col = np.array(self.bearing, dtype=float).reshape(-1, 5)
+        parts.append(
+            measurement_rows(
+                "bearing_elevation",
+                t=col[:, 0],
+                observer=col[:, 1].astype(np.int64),
+                value=col[:, 3:5],
+                sigma=np.array([sa, se]),
+                origin=col[:, 2].astype(np.int64),
+            )
+        )
+        return Measurements.concatenate(parts)
 
 
 def _scan(
-    scenario: DeSilvaScenario, poses: Array, i: int, time: float, rng: np.random.Generator
-) -> DirectScan:
-    n = poses.shape[0]
-    heights = np.full(n, np.nan)
-    ranges = np.full(n, np.nan)
+    scenario: DeSilvaScenario,
+    poses: Array,
+    i: int,
+    time: float,
+    rng: np.random.Generator,
+    rows: _Rows,
+) -> None:
+    """Append leader ``i``'s scan at ``time`` to ``rows``: heights and ranges of every teammate
+    (known correspondence) and the shuffled set of bearings of unknown correspondence."""
     bearings: list[tuple[float, float]] = []
     origins: list[int] = []
     sa, se = np.sqrt(scenario.var_azimuth), np.sqrt(scenario.var_elevation)
-    for j in range(n):
+    for j in range(poses.shape[0]):
         if j == i:
             continue
         rel, _, _ = relative(poses[i], poses[j])
-        heights[j] = rel[2] + scenario.sigma_height * rng.normal()
+        rows.height.append((time, i, j, float(rel[2] + scenario.sigma_height * rng.normal())))
         r = float(np.linalg.norm(rel[:3]))
         if r > scenario.max_range:
             continue
         if rng.random() < scenario.p_detect:
-            ranges[j] = r + scenario.sigma_range * rng.normal()
+            rows.range.append((time, i, j, r + scenario.sigma_range * rng.normal()))
         if rng.random() < scenario.p_detect:
             az = np.arctan2(rel[1], rel[0]) + sa * rng.normal()
             el = np.arctan2(rel[2], np.hypot(rel[0], rel[1])) + se * rng.normal()
@@ -274,7 +327,5 @@ def _scan(
     for _ in range(n_clutter):
         bearings.append((rng.uniform(-np.pi, np.pi), rng.uniform(-0.5 * np.pi, 0.5 * np.pi)))
         origins.append(CLUTTER)
-    order = rng.permutation(len(bearings))
-    b = np.array(bearings, dtype=float).reshape(-1, 2)[order]
-    o = np.array(origins, dtype=np.int64)[order]
-    return DirectScan(time=time, observer=i, heights=heights, ranges=ranges, bearings=b, origins=o)
+    for k in rng.permutation(len(bearings)):
+        rows.bearing.append((time, i, origins[k], *bearings[k]))
