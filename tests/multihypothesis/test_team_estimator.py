@@ -25,7 +25,6 @@ from relloc.core.recording import (
 from relloc.errors import ConfigError, DataError
 from relloc.estimators.gaussian_sum import GaussianSumFuser
 from relloc.experiments.desilva2015 import filter_settings
-from relloc.experiments.montecarlo import spawn_seeds
 from relloc.experiments.multihypothesis_scores import NO_READING, leader_scores
 from relloc.fusion.gaussian_sum_estimator import (
     GaussianSumEstimator,
@@ -37,6 +36,7 @@ from relloc.fusion.gaussian_sum_estimator import (
 from relloc.fusion.messages import EquivalentMeasurement
 from relloc.pipeline.contract import Estimator, HeldOdometry, Silent
 from relloc.pipeline.estimates import Recorder
+from relloc.pipeline.montecarlo import spawn_seeds
 from relloc.pipeline.replay import feed_ticks, replay
 from relloc.sim.multihypothesis import ROBOT_NAMES, DeSilvaScenario, simulate
 
