@@ -1,0 +1,457 @@
+"""One contract test for every estimator; each linear special case against a plain Kalman filter.
+
+Registry (:data:`CASES`): every estimator relloc ships, each on a short recording it is meant
+for, as ``(recording, estimators built fresh from a recording, the kinds it models, the NIS
+degrees of freedom it may report)``. Parametrised over every case, through the one loop
+:func:`relloc.pipeline.replay.replay`:
+
+- each estimator is an :class:`~relloc.pipeline.contract.Estimator` (runtime-checked Protocol);
+- every recorded belief has its frame's dimension (:mod:`relloc.pipeline.frames`), a finite
+  mean and a symmetric positive semi-definite covariance (eigenvalues ≥ −1e-9·scale);
+- every update record has a finite NIS ≥ 0 and a dof ≥ 1 that the modelled kinds allow, and is
+  stamped at a time with a reading of one of those kinds;
+- replay is deterministic (same recording, fresh estimators → identical
+  :class:`~relloc.pipeline.estimates.Estimates`) and never reads ``Measurements.origin`` (a
+  recording whose origin column is scrambled gives identical Estimates);
+- :func:`relloc.pipeline.evaluation.evaluate` and ``accuracy_and_consistency`` run on the result.
+
+Linear special cases, each compared with a Kalman filter written out here with the textbook
+equations (``x⁻ = F x``, ``P⁻ = F P Fᵀ + Q``; ``S = H P⁻ Hᵀ + R``, ``K = P⁻ Hᵀ S⁻¹``,
+``x⁺ = x⁻ + K ν``, ``P⁺ = (I − K H) P⁻ (I − K H)ᵀ + K R Kᵀ``):
+
+- the PLKF of :class:`~relloc.estimators.track_manager.TrackManager` with both robots still:
+  ``f`` is the identity, ``Q = G Σ_u Gᵀ`` (:mod:`relloc.models.motion`) and, given the measured
+  bearings, ``[r̃, 0, 0] = H_pmo(θ̃, α̃) p + noise`` is linear (:mod:`relloc.models.measurement`);
+  the noise covariances ``Q`` and ``R_pmo`` are evaluated at the estimate, as the PLKF does;
+- the Joseph-form updates themselves (:func:`relloc.estimators.relative.kalman_update`,
+  :func:`relloc.core.linalg.joseph_update`).
+
+No linear special case exists for: the TEKF (``h(x) = (r, θ, α)`` is nonlinear in the state);
+the bias-compensated PLKF (its correction ``b̂`` is a nonlinear function of the estimate); a
+yaw bank (a Gaussian mixture whose weights depend on the likelihoods); the Gaussian-sum
+estimator of seed 002 (bearings are nonlinear and the correspondence is unknown, so it is a
+mixture); the switching EKF of seed 003 (the UWB range ``d = ‖r‖`` and the camera bearing are
+nonlinear in ``r``, and Eq. 3 is nonlinear in the headings).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable, Mapping
+from functools import cache, partial
+from typing import Any
+
+import numpy as np
+import pytest
+from numpy.typing import NDArray
+
+from relloc.core.linalg import joseph_update
+from relloc.core.recording import (
+    CLUTTER,
+    KINDS,
+    ORIGIN_UNKNOWN,
+    GroundTruth,
+    Measurements,
+    Odometry,
+    Recording,
+    kind_code,
+    measurement_rows,
+    relative_pose,
+)
+from relloc.estimators.initialisation import InitPolicy
+from relloc.estimators.relative import kalman_update
+from relloc.estimators.track_manager import TrackManagerSettings, managers_for
+from relloc.estimators.yaw_bank import YawBankSettings
+from relloc.experiments.desilva2015 import filter_settings
+from relloc.experiments.guler2023 import FilterFactory, build_cases, simulate_case
+from relloc.fusion.gaussian_sum_estimator import scan_times, team
+from relloc.models.measurement import (
+    RangeBearingNoise,
+    pseudo_linear_covariance,
+    pseudo_linear_matrix,
+    pseudo_linear_measurement,
+)
+from relloc.models.motion import VelocityNoise, process_noise, relative_jacobians, relative_step
+from relloc.models.uwb_noise import UwbNoiseModel
+from relloc.pipeline.contract import Estimator
+from relloc.pipeline.estimates import Estimates
+from relloc.pipeline.evaluation import accuracy_and_consistency, evaluate
+from relloc.pipeline.frames import frame
+from relloc.pipeline.replay import TIME_TOL, replay
+from relloc.sim import multihypothesis
+from relloc.sim.airground import robot_names
+from relloc.sim.scenario import default_scenario
+from relloc.sim.sensors import range_azimuth_elevation
+from relloc.sim.simulate import simulate
+
+Array = NDArray[np.float64]
+RecordTimes = Array | Mapping[str, Array] | None
+
+
+@dataclasses.dataclass(frozen=True)
+class Case:
+    """One estimator on one recording.
+
+    ``build(recording)`` makes fresh estimators for a recording; ``kinds`` are the measurement
+    kinds they model; ``dofs`` the NIS degrees of freedom their updates may have (empty: the
+    estimator reports no updates); ``record_times(recording)`` the record times for
+    :func:`replay` (``None``: its default grid).
+    """
+
+    recording: Recording
+    build: Callable[[Recording], list[Estimator]]
+    kinds: tuple[str, ...]
+    dofs: frozenset[int]
+    record_times: Callable[[Recording], RecordTimes] = lambda rec: None
+
+    def replay(self, recording: Recording | None = None) -> Estimates:
+        rec = self.recording if recording is None else recording
+        return replay(rec, self.build(rec), record_times=self.record_times(rec))
+
+
+# ---------------------------------------------------------------------------------- the cases
+def _track_manager_case(filter_name: str, *, yaw_bank: bool, init: str = "measurement") -> Case:
+    """Seed 000: one manager per observing robot on the first 3 s of the default scenario."""
+    rec = simulate(
+        dataclasses.replace(default_scenario(), duration_s=3.0), np.random.default_rng(0)
+    )
+    settings = TrackManagerSettings(
+        filter=filter_name,
+        yaw_bank=YawBankSettings() if yaw_bank else None,
+        init=InitPolicy(name=init),
+    )
+    return Case(
+        recording=rec,
+        build=lambda r: list(managers_for(r, settings)),
+        kinds=("range_bearing_elevation",),
+        dofs=frozenset({KINDS["range_bearing_elevation"].dim}),
+    )
+
+
+def _gaussian_sum_case(*, sharing: bool) -> Case:
+    """Seed 002: the two leaders' Gaussian-sum estimators on 3 s of the paper's scenario."""
+    scenario = multihypothesis.DeSilvaScenario(duration=3.0)
+    settings = filter_settings(scenario)
+    rec = multihypothesis.simulate(scenario, np.random.default_rng(1))
+    sensing = (0, 1)
+    return Case(
+        recording=rec,
+        build=lambda r: list(team(r.robots, sensing, settings, sharing=sharing)),
+        kinds=("height", "range", "bearing_elevation"),
+        dofs=frozenset(),
+        record_times=lambda r: scan_times(r.measurements, r.robots, sensing, settings),
+    )
+
+
+#: The TIERS UWB fit, rounded (so the cases do not need the shared data).
+TIERS_LIKE = UwbNoiseModel(
+    bias=0.35,
+    spread=0.075,
+    outlier_rate=0.04,
+    outlier_excess_mean=0.15,
+    outlier_positive_fraction=0.9,
+    link_bias_std=0.1,
+    correlation_time=1.2,
+)
+
+
+def _switching_ekf_case(name: str) -> Case:
+    """Seed 003: the recording of a 3 s closed-loop run, replayed through fresh followers'
+    filters started from the run's priors."""
+    case = build_cases(TIERS_LIKE)[name].with_scenario(duration=3.0)
+    run, _ = simulate_case(case, np.random.default_rng(7))
+    assert run.recording.robots == robot_names(case.scenario)
+    factory = FilterFactory(case)
+    record_t = run.estimates.beliefs[0].t
+
+    def build(rec: Recording) -> list[Estimator]:
+        return [factory(rec.robots, owner, prior) for owner, prior in run.priors.items()]
+
+    return Case(
+        recording=run.recording,
+        build=build,
+        kinds=("range", "pair_sighting"),
+        dofs=frozenset({1, 2, 3}),  # BLOCK_DIMS of relloc.estimators.switching_ekf
+        record_times=lambda rec: record_t,
+    )
+
+
+CASES: dict[str, Callable[[], Case]] = {
+    **{
+        f"track_manager-{f}{'-yaw_bank' if bank else ''}": partial(
+            _track_manager_case, f, yaw_bank=bank
+        )
+        for f in ("plkf", "tekf", "bcplkf")
+        for bank in (False, True)
+    },
+    "track_manager-plkf-known_init": lambda: _track_manager_case(
+        "plkf", yaw_bank=False, init="known"
+    ),
+    "gaussian_sum-sharing": lambda: _gaussian_sum_case(sharing=True),
+    "gaussian_sum-alone": lambda: _gaussian_sum_case(sharing=False),
+    "switching_ekf-one_drone": lambda: _switching_ekf_case("one_drone"),
+    "switching_ekf-two_drones": lambda: _switching_ekf_case("two_drones"),
+}
+
+
+@cache
+def _case(name: str) -> Case:
+    return CASES[name]()
+
+
+@cache
+def _estimates(name: str) -> Estimates:
+    return _case(name).replay()
+
+
+NAMES = sorted(CASES)
+
+
+# ---------------------------------------------------------------------------------- helpers
+def assert_same_estimates(a: Estimates, b: Estimates) -> None:
+    """Every array, event and count of ``a`` and ``b`` identical (NaN equal to NaN)."""
+    assert a.estimator == b.estimator
+    assert [s.key for s in a.beliefs] == [s.key for s in b.beliefs]
+    for x, y in zip(a.beliefs, b.beliefs, strict=True):
+        assert x.frame == y.frame
+        for field in ("t", "mean", "cov", "age"):
+            np.testing.assert_array_equal(getattr(x, field), getattr(y, field), err_msg=x.label)
+        assert sorted(x.info) == sorted(y.info)
+        for k in x.info:
+            np.testing.assert_array_equal(x.info[k], y.info[k], err_msg=f"{x.label} {k}")
+    assert [u.key for u in a.updates] == [u.key for u in b.updates]
+    for u, v in zip(a.updates, b.updates, strict=True):
+        for field in ("t", "age", "nis", "dof", "cond_r", "cond_s"):
+            np.testing.assert_array_equal(getattr(u, field), getattr(v, field), err_msg=u.label)
+    assert a.events == b.events
+    assert dict(a.counts) == dict(b.counts)
+
+
+def scrambled_origin(rec: Recording, rng: np.random.Generator) -> Recording:
+    """``rec`` with every reading's ``origin`` replaced by a random robot, clutter or unknown."""
+    m = rec.measurements
+    origin = rng.integers(ORIGIN_UNKNOWN, rec.n_robots, size=m.size).astype(np.int64)
+    assert m.origin is not None and np.any(origin != m.origin)
+    assert {CLUTTER, ORIGIN_UNKNOWN} <= set(origin.tolist())
+    return dataclasses.replace(rec, measurements=dataclasses.replace(m, origin=origin))
+
+
+# ---------------------------------------------------------------------------------- the contract
+@pytest.mark.parametrize("name", NAMES)
+def test_every_estimator_implements_the_contract(name: str) -> None:
+    case = _case(name)
+    estimators = case.build(case.recording)
+    assert estimators
+    for est in estimators:
+        assert isinstance(est, Estimator), type(est).__name__
+        assert isinstance(est.name, str) and est.name
+        assert est.owner == "team" or est.owner in case.recording.robots
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_beliefs_have_the_frame_dimension_finite_means_and_psd_covariances(name: str) -> None:
+    rec, estimates = _case(name).recording, _estimates(name)
+    assert estimates.beliefs and sum(s.t.size for s in estimates.beliefs) > 0
+    for s in estimates.beliefs:
+        d = frame(s.frame).dim
+        assert s.owner == "team" or s.owner in rec.robots
+        assert s.subject in rec.robots
+        assert s.mean.shape == (s.t.size, d), s.label
+        assert s.cov.shape == (s.t.size, d, d), s.label
+        assert s.age.shape == s.t.shape and np.all(np.isfinite(s.age)) and np.all(s.age >= 0)
+        assert np.all(np.isfinite(s.t)) and np.all(np.diff(s.t) > 0), s.label
+        assert np.all(np.isfinite(s.mean)), s.label
+        assert np.all(np.isfinite(s.cov)), s.label
+        scale = np.maximum(1.0, np.abs(s.cov).max(axis=(1, 2)))
+        asym = np.abs(s.cov - np.swapaxes(s.cov, 1, 2)).max(axis=(1, 2))
+        assert np.all(asym <= 1e-12 * scale), f"{s.label}: asymmetry {asym.max()}"
+        eig_min = np.linalg.eigvalsh(0.5 * (s.cov + np.swapaxes(s.cov, 1, 2)))[:, 0]
+        assert np.all(eig_min >= -1e-9 * scale), f"{s.label}: λmin {eig_min.min()}"
+        for k, v in s.info.items():
+            assert np.asarray(v).shape == s.t.shape, f"{s.label} info {k}"
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_update_records_have_valid_nis_of_the_modelled_kinds(name: str) -> None:
+    case, estimates = _case(name), _estimates(name)
+    m = case.recording.measurements
+    assert np.any(np.isin(m.kind, [kind_code(k) for k in case.kinds])), "no modelled rows"
+    n_updates = sum(u.t.size for u in estimates.updates)
+    if not case.dofs:
+        assert n_updates == 0
+        return
+    assert n_updates > 0
+    stamps = np.unique(m.of_kind(*case.kinds).t)
+    for u in estimates.updates:
+        assert u.subject in case.recording.robots
+        assert np.all(np.isfinite(u.nis)) and np.all(u.nis >= 0.0), u.label
+        assert np.all(u.dof >= 1), u.label
+        assert set(u.dof.tolist()) <= case.dofs, f"{u.label}: dof {set(u.dof.tolist())}"
+        assert np.all(np.isfinite(u.age)) and np.all(u.age >= 0.0), u.label
+        for cond in (u.cond_r, u.cond_s):  # log10(λmax/λmin), NaN where not computed
+            assert not np.any(cond < 0.0), u.label
+        # every update is at the stamp of a reading of a modelled kind
+        at = np.clip(np.searchsorted(stamps, u.t), 1, stamps.size - 1)
+        gap = np.minimum(np.abs(stamps[at] - u.t), np.abs(stamps[at - 1] - u.t))
+        assert np.all(gap <= TIME_TOL) if stamps.size > 1 else np.all(u.t == stamps[0])
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_replay_is_deterministic(name: str) -> None:
+    assert_same_estimates(_case(name).replay(), _estimates(name))
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_estimators_never_read_the_origin_of_a_reading(name: str) -> None:
+    case = _case(name)
+    scrambled = scrambled_origin(case.recording, np.random.default_rng(11))
+    assert_same_estimates(case.replay(scrambled), _estimates(name))
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_evaluation_runs_on_the_estimates(name: str) -> None:
+    rec, estimates = _case(name).recording, _estimates(name)
+    evals = evaluate(estimates, rec)
+    assert [e.label for e in evals] == list(estimates.labels)
+    for e, s in zip(evals, estimates.beliefs, strict=True):
+        assert e.error.shape == s.mean.shape and np.all(np.isfinite(e.error)), e.label
+        assert np.all(np.isfinite(e.nees)) and np.all(e.nees >= 0.0), e.label
+        np.testing.assert_array_equal(e.nis, estimates.updates_of(*s.key).nis)
+    for f in {e.frame for e in evals}:
+        summary = accuracy_and_consistency([e for e in evals if e.frame == f], settle_s=0.0)
+        assert summary["samples"] > 0
+        assert np.isfinite(summary["position_rmse_m"]) and np.isfinite(summary["anees"])
+
+
+# ---------------------------------------------------------------------------------- linear cases
+def textbook_predict(x: Array, P: Array, F: Array, Q: Array) -> tuple[Array, Array]:
+    """``x⁻ = F x``, ``P⁻ = F P Fᵀ + Q``."""
+    return F @ x, F @ P @ F.T + Q
+
+
+def textbook_update(
+    x: Array, P: Array, nu: Array, H: Array, R: Array
+) -> tuple[Array, Array, Array, float]:
+    """``S = H P Hᵀ + R``, ``K = P Hᵀ S⁻¹``, ``x⁺ = x + K ν``,
+    ``P⁺ = (I − K H) P (I − K H)ᵀ + K R Kᵀ``; also returns ``S`` and the NIS ``νᵀ S⁻¹ ν``."""
+    S = H @ P @ H.T + R
+    K = P @ H.T @ np.linalg.inv(S)
+    A = np.eye(P.shape[0]) - K @ H
+    return x + K @ nu, A @ P @ A.T + K @ R @ K.T, S, float(nu @ np.linalg.solve(S, nu))
+
+
+def _still_team(rng: np.random.Generator) -> tuple[Recording, RangeBearingNoise]:
+    """An observer and two observed robots standing still for 3 s: zero odometry at 20 Hz
+    (with stated noise), noisy range/azimuth/elevation readings of both at 10 Hz."""
+    dt, duration = 0.05, 3.0
+    t: Array = np.linspace(0.0, duration, round(duration / dt) + 1)
+    poses = np.array([[1.0, 2.0, 0.0, 0.4], [4.0, 3.5, 1.5, -1.0], [-1.5, 5.0, -0.2, 2.5]])
+    sigma_u = np.array([0.05, 0.04, 0.02, 0.03])
+    noise = RangeBearingNoise(sigma_r=0.05, sigma_azimuth=0.02, sigma_elevation=0.03)
+    sensor_sigma = np.sqrt(noise.variances)
+    tm = t[2::2]
+    rows = []
+    for j in (1, 2):
+        rel = np.tile(relative_pose(poses[0], poses[j]), (tm.size, 1))
+        z = range_azimuth_elevation(rel[:, :3]) + sensor_sigma * rng.standard_normal((tm.size, 3))
+        rows.append(
+            measurement_rows(
+                "range_bearing_elevation", t=tm, observer=0, target=j, value=z, sigma=sensor_sigma
+            )
+        )
+    rec = Recording(
+        robots=("observer", "a", "b"),
+        platforms=("ground", "aerial", "ground"),
+        truth=tuple(GroundTruth(t=t, pose=np.tile(p, (t.size, 1))) for p in poses),
+        odometry=tuple(
+            Odometry(t=t[:-1], velocity=np.zeros((t.size - 1, 4)), sigma=sigma_u) for _ in poses
+        ),
+        measurements=Measurements.concatenate(rows),
+    )
+    return rec, noise
+
+
+@pytest.mark.parametrize("covariance", ["simplified", "full"])
+def test_plkf_of_still_robots_is_a_plain_kalman_filter(covariance: str) -> None:
+    rec, noise = _still_team(np.random.default_rng(5))
+    init = InitPolicy(name="known", sigma_known_position=0.5, sigma_known_yaw=0.3)
+    settings = TrackManagerSettings(
+        filter="plkf",
+        init=init,
+        pseudo_linear_covariance=covariance,  # type: ignore[arg-type]
+    )
+    estimates = replay(rec, managers_for(rec, settings))
+    zero = np.zeros(4)
+    m = rec.measurements
+    for j, subject in ((1, "a"), (2, "b")):
+        motion = VelocityNoise(
+            observer=tuple(rec.odometry[0].sigma),  # type: ignore[arg-type]
+            observed=tuple(rec.odometry[j].sigma),  # type: ignore[arg-type]
+        )
+        rows = np.flatnonzero(m.target == j)
+        # the track starts at its first reading from the true relative pose (no random draw)
+        t_prev = float(m.t[rows[0]])
+        x = rec.relative_truth(0, j, t_prev)[0]
+        P = np.diag([0.5**2] * 3 + [0.3**2])
+        beliefs: dict[float, tuple[Array, Array]] = {}
+        nis: list[float] = []
+        events = np.unique(np.concatenate([rec.odometry[0].t, m.t, [rec.span[1]]]))
+        for t in events[events >= t_prev - TIME_TOL]:
+            step = float(t) - t_prev
+            if step > 0:
+                F, G = relative_jacobians(x, zero, zero, step)
+                np.testing.assert_array_equal(F, np.eye(4))  # still robots: f is the identity
+                np.testing.assert_allclose(relative_step(x, zero, zero, step), x, atol=1e-15)
+                x, P = textbook_predict(x, P, F, process_noise(G, motion))
+            t_prev = float(t)
+            for q in rows[np.abs(m.t[rows] - t) <= TIME_TOL]:
+                z = m.value[q]
+                H = pseudo_linear_matrix(z)
+                R = pseudo_linear_covariance(x, z, noise, covariance)  # type: ignore[arg-type]
+                nu = pseudo_linear_measurement(z) - H @ x
+                x, P, _, e = textbook_update(x, P, nu, H, R)
+                nis.append(e)
+            beliefs[round(float(t), 6)] = (x, P)
+        series = estimates.series("observer", subject)
+        assert series.t.size == 30
+        for k, t in enumerate(series.t):
+            x_ref, P_ref = beliefs[round(float(t), 6)]
+            np.testing.assert_allclose(series.mean[k], x_ref, rtol=1e-9, atol=1e-12)
+            np.testing.assert_allclose(series.cov[k], P_ref, rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(
+            estimates.updates_of("observer", subject).nis, nis, rtol=1e-9, atol=1e-12
+        )
+        # the estimate moved away from its start: the comparison is not of two constants
+        assert np.linalg.norm(series.mean[-1, :3] - series.mean[0, :3]) > 1e-3
+
+
+def _random_problem(rng: np.random.Generator, n: int, m: int, batch: tuple[int, ...]) -> Any:
+    """A random PSD ``P (…, n, n)``, ``H (…, m, n)``, PD ``R (…, m, m)``, ``ν (…, m)``, ``x``."""
+    A = rng.standard_normal((*batch, n, n))
+    B = rng.standard_normal((*batch, m, m))
+    P = A @ np.swapaxes(A, -1, -2)
+    R = B @ np.swapaxes(B, -1, -2) + 0.1 * np.eye(m)
+    return (
+        rng.standard_normal((*batch, n)),
+        P,
+        rng.standard_normal((*batch, m)),
+        rng.standard_normal((*batch, m, n)),
+        R,
+    )
+
+
+@pytest.mark.parametrize("m", [1, 2, 3, 4])
+def test_joseph_updates_are_the_textbook_update(m: int) -> None:
+    rng = np.random.default_rng(100 + m)
+    x, P, nu, H, R = _random_problem(rng, 4, m, (6,))
+    mean, cov, inn = kalman_update(x, P, nu, H, R)
+    for k in range(6):
+        x_ref, P_ref, S_ref, nis_ref = textbook_update(x[k], P[k], nu[k], H[k], R[k])
+        np.testing.assert_allclose(mean[k], x_ref, rtol=1e-10, atol=1e-12)
+        np.testing.assert_allclose(cov[k], P_ref, rtol=1e-10, atol=1e-10)
+        np.testing.assert_allclose(inn.cov[k], S_ref, rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(np.asarray(inn.nis)[k], nis_ref, rtol=1e-10)
+        K = P[k] @ H[k].T @ np.linalg.inv(S_ref)
+        np.testing.assert_allclose(
+            joseph_update(P[k], K, H[k], R[k]), P_ref, rtol=1e-10, atol=1e-10
+        )
