@@ -371,8 +371,67 @@ def _still_team(rng: np.random.Generator) -> tuple[Recording, RangeBearingNoise]
     return rec, noise
 
 
+Beliefs = dict[float, tuple[Array, Array]]
+
+
+def plain_still_plkf(
+    rec: Recording,
+    j: int,
+    noise: RangeBearingNoise,
+    covariance: str,
+    prior: tuple[float, Array, Array],
+) -> tuple[Beliefs, list[float]]:
+    """Robot 0's PLKF of robot ``j`` of a still team (:func:`_still_team`) as a textbook
+    Kalman filter from ``prior = (t, x, P)``, stepping through the replay's event times: the
+    belief after each event (keyed by the time rounded to µs) and the NIS of each update."""
+    zero = np.zeros(4)
+    m = rec.measurements
+    motion = VelocityNoise(
+        observer=tuple(rec.odometry[0].sigma),  # type: ignore[arg-type]
+        observed=tuple(rec.odometry[j].sigma),  # type: ignore[arg-type]
+    )
+    rows = np.flatnonzero(m.target == j)
+    t_prev, x, P = prior
+    beliefs: Beliefs = {}
+    nis: list[float] = []
+    events = np.unique(np.concatenate([rec.odometry[0].t, m.t, [rec.span[1]]]))
+    for t in events[events >= t_prev - TIME_TOL]:
+        step = float(t) - t_prev
+        if step > 0:
+            F, G = relative_jacobians(x, zero, zero, step)
+            np.testing.assert_array_equal(F, np.eye(4))  # still robots: f is the identity
+            np.testing.assert_allclose(relative_step(x, zero, zero, step), x, atol=1e-15)
+            x, P = textbook_predict(x, P, F, process_noise(G, motion))
+        t_prev = float(t)
+        for q in rows[np.abs(m.t[rows] - t) <= TIME_TOL]:
+            z = m.value[q]
+            H = pseudo_linear_matrix(z)
+            R = pseudo_linear_covariance(x, z, noise, covariance)  # type: ignore[arg-type]
+            nu = pseudo_linear_measurement(z) - H @ x
+            x, P, _, e = textbook_update(x, P, nu, H, R)
+            nis.append(e)
+        beliefs[round(float(t), 6)] = (x, P)
+    return beliefs, nis
+
+
+def assert_plain_kalman(
+    estimates: Estimates, key: tuple[str, str, str], reference: tuple[Beliefs, list[float]]
+) -> None:
+    """The series ``key`` of ``estimates`` and its NIS equal the reference to 1e-9."""
+    beliefs, nis = reference
+    series = estimates.series(*key)
+    assert series.t.size >= 29
+    for k, t in enumerate(series.t):
+        x_ref, P_ref = beliefs[round(float(t), 6)]
+        np.testing.assert_allclose(series.mean[k], x_ref, rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(series.cov[k], P_ref, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(estimates.updates_of(*key).nis, nis, rtol=1e-9, atol=1e-12)
+    # the estimate moved away from its start: the comparison is not of two constants
+    assert np.linalg.norm(series.mean[-1, :3] - series.mean[0, :3]) > 1e-3
+
+
 @pytest.mark.parametrize("covariance", ["simplified", "full"])
-def test_plkf_of_still_robots_is_a_plain_kalman_filter(covariance: str) -> None:
+def test_track_manager_plkf_of_still_robots_is_a_plain_kalman_filter(covariance: str) -> None:
     rec, noise = _still_team(np.random.default_rng(5))
     init = InitPolicy(name="known", sigma_known_position=0.5, sigma_known_yaw=0.3)
     settings = TrackManagerSettings(
@@ -381,48 +440,13 @@ def test_plkf_of_still_robots_is_a_plain_kalman_filter(covariance: str) -> None:
         pseudo_linear_covariance=covariance,  # type: ignore[arg-type]
     )
     estimates = replay(rec, managers_for(rec, settings))
-    zero = np.zeros(4)
     m = rec.measurements
     for j, subject in ((1, "a"), (2, "b")):
-        motion = VelocityNoise(
-            observer=tuple(rec.odometry[0].sigma),  # type: ignore[arg-type]
-            observed=tuple(rec.odometry[j].sigma),  # type: ignore[arg-type]
-        )
-        rows = np.flatnonzero(m.target == j)
         # the track starts at its first reading from the true relative pose (no random draw)
-        t_prev = float(m.t[rows[0]])
-        x = rec.relative_truth(0, j, t_prev)[0]
-        P = np.diag([0.5**2] * 3 + [0.3**2])
-        beliefs: dict[float, tuple[Array, Array]] = {}
-        nis: list[float] = []
-        events = np.unique(np.concatenate([rec.odometry[0].t, m.t, [rec.span[1]]]))
-        for t in events[events >= t_prev - TIME_TOL]:
-            step = float(t) - t_prev
-            if step > 0:
-                F, G = relative_jacobians(x, zero, zero, step)
-                np.testing.assert_array_equal(F, np.eye(4))  # still robots: f is the identity
-                np.testing.assert_allclose(relative_step(x, zero, zero, step), x, atol=1e-15)
-                x, P = textbook_predict(x, P, F, process_noise(G, motion))
-            t_prev = float(t)
-            for q in rows[np.abs(m.t[rows] - t) <= TIME_TOL]:
-                z = m.value[q]
-                H = pseudo_linear_matrix(z)
-                R = pseudo_linear_covariance(x, z, noise, covariance)  # type: ignore[arg-type]
-                nu = pseudo_linear_measurement(z) - H @ x
-                x, P, _, e = textbook_update(x, P, nu, H, R)
-                nis.append(e)
-            beliefs[round(float(t), 6)] = (x, P)
-        series = estimates.series("observer", subject)
-        assert series.t.size == 30
-        for k, t in enumerate(series.t):
-            x_ref, P_ref = beliefs[round(float(t), 6)]
-            np.testing.assert_allclose(series.mean[k], x_ref, rtol=1e-9, atol=1e-12)
-            np.testing.assert_allclose(series.cov[k], P_ref, rtol=1e-9, atol=1e-12)
-        np.testing.assert_allclose(
-            estimates.updates_of("observer", subject).nis, nis, rtol=1e-9, atol=1e-12
-        )
-        # the estimate moved away from its start: the comparison is not of two constants
-        assert np.linalg.norm(series.mean[-1, :3] - series.mean[0, :3]) > 1e-3
+        t0 = float(m.t[np.flatnonzero(m.target == j)[0]])
+        prior = (t0, rec.relative_truth(0, j, t0)[0], np.diag([0.5**2] * 3 + [0.3**2]))
+        reference = plain_still_plkf(rec, j, noise, covariance, prior)
+        assert_plain_kalman(estimates, ("observer", subject, ""), reference)
 
 
 def _random_problem(rng: np.random.Generator, n: int, m: int, batch: tuple[int, ...]) -> Any:
