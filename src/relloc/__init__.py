@@ -15,8 +15,8 @@ nothing and loads no optional dependency):
 - estimators, all implementing the one contract :class:`Estimator` (``advance`` with
   :class:`HeldOdometry`, ``measure`` a batch, ``beliefs`` → :class:`Belief`, ``outbox`` /
   ``receive`` teammates' messages): :class:`TrackManager` (seed 000 relative tracking: PLKF,
-  TEKF, bias-compensated PLKF, yaw bank, track keep/delete; one per observing robot,
-  :func:`managers_for`), :class:`CooperativeFilter` (seed 001 team EIF / joint EKF),
+  TEKF, bias-compensated PLKF, yaw bank, track keep/delete, set by
+  :class:`TrackManagerSettings`; one per observing robot, :func:`managers_for`), :class:`CooperativeFilter` (seed 001 team EIF / joint EKF),
   :class:`GaussianSumEstimator` (seed 002, one leader's multi-hypothesis fuser),
   :class:`SwitchingEkf` (seed 003, one follower's switching multi-rate EKF);
 - the loop — :func:`replay` (any recording through any estimators) and :func:`run_events`
