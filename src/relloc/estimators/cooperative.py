@@ -289,6 +289,9 @@ class StaleIntervals:
         return [float(np.sum(overlap[self.robot == i])) for i in range(n)]
 
 
+NO_STALE = StaleIntervals(np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0))
+
+
 def command_timeline(
     held: HeldCommands, model: OdometryModel
 ) -> tuple[TeamTimeline, StaleIntervals]:
@@ -308,10 +311,13 @@ def command_timeline(
     expiry = held.stamp + hold
     inside = (expiry >= held.begin[:, None]) & (expiry < held.end[:, None])
     later = fresh & (held.stamp > held.begin[0])
-    start = np.unique(np.concatenate([held.begin[:1], held.stamp[later], expiry[inside]]))
     # at each segment start: the interval holding it, each robot's command there, and whether
     # the robot has none yet or its command has expired
-    k = np.searchsorted(held.end, start, side="right")
+    if later.any() or inside.any():
+        start = np.unique(np.concatenate([held.begin[:1], held.stamp[later], expiry[inside]]))
+        k = np.searchsorted(held.end, start, side="right")
+    else:  # one segment (nothing changes inside the intervals)
+        start, k = held.begin[:1], np.zeros(1, dtype=np.int64)
     none = np.isnan(held.stamp[k])
     still = none | (start[:, None] >= expiry[k])
     v, w = held.v[k], held.w[k]
@@ -321,7 +327,10 @@ def command_timeline(
     timeline = TeamTimeline(
         start=start, v=np.where(still, 0.0, v), w=np.where(still, 0.0, w), q_v=q_v, q_w=q_w
     )
-    k_closed, robot = np.nonzero(fresh & (before + hold < held.stamp))
+    closed = fresh & (before + hold < held.stamp)
+    if not closed.any():
+        return timeline, NO_STALE
+    k_closed, robot = np.nonzero(closed)
     stale = StaleIntervals(
         robot=robot,
         start=before[k_closed, robot] + hold,
@@ -543,23 +552,24 @@ def fix_rows(batch: Measurements, idx: IntArray, group_offset: int) -> ScalarRow
 @dataclass(frozen=True)
 class GroupInnovations:
     """Per gating group (a detection or fix) of one epoch, in ``ids`` order: the NIS
-    ``νᵀ S⁻¹ ν`` with ``dof`` rows, the observer (the robot whose reading it is), the
-    innovation covariance ``S`` and the rows' noise variances ``var`` (both padded to the widest
-    group: ``S`` with the identity, ``var`` with NaN)."""
+    ``νᵀ S⁻¹ ν`` with ``dof`` rows, the observer (the robot whose reading it is), and the
+    innovation covariance ``S`` (padded with the identity to the widest group); ``rows``
+    ``(groups, width)`` index each group's rows (−1 beyond its ``dof``), ``sigma`` their noise."""
 
     ids: IntArray
     nis: Array
     dof: IntArray
     observer: IntArray
     S: Array
-    var: Array
+    rows: IntArray
+    sigma: Array
 
     def conditioning(self) -> tuple[Array, Array]:
         """``log10(λmax/λmin)`` of every group's ``R`` (diagonal) and ``S``."""
         cond_r, cond_s = np.zeros(self.ids.size), np.zeros(self.ids.size)
         for d in np.unique(self.dof[self.dof > 1]):
             sel = self.dof == d
-            var = self.var[sel, :d]
+            var = self.sigma[self.rows[sel, :d]] ** 2
             cond_r[sel] = np.log10(var.max(axis=1) / var.min(axis=1))
             eig = np.linalg.eigvalsh(self.S[sel, :d, :d])
             cond_s[sel] = np.log10(eig[:, -1] / eig[:, 0])
@@ -580,11 +590,11 @@ def group_innovations(lin: LinearisedRows, P: Array) -> GroupInnovations:
     idx = np.maximum(lin.block_index, 0)
     S = np.broadcast_to(np.eye(width), (ids.size, width, width)).copy()
     nu = np.zeros((ids.size, width))
-    var = np.full((ids.size, width), np.nan)
+    rows = np.full((ids.size, width), -1, dtype=np.int64)
     for a in range(width):
         ok_a = a < dof
-        nu[ok_a, a] = lin.residual[order[start[ok_a] + a]]
-        var[ok_a, a] = lin.sigma[order[start[ok_a] + a]] ** 2
+        rows[ok_a, a] = order[start[ok_a] + a]
+        nu[ok_a, a] = lin.residual[rows[ok_a, a]]
         for b in range(width):
             ok = ok_a & (b < dof)
             ra, rb = order[start[ok] + a], order[start[ok] + b]
@@ -599,7 +609,8 @@ def group_innovations(lin: LinearisedRows, P: Array) -> GroupInnovations:
         dof=dof,
         observer=lin.block_index[order[start], 0],
         S=S,
-        var=var,
+        rows=rows,
+        sigma=lin.sigma,
     )
 
 
@@ -804,15 +815,13 @@ class CooperativeEstimator(Silent):
 
     def _check_indices(self, batch: Measurements) -> None:
         assert batch.landmark is not None
-        n, n_lm = self.n_robots, self._landmarks.shape[0]
         for name, ids, limit in (
-            ("observer", batch.observer, n),
-            ("target", batch.target, n),
-            ("landmark", batch.landmark, n_lm),
+            ("observer", batch.observer, self.n_robots),
+            ("target", batch.target, self.n_robots),
+            ("landmark", batch.landmark, self._landmarks.shape[0]),
         ):
-            bad = ids >= limit
-            if bad.any():
-                row = int(np.argmax(bad))
+            if ids.max() >= limit:
+                row = int(np.argmax(ids >= limit))
                 raise DataError(
                     f"measurements at t={batch.t[row]:.6g}: {name} {int(ids[row])} is not among "
                     f"the filter's {limit}"
@@ -847,7 +856,8 @@ class CooperativeEstimator(Silent):
         accumulate_prediction(
             self._pending, timeline, self._t_applied, self._t, self.settings.odometry.max_step_s
         )
-        self._stale.append(stale)
+        if stale.robot.size:
+            self._stale.append(stale)
         self._in_force = held.stamp[-1]
         self._held.clear()
         self._held_t.clear()
