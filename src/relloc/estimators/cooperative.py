@@ -672,7 +672,10 @@ class CooperativeEstimator(Silent):
     the per-detection update records (a few µs each: worth skipping where nobody reads them).
 
     Every batch is one epoch at the current time: the prediction pending since the previous
-    epoch is applied, then every detection and fix of the batch is gated and used in one update.
+    epoch is applied, then every detection and fix of the batch is gated and used in one update
+    (a batch with nothing the settings use leaves the prediction pending). Beliefs are read
+    after applying the pending prediction too, so the unicycle steps are cut at every epoch and
+    every record time.
     Robots' commands come from the held odometry at each :meth:`advance`; a command takes effect
     at its time stamp (the loop delivers each one at the first event after it).
     """

@@ -235,8 +235,20 @@ def simulate(s: CooperativeScenario, rng: np.random.Generator) -> CooperativeSim
     order = np.argsort(cols[0], kind="stable")
     detections = _detection_rows(s, *(c[order] for c in cols))
     fixes = _gps(s, t, truth, rng)
+    recording = _recording(s, t, truth, odo_u, Measurements.concatenate([detections, fixes]))
+    noise = rng.normal(size=(n, 3)) * np.asarray(s.initial_sigma)
+    prior = Gaussian(mean=(truth[0] + noise).reshape(-1), cov=s.prior_cov)
+    return CooperativeSim(recording=recording, prior=prior)
+
+
+def _recording(
+    s: CooperativeScenario, t: Array, truth: Array, odo_u: Array, measurements: Measurements
+) -> Recording:
+    """Robots ``"1"`` … ``"n"``: odometry ``(v, 0, 0, ω)`` reported at ``t[:-1]``, the
+    measurements, truth ``(x, y, 0, ψ)`` at ``t`` and the landmarks at height 0."""
+    n = s.n_robots
     robots = tuple(str(i + 1) for i in range(n))
-    zero = np.zeros(steps)
+    zero = np.zeros(t.size - 1)
     odometry = tuple(
         Odometry(
             t=t[:-1],
@@ -254,19 +266,16 @@ def simulate(s: CooperativeScenario, rng: np.random.Generator) -> CooperativeSim
         )
         for i in range(n)
     )
-    recording = Recording(
+    return Recording(
         robots=robots,
         platforms=("ground",) * n,
         odometry=odometry,
-        measurements=Measurements.concatenate([detections, fixes]),
+        measurements=measurements,
         truth=ground_truth,
         landmarks=np.column_stack([s.landmarks_xy, np.zeros(s.landmarks_xy.shape[0])]),
         source="relloc.sim.cooperative",
-        meta={"dt": dt, "duration": s.duration},
+        meta={"dt": s.dt, "duration": s.duration},
     )
-    noise = rng.normal(size=(n, 3)) * np.asarray(s.initial_sigma)
-    prior = Gaussian(mean=(truth[0] + noise).reshape(-1), cov=s.prior_cov)
-    return CooperativeSim(recording=recording, prior=prior)
 
 
 def _detection_rows(
