@@ -15,10 +15,11 @@ nothing and loads no optional dependency):
 - estimators, all implementing the one contract :class:`Estimator` (``advance`` with
   :class:`HeldOdometry`, ``measure`` a batch, ``beliefs`` → :class:`Belief`, ``outbox`` /
   ``receive`` teammates' messages): :class:`TrackManager` (seed 000 relative tracking: PLKF,
-  TEKF, bias-compensated PLKF, yaw bank, track keep/delete; one per observing robot,
-  :func:`managers_for`), :class:`CooperativeFilter` (seed 001 team EIF / joint EKF),
-  :class:`GaussianSumEstimator` (seed 002, one leader's multi-hypothesis fuser),
-  :class:`SwitchingEkf` (seed 003, one follower's switching multi-rate EKF);
+  TEKF, bias-compensated PLKF, yaw bank, track keep/delete, set by
+  :class:`TrackManagerSettings`; one per observing robot, :func:`managers_for`),
+  :class:`CooperativeEstimator` (seed 001 team EIF / joint EKF), :class:`GaussianSumEstimator`
+  (seed 002, one leader's multi-hypothesis fuser), :class:`SwitchingEkf` (seed 003, one
+  follower's switching multi-rate EKF);
 - the loop — :func:`replay` (any recording through any estimators) and :func:`run_events`
   (the same loop, window by window, as robot nodes run it);
 - results — :class:`Estimates` (:class:`BeliefSeries` and :class:`UpdateSeries` per owner and
@@ -59,6 +60,8 @@ _API: dict[str, str] = {
     "Estimator": "relloc.pipeline.contract",
     "HeldOdometry": "relloc.pipeline.contract",
     "TrackManager": "relloc.estimators.track_manager",
+    "GaussianSumEstimator": "relloc.fusion.gaussian_sum_estimator",
+    "SwitchingEkf": "relloc.estimators.switching_ekf",
     "TrackManagerSettings": "relloc.estimators.track_manager",
     "managers_for": "relloc.estimators.track_manager",
     "replay": "relloc.pipeline.replay",

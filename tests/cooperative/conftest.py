@@ -1,11 +1,53 @@
-"""Shared fixtures: a small synthetic dataset written in the MRCLAM folder layout."""
+"""Shared fixtures: the team filter run through the replay loop, and a small synthetic dataset
+written in the MRCLAM folder layout."""
 
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from relloc.core.gaussian import Gaussian
+from relloc.core.recording import Recording
+from relloc.estimators.cooperative import CooperativeEstimator, CooperativeSettings
+from relloc.pipeline.estimates import Estimates
+from relloc.pipeline.replay import replay
 from relloc.sim.cooperative import CooperativeScenario, simulate
+
+
+class FilterRun:
+    """The team filter over a recording: ``mean (T, n, 3)``, ``cov (T, n, 3, 3)`` at the record
+    times, the estimator (its counts) and the estimates record."""
+
+    def __init__(
+        self,
+        recording: Recording,
+        prior: Gaussian,
+        settings: CooperativeSettings,
+        record_times: np.ndarray,
+        start: float = 0.0,
+    ) -> None:
+        self.estimator = CooperativeEstimator(
+            recording.robots, prior, settings, recording.landmarks
+        )
+        self.estimates: Estimates = replay(
+            recording,
+            [self.estimator],
+            record_times=record_times,
+            start=start,
+            end=float(record_times[-1]),
+        )
+        self.t, self.mean, self.cov = self.estimates.stacked("team", recording.robots)
+
+    @property
+    def counts(self):
+        return self.estimator.counts
+
+
+@pytest.fixture(scope="session")
+def team_run():
+    """``team_run(recording, prior, settings, record_times, start=0.0) -> FilterRun``."""
+    return FilterRun
+
 
 HEADER = "# synthetic MRCLAM-layout data written by relloc's tests\n#\n# {}\n#\n"
 T0_UNIX = 1248444189.0
@@ -40,7 +82,8 @@ def write_mrclam_folder(folder: Path, duration: float = 30.0, seed: int = 0) -> 
         max_turn_rate=0.5,
         capture_radius=0.15,
     )
-    sim = simulate(scenario, rng)
+    rec = simulate(scenario, rng).recording
+    assert rec.truth is not None and rec.measurements.landmark is not None
     folder.mkdir(parents=True, exist_ok=True)
     subjects = [(i + 1, b) for i, b in enumerate(ROBOT_BARCODES)]
     subjects += [(6 + k, b) for k, b in enumerate(LANDMARK_BARCODES)]
@@ -53,27 +96,23 @@ def write_mrclam_folder(folder: Path, duration: float = 30.0, seed: int = 0) -> 
             f"{6 + k}\t{x:.6f}\t{y:.6f}\t0.0001\t0.0001\n" for k, (x, y) in enumerate(landmarks)
         )
     )
-    det = sim.recording.detections
+    det = rec.measurements.of_kind("range_bearing")
     for i in range(5):
         gt = "".join(
-            f"{T0_UNIX + t:.3f}\t{p[0]:.5f}\t{p[1]:.5f}\t{p[2]:.5f}\n"
-            for t, p in zip(sim.t, sim.truth[:, i], strict=True)
+            f"{T0_UNIX + t:.3f}\t{p[0]:.5f}\t{p[1]:.5f}\t{p[3]:.5f}\n"
+            for t, p in zip(rec.truth[i].t, rec.truth[i].pose, strict=True)
         )
         (folder / f"Robot{i + 1}_Groundtruth.dat").write_text(HEADER.format("Time x y theta") + gt)
-        o = sim.recording.odometry[i]
+        o = rec.odometry[i]
         odo = "".join(
-            f"{T0_UNIX + t:.3f}\t{v:.4f}\t{w:.4f}\n" for t, v, w in zip(o.t, o.v, o.w, strict=True)
+            f"{T0_UNIX + t:.3f}\t{u[0]:.4f}\t{u[3]:.4f}\n"
+            for t, u in zip(o.t, o.velocity, strict=True)
         )
         (folder / f"Robot{i + 1}_Odometry.dat").write_text(HEADER.format("Time v w") + odo)
         sel = det.observer == i
         lines = []
-        for t, tr, lm, r, b in zip(
-            det.t[sel],
-            det.target_robot[sel],
-            det.landmark[sel],
-            det.range[sel],
-            det.bearing[sel],
-            strict=True,
+        for t, tr, lm, (r, b, _) in zip(
+            det.t[sel], det.target[sel], det.landmark[sel], det.value[sel], strict=True
         ):
             code = ROBOT_BARCODES[tr] if tr >= 0 else LANDMARK_BARCODES[lm]
             lines.append(f"{T0_UNIX + t:.3f}\t{code}\t{r:.3f}\t{b:.4f}\n")

@@ -74,21 +74,26 @@ def test_mrclam_missing_file_is_a_data_error(synthetic_mrclam, tmp_path, capsys)
 def test_loader_and_cooperative_localization_on_real_mrclam():
     from relloc.calibration.window import CalibrationWindow
     from relloc.datasets.mrclam import load_mrclam
-    from relloc.estimators.cooperative import run_team
-    from relloc.experiments.mrclam_cl import build_recording, case_settings, evaluate, fit_models
+    from relloc.experiments.mrclam_cl import (
+        build_recording,
+        case_settings,
+        evaluate,
+        fit_models,
+        run_filter,
+    )
 
     ds = load_mrclam(default_mrclam_dataset())
     fit = fit_models(ds, CalibrationWindow(0.0, 100.0, str(ds.path)))
     prepared = build_recording(ds, fit, np.random.default_rng(0))
     out_t = prepared.out_t[prepared.out_t <= 30.0]
-    n_lm = prepared.recording.landmarks_xy.shape[0]
+    n_lm = prepared.recording.landmarks.shape[0]
     result = {}
     for mode, anchors in (("dead_reckoning", "none"), ("range_bearing", "all_landmarks")):
         settings = case_settings(mode, anchors, fit, prepared.two_landmarks, n_lm)
-        run = run_team(prepared.recording, prepared.prior, prepared.t_start, out_t, settings)
-        result[mode] = (evaluate({"mean": run.mean, "cov": run.cov}, ds, out_t, 0.0), run.counts)
+        run = run_filter(prepared, settings, out_t)
+        result[mode] = (evaluate(run, ds, out_t, 0.0), run["counts"])
     cl, counts = result["range_bearing"]
-    assert counts.used > 100 and np.isfinite(cl["pos_rmse_m"]["mean"])
+    assert counts["used"] > 100 and np.isfinite(cl["pos_rmse_m"]["mean"])
     assert cl["pos_rmse_m"]["mean"] < 0.2
     assert cl["pos_rmse_m"]["mean"] < result["dead_reckoning"][0]["pos_rmse_m"]["mean"]
 

@@ -9,24 +9,25 @@ observable: errors and bounds collapse to the sensing accuracy.
 import numpy as np
 import pytest
 
-from relloc.estimators.cooperative import OdometryModel, PipelineSettings, SensorModel, run_team
+from relloc.estimators.cooperative import CooperativeSettings, OdometryModel, SensorModel
 from relloc.metrics import state_errors
 from relloc.sim.cooperative import sharma2013_scenario, simulate
 
 
 @pytest.fixture(scope="module")
-def runs():
+def runs(team_run):
     scenario = sharma2013_scenario(duration=40.0)
     sim = simulate(scenario, np.random.default_rng(7))
+    rec = sim.recording
     odo = OdometryModel.from_discrete(scenario.sigma_v, scenario.sigma_w, scenario.dt)
-    out_t = sim.t[::20]
-    truth = sim.truth[::20]
+    out_t = rec.truth[0].t[::20]
+    truth = np.stack([g.pose[::20][:, [0, 1, 3]] for g in rec.truth], axis=1)
     results = {}
     for name, anchors in (("none", ()), ("two", (0, 1))):
-        settings = PipelineSettings(
+        settings = CooperativeSettings(
             odometry=odo, sensor=SensorModel(sigma_bearing=scenario.sigma_bearing), anchors=anchors
         )
-        run = run_team(sim.recording, sim.prior, 0.0, out_t, settings)
+        run = team_run(rec, sim.prior, settings, out_t)
         results[name] = (run, state_errors(run.mean, truth, angle_indices=(2,)), truth)
     return results
 

@@ -1,19 +1,20 @@
-"""Robustness of the team pipeline: stopped odometry, isolated robots, malformed input."""
+"""Robustness of the team filter: stopped odometry, isolated robots, input it cannot use."""
+
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
+from relloc.core.recording import measurement_rows
 from relloc.errors import ConfigError, DataError
 from relloc.estimators.cooperative import (
-    Detections,
+    CooperativeEstimator,
+    CooperativeSettings,
     OdometryModel,
-    OdometryStream,
-    PipelineSettings,
     SensorModel,
-    TeamRecording,
-    run_team,
 )
 from relloc.metrics import nees, state_errors
+from relloc.pipeline.replay import replay
 from relloc.sim.cooperative import sharma2013_scenario, simulate
 
 
@@ -31,24 +32,21 @@ def _settings(scenario, **kw):
         stale_q_v=4.0,
         stale_q_w=0.05,
     )
-    return PipelineSettings(
+    return CooperativeSettings(
         odometry=odo, sensor=SensorModel(sigma_bearing=scenario.sigma_bearing), **kw
     )
 
 
-def test_odometry_that_stops_and_a_robot_that_sees_nobody(sim):
+def test_odometry_that_stops_and_a_robot_that_sees_nobody(sim, team_run):
     scenario, s = sim
     rec = s.recording
     odo = list(rec.odometry)
-    o = odo[1]
-    keep = o.t < 8.0
-    odo[1] = OdometryStream(o.t[keep], o.v[keep], o.w[keep])
-    d = rec.detections
-    blind = ((d.observer == 2) | (d.target_robot == 2)) & (d.t > 12.0) & (d.t < 20.0)
-    recording = TeamRecording(
-        odometry=tuple(odo), detections=d.select(~blind), landmarks_xy=rec.landmarks_xy
-    )
-    run = run_team(recording, s.prior, 0.0, s.t[::10], _settings(scenario, anchors=(0, 1)))
+    keep = odo[1].t < 8.0
+    odo[1] = replace(odo[1], t=odo[1].t[keep], velocity=odo[1].velocity[keep])
+    m = rec.measurements
+    blind = ((m.observer == 2) | (m.target == 2)) & (m.t > 12.0) & (m.t < 20.0)
+    recording = replace(rec, odometry=tuple(odo), measurements=m.select(~blind))
+    run = team_run(recording, s.prior, _settings(scenario, anchors=(0, 1)), rec.truth[0].t[::10])
     stale = run.counts.stale_odometry_s
     # last command at 7.9 s, held 0.5 s, then stale until the end (25 s)
     assert stale[1] == pytest.approx(25.0 - 7.9 - 0.5, abs=1e-6)
@@ -56,32 +54,57 @@ def test_odometry_that_stops_and_a_robot_that_sees_nobody(sim):
     assert np.isfinite(run.mean).all() and np.isfinite(run.cov).all()
     # after the outage every robot, the blind one and the one without odometry included, is
     # back within its consistent bound: final 3-DOF NEES below χ²₃(0.999) = 16.27
-    err = state_errors(run.mean[-1], s.truth[::10][-1], angle_indices=(2,))
+    truth = np.stack([g.pose[-1, [0, 1, 3]] for g in rec.truth])
+    err = state_errors(run.mean[-1], truth, angle_indices=(2,))
     assert np.all(nees(err, run.cov[-1]) < 16.27)
 
 
-def test_malformed_inputs_raise_named_errors(sim):
+def test_bad_settings_raise_config_errors(sim):
     scenario, s = sim
-    with pytest.raises(DataError, match=r"odometry\.t"):
-        OdometryStream(np.array([0.0, 0.2, 0.1]), np.zeros(3), np.zeros(3))
-    with pytest.raises(DataError, match="itself"):
-        Detections(
-            np.zeros(1), np.array([1]), np.array([1]), np.array([-1]), np.ones(1), np.zeros(1)
-        )
-    with pytest.raises(DataError, match="non-finite"):
-        OdometryStream(np.array([0.0, 1.0]), np.array([np.nan, 0.0]), np.zeros(2))
     with pytest.raises(ConfigError, match="q_v0"):
         OdometryModel(q_v0=-1.0, q_w0=0.1)
     with pytest.raises(ConfigError, match="filter"):
-        PipelineSettings(
+        CooperativeSettings(
             odometry=OdometryModel(q_v0=0.1, q_w0=0.1),
             sensor=SensorModel(sigma_bearing=0.1),
             filter="ukf",  # type: ignore[arg-type]
         )
-    two_robots = TeamRecording(
-        odometry=s.recording.odometry[:2],
-        detections=s.recording.detections.select(np.zeros(len(s.recording.detections), bool)),
-        landmarks_xy=s.recording.landmarks_xy,
-    )
     with pytest.raises(ConfigError, match="dimension"):
-        run_team(two_robots, s.prior, 0.0, s.t, _settings(scenario))
+        CooperativeEstimator(s.recording.robots[:2], s.prior, _settings(scenario))
+    with pytest.raises(ConfigError, match="landmarks"):
+        CooperativeEstimator(
+            s.recording.robots, s.prior, _settings(scenario), np.array([1.0, np.nan])
+        )
+
+
+def _replay(recording, prior, settings):
+    est = CooperativeEstimator(recording.robots, prior, settings, recording.landmarks)
+    return replay(recording, [est], record_rate_hz=1.0)
+
+
+def test_input_the_filter_cannot_use_raises_data_errors(sim):
+    scenario, s = sim
+    rec = s.recording
+    # a team of three robots cannot use readings of robots 4 and 5
+    three = CooperativeEstimator(
+        rec.robots[:3],
+        type(s.prior)(mean=s.prior.mean[:9], cov=s.prior.cov[:9, :9]),
+        _settings(scenario),
+        rec.landmarks,
+    )
+    with pytest.raises(DataError, match="not among the filter's 3"):
+        replay(rec, [three], record_rate_hz=1.0)
+    # a unicycle does not move sideways
+    odo = list(rec.odometry)
+    velocity = np.array(odo[3].velocity)
+    velocity[40, 1] = 0.5
+    odo[3] = replace(odo[3], velocity=velocity)
+    with pytest.raises(DataError, match="lateral or vertical velocity"):
+        _replay(replace(rec, odometry=tuple(odo)), s.prior, _settings(scenario))
+    # an absolute fix is useless without its noise
+    fix = measurement_rows("pose", t=np.array([5.0]), observer=0, value=np.zeros((1, 3)))
+    no_sigma = replace(
+        rec, measurements=type(rec.measurements).concatenate([rec.measurements, fix])
+    )
+    with pytest.raises(DataError, match="states no σ"):
+        _replay(no_sigma, s.prior, _settings(scenario, use_fixes=True))

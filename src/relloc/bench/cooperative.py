@@ -2,10 +2,13 @@
 
 A grid team (:func:`relloc.sim.cooperative.grid_team_scenario`: robots 30 m apart, 50 m
 sensing range, so each sees its ~8 nearest neighbours, plus a few landmarks) is simulated at
-10 Hz (odometry and bearings every 0.1 s); the asynchronous pipeline then replays it with the
-EIF (:mod:`relloc.estimators.eif`) and, as the baseline measured in the same run, the
-covariance-form joint EKF (:mod:`relloc.estimators.joint_ekf`), reporting the estimate of every
-robot at every step. Both are checked to give the same estimates before timing counts.
+10 Hz (odometry and bearings every 0.1 s); :func:`relloc.pipeline.replay.replay` then runs the
+team filter (:class:`relloc.estimators.cooperative.CooperativeEstimator`) over it with the EIF
+(:mod:`relloc.estimators.eif`) and, as the baseline measured in the same run, the
+covariance-form joint EKF (:mod:`relloc.estimators.joint_ekf`), recording the belief of every
+robot at every step (the per-detection update records, a few µs each, are not kept: the
+benchmark times the localization). Both are checked to give the same estimates before timing
+counts.
 
 The sizes grow until the EIF falls below real time; the EKF baseline stops once its
 real-time factor is below 0.5. Reported per team size ``n``: wall time per 0.1 s step (best
@@ -31,16 +34,20 @@ import time
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from relloc.errors import ModelError
 from relloc.estimators.cooperative import (
+    CooperativeEstimator,
+    CooperativeSettings,
+    Counts,
     OdometryModel,
-    PipelineSettings,
     SensorModel,
-    TeamRun,
-    run_team,
 )
-from relloc.sim.cooperative import grid_team_scenario, simulate
+from relloc.pipeline.replay import replay
+from relloc.sim.cooperative import CooperativeSim, grid_team_scenario, simulate
+
+Array = NDArray[np.float64]
 
 SIZES = (5, 10, 25, 50, 100, 150, 200, 300, 400)
 STEPS = 30
@@ -48,15 +55,24 @@ REPEATS = 2
 EQUIVALENCE_TOL = 1e-6
 
 
-def _time_run(sim: Any, settings: PipelineSettings, repeats: int) -> tuple[float, TeamRun]:
+def _time_run(
+    sim: CooperativeSim, settings: CooperativeSettings, repeats: int
+) -> tuple[float, Array, Counts]:
+    """Best wall time of ``repeats`` replays, the recorded means ``(T, n, 3)`` and the counts."""
+    rec = sim.recording
+    t = rec.truth[0].t if rec.truth is not None else np.zeros(0)
     best = np.inf
-    run = None
+    mean, counts = np.zeros(0), Counts()
     for _ in range(repeats):
         start = time.perf_counter()
-        run = run_team(sim.recording, sim.prior, 0.0, sim.t, settings)
+        estimator = CooperativeEstimator(
+            rec.robots, sim.prior, settings, rec.landmarks, record_updates=False
+        )
+        estimates = replay(rec, [estimator], record_times=t, start=0.0, end=float(t[-1]))
         best = min(best, time.perf_counter() - start)
-    assert run is not None
-    return float(best), run
+        _, mean, _ = estimates.stacked(estimator.owner, rec.robots)
+        counts = estimator.counts
+    return float(best), mean, counts
 
 
 def _crossing(sizes: list[int], factors: list[float]) -> float | None:
@@ -84,27 +100,29 @@ def measure() -> dict[str, Any]:
             odometry = OdometryModel.from_discrete(scenario.sigma_v, scenario.sigma_w, 0.1)
             sensor = SensorModel(sigma_bearing=scenario.sigma_bearing)
             timing: dict[str, float] = {}
-            runs: dict[str, TeamRun] = {}
+            means: dict[str, Array] = {}
+            counts: dict[str, Counts] = {}
             for kind in ("eif", "ekf") if ekf_active else ("eif",):
-                settings = PipelineSettings(
+                settings = CooperativeSettings(
                     odometry=odometry, sensor=sensor, anchors=(0, 1), filter=kind
                 )
-                timing[kind], runs[kind] = _time_run(sim, settings, REPEATS)
-            duration = float(sim.t[-1])
+                timing[kind], means[kind], counts[kind] = _time_run(sim, settings, REPEATS)
+            t0, t1 = sim.recording.span
+            duration = t1 - t0
             row: dict[str, Any] = {
                 "n": n,
                 "state_dim": 3 * n,
-                "rows_per_step": runs["eif"].counts.used / max(runs["eif"].counts.epochs, 1),
+                "rows_per_step": counts["eif"].used / max(counts["eif"].epochs, 1),
                 "eif_ms_per_step": 1e3 * timing["eif"] / STEPS,
                 "eif_realtime_factor": duration / timing["eif"],
                 "ekf_ms_per_step": None,
                 "ekf_realtime_factor": None,
                 "max_mean_diff_eif_ekf": None,
             }
-            if "ekf" in runs:
+            if "ekf" in means:
                 row["ekf_ms_per_step"] = 1e3 * timing["ekf"] / STEPS
                 row["ekf_realtime_factor"] = duration / timing["ekf"]
-                diff = float(np.max(np.abs(runs["eif"].mean - runs["ekf"].mean)))
+                diff = float(np.max(np.abs(means["eif"] - means["ekf"])))
                 if not diff < EQUIVALENCE_TOL:
                     raise ModelError(f"EIF and EKF disagree by {diff:g} for n = {n}")
                 row["max_mean_diff_eif_ekf"] = diff

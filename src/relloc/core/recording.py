@@ -348,20 +348,32 @@ class Measurements:
     def __len__(self) -> int:
         return self.size
 
-    def select(self, mask: BoolArray | IntArray) -> Measurements:
-        """The rows picked by a boolean mask or an index array (order kept)."""
+    def select(self, mask: BoolArray | IntArray | slice) -> Measurements:
+        """The rows picked by a boolean mask, an index array or a slice (order kept).
+
+        Rows of a valid table taken in their order (a mask, a slice, or strictly increasing
+        indices) form a valid table, so they are not checked again (the replay loop slices its
+        table at every event); any other index array builds a new, checked table.
+        """
         assert self.landmark is not None and self.origin is not None and self.sensor is not None
-        return Measurements(
-            t=self.t[mask],
-            kind=self.kind[mask],
-            observer=self.observer[mask],
-            target=self.target[mask],
-            value=self.value[mask],
-            sigma=self.sigma[mask],
-            landmark=self.landmark[mask],
-            origin=self.origin[mask],
-            sensor=self.sensor[mask],
-        )
+        pick: slice | NDArray[Any]
+        if isinstance(mask, slice):
+            pick, ordered = mask, (mask.step or 1) > 0
+        else:
+            pick = np.asarray(mask)
+            if pick.dtype == np.bool_ and pick.shape != self.t.shape:
+                raise DataError(f"measurements.select: mask of {pick.shape} for {self.size} rows")
+            ordered = pick.dtype == np.bool_ or pick.size < 2 or bool(np.all(np.diff(pick) > 0))
+        if not ordered:
+            return Measurements(
+                **{name: getattr(self, name)[pick] for name in _MEASUREMENT_COLUMNS}
+            )
+        out = object.__new__(Measurements)
+        for name in _MEASUREMENT_COLUMNS:
+            column = getattr(self, name)[pick]
+            column.setflags(write=False)
+            object.__setattr__(out, name, column)
+        return out
 
     def of_kind(self, *names: str) -> Measurements:
         """Only the rows of the named kinds."""
@@ -397,6 +409,19 @@ class Measurements:
             origin=cat("origin"),
             sensor=cat("sensor"),
         )
+
+
+_MEASUREMENT_COLUMNS = (
+    "t",
+    "kind",
+    "observer",
+    "target",
+    "value",
+    "sigma",
+    "landmark",
+    "origin",
+    "sensor",
+)
 
 
 def _check_kind_rows(

@@ -81,6 +81,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from relloc.core import recording as rec
 from relloc.core.angles import circular_interp
 from relloc.errors import ConfigError, DataError
 
@@ -843,3 +844,124 @@ def _map_barcodes(barcodes: IntArray, barcode_to_subject: Mapping[int, int]) -> 
     if len(barcodes) == 0:
         return np.zeros(0, dtype=np.int64)
     return np.asarray(subjects[np.searchsorted(codes, barcodes)], dtype=np.int64)
+
+
+# ----------------------------------------------------------------------------------------------
+# Dataset → Recording
+# ----------------------------------------------------------------------------------------------
+
+#: Skip reasons of :func:`to_recording` (counted per measurement file in ``Recording.skips``).
+UNMAPPED_SUBJECT = "subject is neither another robot nor a landmark"
+REPEATED_READING = "repeated reading of one subject in one camera frame"
+
+
+def to_recording(ds: MrclamDataset) -> rec.Recording:
+    """The dataset as a :class:`relloc.core.recording.Recording` (the pipeline's input).
+
+    Robots ``"1"`` … (their subject ids) on the ground; odometry ``(v, 0, 0, ω)`` as commanded
+    (MRCLAM states no noise: ``sigma`` is 0, the estimator's odometry model supplies it);
+    every camera reading a ``"range_bearing"`` row of another robot (``target``) or of a
+    landmark (``landmark``, indexed in the order of ``Landmark_Groundtruth.dat``, positions
+    ``(x, y, 0)``), rows of one time sorted in robot order, ``sigma`` not stated; the Vicon
+    ground truth ``(x, y, 0, θ)`` (gaps are not marked: :meth:`GroundTruth.at` flags them).
+
+    Readings the table cannot hold are skipped and counted per measurement file
+    (:data:`UNMAPPED_SUBJECT`: a robot seeing itself or a subject in no table;
+    :data:`REPEATED_READING`: the same subject again at the same time stamp, the first kept);
+    ``skips`` holds them with everything the loader skipped. ``meta`` holds the robots' and
+    landmarks' subject ids and the clock offset ``t0_unix``.
+    """
+    robots = ds.robot_ids
+    parts, conversion = [], {}
+    for observer, rid in enumerate(robots):
+        rows, skipped = _camera_rows(ds, rid, observer)
+        parts.append(rows)
+        conversion[f"Robot{rid}_Measurement.dat"] = skipped
+    return rec.Recording(
+        robots=tuple(str(rid) for rid in robots),
+        platforms=("ground",) * len(robots),
+        odometry=tuple(_unicycle_odometry(ds.robot(rid)) for rid in robots),
+        measurements=rec.Measurements.concatenate(parts),
+        truth=tuple(_pose_truth(ds.robot(rid)) for rid in robots),
+        landmarks=np.column_stack([ds.landmarks.xy, np.zeros(len(ds.landmarks.subject))]),
+        source=str(ds.path),
+        meta={
+            "robot_subjects": tuple(robots),
+            "landmark_subjects": tuple(int(s) for s in ds.landmarks.subject),
+            "t0_unix": ds.t0_unix,
+        },
+        skips=_skip_report(ds.report, conversion),
+    )
+
+
+def _camera_rows(
+    ds: MrclamDataset, rid: int, observer: int
+) -> tuple[rec.Measurements, dict[str, int]]:
+    """Robot ``rid``'s camera readings as ``"range_bearing"`` rows, and what was skipped."""
+    index = {r: i for i, r in enumerate(ds.robot_ids) if r != rid}
+    lm_index = {int(s): k for k, s in enumerate(ds.landmarks.subject)}
+    m = ds.robot(rid).measurements
+    target = np.array([index.get(int(s), rec.NO_TARGET) for s in m.subject], dtype=np.int64)
+    landmark = np.array([lm_index.get(int(s), rec.NO_TARGET) for s in m.subject], dtype=np.int64)
+    mapped = (target != rec.NO_TARGET) | (landmark != rec.NO_TARGET)
+    first = np.zeros(len(m), dtype=bool)
+    key = np.stack([m.t, m.subject.astype(float)], axis=1)
+    first[np.unique(key, axis=0, return_index=True)[1]] = True
+    keep = mapped & first
+    rows = rec.measurement_rows(
+        "range_bearing",
+        t=m.t[keep],
+        observer=observer,
+        target=target[keep],
+        landmark=landmark[keep],
+        value=np.column_stack([m.range[keep], m.bearing[keep]]),
+    )
+    skipped = {
+        UNMAPPED_SUBJECT: int((~mapped).sum()),
+        REPEATED_READING: int((mapped & ~first).sum()),
+    }
+    return rows, skipped
+
+
+def _unicycle_odometry(robot: RobotData) -> rec.Odometry:
+    """Commands ``(v, 0, 0, ω)``; no noise is stated (``sigma`` 0)."""
+    od = robot.odometry
+    zero = np.zeros(len(od.t))
+    return rec.Odometry(
+        t=od.t,
+        velocity=np.column_stack([od.v, zero, zero, od.omega]),
+        sigma=np.zeros(4),
+        where=f"Robot{robot.subject}_Odometry.dat",
+    )
+
+
+def _pose_truth(robot: RobotData) -> rec.GroundTruth:
+    """Vicon poses ``(x, y, 0, θ)``."""
+    g = robot.groundtruth
+    return rec.GroundTruth(
+        t=g.t,
+        pose=np.column_stack([g.x, g.y, np.zeros(len(g.t)), g.theta]),
+        where=f"Robot{robot.subject}_Groundtruth.dat",
+    )
+
+
+def _skip_report(report: LoadReport, conversion: Mapping[str, Mapping[str, int]]) -> rec.SkipReport:
+    """The loader's report with the conversion's skips added to their files (counts only: the
+    conversion works on loaded rows, whose line numbers are gone)."""
+    files = []
+    for name, f in report.files.items():
+        extra = {r: n for r, n in conversion.get(name, {}).items() if n}
+        files.append(
+            rec.FileSkips(
+                file=name,
+                rows_read=f.rows_read,
+                rows_kept=f.rows_kept - sum(extra.values()),
+                skipped={**f.skipped, **extra},
+                examples=tuple(
+                    rec.SkippedRow(e.line, e.reason, e.text)
+                    for ex in f.examples.values()
+                    for e in ex
+                ),
+            )
+        )
+    return rec.SkipReport(files=tuple(files))

@@ -1,25 +1,36 @@
-"""Asynchronous cooperative-localization pipeline for a team of unicycles (seed 001).
+"""Asynchronous cooperative localization of a team of unicycles (seed 001).
 
-A :class:`TeamRecording` holds each robot's odometry stream (commanded or measured ``v, ω`` at its
-own time stamps), detections (bearing, optionally range, of another robot or of a known landmark,
-each at its own time stamp) and optional GPS-like absolute pose fixes. :func:`run_team` replays it
-through a joint filter (the EIF of :mod:`relloc.estimators.eif` or the EKF of
-:mod:`relloc.estimators.joint_ekf`) and returns the estimate at requested output times with the
-counts of what was used, rejected and ignored.
+:class:`CooperativeEstimator` is the centralised joint filter of the whole team — the EIF of
+:mod:`relloc.estimators.eif` or the covariance-form EKF of :mod:`relloc.estimators.joint_ekf` —
+behind the estimator contract of :mod:`relloc.pipeline.contract` (owner ``"team"``), so
+:func:`relloc.pipeline.replay.replay` drives it over any :class:`~relloc.core.recording.Recording`
+of planar robots:
+
+- odometry ``(v, 0, 0, ω)`` per robot (a unicycle; lateral or vertical velocity is an error);
+- detections: rows of kind ``"range_bearing"`` (range and bearing) or ``"bearing"`` of another
+  robot (``target``) or of a known landmark (``landmark``, its world position in
+  :attr:`Recording.landmarks`), every one processed at its own time stamp;
+- GPS-like absolute pose fixes: rows of kind ``"pose"`` ``(x, y, ψ)`` with their stated ``σ``.
+
+Rows it has no model for (other kinds, detections of unknown correspondence) and rows its
+settings leave unused are counted (:class:`Counts`). Its beliefs are every robot's marginal
+``(x, y, ψ)`` in the frame ``world_pose2``; its update records are one NIS per detection or fix.
 
 Odometry model (:class:`OdometryModel`)
 ---------------------------------------
-Each command is held from its (latency-shifted) time stamp until the next one, at most
-``max_hold_s``; after that the robot is assumed still, with the larger ``stale`` noise rates
-(a robot whose odometry stops). Before the first command robots stand still. The input is
-``u = (s_v v_cmd, s_ω ω_cmd)`` applied ``latency_s`` after it was commanded. The noise on the
-true input is white with spectral densities (variance rates, SI units per second)
+Each command is held from its time stamp until the next one, at most ``max_hold_s``; after that
+the robot is assumed still, with the larger ``stale`` noise rates (a robot whose odometry
+stops). Before the first command robots stand still. The noise on the input is white with
+spectral densities (variance rates, SI units per second)
 
     q_v = q_v0 + k_v |v|,     q_ω = q_ω0 + k_ω |ω| + k_ωv |v|,
 
 so the dead-reckoning variance grows with distance travelled and angle turned, independent of
 the odometry rate. Over a step of length ``dt`` the covariance of the averaged input is
-``diag(q_v, q_ω)/dt``.
+``diag(q_v, q_ω)/dt``. A calibrated latency ``τ`` (the commands lead the motion) and scale
+factors are properties of the data, not of the filter: they are applied to the recording before
+the replay (each command re-stamped ``t + τ`` and scaled), because the filter learns a command
+only once the loop holds it.
 
 Exact multi-step prediction
 ---------------------------
@@ -33,8 +44,12 @@ matrices only adds their ``a, b`` entries, so
 
 computed vectorised over the steps (suffix sums of ``a, b``). One joint prediction with these
 blocks equals the K single-step predictions of seed 001 Eq. 5 exactly, which is what lets the
-pipeline process every measurement at its own time stamp while paying the joint prediction only
-once per measurement epoch.
+filter process every measurement at its own time stamp while paying the joint prediction only
+once per measurement epoch. :meth:`CooperativeEstimator.advance` only collects the commands the
+loop holds; the steps are laid out and accumulated (:func:`command_timeline`,
+:func:`accumulate_prediction`) when a measurement epoch or a belief needs the state — the
+segments between command changes (every robot's, the team advances in one vectorised step) are
+cut at those epochs and at most ``max_step_s`` long.
 
 Measurements
 ------------
@@ -44,13 +59,15 @@ Rows (:mod:`relloc.models.planar_measurement`) are built per epoch: bearing (alw
 thinned to one range per pair every ``range_min_interval_s``
 because consecutive ranges have strongly correlated errors), and absolute pose rows. Each detection
 or fix is gated as a whole with its normalised innovation squared against
-``χ²_{dof}(p_gate)`` (:mod:`relloc.association.gating`) before the batch update.
+``χ²_{dof}(p_gate)`` (:mod:`relloc.association.gating`) before the batch update. The NIS of every
+detection or fix used is recorded (:meth:`CooperativeEstimator.take_updates`), with the
+conditioning ``log10(λmax/λmin)`` of its ``R`` (diagonal) and of its ``S`` (at most 3 × 3).
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Literal, Protocol
 
 import numpy as np
@@ -58,7 +75,8 @@ from numpy.typing import NDArray
 
 from relloc.association.gating import chi2_gate, mahalanobis_batch
 from relloc.core.gaussian import Gaussian
-from relloc.errors import ConfigError, DataError
+from relloc.core.recording import NO_TARGET, Measurements, kind_code
+from relloc.errors import ConfigError, DataError, ModelError
 from relloc.estimators.eif import ExtendedInformationFilter
 from relloc.estimators.joint_ekf import JointEkf
 from relloc.models.planar_measurement import (
@@ -71,159 +89,18 @@ from relloc.models.planar_measurement import (
     range_bias_features,
 )
 from relloc.models.unicycle import unicycle_jacobians, unicycle_step
+from relloc.pipeline.contract import Belief, HeldOdometry, Silent, UpdateRecord
 
 Array = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 BoolArray = NDArray[np.bool_]
 
 _MIN_SEPARATION_M = 1e-3
-
-
-# ----------------------------------------------------------------------------------------------
-# Recording (the pipeline's input)
-# ----------------------------------------------------------------------------------------------
-
-
-def _vector(value: object, where: str, n: int | None = None) -> Array:
-    arr = np.asarray(value, dtype=float).reshape(-1)
-    if n is not None and arr.shape != (n,):
-        raise DataError(f"{where}: expected {n} values, got {arr.shape[0]}")
-    return arr
-
-
-@dataclass(frozen=True)
-class OdometryStream:
-    """Odometry of one robot: strictly increasing ``t``, forward speed ``v`` and turn rate ``w``."""
-
-    t: Array
-    v: Array
-    w: Array
-
-    def __post_init__(self) -> None:
-        t = _vector(self.t, "odometry.t")
-        v = _vector(self.v, "odometry.v", t.size)
-        w = _vector(self.w, "odometry.w", t.size)
-        if not (np.isfinite(t).all() and np.isfinite(v).all() and np.isfinite(w).all()):
-            raise DataError("odometry: non-finite time or velocity")
-        if t.size > 1 and np.any(np.diff(t) <= 0):
-            row = int(np.argmax(np.diff(t) <= 0)) + 1
-            raise DataError(f"odometry.t: not strictly increasing at row {row}")
-        object.__setattr__(self, "t", t)
-        object.__setattr__(self, "v", v)
-        object.__setattr__(self, "w", w)
-
-
-@dataclass(frozen=True)
-class Detections:
-    """Camera detections of the team, sorted by time.
-
-    ``observer``: robot index; ``target_robot``: observed robot index or −1; ``landmark``:
-    observed landmark index or −1 (exactly one of the two is ≥ 0); ``range``: NaN when the sensor
-    gives no range; ``bearing`` in the observer's frame (rad).
-    """
-
-    t: Array
-    observer: IntArray
-    target_robot: IntArray
-    landmark: IntArray
-    range: Array
-    bearing: Array
-
-    def __post_init__(self) -> None:
-        t = _vector(self.t, "detections.t")
-        n = t.size
-        for name in ("observer", "target_robot", "landmark"):
-            arr = np.asarray(getattr(self, name)).reshape(-1)
-            if arr.shape != (n,) or (n and not np.issubdtype(arr.dtype, np.integer)):
-                raise DataError(f"detections.{name}: expected {n} integer indices")
-            object.__setattr__(self, name, arr.astype(np.int64))
-        rng = _vector(self.range, "detections.range", n)
-        brg = _vector(self.bearing, "detections.bearing", n)
-        if not (np.isfinite(t).all() and np.isfinite(brg).all()):
-            raise DataError("detections: non-finite time or bearing")
-        if n > 1 and np.any(np.diff(t) < 0):
-            raise DataError(f"detections.t: not sorted at row {int(np.argmax(np.diff(t) < 0)) + 1}")
-        if np.any((self.target_robot >= 0) == (self.landmark >= 0)):
-            raise DataError("detections: each row must observe exactly one robot or landmark")
-        if np.any(self.target_robot == self.observer):
-            raise DataError("detections: a robot cannot detect itself")
-        object.__setattr__(self, "t", t)
-        object.__setattr__(self, "range", rng)
-        object.__setattr__(self, "bearing", brg)
-
-    def __len__(self) -> int:
-        return int(self.t.size)
-
-    def select(self, keep: BoolArray) -> Detections:
-        """The rows where ``keep`` is true."""
-        return Detections(
-            self.t[keep],
-            self.observer[keep],
-            self.target_robot[keep],
-            self.landmark[keep],
-            self.range[keep],
-            self.bearing[keep],
-        )
-
-
-@dataclass(frozen=True)
-class PoseFixes:
-    """GPS-like absolute pose fixes ``pose (g, 3)`` of robot ``robot (g,)`` with noise ``sigma``."""
-
-    t: Array
-    robot: IntArray
-    pose: Array
-    sigma: Array
-
-    def __post_init__(self) -> None:
-        t = _vector(self.t, "fixes.t")
-        pose = np.asarray(self.pose, dtype=float).reshape(t.size, 3)
-        sigma = _vector(self.sigma, "fixes.sigma", 3)
-        robot = np.asarray(self.robot).reshape(-1).astype(np.int64)
-        if robot.shape != t.shape or not np.isfinite(pose).all() or np.any(sigma <= 0):
-            raise DataError("fixes: bad robot indices, non-finite pose or σ ≤ 0")
-        if t.size > 1 and np.any(np.diff(t) < 0):
-            raise DataError("fixes.t: not sorted")
-        object.__setattr__(self, "t", t)
-        object.__setattr__(self, "pose", pose)
-        object.__setattr__(self, "sigma", sigma)
-        object.__setattr__(self, "robot", robot)
-
-    @staticmethod
-    def none() -> PoseFixes:
-        return PoseFixes(np.zeros(0), np.zeros(0, dtype=np.int64), np.zeros((0, 3)), np.ones(3))
-
-
-@dataclass(frozen=True)
-class TeamRecording:
-    """Everything the pipeline consumes. Robots are indexed ``0 … n−1``.
-
-    (The shared :class:`relloc.sim.log.Log` models 4-DOF inter-robot range/azimuth/elevation
-    without landmarks or absolute fixes; this planar record adds both.)
-    """
-
-    odometry: tuple[OdometryStream, ...]
-    detections: Detections
-    landmarks_xy: Array
-    fixes: PoseFixes = field(default_factory=PoseFixes.none)
-
-    def __post_init__(self) -> None:
-        n = len(self.odometry)
-        if n == 0:
-            raise DataError("TeamRecording: no robots")
-        lm = np.asarray(self.landmarks_xy, dtype=float).reshape(-1, 2)
-        object.__setattr__(self, "landmarks_xy", lm)
-        d = self.detections
-        if len(d) and (d.observer.min() < 0 or d.observer.max() >= n or d.target_robot.max() >= n):
-            raise DataError(f"detections: robot index outside 0…{n - 1}")
-        if len(d) and d.landmark.max() >= lm.shape[0]:
-            raise DataError(f"detections: landmark index outside 0…{lm.shape[0] - 1}")
-        if self.fixes.robot.size and (self.fixes.robot.min() < 0 or self.fixes.robot.max() >= n):
-            raise DataError(f"fixes: robot index outside 0…{n - 1}")
-
-    @property
-    def n_robots(self) -> int:
-        return len(self.odometry)
+RANGE_BEARING = kind_code("range_bearing")
+BEARING = kind_code("bearing")
+POSE = kind_code("pose")
+#: The frame of the beliefs: every robot's ``(x, y, ψ)`` in the world frame.
+FRAME = "world_pose2"
 
 
 # ----------------------------------------------------------------------------------------------
@@ -247,9 +124,6 @@ class OdometryModel:
     k_v: float = 0.0
     k_w: float = 0.0
     k_wv: float = 0.0
-    latency_s: float = 0.0
-    scale_v: float = 1.0
-    scale_w: float = 1.0
     max_hold_s: float = 1.0
     stale_q_v: float = 0.01
     stale_q_w: float = 0.01
@@ -258,21 +132,10 @@ class OdometryModel:
     def __post_init__(self) -> None:
         _check_nonneg(
             self,
-            (
-                "q_v0",
-                "q_w0",
-                "k_v",
-                "k_w",
-                "k_wv",
-                "latency_s",
-                "max_hold_s",
-                "stale_q_v",
-                "stale_q_w",
-            ),
+            ("q_v0", "q_w0", "k_v", "k_w", "k_wv", "max_hold_s", "stale_q_v", "stale_q_w"),
         )
-        for name in ("scale_v", "scale_w", "max_step_s"):
-            if not (np.isfinite(getattr(self, name)) and getattr(self, name) > 0):
-                raise ConfigError(f"OdometryModel.{name} must be a finite number > 0")
+        if not (np.isfinite(self.max_step_s) and self.max_step_s > 0):
+            raise ConfigError("OdometryModel.max_step_s must be a finite number > 0")
         if self.q_v0 + self.k_v <= 0 or self.q_w0 + self.k_w + self.k_wv <= 0:
             raise ConfigError("OdometryModel: q_v0/k_v and q_w0/k_w must not all be zero")
 
@@ -282,6 +145,12 @@ class OdometryModel:
         if dt <= 0:
             raise ConfigError("OdometryModel.from_discrete: dt must be > 0")
         return OdometryModel(q_v0=sigma_v**2 * dt, q_w0=sigma_w**2 * dt, max_step_s=dt)
+
+    def rates(self, v: Array, w: Array) -> tuple[Array, Array]:
+        """Variance rates ``(q_v, q_ω)`` of fresh commands ``(v, ω)``."""
+        return self.q_v0 + self.k_v * np.abs(v), self.q_w0 + self.k_w * np.abs(
+            w
+        ) + self.k_wv * np.abs(v)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -324,12 +193,12 @@ class SensorModel:
 
 
 @dataclass(frozen=True, kw_only=True)
-class PipelineSettings:
-    """What the pipeline uses and how.
+class CooperativeSettings:
+    """What the filter uses and how.
 
     ``anchors``: landmark indices whose detections are used (others are ignored and counted);
-    ``use_robot_detections``: robot→robot rows; ``p_gate``: χ² gate probability (``None``: no
-    gating); ``filter``: ``"eif"`` or ``"ekf"``.
+    ``use_robot_detections``: robot→robot rows; ``use_fixes``: absolute pose rows; ``p_gate``:
+    χ² gate probability (``None``: no gating); ``filter``: ``"eif"`` or ``"ekf"``.
     """
 
     odometry: OdometryModel
@@ -344,71 +213,45 @@ class PipelineSettings:
 
     def __post_init__(self) -> None:
         if self.filter not in ("eif", "ekf"):
-            raise ConfigError(f"PipelineSettings.filter must be 'eif' or 'ekf', got {self.filter}")
+            raise ConfigError(
+                f"CooperativeSettings.filter must be 'eif' or 'ekf', got {self.filter}"
+            )
         if self.p_gate is not None and not 0.0 < self.p_gate < 1.0:
-            raise ConfigError(f"PipelineSettings.p_gate must lie in (0, 1), got {self.p_gate}")
+            raise ConfigError(f"CooperativeSettings.p_gate must lie in (0, 1), got {self.p_gate}")
         if any(a < 0 for a in self.anchors):
-            raise ConfigError("PipelineSettings.anchors must be landmark indices ≥ 0")
+            raise ConfigError("CooperativeSettings.anchors must be landmark indices ≥ 0")
 
     @property
-    def uses_measurements(self) -> bool:
+    def uses_detections(self) -> bool:
+        """Whether detections are looked at (each then opens a measurement epoch)."""
         return self.use_fixes or (self.use_bearing or self.use_range)
 
 
 # ----------------------------------------------------------------------------------------------
-# Odometry → piecewise-constant input timeline → exact block prediction
+# Held commands → piecewise-constant input timeline → exact block prediction
 # ----------------------------------------------------------------------------------------------
 
 
 @dataclass(frozen=True)
-class InputTimeline:
-    """Piecewise-constant inputs of one robot: segment ``k`` holds from ``start[k]`` to
-    ``start[k+1]`` (the first starts at −∞, the last ends at +∞)."""
+class HeldCommands:
+    """What the loop held over ``K`` consecutive event intervals ``(begin[k], end[k]]``: each
+    robot's command ``(v, w)`` (``(K, n)``) and its time stamp ``stamp`` (NaN before the
+    robot's first report); ``in_force`` ``(n,)`` is the stamp of the command held before them.
+    A command takes effect at its stamp."""
 
-    start: Array
+    begin: Array
+    end: Array
+    stamp: Array
     v: Array
     w: Array
-    q_v: Array
-    q_w: Array
-    stale: BoolArray
-
-    @staticmethod
-    def build(odo: OdometryStream, model: OdometryModel) -> InputTimeline:
-        t = odo.t + model.latency_s
-        v = model.scale_v * odo.v
-        w = model.scale_w * odo.w
-        k = t.size
-        gaps = np.append(np.diff(t), np.inf)
-        expire = gaps > model.max_hold_s
-        n_seg = 1 + k + int(expire.sum())
-        start = np.empty(n_seg)
-        sv, sw = np.zeros(n_seg), np.zeros(n_seg)
-        qv, qw = np.full(n_seg, model.q_v0), np.full(n_seg, model.q_w0)
-        stale = np.zeros(n_seg, dtype=bool)
-        start[0] = -np.inf
-        # position of command j: 1 + j + (number of expiries before j)
-        pos = 1 + np.arange(k) + np.concatenate(([0], np.cumsum(expire)[:-1])).astype(int)
-        start[pos] = t
-        sv[pos], sw[pos] = v, w
-        qv[pos] = model.q_v0 + model.k_v * np.abs(v)
-        qw[pos] = model.q_w0 + model.k_w * np.abs(w) + model.k_wv * np.abs(v)
-        epos = pos[expire] + 1
-        start[epos] = t[expire] + model.max_hold_s
-        qv[epos], qw[epos] = model.stale_q_v, model.stale_q_w
-        stale[epos] = True
-        return InputTimeline(start, sv, sw, qv, qw, stale)
-
-    def stale_seconds(self, t0: float, t1: float) -> float:
-        """Time within ``[t0, t1]`` spent without a fresh command (after ``max_hold_s``)."""
-        end = np.append(self.start[1:], np.inf)
-        s, e = np.maximum(self.start, t0), np.minimum(end, t1)
-        return float(np.sum(np.clip(e - s, 0, None)[self.stale]))
+    in_force: Array
 
 
 @dataclass(frozen=True)
 class TeamTimeline:
-    """All robots' input timelines merged on the union of their segment starts: ``(S,)`` starts
-    and ``(S, n)`` inputs and noise rates, so a whole team advances in one vectorised step."""
+    """Every robot's inputs on the union of all robots' segment starts: segment ``k`` holds from
+    ``start[k]`` to ``start[k+1]`` (the last to +∞), with ``(S, n)`` inputs and noise rates, so a
+    whole team advances in one vectorised step."""
 
     start: Array
     v: Array
@@ -416,16 +259,78 @@ class TeamTimeline:
     q_v: Array
     q_w: Array
 
+
+@dataclass(frozen=True)
+class StaleIntervals:
+    """Intervals ``[start, end)`` during which ``robot`` had no fresh command (``end`` may be
+    +∞)."""
+
+    robot: IntArray
+    start: Array
+    end: Array
+
     @staticmethod
-    def merge(timelines: Sequence[InputTimeline]) -> TeamTimeline:
-        start = np.unique(np.concatenate([tl.start for tl in timelines]))
-        cols: list[list[Array]] = [[], [], [], []]
-        for tl in timelines:
-            k = np.searchsorted(tl.start, start, side="right") - 1
-            for c, arr in zip(cols, (tl.v, tl.w, tl.q_v, tl.q_w), strict=True):
-                c.append(arr[k])
-        v, w, qv, qw = (np.stack(c, axis=1) for c in cols)
-        return TeamTimeline(start, v, w, qv, qw)
+    def concatenate(parts: Sequence[StaleIntervals]) -> StaleIntervals:
+        return StaleIntervals(
+            robot=np.concatenate([p.robot for p in parts]),
+            start=np.concatenate([p.start for p in parts]),
+            end=np.concatenate([p.end for p in parts]),
+        )
+
+    def seconds(self, n: int, t0: float, t1: float) -> list[float]:
+        """Per robot, the time within ``[t0, t1]`` spent without a fresh command."""
+        overlap = np.clip(np.minimum(self.end, t1) - np.maximum(self.start, t0), 0, None)
+        return [float(np.sum(overlap[self.robot == i])) for i in range(n)]
+
+
+NO_STALE = StaleIntervals(np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0))
+
+
+def command_timeline(
+    held: HeldCommands, model: OdometryModel
+) -> tuple[TeamTimeline, StaleIntervals]:
+    """The team's input timeline over the held intervals, and the stale intervals it closes.
+
+    Each command holds from its stamp until the next one, at most ``max_hold_s`` (then the
+    robot is still, at the stale noise rates); a robot that has not reported yet is still at
+    the rates ``(q_v0, q_ω0)``. Segments start at the first interval's begin, at every command
+    that appears later and at every expiry inside the intervals (a command's successor comes at
+    an event, so it expires inside the interval that holds it, or before, or after); every
+    robot's input over a segment is the one in force at its start. A stale interval is closed
+    by the command after it.
+    """
+    hold = model.max_hold_s
+    before = np.vstack([held.in_force[None], held.stamp[:-1]])
+    fresh = ~np.isnan(held.stamp) & (held.stamp != before)  # (K, n): a new command
+    expiry = held.stamp + hold
+    inside = (expiry >= held.begin[:, None]) & (expiry < held.end[:, None])
+    later = fresh & (held.stamp > held.begin[0])
+    # at each segment start: the interval holding it, each robot's command there, and whether
+    # the robot has none yet or its command has expired
+    if later.any() or inside.any():
+        start = np.unique(np.concatenate([held.begin[:1], held.stamp[later], expiry[inside]]))
+        k = np.searchsorted(held.end, start, side="right")
+    else:  # one segment (nothing changes inside the intervals)
+        start, k = held.begin[:1], np.zeros(1, dtype=np.int64)
+    none = np.isnan(held.stamp[k])
+    still = none | (start[:, None] >= expiry[k])
+    v, w = held.v[k], held.w[k]
+    q_v, q_w = model.rates(v, w)
+    q_v[still], q_w[still] = model.stale_q_v, model.stale_q_w
+    q_v[none], q_w[none] = model.q_v0, model.q_w0
+    timeline = TeamTimeline(
+        start=start, v=np.where(still, 0.0, v), w=np.where(still, 0.0, w), q_v=q_v, q_w=q_w
+    )
+    closed = fresh & (before + hold < held.stamp)
+    if not closed.any():
+        return timeline, NO_STALE
+    k_closed, robot = np.nonzero(closed)
+    stale = StaleIntervals(
+        robot=robot,
+        start=before[k_closed, robot] + hold,
+        end=held.stamp[k_closed, robot],
+    )
+    return timeline, stale
 
 
 @dataclass
@@ -449,7 +354,7 @@ class TeamPending:
         self.Q[:] = 0.0
 
 
-def advance(
+def accumulate_prediction(
     pending: TeamPending, timeline: TeamTimeline, t0: float, t1: float, max_step: float
 ) -> None:
     """Move every robot of ``pending`` from ``t0`` to ``t1`` (exact block accumulation, module
@@ -501,7 +406,12 @@ def advance(
 
 @dataclass
 class Counts:
-    """What happened to every detection and fix (reported in summaries)."""
+    """What happened to every detection and fix (reported in summaries).
+
+    ``ignored_unused``: rows of a kind the settings leave unused (fixes without ``use_fixes``,
+    every detection when neither bearing, range nor fixes are used); ``ignored_unmodelled``:
+    rows the filter has no model for (other kinds, detections of unknown correspondence).
+    """
 
     detections_used: int = 0
     fixes_used: int = 0
@@ -509,6 +419,8 @@ class Counts:
     rejected_degenerate: int = 0
     ignored_not_anchor: int = 0
     ignored_robot_detection: int = 0
+    ignored_unused: int = 0
+    ignored_unmodelled: int = 0
     ranges_thinned: int = 0
     epochs: int = 0
     stale_odometry_s: list[float] = field(default_factory=list)
@@ -531,6 +443,8 @@ class Counts:
             "rejected_degenerate": self.rejected_degenerate,
             "ignored_not_anchor": self.ignored_not_anchor,
             "ignored_robot_detection": self.ignored_robot_detection,
+            "ignored_unused": self.ignored_unused,
+            "ignored_unmodelled": self.ignored_unmodelled,
             "ranges_thinned": self.ranges_thinned,
             "epochs": self.epochs,
             "stale_odometry_s": list(self.stale_odometry_s),
@@ -538,18 +452,18 @@ class Counts:
 
 
 def detection_rows(
-    det: Detections,
-    rows_of_epoch: slice,
+    batch: Measurements,
+    idx: IntArray,
     landmarks_xy: Array,
-    settings: PipelineSettings,
+    settings: CooperativeSettings,
     group_offset: int,
     last_range: dict[tuple[int, int], float],
     counts: Counts,
 ) -> ScalarRows:
-    """Scalar rows (bearing, range) of the detections ``det[rows_of_epoch]`` of one epoch, after
-    the settings' choices of anchors, robot detections and range thinning (all counted)."""
-    idx = np.arange(rows_of_epoch.start, rows_of_epoch.stop)
-    landmark = det.landmark[idx]
+    """Scalar rows (bearing, range) of the detections ``batch[idx]`` of one epoch, after the
+    settings' choices of anchors, robot detections and range thinning (all counted)."""
+    assert batch.landmark is not None
+    landmark = batch.landmark[idx]
     is_lm = landmark >= 0
     not_anchor = is_lm & ~np.isin(landmark, np.asarray(settings.anchors, dtype=np.int64))
     counts.ignored_not_anchor += int(not_anchor.sum())
@@ -561,9 +475,11 @@ def detection_rows(
     m = idx.size
     if m == 0:
         return empty_rows()
-    observer, target = det.observer[idx], det.target_robot[idx]
-    bearing_z = det.bearing[idx]
     groups = group_offset + np.arange(m)
+    observer, target = batch.observer[idx], batch.target[idx]
+    has_range = batch.kind[idx] == RANGE_BEARING
+    value = batch.value[idx]
+    bearing_z = np.where(has_range, value[:, 1], value[:, 0])
     lm_xy = np.zeros((m, 2))
     lm_xy[is_lm] = landmarks_xy[landmark[is_lm]]
     parts: list[ScalarRows] = []
@@ -580,11 +496,11 @@ def detection_rows(
             )
         )
     if settings.use_range:
-        rng = det.range[idx]
-        use = np.isfinite(rng)
+        rng = np.where(has_range, value[:, 0], np.nan)
+        use = has_range.copy()
         interval = settings.sensor.range_min_interval_s
         if interval > 0:
-            t = det.t[idx]
+            t = batch.t[idx]
             for r in np.flatnonzero(use):
                 key = (int(observer[r]), int(target[r] if landmark[r] < 0 else -1 - landmark[r]))
                 if t[r] - last_range.get(key, -np.inf) < interval:
@@ -605,26 +521,57 @@ def detection_rows(
                 group=groups[use],
             )
         )
-    return ScalarRows.concatenate(parts)
+    return ScalarRows.concatenate(parts) if len(parts) > 1 else parts[0]
 
 
-def fix_rows(fixes: PoseFixes, group_offset: int) -> ScalarRows:
-    """Three rows (x, y, ψ) per absolute pose fix, one gating group per fix."""
-    g = fixes.t.size
+def fix_rows(batch: Measurements, idx: IntArray, group_offset: int) -> ScalarRows:
+    """Three rows (x, y, ψ) per absolute pose fix ``batch[idx]``, one gating group per fix."""
+    g = idx.size
+    sigma = batch.sigma[idx, :3]
+    if not np.isfinite(sigma).all():
+        row = int(idx[np.argwhere(~np.isfinite(sigma))[0][0]])
+        raise DataError(f"pose fix at t={batch.t[row]:.6g} states no σ (needed for its noise)")
     kinds = np.array([RowKind.POSE_X, RowKind.POSE_Y, RowKind.POSE_HEADING], dtype=np.int64)
     return ScalarRows(
         kind=np.tile(kinds, g),
-        observer=np.repeat(fixes.robot, 3),
+        observer=np.repeat(batch.observer[idx], 3),
         target=np.full(3 * g, -1, dtype=np.int64),
         landmark_xy=np.zeros((3 * g, 2)),
-        z=fixes.pose.reshape(-1),
-        sigma=np.tile(fixes.sigma, g),
+        z=batch.value[idx, :3].reshape(-1),
+        sigma=sigma.reshape(-1),
         group=np.repeat(group_offset + np.arange(g), 3),
     )
 
 
-def group_nis(lin: LinearisedRows, P: Array) -> tuple[IntArray, Array, IntArray]:
-    """NIS of every gating group: ``(group ids, νᵀ S⁻¹ ν, dof)`` with ``S = H P Hᵀ + R``.
+@dataclass(frozen=True)
+class GroupInnovations:
+    """Per gating group (a detection or fix) of one epoch, in ``ids`` order: the NIS
+    ``νᵀ S⁻¹ ν`` with ``dof`` rows, the observer (the robot whose reading it is), and the
+    innovation covariance ``S`` (padded with the identity to the widest group); ``rows``
+    ``(groups, width)`` index each group's rows (−1 beyond its ``dof``), ``sigma`` their noise."""
+
+    ids: IntArray
+    nis: Array
+    dof: IntArray
+    observer: IntArray
+    S: Array
+    rows: IntArray
+    sigma: Array
+
+    def conditioning(self) -> tuple[Array, Array]:
+        """``log10(λmax/λmin)`` of every group's ``R`` (diagonal) and ``S``."""
+        cond_r, cond_s = np.zeros(self.ids.size), np.zeros(self.ids.size)
+        for d in np.unique(self.dof[self.dof > 1]):
+            sel = self.dof == d
+            var = self.sigma[self.rows[sel, :d]] ** 2
+            cond_r[sel] = np.log10(var.max(axis=1) / var.min(axis=1))
+            eig = np.linalg.eigvalsh(self.S[sel, :d, :d])
+            cond_s[sel] = np.log10(eig[:, -1] / eig[:, 0])
+        return cond_r, cond_s
+
+
+def group_innovations(lin: LinearisedRows, P: Array) -> GroupInnovations:
+    """NIS of every gating group, with ``S = H P Hᵀ + R``.
 
     Only the entries of ``S`` within a group are formed, from the 3 × 3 blocks of ``P`` that the
     rows' two Jacobian blocks touch.
@@ -637,9 +584,11 @@ def group_nis(lin: LinearisedRows, P: Array) -> tuple[IntArray, Array, IntArray]
     idx = np.maximum(lin.block_index, 0)
     S = np.broadcast_to(np.eye(width), (ids.size, width, width)).copy()
     nu = np.zeros((ids.size, width))
+    rows = np.full((ids.size, width), -1, dtype=np.int64)
     for a in range(width):
         ok_a = a < dof
-        nu[ok_a, a] = lin.residual[order[start[ok_a] + a]]
+        rows[ok_a, a] = order[start[ok_a] + a]
+        nu[ok_a, a] = lin.residual[rows[ok_a, a]]
         for b in range(width):
             ok = ok_a & (b < dof)
             ra, rb = order[start[ok] + a], order[start[ok] + b]
@@ -648,16 +597,22 @@ def group_nis(lin: LinearisedRows, P: Array) -> tuple[IntArray, Array, IntArray]
             if a == b:
                 val += lin.sigma[ra] ** 2
             S[ok, a, b] = val
-    return ids, mahalanobis_batch(nu, S), dof
+    return GroupInnovations(
+        ids=ids,
+        nis=mahalanobis_batch(nu, S),
+        dof=dof,
+        observer=lin.block_index[order[start], 0],
+        S=S,
+        rows=rows,
+        sigma=lin.sigma,
+    )
 
 
-def gate(lin: LinearisedRows, P: Array, p_gate: float) -> tuple[BoolArray, IntArray]:
-    """Rows inside the χ² gate, and the ids of the groups rejected."""
-    ids, nis, dof = group_nis(lin, P)
-    thresholds = np.array([chi2_gate(int(d), p_gate) for d in dof])
-    bad = ~(nis <= thresholds)
-    rejected = ids[bad]
-    return ~np.isin(lin.group, rejected), rejected
+def outside_gate(groups: GroupInnovations, p_gate: float) -> BoolArray:
+    """Groups whose NIS exceeds ``χ²_{dof}(p_gate)``."""
+    dofs, which = np.unique(groups.dof, return_inverse=True)
+    thresholds = np.array([chi2_gate(int(d), p_gate) for d in dofs])[which]
+    return ~(groups.nis <= thresholds)
 
 
 def _select_lin(lin: LinearisedRows, keep: BoolArray) -> LinearisedRows:
@@ -670,13 +625,21 @@ def _select_lin(lin: LinearisedRows, keep: BoolArray) -> LinearisedRows:
     )
 
 
+def _degenerate(rows: ScalarRows, X: Array) -> BoolArray:
+    """Rows whose observer and (estimated) target coincide — bearing undefined."""
+    rel = (rows.kind == RowKind.BEARING) | (rows.kind == RowKind.RANGE)
+    tgt = np.where((rows.target >= 0)[:, None], X[np.maximum(rows.target, 0), :2], rows.landmark_xy)
+    sep = np.linalg.norm(tgt - X[rows.observer, :2], axis=1)
+    return rel & (sep < _MIN_SEPARATION_M)
+
+
 # ----------------------------------------------------------------------------------------------
-# The replay
+# The estimator
 # ----------------------------------------------------------------------------------------------
 
 
 class TeamFilter(Protocol):
-    """What :func:`run_team` needs from a joint filter."""
+    """What :class:`CooperativeEstimator` needs from a joint filter."""
 
     def mean(self) -> Array: ...
 
@@ -687,16 +650,6 @@ class TeamFilter(Protocol):
     def update(self, rows: LinearisedRows) -> None: ...
 
 
-@dataclass(frozen=True)
-class TeamRun:
-    """Estimates at the output times: ``mean (T, n, 3)``, per-robot ``cov (T, n, 3, 3)``."""
-
-    t: Array
-    mean: Array
-    cov: Array
-    counts: Counts
-
-
 def make_filter(prior: Gaussian, kind: str) -> TeamFilter:
     """The joint filter named by ``kind`` ("eif" or "ekf") started at ``prior``."""
     if kind == "eif":
@@ -704,103 +657,254 @@ def make_filter(prior: Gaussian, kind: str) -> TeamFilter:
     return JointEkf(prior)
 
 
-def _degenerate(rows: ScalarRows, X: Array) -> BoolArray:
-    """Rows whose observer and (estimated) target coincide — bearing undefined."""
-    rel = (rows.kind == RowKind.BEARING) | (rows.kind == RowKind.RANGE)
-    tgt = np.where((rows.target >= 0)[:, None], X[np.maximum(rows.target, 0), :2], rows.landmark_xy)
-    sep = np.linalg.norm(tgt - X[rows.observer, :2], axis=1)
-    return rel & (sep < _MIN_SEPARATION_M)
+class CooperativeEstimator(Silent):
+    """The team's joint filter behind the estimator contract (module docstring).
 
+    ``robots`` name the team's robots in the recording's order; ``prior`` ``(3n,)`` holds at the
+    first :meth:`advance`; ``landmarks (L, 2 or 3)`` are the world positions the detections'
+    ``landmark`` indices refer to (:attr:`Recording.landmarks`). ``record_updates=False`` skips
+    the per-detection update records (a few µs each: worth skipping where nobody reads them).
 
-def run_team(
-    recording: TeamRecording,
-    prior: Gaussian,
-    t_start: float,
-    output_times: Array,
-    settings: PipelineSettings,
-) -> TeamRun:
-    """Replay ``recording`` from ``t_start`` (where ``prior`` holds) and report at ``output_times``.
-
-    Every detection and fix is processed at its own time stamp; all those sharing a time stamp
-    form one epoch (one joint prediction, one gated batch update).
+    Every batch is one epoch at the current time: the prediction pending since the previous
+    epoch is applied, then every detection and fix of the batch is gated and used in one update
+    (a batch with nothing the settings use leaves the prediction pending). Beliefs are read
+    after applying the pending prediction too, so the unicycle steps are cut at every epoch and
+    every record time.
+    Robots' commands come from the held odometry at each :meth:`advance`; a command takes effect
+    at its time stamp (the loop delivers each one at the first event after it).
     """
-    n = recording.n_robots
-    if prior.dim != 3 * n:
-        raise ConfigError(f"prior has dimension {prior.dim}, the team needs {3 * n}")
-    out_t = np.asarray(output_times, dtype=float).reshape(-1)
-    if out_t.size and (np.any(np.diff(out_t) < 0) or out_t[0] < t_start):
-        raise ConfigError("output_times must be sorted and ≥ t_start")
-    t_end = float(out_t[-1]) if out_t.size else t_start
-    det = recording.detections
-    fixes = recording.fixes
-    in_span = (det.t > t_start) & (det.t <= t_end)
-    det = det.select(in_span)
-    if not settings.uses_measurements:
-        det = det.select(np.zeros(len(det), dtype=bool))
-    fix_ok = (fixes.t > t_start) & (fixes.t <= t_end) & settings.use_fixes
-    fixes = PoseFixes(fixes.t[fix_ok], fixes.robot[fix_ok], fixes.pose[fix_ok], fixes.sigma)
-    epochs = np.unique(np.concatenate([det.t, fixes.t, out_t]))
-    det_lo = np.searchsorted(det.t, epochs, side="left")
-    det_hi = np.searchsorted(det.t, epochs, side="right")
-    fix_lo = np.searchsorted(fixes.t, epochs, side="left")
-    fix_hi = np.searchsorted(fixes.t, epochs, side="right")
-    is_out = np.isin(epochs, out_t)
 
-    timelines = [InputTimeline.build(o, settings.odometry) for o in recording.odometry]
-    team_timeline = TeamTimeline.merge(timelines)
-    filt = make_filter(prior, settings.filter)
-    pending = TeamPending.at(filt.mean())
-    counts = Counts()
-    last_range: dict[tuple[int, int], float] = {}
-    means = np.zeros((out_t.size, n, 3))
-    covs = np.zeros((out_t.size, n, 3, 3))
-    out_index = 0
-    t_prev = t_start
-    group_offset = 0
-    diag = np.arange(n)
-    for e, t in enumerate(epochs):
-        advance(pending, team_timeline, t_prev, float(t), settings.odometry.max_step_s)
-        t_prev = float(t)
+    owner = "team"
+
+    def __init__(
+        self,
+        robots: Sequence[str],
+        prior: Gaussian,
+        settings: CooperativeSettings,
+        landmarks: Array | None = None,
+        *,
+        record_updates: bool = True,
+    ) -> None:
+        self.robots = tuple(str(r) for r in robots)
+        n = len(self.robots)
+        if n == 0:
+            raise ConfigError("CooperativeEstimator: no robots")
+        if prior.dim != 3 * n:
+            raise ConfigError(f"prior has dimension {prior.dim}, the team needs {3 * n}")
+        lm = np.zeros((0, 2)) if landmarks is None else np.asarray(landmarks, dtype=float)
+        if lm.ndim != 2 or lm.shape[1] not in (2, 3) or not np.isfinite(lm).all():
+            raise ConfigError(f"landmarks: expected finite (L, 2) or (L, 3), got {lm.shape}")
+        self.name: str = settings.filter
+        self.settings = settings
+        self._landmarks = lm[:, :2]
+        self._filter = make_filter(prior, settings.filter)
+        self._pending = TeamPending.at(self._filter.mean())
+        self._counts = Counts()
+        self._last_range: dict[tuple[int, int], float] = {}
+        self._group_offset = 0
+        self._record_updates = record_updates
+        self._updates: list[UpdateRecord] = []
+        self._t_start = np.nan
+        self._t = np.nan
+        self._t_applied = np.nan
+        # the stamp of each robot's command at the last applied time; the loop's holds since
+        self._in_force = np.full(n, np.nan)
+        self._held: list[HeldOdometry] = []
+        self._held_t: list[float] = []
+        self._stale: list[StaleIntervals] = []
+
+    @property
+    def n_robots(self) -> int:
+        return len(self.robots)
+
+    # -- the contract ----------------------------------------------------------------------
+
+    def advance(self, t: float, odometry: HeldOdometry) -> None:
+        """Note the commands held over ``(previous event, t]``; the steps are taken lazily."""
+        t = float(t)
+        if np.isnan(self._t):
+            self._t_start = self._t = self._t_applied = t
+            return
+        if t < self._t:
+            raise ConfigError(f"CooperativeEstimator.advance: time went back from {self._t} to {t}")
+        if t > self._t:
+            self._held.append(odometry)
+            self._held_t.append(t)
+            self._t = t
+
+    def measure(self, batch: Measurements) -> None:
+        """One epoch with the detections and fixes of ``batch`` (the rest is counted)."""
+        if batch.size == 0:
+            return
+        if np.isnan(self._t):
+            raise ConfigError("CooperativeEstimator.measure before the first advance")
+        self._check_indices(batch)
+        assert batch.landmark is not None
+        s = self.settings
+        kind = batch.kind
+        detection = (kind == RANGE_BEARING) | (kind == BEARING)
+        known = detection & ((batch.target != NO_TARGET) | (batch.landmark != NO_TARGET))
+        fix = kind == POSE
+        c = self._counts
+        c.ignored_unmodelled += int(np.sum(~(known | fix)))
+        det_idx = np.flatnonzero(known) if s.uses_detections else np.zeros(0, dtype=np.int64)
+        fix_idx = np.flatnonzero(fix) if s.use_fixes else np.zeros(0, dtype=np.int64)
+        c.ignored_unused += int(known.sum()) - det_idx.size + int(fix.sum()) - fix_idx.size
+        if det_idx.size == 0 and fix_idx.size == 0:
+            return
+        self._apply_motion()
         parts = []
-        if det_hi[e] > det_lo[e]:
-            sl = slice(int(det_lo[e]), int(det_hi[e]))
+        if det_idx.size:
             parts.append(
                 detection_rows(
-                    det, sl, recording.landmarks_xy, settings, group_offset, last_range, counts
+                    batch, det_idx, self._landmarks, s, self._group_offset, self._last_range, c
                 )
             )
-            group_offset += sl.stop - sl.start
-        if fix_hi[e] > fix_lo[e]:
-            sl = slice(int(fix_lo[e]), int(fix_hi[e]))
-            epoch_fix = PoseFixes(fixes.t[sl], fixes.robot[sl], fixes.pose[sl], fixes.sigma)
-            parts.append(fix_rows(epoch_fix, group_offset))
-            group_offset += epoch_fix.t.size
-        rows = ScalarRows.concatenate(parts) if len(parts) > 1 else (parts or [empty_rows()])[0]
+            self._group_offset += det_idx.size
+        if fix_idx.size:
+            parts.append(fix_rows(batch, fix_idx, self._group_offset))
+            self._group_offset += fix_idx.size
+        rows = ScalarRows.concatenate(parts) if len(parts) > 1 else parts[0]
         if rows.size:
-            counts.epochs += 1
-            filt.predict(pending.pose, pending.F, pending.Q)
-            X = filt.mean()
-            degenerate = _degenerate(rows, X)
-            if degenerate.any():
-                counts.rejected_degenerate += int(np.unique(rows.group[degenerate]).size)
-                rows = rows.select(~np.isin(rows.group, rows.group[degenerate]))
-            lin = linearise_rows(X, rows)
-            if settings.p_gate is not None and rows.size:
-                keep, rejected = gate(lin, filt.covariance(), settings.p_gate)
-                counts.rejected_gate += int(rejected.size)
+            self._update(rows)
+
+    def beliefs(self) -> list[Belief]:
+        """Every robot's marginal ``(x, y, ψ)`` now: the pending prediction applied to its
+        block, ``Φ_i P_ii Φ_iᵀ + Q_i``."""
+        if not np.isnan(self._t):
+            self._apply_motion()
+        n = self.n_robots
+        diag = np.arange(n)
+        Pb = self._filter.covariance().reshape(n, 3, n, 3)[diag, :, diag, :]
+        p = self._pending
+        cov = p.F @ Pb @ np.swapaxes(p.F, -1, -2) + p.Q
+        if not np.isfinite(cov.sum() + p.pose.sum()):
+            raise ModelError("cooperative filter produced non-finite estimates")
+        age = 0.0 if np.isnan(self._t) else self._t - self._t_start
+        return [
+            Belief(name, FRAME, mean, P, age)
+            for name, mean, P in zip(self.robots, p.pose, cov, strict=True)
+        ]
+
+    def take_updates(self) -> list[UpdateRecord]:
+        out, self._updates = self._updates, []
+        return out
+
+    @property
+    def counts(self) -> Counts:
+        """What happened to every row so far, with each robot's time without fresh odometry
+        (``stale_odometry_s``) between the first and the latest event."""
+        if np.isnan(self._t):
+            return replace(self._counts, stale_odometry_s=[])
+        hold = self.settings.odometry.max_hold_s
+        parts = list(self._stale)
+        last = self._in_force
+        if self._held:
+            held = self._held_commands()
+            parts.append(command_timeline(held, self.settings.odometry)[1])
+            last = held.stamp[-1]
+        robot = np.flatnonzero(~np.isnan(last))
+        parts.append(StaleIntervals(robot, last[robot] + hold, np.full(robot.size, np.inf)))
+        seconds = StaleIntervals.concatenate(parts).seconds(self.n_robots, self._t_start, self._t)
+        return replace(self._counts, stale_odometry_s=seconds)
+
+    # -- internals -------------------------------------------------------------------------
+
+    def _check_indices(self, batch: Measurements) -> None:
+        assert batch.landmark is not None
+        for name, ids, limit in (
+            ("observer", batch.observer, self.n_robots),
+            ("target", batch.target, self.n_robots),
+            ("landmark", batch.landmark, self._landmarks.shape[0]),
+        ):
+            if ids.max() >= limit:
+                row = int(np.argmax(ids >= limit))
+                raise DataError(
+                    f"measurements at t={batch.t[row]:.6g}: {name} {int(ids[row])} is not among "
+                    f"the filter's {limit}"
+                )
+
+    def _held_commands(self) -> HeldCommands:
+        """What the loop held since the last applied time."""
+        stamp = np.array([h.stamp for h in self._held])
+        velocity = np.array([h.velocity for h in self._held])
+        if np.any(velocity[..., 1:3]):
+            k, i = np.argwhere(velocity[..., 1:3] != 0)[0][:2]
+            raise DataError(
+                f"odometry of {self.robots[i]} at t={self._held_t[k]:.6g} has lateral or vertical "
+                "velocity; the cooperative filter models unicycles (v, 0, 0, ω)"
+            )
+        end = np.array(self._held_t)
+        return HeldCommands(
+            begin=np.concatenate([[self._t_applied], end[:-1]]),
+            end=end,
+            stamp=stamp,
+            v=velocity[..., 0],
+            w=velocity[..., 3],
+            in_force=self._in_force,
+        )
+
+    def _apply_motion(self) -> None:
+        """Bring the pending prediction from the last applied time up to now."""
+        if not self._held:
+            return
+        held = self._held_commands()
+        timeline, stale = command_timeline(held, self.settings.odometry)
+        accumulate_prediction(
+            self._pending, timeline, self._t_applied, self._t, self.settings.odometry.max_step_s
+        )
+        if stale.robot.size:
+            self._stale.append(stale)
+        self._in_force = held.stamp[-1]
+        self._held.clear()
+        self._held_t.clear()
+        self._t_applied = self._t
+
+    def _update(self, rows: ScalarRows) -> None:
+        """Predict to now and update with the rows of one epoch (gated per detection / fix)."""
+        c, s = self._counts, self.settings
+        c.epochs += 1
+        filt = self._filter
+        filt.predict(self._pending.pose, self._pending.F, self._pending.Q)
+        X = filt.mean()
+        degenerate = _degenerate(rows, X)
+        if degenerate.any():
+            c.rejected_degenerate += int(np.unique(rows.group[degenerate]).size)
+            rows = rows.select(~np.isin(rows.group, rows.group[degenerate]))
+        lin = linearise_rows(X, rows)
+        used = 0
+        if rows.size:
+            groups = group_innovations(lin, filt.covariance())
+            rejected = outside_gate(groups, s.p_gate) if s.p_gate is not None else None
+            used = groups.ids.size
+            if rejected is not None and rejected.any():
+                c.rejected_gate += int(rejected.sum())
+                used -= int(rejected.sum())
+                keep = ~np.isin(lin.group, groups.ids[rejected])
                 lin = _select_lin(lin, keep)
                 rows = rows.select(keep)
-            n_fixes = int((rows.kind == RowKind.POSE_X).sum())
-            counts.fixes_used += n_fixes
-            counts.detections_used += int(np.unique(rows.group).size) - n_fixes
-            filt.update(lin)
-            pending.reset(filt.mean())
-        if is_out[e]:
-            Pb = filt.covariance().reshape(n, 3, n, 3)[diag, :, diag, :]
-            covs[out_index] = pending.F @ Pb @ np.swapaxes(pending.F, -1, -2) + pending.Q
-            means[out_index] = pending.pose
-            out_index += 1
-    counts.stale_odometry_s = [tl.stale_seconds(t_start, t_end) for tl in timelines]
-    if not (np.isfinite(means).all() and np.isfinite(covs).all()):
-        raise DataError("cooperative pipeline produced non-finite estimates")
-    return TeamRun(t=out_t, mean=means, cov=covs, counts=counts)
+            if self._record_updates:
+                self._record(groups, rejected)
+        n_fixes = int((rows.kind == RowKind.POSE_X).sum())
+        c.fixes_used += n_fixes
+        c.detections_used += used - n_fixes
+        filt.update(lin)
+        self._pending.reset(filt.mean())
+
+    def _record(self, groups: GroupInnovations, rejected: BoolArray | None) -> None:
+        """One update record per detection or fix used (the observer's name as subject)."""
+        used = np.ones(groups.ids.size, dtype=bool) if rejected is None else ~rejected
+        cond_r, cond_s = groups.conditioning()
+        t, age = self._t, self._t - self._t_start
+        columns = zip(
+            groups.observer[used].tolist(),
+            groups.nis[used].tolist(),
+            groups.dof[used].tolist(),
+            cond_r[used].tolist(),
+            cond_s[used].tolist(),
+            strict=True,
+        )
+        self._updates.extend(
+            UpdateRecord(t, self.robots[o], nis, dof, c_r, c_s, age)
+            for o, nis, dof, c_r, c_s in columns
+        )

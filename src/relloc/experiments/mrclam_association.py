@@ -5,8 +5,8 @@
 Real data (Leung, Barfoot & Liu, IJRR 2011; any folder in MRCLAM layout, default run 6): every
 robot runs a fuser (:class:`~relloc.fusion.gaussian_sum_estimator.GaussianSumEstimator`) with
 one Gaussian-sum filter per other robot, as in seed 002. The dataset becomes a
-:class:`~relloc.core.recording.Recording` (:func:`_mrclam_recording`), whose camera rows of one
-time stamp (a camera frame) form a scan (:func:`_hidden_correspondence`). Each robot-to-robot
+:class:`~relloc.core.recording.Recording` (:func:`relloc.datasets.mrclam.to_recording`), whose
+camera rows of one time stamp (a camera frame) form a scan (:func:`_hidden_correspondence`). Each robot-to-robot
 row keeps its *range* with its barcode (known correspondence, like the paper's ranging sensor)
 but its *bearing* goes, without the barcode, into the scan's bearing set, together with
 ``CLUTTER_PER_SCAN`` injected false bearings (Poisson, seeded), uniform over the camera's field
@@ -64,16 +64,11 @@ from relloc.calibration.odometry import fit_odometry_noise
 from relloc.calibration.window import CalibrationWindow, following, spanning
 from relloc.core.recording import (
     CLUTTER,
-    NO_TARGET,
-    FileSkips,
-    GroundTruth,
     Measurements,
-    Odometry,
     Recording,
-    SkipReport,
     measurement_rows,
 )
-from relloc.datasets.mrclam import MrclamDataset, load_mrclam
+from relloc.datasets.mrclam import UNMAPPED_SUBJECT, MrclamDataset, load_mrclam, to_recording
 from relloc.datasets.paths import default_mrclam_dataset
 from relloc.errors import DataError
 from relloc.estimators.gaussian_sum import GaussianSumSettings
@@ -118,90 +113,6 @@ def _whole_run(ds: MrclamDataset, source: str) -> CalibrationWindow:
 # ---------------------------------------------------------------------------------------------
 # MRCLAM → Recording. TEMPORARY: the one shared conversion, relloc.datasets.mrclam.to_recording
 # (being added in parallel), replaces this function at merge; it follows the same rules.
-# ---------------------------------------------------------------------------------------------
-
-#: Skip reasons of :func:`_mrclam_recording` (counted per measurement file).
-UNMAPPED_SUBJECT = "subject is neither another robot nor a landmark"
-REPEATED_READING = "repeated reading of one subject in one camera frame"
-
-
-def _mrclam_recording(ds: MrclamDataset) -> Recording:
-    """The dataset as a :class:`~relloc.core.recording.Recording`.
-
-    Robots ``"1"`` … (their subject ids) on the ground; odometry ``(v, 0, 0, ω)`` as commanded
-    (no noise stated: ``sigma`` 0); every camera reading a ``"range_bearing"`` row of another
-    robot (``target``) or of a landmark (``landmark``, in the order of the landmark file,
-    positions ``(x, y, 0)``), ``sigma`` not stated; Vicon truth ``(x, y, 0, θ)``. A reading of
-    no other robot and no landmark, or of a subject already read in that frame, is skipped and
-    counted per measurement file.
-    """
-    robots = ds.robot_ids
-    lm_index = {int(s): k for k, s in enumerate(ds.landmarks.subject)}
-    parts, files = [], []
-    for observer, rid in enumerate(robots):
-        m = ds.robot(rid).measurements
-        index = {r: i for i, r in enumerate(robots) if r != rid}
-        target = np.array([index.get(int(s), NO_TARGET) for s in m.subject], dtype=np.int64)
-        landmark = np.array([lm_index.get(int(s), NO_TARGET) for s in m.subject], dtype=np.int64)
-        mapped = (target != NO_TARGET) | (landmark != NO_TARGET)
-        first = np.zeros(len(m), dtype=bool)
-        key = np.stack([m.t, m.subject.astype(float)], axis=1)
-        first[np.unique(key, axis=0, return_index=True)[1]] = True
-        keep = mapped & first
-        parts.append(
-            measurement_rows(
-                "range_bearing",
-                t=m.t[keep],
-                observer=observer,
-                target=target[keep],
-                landmark=landmark[keep],
-                value=np.column_stack([m.range[keep], m.bearing[keep]]),
-            )
-        )
-        skipped = {
-            UNMAPPED_SUBJECT: int((~mapped).sum()),
-            REPEATED_READING: int((mapped & ~first).sum()),
-        }
-        files.append(
-            FileSkips(
-                file=f"Robot{rid}_Measurement.dat",
-                rows_read=len(m),
-                rows_kept=int(keep.sum()),
-                skipped={k: v for k, v in skipped.items() if v},
-            )
-        )
-    odometry, truth = [], []
-    for rid in robots:
-        od, g = ds.robot(rid).odometry, ds.robot(rid).groundtruth
-        zero = np.zeros(len(od.t))
-        odometry.append(
-            Odometry(
-                t=od.t,
-                velocity=np.column_stack([od.v, zero, zero, od.omega]),
-                sigma=np.zeros(4),
-                where=f"Robot{rid}_Odometry.dat",
-            )
-        )
-        truth.append(
-            GroundTruth(
-                t=g.t,
-                pose=np.column_stack([g.x, g.y, np.zeros(len(g.t)), g.theta]),
-                where=f"Robot{rid}_Groundtruth.dat",
-            )
-        )
-    return Recording(
-        robots=tuple(str(rid) for rid in robots),
-        platforms=("ground",) * len(robots),
-        odometry=tuple(odometry),
-        measurements=Measurements.concatenate(parts),
-        truth=tuple(truth),
-        landmarks=np.column_stack([ds.landmarks.xy, np.zeros(len(ds.landmarks.subject))]),
-        source=str(ds.path),
-        meta={"robot_subjects": tuple(robots)},
-        skips=SkipReport(files=tuple(files)),
-    )
-
-
 # ---------------------------------------------------------------------------------------------
 
 
@@ -333,7 +244,7 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
     settings, odo = _settings(ds, calibration, fov)
     clock = np.arange(t_start, t_end, 1.0 / FILTER_RATE)
     rng = np.random.default_rng(args.seed)
-    rec, counts = _hidden_correspondence(_mrclam_recording(ds), t_start, clock[-1], fov, rng)
+    rec, counts = _hidden_correspondence(to_recording(ds), t_start, clock[-1], fov, rng)
     counts["unknown_subject"] = rec.skips.skipped_by_reason().get(UNMAPPED_SUBJECT, 0)
     counts["truth_missing"] = sum(
         int((~ds.robot(s).groundtruth.at(clock).valid).sum()) for s in ds.robot_ids

@@ -39,12 +39,14 @@ summary.json keys: ``cases.<mode>/<anchors>``: ``pos_rmse_m`` and ``heading_rmse
 ``nees_pct_beyond`` (per-robot 3-DOF NEES above χ²₃(0.95), pooled), ``anees``, ``used``,
 ``rejected`` (χ² gate + degenerate geometry + unknown barcodes), ``counts`` (the breakdown),
 ``heldout`` (the same accuracy numbers over the second half only); ``fit`` (the fitted models),
-``targets`` (the issue's targets and whether each is met), ``load_report``.
+``targets`` (the issue's targets and whether each is met), ``load_report`` (rows the loader
+and :func:`relloc.datasets.mrclam.to_recording` skipped, by reason). The fitted latency, scales
+and bearing offsets are applied to the recording before the replay (:func:`build_recording`).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -56,6 +58,13 @@ from relloc.calibration.inflation import CORRELATION_HORIZON_S
 from relloc.calibration.odometry import OdometryModelFit, fit_odometry_model
 from relloc.calibration.window import CalibrationWindow, leading_fraction
 from relloc.core.gaussian import Gaussian
+from relloc.core.recording import Measurements, Odometry, Recording, measurement_rows
+from relloc.estimators.cooperative import (
+    CooperativeEstimator,
+    CooperativeSettings,
+    OdometryModel,
+    SensorModel,
+)
 from relloc.experiments.registry import ReproduceArgs
 from relloc.pipeline.montecarlo import run_monte_carlo
 from relloc.pipeline.output import (
@@ -66,6 +75,7 @@ from relloc.pipeline.output import (
     write_report,
     write_summary,
 )
+from relloc.pipeline.replay import replay
 
 Array = NDArray[np.float64]
 
@@ -130,9 +140,10 @@ def fit_models(ds: Any, window: CalibrationWindow) -> FittedModels:
 
 @dataclass(frozen=True)
 class Prepared:
-    """The recording, its prior and the bookkeeping of the subjects it could not map."""
+    """The calibrated recording, its prior, the output times and the bookkeeping of the
+    readings it could not hold."""
 
-    recording: Any
+    recording: Recording
     prior: Gaussian
     t_start: float
     out_t: Array
@@ -142,83 +153,72 @@ class Prepared:
 
 
 def build_recording(ds: Any, fit: FittedModels, rng: np.random.Generator) -> Prepared:
-    """Calibrated odometry, detections mapped to robot/landmark indices and robot 1's GPS."""
-    from relloc.estimators.cooperative import (
-        Detections,
-        OdometryStream,
-        PoseFixes,
-        TeamRecording,
-    )
+    """The dataset's recording (:func:`relloc.datasets.mrclam.to_recording`) calibrated with the
+    fitted models, plus robot 1's GPS-like fixes, and the prior at the first common ground-truth
+    time."""
+    from relloc.datasets.mrclam import UNMAPPED_SUBJECT, to_recording
 
+    raw = to_recording(ds)
     robots = ds.robot_ids
-    index = {rid: i for i, rid in enumerate(robots)}
-    lm_subjects = tuple(int(s) for s in ds.landmarks.subject)
-    lm_index = {s: k for k, s in enumerate(lm_subjects)}
-    odometry = tuple(
-        OdometryStream(
-            ds.robot(rid).odometry.t,
-            fit.odometry.scale_v[i] * ds.robot(rid).odometry.v,
-            fit.odometry.scale_w[i] * ds.robot(rid).odometry.omega,
-        )
-        for i, rid in enumerate(robots)
-    )
-    cols: list[list[Array]] = [[] for _ in range(6)]
-    unmapped = 0
-    for rid in robots:
-        m = ds.robot(rid).measurements
-        subj = m.subject
-        is_robot = np.isin(subj, robots) & (subj != rid)
-        is_lm = np.isin(subj, lm_subjects)
-        ok = is_robot | is_lm
-        unmapped += int((~ok).sum())
-        tr = np.array(
-            [index.get(int(s), -1) if r else -1 for s, r in zip(subj, is_robot, strict=True)]
-        )
-        lk = np.array(
-            [lm_index.get(int(s), -1) if k else -1 for s, k in zip(subj, is_lm, strict=True)]
-        )
-        bearing = m.bearing - fit.camera.bearing_offset[index[rid]]
-        for c, v in zip(
-            cols,
-            (m.t, np.full(len(m), index[rid]), tr, lk, m.range, bearing),
-            strict=True,
-        ):
-            c.append(v[ok])
-    t = np.concatenate(cols[0])
-    order = np.argsort(t, kind="stable")
-    det = Detections(
-        t[order],
-        np.concatenate(cols[1]).astype(np.int64)[order],
-        np.concatenate(cols[2]).astype(np.int64)[order],
-        np.concatenate(cols[3]).astype(np.int64)[order],
-        np.concatenate(cols[4])[order],
-        np.concatenate(cols[5])[order],
-    )
     t_start = max(float(ds.robot(r).groundtruth.t[0]) for r in robots)
     t_end = float(ds.duration)
     out_t = np.arange(t_start, t_end, OUTPUT_DT_S)
-    # Robot 1's GPS-like fixes: ground truth + stated noise at 1 Hz while it is valid.
-    gt1 = ds.robot(robots[0]).groundtruth
-    tg = np.arange(t_start + GPS_PERIOD_S, t_end, GPS_PERIOD_S)
-    q = gt1.at(tg)
-    tg, pose = tg[q.valid], q.pose[q.valid]
-    pose = pose + rng.normal(size=pose.shape) * np.asarray(GPS_SIGMA)
-    fixes = PoseFixes(tg, np.zeros(tg.size, dtype=np.int64), pose, np.asarray(GPS_SIGMA))
-    recording = TeamRecording(
-        odometry=odometry, detections=det, landmarks_xy=ds.landmarks.xy, fixes=fixes
+    recording = replace(
+        raw,
+        odometry=calibrated_odometry(raw, fit),
+        measurements=Measurements.concatenate(
+            [corrected_bearings(raw.measurements, fit), gps_fixes(ds, t_start, t_end, rng)]
+        ),
     )
     start = np.concatenate([ds.robot(r).groundtruth.at(t_start).pose for r in robots])
     prior = Gaussian(
         mean=start.reshape(-1), cov=np.diag(np.tile(np.square(INITIAL_SIGMA), len(robots)))
     )
     return Prepared(
-        recording, prior, t_start, out_t, lm_subjects, _two_landmarks(det, ds), unmapped
+        recording,
+        prior,
+        t_start,
+        out_t,
+        tuple(raw.meta["landmark_subjects"]),
+        _two_landmarks(raw.measurements, ds),
+        raw.skips.skipped_by_reason().get(UNMAPPED_SUBJECT, 0),
     )
 
 
-def _two_landmarks(det: Any, ds: Any) -> tuple[int, int]:
+def calibrated_odometry(recording: Recording, fit: FittedModels) -> tuple[Odometry, ...]:
+    """Every command re-stamped by when it acts (``t + τ``) and scaled per robot
+    (``s_v v``, ``s_ω ω``): the odometry as the filter's model sees it."""
+    out = []
+    for i, od in enumerate(recording.odometry):
+        velocity = np.zeros_like(od.velocity)
+        velocity[:, 0] = fit.odometry.scale_v[i] * od.velocity[:, 0]
+        velocity[:, 3] = fit.odometry.scale_w[i] * od.velocity[:, 3]
+        out.append(replace(od, t=od.t + fit.odometry.latency_s, velocity=velocity))
+    return tuple(out)
+
+
+def corrected_bearings(m: Measurements, fit: FittedModels) -> Measurements:
+    """The camera rows with each observer's fitted bearing offset removed."""
+    value = np.array(m.value)
+    value[:, 1] -= np.asarray(fit.camera.bearing_offset)[m.observer]
+    return replace(m, value=value)
+
+
+def gps_fixes(ds: Any, t_start: float, t_end: float, rng: np.random.Generator) -> Measurements:
+    """Robot 1's GPS-like fixes: ground truth + ``N(0, diag(GPS_SIGMA)²)`` at 1 Hz while its
+    ground truth is valid."""
+    gt1 = ds.robot(ds.robot_ids[0]).groundtruth
+    tg = np.arange(t_start + GPS_PERIOD_S, t_end, GPS_PERIOD_S)
+    q = gt1.at(tg)
+    tg, pose = tg[q.valid], q.pose[q.valid]
+    pose = pose + rng.normal(size=pose.shape) * np.asarray(GPS_SIGMA)
+    return measurement_rows("pose", t=tg, observer=0, value=pose, sigma=np.asarray(GPS_SIGMA))
+
+
+def _two_landmarks(m: Measurements, ds: Any) -> tuple[int, int]:
     """The most-detected landmark and the most-detected one at least 1 m from it (indices)."""
-    counts = np.bincount(det.landmark[det.landmark >= 0], minlength=len(ds.landmarks.subject))
+    assert m.landmark is not None
+    counts = np.bincount(m.landmark[m.landmark >= 0], minlength=len(ds.landmarks.subject))
     order = np.argsort(-counts, kind="stable")
     first = int(order[0])
     for k in order[1:]:
@@ -227,17 +227,16 @@ def _two_landmarks(det: Any, ds: Any) -> tuple[int, int]:
     return first, int(order[1])
 
 
-def case_settings(mode: str, anchors: str, fit: FittedModels, two: tuple[int, int], n_lm: int):  # type: ignore[no-untyped-def]
-    """Pipeline settings of one ``<mode>/<anchors>`` case."""
-    from relloc.estimators.cooperative import OdometryModel, PipelineSettings, SensorModel
-
+def case_settings(
+    mode: str, anchors: str, fit: FittedModels, two: tuple[int, int], n_lm: int
+) -> CooperativeSettings:
+    """Filter settings of one ``<mode>/<anchors>`` case."""
     odometry = OdometryModel(
         q_v0=fit.odometry.q_v0,
         q_w0=fit.odometry.q_w0,
         k_v=fit.odometry.k_v,
         k_w=fit.odometry.k_w,
         k_wv=fit.odometry.k_wv,
-        latency_s=fit.odometry.latency_s,
         max_hold_s=1.0,
         max_step_s=0.05,
     )
@@ -253,7 +252,7 @@ def case_settings(mode: str, anchors: str, fit: FittedModels, two: tuple[int, in
         "all_landmarks": tuple(range(n_lm)),
         "gps_robot1": (),
     }
-    return PipelineSettings(
+    return CooperativeSettings(
         odometry=odometry,
         sensor=sensor,
         use_bearing=mode != "dead_reckoning",
@@ -266,16 +265,26 @@ def case_settings(mode: str, anchors: str, fit: FittedModels, two: tuple[int, in
     )
 
 
+def run_filter(prepared: Prepared, settings: CooperativeSettings, out_t: Array) -> dict[str, Any]:
+    """Replay the recording from ``t_start`` through the team filter, recording at ``out_t``:
+    ``mean (T, n, 3)``, ``cov (T, n, 3, 3)`` and the filter's counts."""
+    rec = prepared.recording
+    estimator = CooperativeEstimator(rec.robots, prepared.prior, settings, rec.landmarks)
+    estimates = replay(
+        rec, [estimator], record_times=out_t, start=prepared.t_start, end=float(out_t[-1])
+    )
+    _, mean, cov = estimates.stacked(estimator.owner, rec.robots)
+    return {"mean": mean, "cov": cov, "counts": estimator.counts.to_dict()}
+
+
 def run_case(
-    seed_sequence: np.random.SeedSequence, index: int, prepared: Prepared, settings: list[Any]
+    seed_sequence: np.random.SeedSequence,
+    index: int,
+    prepared: Prepared,
+    settings: list[CooperativeSettings],
 ) -> dict[str, Any]:
     """Replay one case (a picklable task for :func:`run_monte_carlo`; no randomness used)."""
-    from relloc.estimators.cooperative import run_team
-
-    run = run_team(
-        prepared.recording, prepared.prior, prepared.t_start, prepared.out_t, settings[index]
-    )
-    return {"mean": run.mean, "cov": run.cov, "counts": run.counts.to_dict()}
+    return run_filter(prepared, settings[index], prepared.out_t)
 
 
 def evaluate(result: dict[str, Any], ds: Any, out_t: Array, t_from: float) -> dict[str, Any]:
@@ -315,13 +324,14 @@ def heading_error_by_landmark_gap(
     the robot last detected a landmark (where does the heading error come from?)."""
     from relloc.metrics import state_errors
 
-    det = prepared.recording.detections
+    rows = prepared.recording.measurements
+    assert rows.landmark is not None
     errs, gaps = [], []
     for i, rid in enumerate(ds.robot_ids):
         q = ds.robot(rid).groundtruth.at(prepared.out_t)
         t = prepared.out_t[q.valid]
         errs.append(state_errors(result["mean"][q.valid, i], q.pose[q.valid], (2,))[:, 2])
-        seen = np.sort(det.t[(det.observer == i) & (det.landmark >= 0)])
+        seen = np.sort(rows.t[(rows.observer == i) & (rows.landmark >= 0)])
         k = np.searchsorted(seen, t, side="right") - 1
         gaps.append(np.where(k >= 0, t - seen[np.maximum(k, 0)], np.inf))
     e, g = np.concatenate(errs), np.concatenate(gaps)
@@ -350,7 +360,7 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
     t_mid = window.end_s
     fit = fit_models(ds, window)
     prepared = build_recording(ds, fit, np.random.default_rng(args.seed))
-    n_lm = prepared.recording.landmarks_xy.shape[0]
+    n_lm = prepared.recording.landmarks.shape[0]
     keys = [("dead_reckoning", "none")] + [(m, a) for m in MODES[1:] for a in ANCHORS]
     settings = [case_settings(m, a, fit, prepared.two_landmarks, n_lm) for m, a in keys]
     results = run_monte_carlo(
@@ -362,7 +372,8 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
         description="mrclam-cl cases",
         quiet=args.quiet,
     )
-    unknown = int(ds.report.skipped_by_reason().get("unknown barcode", 0))
+    skips = prepared.recording.skips  # the loader's and the conversion's
+    unknown = int(skips.skipped_by_reason().get("unknown barcode", 0))
     cases: dict[str, Any] = {}
     by_key = dict(zip(keys, results, strict=True))
     for mode in MODES:
@@ -402,8 +413,8 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
         "targets": targets,
         "paper_reference": {"joint_ekf_pos_rmse_m": 0.13, "dead_reckoning_pos_rmse_m": 2.7},
         "load_report": {
-            "n_skipped": ds.report.n_skipped,
-            "by_reason": ds.report.skipped_by_reason(),
+            "n_skipped": skips.n_skipped,
+            "by_reason": skips.skipped_by_reason(),
         },
     }
     figures = _figures(out, ds, prepared, by_key, cases)

@@ -37,12 +37,13 @@ quarter by less than 20 %.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import networkx as nx
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.core.recording import Measurements, Recording
 from relloc.experiments.registry import ReproduceArgs
 from relloc.pipeline.montecarlo import run_monte_carlo
 from relloc.pipeline.output import (
@@ -53,6 +54,10 @@ from relloc.pipeline.output import (
     write_report,
     write_summary,
 )
+
+if TYPE_CHECKING:
+    from relloc.estimators.cooperative import CooperativeSettings
+    from relloc.sim.cooperative import CooperativeSim
 
 Array = NDArray[np.float64]
 
@@ -86,22 +91,28 @@ def _scenario():  # type: ignore[no-untyped-def]
     return sharma2013_scenario(gps_robots=(0,), duration=DURATION_S)
 
 
-def _rpmg_stats(recording: Any, n: int) -> dict[str, float]:
+def _detections(recording: Recording) -> Measurements:
+    """The recording's detection rows (of a robot or a landmark)."""
+    return recording.measurements.of_kind("bearing", "range_bearing")
+
+
+def _rpmg_stats(recording: Recording) -> dict[str, float]:
     """Fractions of detection epochs with a connected robot graph and with β(G) = 1.
 
-    Per epoch, the undirected graph over the ``n`` robots and the landmarks (nodes ``n …``)
-    of that epoch's bearings: *connected* when all robots lie in one component (possibly
+    Per epoch, the undirected graph over the robots and the landmarks (nodes ``n …``)
+    of that epoch's detections: *connected* when all robots lie in one component (possibly
     through a landmark), β(G) = 1 when, with at least two landmarks, every robot reaches
     every landmark (the whole graph is one component).
     """
-    det = recording.detections
+    det = _detections(recording)
+    assert det.landmark is not None
+    n, n_lm = recording.n_robots, recording.landmarks.shape[0]
     epochs = np.unique(det.t)
     connected = 0
     beta = 0
-    n_lm = recording.landmarks_xy.shape[0]
     for te in epochs:
         sel = det.t == te
-        obs, tgt, lm = det.observer[sel], det.target_robot[sel], det.landmark[sel]
+        obs, tgt, lm = det.observer[sel], det.target[sel], det.landmark[sel]
         graph = nx.Graph()
         graph.add_nodes_from(range(n + n_lm))
         graph.add_edges_from(
@@ -113,57 +124,78 @@ def _rpmg_stats(recording: Any, n: int) -> dict[str, float]:
     return {"connected_fraction": connected / k, "beta_fraction": beta / k}
 
 
+def _poses(recording: Recording, every: int) -> Array:
+    """True poses ``(T, n, 3)`` = (x, y, ψ) at every ``every``-th truth sample."""
+    truth = recording.require_truth("sharma2013")
+    return np.stack([g.pose[::every][:, [0, 1, 3]] for g in truth], axis=1)
+
+
+def run_case(sim: CooperativeSim, settings: CooperativeSettings, out_t: Array) -> dict[str, Any]:
+    """The team EIF over the simulated recording: errors ``(T, n, 3)`` against the truth
+    (:func:`relloc.pipeline.evaluation.evaluate`), the estimates and the filter's counts."""
+    from relloc.estimators.cooperative import CooperativeEstimator
+    from relloc.pipeline.evaluation import evaluate
+    from relloc.pipeline.replay import replay
+
+    rec = sim.recording
+    estimator = CooperativeEstimator(
+        rec.robots, sim.prior, settings, rec.landmarks, record_updates=False
+    )
+    estimates = replay(rec, [estimator], record_times=out_t, start=0.0, end=float(out_t[-1]))
+    _, mean, cov = estimates.stacked(estimator.owner, rec.robots)
+    scored = {e.subject: e for e in evaluate(estimates, rec)}
+    errors = np.stack([scored[r].error for r in rec.robots], axis=1)
+    counts = estimator.counts
+    return {
+        "errors": errors,
+        "cov": cov,
+        "mean": mean,
+        "used": counts.used,
+        "rejected": counts.rejected,
+    }
+
+
 def run_once(seed_sequence: np.random.SeedSequence, run_index: int) -> dict[str, Any]:
     """One Monte-Carlo run: simulate, then the EIF on every case (picklable task)."""
-    from relloc.estimators.cooperative import (
-        OdometryModel,
-        PipelineSettings,
-        SensorModel,
-        run_team,
-    )
-    from relloc.metrics import state_errors
+    from relloc.estimators.cooperative import CooperativeSettings, OdometryModel, SensorModel
     from relloc.sim.cooperative import simulate
 
     scenario = _scenario()
     rng = np.random.default_rng(seed_sequence)
     sim = simulate(scenario, rng)
+    rec = sim.recording
+    t = rec.require_truth("sharma2013")[0].t
     step = round(OUTPUT_EVERY_S / scenario.dt)
-    out_t = sim.t[::step]
-    truth = sim.truth[::step]
+    out_t = t[::step]
     odometry = OdometryModel.from_discrete(scenario.sigma_v, scenario.sigma_w, scenario.dt)
     sensor = SensorModel(sigma_bearing=scenario.sigma_bearing)
-    result: dict[str, Any] = {"t": out_t, "truth": truth, "cases": {}}
+    result: dict[str, Any] = {"t": out_t, "truth": _poses(rec, step), "cases": {}}
     for case, options in CASES.items():
-        settings = PipelineSettings(odometry=odometry, sensor=sensor, filter="eif", **options)
-        run = run_team(sim.recording, sim.prior, 0.0, out_t, settings)
-        errors = state_errors(run.mean, truth, angle_indices=(2,))
-        result["cases"][case] = {
-            "errors": errors,
-            "cov": run.cov,
-            "mean": run.mean if run_index == 0 else None,
-            "used": run.counts.used,
-            "rejected": run.counts.rejected,
-        }
+        settings = CooperativeSettings(odometry=odometry, sensor=sensor, filter="eif", **options)
+        run = run_case(sim, settings, out_t)
+        if run_index != 0:
+            run["mean"] = None
+        result["cases"][case] = run
     if run_index == 0:
+        k_mid = len(t) // 2
         result["prior"] = sim.prior
-        result["rpmg"] = _rpmg_stats(sim.recording, scenario.n_robots)
-        result["first_edges"] = _edges_at(sim.recording, float(sim.t[1]))
-        result["mid_edges"] = _edges_at(sim.recording, float(sim.t[len(sim.t) // 2]))
-        k_mid = len(sim.t) // 2
-        result["mid_state"] = sim.truth[k_mid]
-        result["mid_inputs"] = np.array([[o.v[k_mid], o.w[k_mid]] for o in sim.recording.odometry])
+        result["rpmg"] = _rpmg_stats(rec)
+        result["first_edges"] = _edges_at(rec, float(t[1]))
+        result["mid_edges"] = _edges_at(rec, float(t[k_mid]))
+        result["mid_state"] = _poses(rec, 1)[k_mid]
+        result["mid_inputs"] = np.array([od.velocity[k_mid, [0, 3]] for od in rec.odometry])
     return result
 
 
-def _edges_at(recording: Any, t: float) -> dict[str, list[tuple[int, int]]]:
-    det = recording.detections
+def _edges_at(recording: Recording, t: float) -> dict[str, list[tuple[int, int]]]:
+    det = _detections(recording)
+    assert det.landmark is not None
     sel = np.isclose(det.t, t)
-    robot = sel & (det.target_robot >= 0)
+    robot = sel & (det.target >= 0)
     lm = sel & (det.landmark >= 0)
     return {
         "robots": [
-            (int(i), int(j))
-            for i, j in zip(det.observer[robot], det.target_robot[robot], strict=True)
+            (int(i), int(j)) for i, j in zip(det.observer[robot], det.target[robot], strict=True)
         ],
         "landmarks": [
             (int(i), int(k)) for i, k in zip(det.observer[lm], det.landmark[lm], strict=True)

@@ -134,6 +134,25 @@ class Estimates:
     def labels(self) -> tuple[str, ...]:
         return tuple(s.label for s in self.beliefs)
 
+    def stacked(
+        self, owner: str, subjects: Sequence[str], track: str = ""
+    ) -> tuple[Array, Array, Array]:
+        """``owner``'s beliefs of ``subjects`` side by side: ``(t (K,), mean (K, m, d),
+        cov (K, m, d, d))`` for the ``m`` subjects in the given order (e.g. a centralised
+        filter's team). The series must share their record times (ConfigError otherwise)."""
+        series = [self.series(owner, s, track) for s in subjects]
+        if not series:
+            raise ConfigError(f"stacked: no subjects of {owner} asked for")
+        t = series[0].t
+        for s in series[1:]:
+            if s.t.shape != t.shape or np.any(s.t != t):
+                raise ConfigError(f"stacked: {s.label} was recorded at other times than the rest")
+        return (
+            t,
+            np.stack([s.mean for s in series], axis=1),
+            np.stack([s.cov for s in series], axis=1),
+        )
+
 
 @dataclass
 class _Rows:
@@ -177,7 +196,9 @@ class Recorder:
         """Store ``owner``'s ``beliefs`` at time ``t``."""
         for b in beliefs:
             key = (owner, b.subject, b.track)
-            rows = self._beliefs.setdefault(key, _Rows(frame=b.frame))
+            rows = self._beliefs.get(key)
+            if rows is None:  # (not setdefault: that would build new rows at every call)
+                rows = self._beliefs[key] = _Rows(frame=b.frame)
             if rows.frame != b.frame:
                 raise ConfigError(
                     f"{series_label(key)}: frame changed from {rows.frame} to {b.frame}"
@@ -193,7 +214,10 @@ class Recorder:
 
     def add_updates(self, owner: str, updates: Iterable[UpdateRecord]) -> None:
         for u in updates:
-            rows = self._updates.setdefault((owner, u.subject, u.track), _UpdateRows())
+            key = (owner, u.subject, u.track)
+            rows = self._updates.get(key)
+            if rows is None:
+                rows = self._updates[key] = _UpdateRows()
             rows.t.append(u.t)
             rows.age.append(u.age)
             rows.nis.append(u.nis)

@@ -85,7 +85,7 @@ def run_events(
             est.advance(t, odometry)
         end = int(ends[k])
         if end > done:
-            batch = measurements.select(np.arange(done, end))
+            batch = measurements.select(slice(done, end))
             for est in estimators:
                 est.measure(batch)
             done = end

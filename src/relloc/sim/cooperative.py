@@ -11,8 +11,13 @@ the next way-point taken once within ``capture_radius``). Every ``dt`` each robo
 - robots listed in ``gps_robots`` get an absolute pose fix every ``gps_period`` with noise
   ``gps_sigma``.
 
-The filter's initial estimate is drawn from ``N(X(0), diag(σ_x0², σ_y0², σ_ψ0²))`` per robot.
-Everything random goes through the ``np.random.Generator`` passed in.
+The result is a :class:`~relloc.core.recording.Recording` (robots ``"1"`` … ``"n"``, odometry
+``(v, 0, 0, ω)``, detections as rows of kind ``"bearing"`` — ``"range_bearing"`` when ranges are
+simulated — of a robot (``target``) or a landmark (``landmark``), fixes as rows of kind
+``"pose"``, every row with the noise it was drawn with as its ``sigma``; ground truth and the
+landmarks) and the filter's initial estimate, drawn from ``N(X(0), diag(σ_x0², σ_y0², σ_ψ0²))``
+per robot. The simulation is open loop: no estimator runs in it. Everything random goes through
+the ``np.random.Generator`` passed in.
 """
 
 from __future__ import annotations
@@ -25,8 +30,15 @@ from numpy.typing import NDArray
 
 from relloc.core.angles import wrap_angle
 from relloc.core.gaussian import Gaussian
+from relloc.core.recording import (
+    NO_TARGET,
+    GroundTruth,
+    Measurements,
+    Odometry,
+    Recording,
+    measurement_rows,
+)
 from relloc.errors import ConfigError
-from relloc.estimators.cooperative import Detections, OdometryStream, PoseFixes, TeamRecording
 from relloc.models.unicycle import unicycle_step
 
 Array = NDArray[np.float64]
@@ -106,11 +118,9 @@ class CooperativeScenario:
 
 @dataclass(frozen=True)
 class CooperativeSim:
-    """Truth ``(T+1, n, 3)`` at ``t``, the recording for the filter and the initial estimate."""
+    """The recording of one simulated run (with its truth) and the filter's initial estimate."""
 
-    t: Array
-    truth: Array
-    recording: TeamRecording
+    recording: Recording
     prior: Gaussian
 
 
@@ -217,39 +227,105 @@ def simulate(s: CooperativeScenario, rng: np.random.Generator) -> CooperativeSim
                 noisy_r = dist + s.sigma_range * rng.normal(size=m)
             det_cols[0].append(np.full(m, t[k]))
             det_cols[1].append(obs)
-            det_cols[2].append(np.where(is_lm, -1, tgt))
-            det_cols[3].append(np.where(is_lm, tgt, -1))
+            det_cols[2].append(np.where(is_lm, NO_TARGET, tgt))
+            det_cols[3].append(np.where(is_lm, tgt, NO_TARGET))
             det_cols[4].append(noisy_r)
             det_cols[5].append(noisy_b)
     cols = [np.concatenate(c) if c else np.zeros(0) for c in det_cols]
     order = np.argsort(cols[0], kind="stable")
-    detections = Detections(
-        cols[0][order],
-        cols[1][order].astype(np.int64),
-        cols[2][order].astype(np.int64),
-        cols[3][order].astype(np.int64),
-        cols[4][order],
-        cols[5][order],
-    )
+    detections = _detection_rows(s, *(c[order] for c in cols))
     fixes = _gps(s, t, truth, rng)
-    odometry = tuple(OdometryStream(t[:-1], odo_u[:, i, 0], odo_u[:, i, 1]) for i in range(n))
-    recording = TeamRecording(
-        odometry=odometry, detections=detections, landmarks_xy=s.landmarks_xy, fixes=fixes
-    )
+    recording = _recording(s, t, truth, odo_u, Measurements.concatenate([detections, fixes]))
     noise = rng.normal(size=(n, 3)) * np.asarray(s.initial_sigma)
     prior = Gaussian(mean=(truth[0] + noise).reshape(-1), cov=s.prior_cov)
-    return CooperativeSim(t=t, truth=truth, recording=recording, prior=prior)
+    return CooperativeSim(recording=recording, prior=prior)
 
 
-def _gps(s: CooperativeScenario, t: Array, truth: Array, rng: np.random.Generator) -> PoseFixes:
-    if not s.gps_robots:
-        return PoseFixes.none()
+def _recording(
+    s: CooperativeScenario, t: Array, truth: Array, odo_u: Array, measurements: Measurements
+) -> Recording:
+    """Robots ``"1"`` … ``"n"``: odometry ``(v, 0, 0, ω)`` reported at ``t[:-1]``, the
+    measurements, truth ``(x, y, 0, ψ)`` at ``t`` and the landmarks at height 0."""
+    n = s.n_robots
+    robots = tuple(str(i + 1) for i in range(n))
+    zero = np.zeros(t.size - 1)
+    odometry = tuple(
+        Odometry(
+            t=t[:-1],
+            velocity=np.column_stack([odo_u[:, i, 0], zero, zero, odo_u[:, i, 1]]),
+            sigma=np.array([s.sigma_v, 0.0, 0.0, s.sigma_w]),
+            where=f"odometry of robot {robots[i]}",
+        )
+        for i in range(n)
+    )
+    ground_truth = tuple(
+        GroundTruth(
+            t=t,
+            pose=np.column_stack([truth[:, i, :2], np.zeros(t.size), truth[:, i, 2]]),
+            where=f"truth of robot {robots[i]}",
+        )
+        for i in range(n)
+    )
+    return Recording(
+        robots=robots,
+        platforms=("ground",) * n,
+        odometry=odometry,
+        measurements=measurements,
+        truth=ground_truth,
+        landmarks=np.column_stack([s.landmarks_xy, np.zeros(s.landmarks_xy.shape[0])]),
+        source="relloc.sim.cooperative",
+        meta={"dt": s.dt, "duration": s.duration},
+    )
+
+
+def _detection_rows(
+    s: CooperativeScenario,
+    t: Array,
+    observer: Array,
+    target: Array,
+    landmark: Array,
+    rng: Array,
+    bearing: Array,
+) -> Measurements:
+    """Detection rows in time order: ``"bearing"`` rows, or ``"range_bearing"`` rows where a
+    range is simulated (a noisy range that came out ≤ 0 is dropped: the row is bearing-only)."""
+    ids = {
+        "observer": observer.astype(np.int64),
+        "target": target.astype(np.int64),
+        "landmark": landmark.astype(np.int64),
+    }
+    if s.sigma_range is None:
+        return measurement_rows(
+            "bearing", t=t, value=bearing, sigma=np.array([s.sigma_bearing]), **ids
+        )
+    ranged = rng > 0
+    parts = [
+        measurement_rows(
+            "range_bearing",
+            t=t[ranged],
+            value=np.column_stack([rng[ranged], bearing[ranged]]),
+            sigma=np.array([s.sigma_range, s.sigma_bearing]),
+            **{k: v[ranged] for k, v in ids.items()},
+        ),
+        measurement_rows(
+            "bearing",
+            t=t[~ranged],
+            value=bearing[~ranged],
+            sigma=np.array([s.sigma_bearing]),
+            **{k: v[~ranged] for k, v in ids.items()},
+        ),
+    ]
+    return Measurements.concatenate(parts)
+
+
+def _gps(s: CooperativeScenario, t: Array, truth: Array, rng: np.random.Generator) -> Measurements:
+    """Absolute pose rows of the robots in ``gps_robots`` every ``gps_period``."""
     every = max(1, round(s.gps_period / s.dt))
-    ks = np.arange(every, t.size, every)
+    ks = np.arange(every, t.size, every) if s.gps_robots else np.zeros(0, dtype=np.int64)
     robots = np.array(s.gps_robots, dtype=np.int64)
     tt = np.repeat(t[ks], robots.size)
     rr = np.tile(robots, ks.size)
     pose = truth[np.repeat(ks, robots.size), rr] + rng.normal(size=(tt.size, 3)) * np.asarray(
         s.gps_sigma
     )
-    return PoseFixes(tt, rr, pose, np.asarray(s.gps_sigma, dtype=float))
+    return measurement_rows("pose", t=tt, observer=rr, value=pose, sigma=np.asarray(s.gps_sigma))

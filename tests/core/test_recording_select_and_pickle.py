@@ -1,0 +1,62 @@
+"""Measurements.select keeps a valid table without checking it again; recordings pickle."""
+
+import pickle
+
+import numpy as np
+import pytest
+
+from relloc.core.recording import (
+    GroundTruth,
+    Measurements,
+    Odometry,
+    Recording,
+    measurement_rows,
+)
+from relloc.errors import DataError
+
+
+def _table() -> Measurements:
+    return Measurements.concatenate(
+        [
+            measurement_rows("bearing", t=np.arange(4.0), observer=0, target=1, value=np.zeros(4)),
+            measurement_rows("range", t=np.arange(4.0), observer=1, value=np.ones(4)),
+        ]
+    )
+
+
+def test_select_by_mask_slice_and_increasing_indices_agree():
+    m = _table()
+    mask = m.t >= 2.0
+    by_mask, by_slice = m.select(mask), m.select(slice(4, 8))
+    by_index = m.select(np.flatnonzero(mask))
+    for a, b in ((by_mask, by_slice), (by_mask, by_index)):
+        for name in ("t", "kind", "observer", "target", "value", "sigma", "landmark", "origin"):
+            assert np.array_equal(getattr(a, name), getattr(b, name), equal_nan=True)
+    assert not by_slice.t.flags.writeable and not by_mask.value.flags.writeable
+
+
+def test_select_out_of_order_is_checked():
+    m = _table()
+    with pytest.raises(DataError, match="sorted"):
+        m.select(np.array([3, 0]))
+    with pytest.raises(DataError, match="sorted"):
+        m.select(slice(None, None, -1))
+    with pytest.raises(DataError, match="mask"):
+        m.select(np.ones(3, dtype=bool))
+
+
+def test_recording_survives_pickling():
+    t = np.arange(3.0)
+    rec = Recording(
+        robots=("a", "b"),
+        platforms=("ground", "ground"),
+        odometry=tuple(Odometry(t=t, velocity=np.zeros((3, 4)), sigma=np.zeros(4)) for _ in "ab"),
+        measurements=_table(),
+        truth=tuple(GroundTruth(t=t, pose=np.zeros((3, 4))) for _ in "ab"),
+        meta={"source": "test"},
+    )
+    back = pickle.loads(pickle.dumps(rec))
+    assert back.meta == {"source": "test"} and back.robots == rec.robots
+    assert np.array_equal(back.measurements.value, rec.measurements.value, equal_nan=True)
+    with pytest.raises(TypeError):
+        back.meta["x"] = 1  # type: ignore[index]
