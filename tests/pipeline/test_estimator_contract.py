@@ -23,6 +23,9 @@ equations (``x⁻ = F x``, ``P⁻ = F P Fᵀ + Q``; ``S = H P⁻ Hᵀ + R``, ``K
   ``f`` is the identity, ``Q = G Σ_u Gᵀ`` (:mod:`relloc.models.motion`) and, given the measured
   bearings, ``[r̃, 0, 0] = H_pmo(θ̃, α̃) p + noise`` is linear (:mod:`relloc.models.measurement`);
   the noise covariances ``Q`` and ``R_pmo`` are evaluated at the estimate, as the PLKF does;
+- the cooperative EIF and EKF of :class:`~relloc.estimators.cooperative.CooperativeEstimator`
+  with only absolute pose fixes of still unicycles (``f`` the identity, ``H = I`` on the fixed
+  robot's block);
 - the Joseph-form updates themselves (:func:`relloc.estimators.relative.kalman_update`,
   :func:`relloc.core.linalg.joseph_update`).
 
@@ -31,7 +34,9 @@ the bias-compensated PLKF (its correction ``b̂`` is a nonlinear function of the
 yaw bank (a Gaussian mixture whose weights depend on the likelihoods); the Gaussian-sum
 estimator of seed 002 (bearings are nonlinear and the correspondence is unknown, so it is a
 mixture); the switching EKF of seed 003 (the UWB range ``d = ‖r‖`` and the camera bearing are
-nonlinear in ``r``, and Eq. 3 is nonlinear in the headings).
+nonlinear in ``r``, and Eq. 3 is nonlinear in the headings); the cooperative filter with
+detections (range and bearing between robots are nonlinear in both poses) or moving robots (the
+unicycle step is nonlinear in the heading).
 """
 
 from __future__ import annotations
@@ -45,6 +50,8 @@ import numpy as np
 import pytest
 from numpy.typing import NDArray
 
+from relloc.core.angles import wrap_angle
+from relloc.core.gaussian import Gaussian
 from relloc.core.linalg import joseph_update
 from relloc.core.recording import (
     CLUTTER,
@@ -57,6 +64,12 @@ from relloc.core.recording import (
     kind_code,
     measurement_rows,
     relative_pose,
+)
+from relloc.estimators.cooperative import (
+    CooperativeEstimator,
+    CooperativeSettings,
+    OdometryModel,
+    SensorModel,
 )
 from relloc.estimators.initialisation import InitPolicy
 from relloc.estimators.relative import kalman_update
@@ -72,13 +85,14 @@ from relloc.models.measurement import (
     pseudo_linear_measurement,
 )
 from relloc.models.motion import VelocityNoise, process_noise, relative_jacobians, relative_step
+from relloc.models.unicycle import unicycle_jacobians, unicycle_step
 from relloc.models.uwb_noise import UwbNoiseModel
 from relloc.pipeline.contract import Estimator
 from relloc.pipeline.estimates import Estimates
 from relloc.pipeline.evaluation import accuracy_and_consistency, evaluate
 from relloc.pipeline.frames import frame
 from relloc.pipeline.replay import TIME_TOL, replay
-from relloc.sim import multihypothesis
+from relloc.sim import cooperative, multihypothesis
 from relloc.sim.airground import robot_names
 from relloc.sim.scenario import default_scenario
 from relloc.sim.sensors import range_azimuth_elevation
@@ -176,6 +190,30 @@ def _switching_ekf_case(name: str) -> Case:
     )
 
 
+def _cooperative_case(kind: str, *, use_range: bool) -> Case:
+    """Seed 001: the team's joint filter on 6 s of the paper's scenario — bearings (and ranges)
+    of robots and of the anchor landmarks, and one robot's GPS-like pose fixes."""
+    scenario = cooperative.sharma2013_scenario(
+        duration=6.0, gps_robots=(0,), sigma_range=1.0 if use_range else None
+    )
+    sim = cooperative.simulate(scenario, np.random.default_rng(3))
+    settings = CooperativeSettings(
+        odometry=OdometryModel.from_discrete(scenario.sigma_v, scenario.sigma_w, scenario.dt),
+        sensor=SensorModel(sigma_bearing=scenario.sigma_bearing, sigma_range0=1.0),
+        anchors=(0, 1),
+        use_range=use_range,
+        use_fixes=True,
+        filter=kind,  # type: ignore[arg-type]
+    )
+    return Case(
+        recording=sim.recording,
+        build=lambda r: [CooperativeEstimator(r.robots, sim.prior, settings, r.landmarks)],
+        kinds=("range_bearing", "bearing", "pose"),
+        # one NIS per detection (bearing, or range and bearing) and per x-y-ψ fix
+        dofs=frozenset({2, 3} if use_range else {1, 3}),
+    )
+
+
 CASES: dict[str, Callable[[], Case]] = {
     **{
         f"track_manager-{f}{'-yaw_bank' if bank else ''}": partial(
@@ -191,6 +229,8 @@ CASES: dict[str, Callable[[], Case]] = {
     "gaussian_sum-alone": lambda: _gaussian_sum_case(sharing=False),
     "switching_ekf-one_drone": lambda: _switching_ekf_case("one_drone"),
     "switching_ekf-two_drones": lambda: _switching_ekf_case("two_drones"),
+    "cooperative-eif-bearings": lambda: _cooperative_case("eif", use_range=False),
+    "cooperative-ekf-range_bearing": lambda: _cooperative_case("ekf", use_range=True),
 }
 
 
@@ -447,6 +487,107 @@ def test_track_manager_plkf_of_still_robots_is_a_plain_kalman_filter(covariance:
         prior = (t0, rec.relative_truth(0, j, t0)[0], np.diag([0.5**2] * 3 + [0.3**2]))
         reference = plain_still_plkf(rec, j, noise, covariance, prior)
         assert_plain_kalman(estimates, ("observer", subject, ""), reference)
+
+
+def _still_planar_team(rng: np.random.Generator) -> Recording:
+    """Three unicycles standing still for 3 s: zero odometry at 10 Hz; GPS-like pose fixes of
+    robots 0 and 2 at 2 Hz (robot 1 has none: it is only predicted)."""
+    dt, duration = 0.1, 3.0
+    t: Array = np.linspace(0.0, duration, round(duration / dt) + 1)
+    poses = np.array([[1.0, 2.0, 0.0, 0.4], [4.0, -3.5, 0.0, -1.0], [-1.5, 5.0, 0.0, 2.5]])
+    sigma_fix = np.array([0.3, 0.2, 0.05])
+    tf = t[5::5]
+    rows = [
+        measurement_rows(
+            "pose",
+            t=tf,
+            observer=i,
+            value=poses[i, [0, 1, 3]] + sigma_fix * rng.standard_normal((tf.size, 3)),
+            sigma=sigma_fix,
+        )
+        for i in (0, 2)
+    ]
+    sigma_u = np.array([0.1, 0.0, 0.0, 0.05])
+    return Recording(
+        robots=("0", "1", "2"),
+        platforms=("ground",) * 3,
+        truth=tuple(GroundTruth(t=t, pose=np.tile(p, (t.size, 1))) for p in poses),
+        odometry=tuple(
+            Odometry(t=t[:-1], velocity=np.zeros((t.size - 1, 4)), sigma=sigma_u) for _ in poses
+        ),
+        measurements=Measurements.concatenate(rows),
+    )
+
+
+@pytest.mark.parametrize("kind", ["eif", "ekf"])
+def test_cooperative_filter_with_pose_fixes_of_still_robots_is_a_plain_kalman_filter(
+    kind: str,
+) -> None:
+    """Still unicycles: ``f`` is the identity and ``Q_i = G diag(q_v, q_ω)/Δt Gᵀ``
+    (:mod:`relloc.models.unicycle`, the odometry model of the cooperative estimator); a pose fix
+    of robot ``i`` is ``z = x_i + noise`` (``H`` selects robot ``i``'s block), all fixes of an
+    epoch in one update, the NIS of each fix at the epoch's prior."""
+    rec = _still_planar_team(np.random.default_rng(8))
+    odometry = OdometryModel(q_v0=0.04, q_w0=0.01)
+    settings = CooperativeSettings(
+        odometry=odometry,
+        sensor=SensorModel(sigma_bearing=0.05),
+        use_fixes=True,
+        p_gate=None,
+        filter=kind,  # type: ignore[arg-type]
+    )
+    n = rec.n_robots
+    assert rec.truth is not None
+    truth = np.stack([g.pose[0, [0, 1, 3]] for g in rec.truth])
+    x = (truth + np.array([0.5, -0.4, 0.2])).reshape(-1)
+    P = np.diag(np.tile([0.6**2, 0.5**2, 0.3**2], n))
+    estimates = replay(rec, [CooperativeEstimator(rec.robots, Gaussian(mean=x, cov=P), settings)])
+    m = rec.measurements
+    zero = np.zeros(2)
+    q_u = np.diag([odometry.q_v0, odometry.q_w0])
+    beliefs: Beliefs = {}
+    nis: dict[str, list[float]] = {r: [] for r in rec.robots}
+    events = np.unique(np.concatenate([rec.odometry[0].t, m.t, [rec.span[1]]]))
+    t_prev = float(events[0])
+    for t in events:
+        step = float(t) - t_prev
+        if step > 0:
+            F, Q = np.zeros((3 * n, 3 * n)), np.zeros((3 * n, 3 * n))
+            for i in range(n):
+                b = slice(3 * i, 3 * i + 3)
+                np.testing.assert_allclose(unicycle_step(x[b], zero, step), x[b], atol=1e-15)
+                F[b, b], G = unicycle_jacobians(x[b], zero, step)
+                Q[b, b] = G @ (q_u / step) @ G.T
+            np.testing.assert_array_equal(F, np.eye(3 * n))  # still robots: f is the identity
+            x, P = textbook_predict(x, P, F, Q)
+        t_prev = float(t)
+        fixes = np.flatnonzero(np.abs(m.t - t) <= TIME_TOL)
+        if fixes.size:
+            H = np.zeros((3 * fixes.size, 3 * n))
+            for k, q in enumerate(fixes):
+                i = int(m.observer[q])
+                H[3 * k : 3 * k + 3, 3 * i : 3 * i + 3] = np.eye(3)
+            nu = m.value[fixes].reshape(-1) - H @ x
+            nu[2::3] = wrap_angle(nu[2::3])
+            R = np.diag(np.square(m.sigma[fixes]).reshape(-1))
+            for k, q in enumerate(fixes):
+                g = slice(3 * k, 3 * k + 3)
+                S = H[g] @ P @ H[g].T + R[g, g]
+                nis[rec.robots[int(m.observer[q])]].append(float(nu[g] @ np.linalg.solve(S, nu[g])))
+            x, P, _, _ = textbook_update(x, P, nu, H, R)
+        beliefs[round(float(t), 6)] = (x, P)
+    for i, robot in enumerate(rec.robots):
+        series = estimates.series("team", robot)
+        b = slice(3 * i, 3 * i + 3)
+        assert series.t.size == 31
+        for k, t in enumerate(series.t):
+            x_ref, P_ref = beliefs[round(float(t), 6)]
+            np.testing.assert_allclose(series.mean[k], x_ref[b], rtol=1e-9, atol=1e-12)
+            np.testing.assert_allclose(series.cov[k], P_ref[b, b], rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(
+            estimates.updates_of("team", robot).nis, nis[robot], rtol=1e-9, atol=1e-12
+        )
+    assert not nis["1"] and nis["0"] and nis["2"]
 
 
 def _random_problem(rng: np.random.Generator, n: int, m: int, batch: tuple[int, ...]) -> Any:
