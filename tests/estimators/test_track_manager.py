@@ -7,6 +7,8 @@ import dataclasses
 import numpy as np
 import pytest
 
+from relloc.core.contract import Estimator, HeldOdometry
+from relloc.core.estimates import Estimates
 from relloc.core.recording import (
     GroundTruth,
     Measurements,
@@ -24,8 +26,6 @@ from relloc.estimators.track_manager import (
 )
 from relloc.estimators.yaw_bank import YawBankSettings
 from relloc.metrics import anees, anees_band, nees, state_errors
-from relloc.pipeline.contract import Estimator, HeldOdometry
-from relloc.pipeline.estimates import Estimates
 from relloc.pipeline.replay import merge_times, record_grid, replay
 from relloc.sim.scenario import (
     RobotSpec,

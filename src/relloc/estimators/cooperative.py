@@ -2,7 +2,7 @@
 
 :class:`CooperativeEstimator` is the centralised joint filter of the whole team — the EIF of
 :mod:`relloc.estimators.eif` or the covariance-form EKF of :mod:`relloc.estimators.joint_ekf` —
-behind the estimator contract of :mod:`relloc.pipeline.contract` (owner ``"team"``), so
+behind the estimator contract of :mod:`relloc.core.contract` (owner ``"team"``), so
 :func:`relloc.pipeline.replay.replay` drives it over any :class:`~relloc.core.recording.Recording`
 of planar robots:
 
@@ -74,6 +74,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from relloc.association.gating import chi2_gate, mahalanobis_batch
+from relloc.core.contract import Belief, HeldOdometry, Silent, UpdateRecord
 from relloc.core.gaussian import Gaussian
 from relloc.core.recording import NO_TARGET, Measurements, kind_code
 from relloc.errors import ConfigError, DataError, ModelError
@@ -89,7 +90,6 @@ from relloc.models.planar_measurement import (
     range_bias_features,
 )
 from relloc.models.unicycle import unicycle_jacobians, unicycle_step
-from relloc.pipeline.contract import Belief, HeldOdometry, Silent, UpdateRecord
 
 Array = NDArray[np.float64]
 IntArray = NDArray[np.int64]

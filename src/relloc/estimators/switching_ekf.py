@@ -2,7 +2,7 @@
 
 Follower ``R_i`` estimates ``x = [r_x, r_y, θ_i, θ_0]`` (:mod:`relloc.models.airground`; the
 frame ``airground_follower`` of :mod:`relloc.pipeline.frames`) and implements the estimator
-contract (:mod:`relloc.pipeline.contract`):
+contract (:mod:`relloc.core.contract`):
 
 - :meth:`SwitchingEkf.advance` predicts with Eq. 3 from both robots' commands — its own and the
   leader's ``(v, 0, 0, ω)`` rows of the held odometry, ``u = [v_i, ω_i, v_0, ω_0]``;
@@ -54,6 +54,7 @@ from numpy.typing import NDArray
 from scipy.stats import chi2
 
 from relloc.core.angles import wrap_angle
+from relloc.core.contract import Belief, HeldOdometry, Silent, UpdateRecord
 from relloc.core.gaussian import Gaussian
 from relloc.core.linalg import condition_log10
 from relloc.core.recording import Measurements, kind_code
@@ -71,7 +72,6 @@ from relloc.models.airground import (
     range_h,
     relative_step,
 )
-from relloc.pipeline.contract import Belief, HeldOdometry, Silent, UpdateRecord
 
 Array = NDArray[np.float64]
 #: Block kinds counted by the filter, with their measurement dimension.

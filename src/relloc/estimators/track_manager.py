@@ -19,7 +19,7 @@ deletion gets a new track. :class:`TrackManager` does exactly that for one obser
 - a track with no update for longer than ``keep_window_s`` is **deleted**; the next measurement
   of that robot **re-creates** it.
 
-The manager implements the estimator contract of :mod:`relloc.pipeline.contract`, so
+The manager implements the estimator contract of :mod:`relloc.core.contract`, so
 :func:`relloc.pipeline.replay.replay` (in-process) and a robot node (window by window) drive it
 alike. At an event time ``t`` it is advanced, then measured (the owner's
 ``range_bearing_elevation`` rows of known targets, one at a time in row order), then stale
@@ -47,6 +47,14 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.core.contract import (
+    Belief,
+    EventKind,
+    HeldOdometry,
+    Silent,
+    TrackEvent,
+    UpdateRecord,
+)
 from relloc.core.recording import KIND_NAMES, KINDS, Measurements, Recording, kind_code
 from relloc.errors import ConfigError
 from relloc.estimators.initialisation import InitContext, InitPolicy
@@ -61,14 +69,6 @@ from relloc.estimators.yaw_bank import (
 from relloc.metrics.conditioning import condition_log10_batch
 from relloc.models.measurement import RangeBearingNoise
 from relloc.models.motion import VelocityNoise
-from relloc.pipeline.contract import (
-    Belief,
-    EventKind,
-    HeldOdometry,
-    Silent,
-    TrackEvent,
-    UpdateRecord,
-)
 
 Array = NDArray[np.float64]
 

@@ -46,11 +46,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.core.contract import Belief, EventKind, HeldOdometry, TrackEvent, UpdateRecord
 from relloc.core.recording import KIND_NAMES, NO_TARGET, Measurements, kind_code
 from relloc.errors import ConfigError, DataError
 from relloc.estimators.gaussian_sum import GaussianSumFuser, GaussianSumSettings
 from relloc.fusion.messages import EquivalentMeasurement
-from relloc.pipeline.contract import Belief, EventKind, HeldOdometry, TrackEvent, UpdateRecord
 
 Array = NDArray[np.float64]
 IntArray = NDArray[np.int64]
