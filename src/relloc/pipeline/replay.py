@@ -6,9 +6,10 @@ recording's span (events closer than :data:`relloc.core.events.TIME_TOL` are one
 them to :func:`~relloc.core.events.run_events`, the loop that robot nodes also call, window by
 window, on what they have received. Readings outside the replayed window are not fed, and are
 counted (``Estimates.counts["rows_outside_window"]``). At each event ``t_k`` every estimator
-is advanced with the velocities in force since ``t_{k−1}`` (each robot's last report at or before ``t_{k−1}``: zero-order hold), then given the
-readings stamped in ``(t_{k−1}, t_k]`` that were not given yet, then its outbox is delivered to
-the other estimators; at record times the beliefs are recorded.
+is advanced with the velocities in force since ``t_{k−1}`` (each robot's last report at or
+before ``t_{k−1}``: zero-order hold), then given the readings stamped in ``(t_{k−1}, t_k]`` that
+were not given yet, then its outbox is delivered to the other estimators; at record times the
+beliefs are recorded.
 
 An estimator that runs on a fixed clock (seed 002's filter steps at 20 Hz) is replayed with
 ``clock``: the events are then the clock's ticks only, and every reading is fed at the first
