@@ -7,7 +7,6 @@ from relloc.core import (
     Gaussian,
     GaussianMixture,
     condition_log10,
-    joseph_update,
     mahalanobis_sq,
     wrap_angle,
 )
@@ -20,17 +19,6 @@ def test_wrap_angle_range_and_scalars():
     assert np.all(w >= -np.pi) and np.all(w < np.pi)
     assert np.allclose(np.sin(w), np.sin(a)) and np.allclose(np.cos(w), np.cos(a))
     assert isinstance(wrap_angle(3 * np.pi), float)
-
-
-def test_joseph_equals_standard_form_with_optimal_gain():
-    rng = np.random.default_rng(0)
-    A = rng.normal(size=(4, 4))
-    P = A @ A.T + np.eye(4)
-    H = rng.normal(size=(2, 4))
-    R = np.diag([0.1, 0.2])
-    S = H @ P @ H.T + R
-    K = P @ H.T @ np.linalg.inv(S)
-    assert np.allclose(joseph_update(P, K, H, R), (np.eye(4) - K @ H) @ P, atol=1e-10)
 
 
 def test_information_round_trip_and_mahalanobis():

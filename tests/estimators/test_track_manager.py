@@ -8,8 +8,8 @@ import pytest
 
 from relloc.errors import ConfigError
 from relloc.estimators.initialisation import InitPolicy
+from relloc.estimators.relative import UPDATE_KINDS
 from relloc.estimators.track_manager import (
-    FILTERS,
     TrackManager,
     TrackManagerSettings,
     track_log,
@@ -94,7 +94,7 @@ def test_track_created_kept_deleted_and_recreated():
     assert np.max(np.abs(err[:, :3])) < 0.02 and np.max(np.abs(err[:, 3])) < 0.05
 
 
-@pytest.mark.parametrize("name", list(FILTERS))
+@pytest.mark.parametrize("name", list(UPDATE_KINDS))
 def test_every_filter_tracks_the_pair(name):
     log = _two_robot_log([(0.1, 12.0)])
     est = track_log(log, TrackManagerSettings(filter=name, init=InitPolicy(name="known")))

@@ -111,8 +111,3 @@ class GaussianMixture:
             "k,ki,kj->ij", self.weights, d, d
         )
         return Gaussian(mean=mean, cov=cov)
-
-    def dominant(self) -> Gaussian:
-        """The highest-weight component."""
-        k = int(np.argmax(self.weights))
-        return Gaussian(mean=self.means[k], cov=self.covs[k])

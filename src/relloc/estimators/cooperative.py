@@ -56,8 +56,9 @@ from typing import Literal, Protocol
 import numpy as np
 from numpy.typing import NDArray
 
-from relloc.association.gating import chi2_gate, mahalanobis_batch
+from relloc.association.gating import mahalanobis_batch
 from relloc.core.gaussian import Gaussian
+from relloc.core.kalman import chi2_threshold
 from relloc.errors import ConfigError, DataError
 from relloc.estimators.eif import ExtendedInformationFilter
 from relloc.estimators.joint_ekf import JointEkf
@@ -660,7 +661,7 @@ def group_nis(lin: LinearisedRows, P: Array) -> tuple[IntArray, Array, IntArray]
 def gate(lin: LinearisedRows, P: Array, p_gate: float) -> tuple[BoolArray, IntArray]:
     """Rows inside the χ² gate, and the ids of the groups rejected."""
     ids, nis, dof = group_nis(lin, P)
-    thresholds = np.array([chi2_gate(int(d), p_gate) for d in dof])
+    thresholds = np.array([chi2_threshold(int(d), p_gate) for d in dof])
     bad = ~(nis <= thresholds)
     rejected = ids[bad]
     return ~np.isin(lin.group, rejected), rejected

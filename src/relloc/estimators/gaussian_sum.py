@@ -7,7 +7,7 @@ is ``RelPose4 = (x, y, z, φ)`` of ``j`` in ``i``'s body frame. Seed 002's proce
 is the same 4-DOF relative kinematics as seed 000 Eq. 1 (``θ̇ = ω_j − ω_i``, ``ż = v_zj − v_zi``),
 so the prediction is engineer A's :func:`relloc.estimators.relative.predict_arrays`, applied to
 all tracks of all teammates in one batched call; the Kalman update is A's
-:func:`relloc.estimators.relative.kalman_update` (Joseph form).
+:func:`relloc.core.kalman.kalman_update` (Joseph form).
 
 Measurements (seed 002 Eq. 6; the paper names azimuth α and elevation β, ``relloc.models``
 names them θ and α), processed **sensor by sensor** (gate → form → update), so that clutter on
@@ -76,12 +76,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from relloc.association.assignment import assign
-from relloc.association.gating import (
-    GateSettings,
-    chi2_gate,
-    mahalanobis_batch,
-    modified_gate_covariance,
-)
+from relloc.association.gating import GateSettings, mahalanobis_batch, modified_gate_covariance
 from relloc.association.hypotheses import FormationSettings, birth_tracks, formation_weights
 from relloc.association.mixture_reduction import (
     align_angles,
@@ -93,8 +88,9 @@ from relloc.association.mixture_reduction import (
 from relloc.association.nscan import branch, family_keep_mask, new_history
 from relloc.core.angles import wrap_angle
 from relloc.core.gaussian import Gaussian, GaussianMixture
+from relloc.core.kalman import chi2_threshold, kalman_update
 from relloc.errors import ConfigError, DataError
-from relloc.estimators.relative import kalman_update, predict_arrays
+from relloc.estimators.relative import predict_arrays
 from relloc.fusion.covariance_intersection import covariance_intersection
 from relloc.fusion.decorrelation import decorrelated_fusion, pose_difference
 from relloc.fusion.messages import EquivalentMeasurement
@@ -539,8 +535,8 @@ class GaussianSumFuser:
                 S, H, t.cov[:, _YAW, _YAW], self._speed[t.owner], st.gate
             )
             d2 = mahalanobis_batch(nu, S_gate[:, None, :, :])
-            gated = d2 <= chi2_gate(nb, st.gate.p_gate)
-            near = d2 <= chi2_gate(nb, st.gate.p_birth_exclusion)
+            gated = d2 <= chi2_threshold(nb, st.gate.p_gate)
+            near = d2 <= chi2_threshold(nb, st.gate.p_birth_exclusion)
             lik = _gaussian_density(nu, np.broadcast_to(S[:, None], (k, m, nb, nb)))
             kappa = self._false_density(lik, m, p_det)
             w_fa, w_det = formation_weights(
@@ -680,7 +676,7 @@ class GaussianSumFuser:
             owner_pd = p_det[t.owner[dom]]
             with np.errstate(divide="ignore"):
                 c += np.log(kappa) - np.log(owner_pd)[:, None]
-            inside = (d2 <= chi2_gate(nb, st.gate.p_gate)) & (owner_pd > 0.0)[:, None]
+            inside = (d2 <= chi2_threshold(nb, st.gate.p_gate)) & (owner_pd > 0.0)[:, None]
             cost[t.owner[dom]] = np.where(inside, c, np.inf)
         miss = -np.log(1.0 - p_det * st.formation.p_gate)
         return assign(cost, miss)
@@ -871,7 +867,7 @@ class GaussianSumFuser:
         t = self.tracks
         mine = np.flatnonzero(t.owner == j)
         others = t.take(np.flatnonzero(t.owner != j))
-        gamma = chi2_gate(4, st.gate.p_gate)
+        gamma = chi2_threshold(4, st.gate.p_gate)
         local = t.take(mine)
         n_loc, n_rx = local.size, weights.size
         parts: list[Tracks] = [others]

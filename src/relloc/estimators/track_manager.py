@@ -36,9 +36,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from relloc.core.gaussian import Gaussian
+from relloc.core.kalman import Innovation
 from relloc.errors import ConfigError
 from relloc.estimators.initialisation import InitContext, InitPolicy
-from relloc.estimators.relative import FilterSettings, Innovation, predict_arrays
+from relloc.estimators.relative import UPDATE_KINDS, FilterSettings, predict_arrays
 from relloc.estimators.yaw_bank import (
     YawBank,
     YawBankSettings,
@@ -53,9 +54,6 @@ from relloc.sim.log import Log, Measurements
 
 Array = NDArray[np.float64]
 EventKind = Literal["created", "deleted", "recreated"]
-
-#: Filter names of ``relloc run --filter`` → update kinds of :mod:`relloc.estimators.relative`.
-FILTERS: dict[str, str] = {"plkf": "plkf", "tekf": "tekf", "bcplkf": "plkf_bc"}
 
 _TIME_TOL = 1e-9
 
@@ -75,8 +73,10 @@ class TrackManagerSettings:
     yaw_bank: YawBankSettings | None = None
 
     def __post_init__(self) -> None:
-        if self.filter not in FILTERS:
-            raise ConfigError(f"filter: must be one of {', '.join(FILTERS)}, got {self.filter!r}")
+        if self.filter not in UPDATE_KINDS:
+            raise ConfigError(
+                f"filter: must be one of {', '.join(UPDATE_KINDS)}, got {self.filter!r}"
+            )
         w = self.keep_window_s
         if isinstance(w, bool) or not isinstance(w, (int, float)) or not 0.0 <= w < np.inf:
             raise ConfigError(f"keep_window_s: must be a finite number ≥ 0, got {w!r}")
@@ -248,7 +248,7 @@ class TrackManager:
         fs = self._settings_cache.get(ck)
         if fs is None:
             fs = FilterSettings(
-                kind=FILTERS[self.settings.filter],  # type: ignore[arg-type]
+                kind=self.settings.filter,  # type: ignore[arg-type]
                 motion_noise=VelocityNoise(
                     observer=self._sigma[key[0]],  # type: ignore[arg-type]
                     observed=self._sigma[key[1]],  # type: ignore[arg-type]

@@ -24,8 +24,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.core.kalman import Innovation
 from relloc.errors import ConfigError, DataError
-from relloc.estimators.relative import FilterSettings, Innovation, UpdateKind, predict_arrays
+from relloc.estimators.relative import FilterSettings, UpdateKind, predict_arrays
 from relloc.estimators.yaw_bank import YawBank, YawBankSettings, spread_yaw_bank, update_yaw_bank
 from relloc.metrics.conditioning import condition_log10_batch
 from relloc.metrics.consistency import nees
