@@ -80,6 +80,7 @@ from relloc.association.gating import GateSettings, mahalanobis_batch, modified_
 from relloc.association.hypotheses import FormationSettings, birth_tracks, formation_weights
 from relloc.association.mixture_reduction import (
     align_angles,
+    cap_mask,
     heaviest_mask,
     merge_groups,
     merge_moments,
@@ -341,15 +342,6 @@ def predict_fusers(
     for f, size in zip(fusers, sizes, strict=True):
         f._set_predicted(m[start : start + size], P[start : start + size])
         start += size
-
-
-def _cap_per_owner(t: Tracks, max_components: int) -> IntArray:
-    """Indices (sorted) of the ``max_components`` heaviest tracks of every filter."""
-    order = np.lexsort((-t.weight, t.owner))
-    owners = t.owner[order]
-    start = np.searchsorted(owners, owners, side="left")
-    rank = np.arange(order.size) - start
-    return np.sort(order[rank < max_components])
 
 
 def _gaussian_density(nu: Array, S: Array) -> Array:
@@ -715,8 +707,10 @@ class GaussianSumFuser:
         t = t.take(np.flatnonzero(keep))
         t = t.take(np.flatnonzero(family_keep_mask(t.history, t.weight, st.nscan_weight, t.owner)))
         if t.size > 1:
-            t = self._merge(t.take(_cap_per_owner(t, 4 * st.max_components)))
-            t = t.take(_cap_per_owner(t, st.max_components))
+            t = self._merge(
+                t.take(np.flatnonzero(cap_mask(t.weight, 4 * st.max_components, t.owner)))
+            )
+            t = t.take(np.flatnonzero(cap_mask(t.weight, st.max_components, t.owner)))
         self.tracks = t
         self._normalise()
 

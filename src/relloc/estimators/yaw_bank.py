@@ -49,6 +49,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from relloc.association.mixture_reduction import absorb_weights, heaviest_mask, prune_mask
+from relloc.core.angles import angle_diff
 from relloc.core.gaussian import Gaussian
 from relloc.errors import ConfigError, ModelError
 from relloc.estimators.relative import FilterSettings, Innovation, predict_arrays
@@ -209,20 +211,20 @@ def reweight(log_weights: Array, innovation: Innovation) -> Array:
 def reduce_bank(bank: YawBank, settings: YawBankSettings) -> YawBank:
     """Merge into the best component, prune below ``prune_ratio`` × best, collapse if dominant.
 
-    Dropped slots get weight ``−∞`` and the best component's state (see module docstring).
+    The steps are those of :mod:`relloc.association.mixture_reduction`, along the component
+    axis: merge by weight (:func:`absorb_weights`) into the best component
+    (:func:`heaviest_mask`), prune with a relative threshold (:func:`prune_mask`), and keep only
+    the best component of a bank where it holds ``collapse_weight``. Dropped slots get weight
+    ``−∞`` and the best component's state (see module docstring).
     """
     lw = bank.log_weights - np.max(bank.log_weights, axis=-1, keepdims=True)
-    best = np.argmax(lw, axis=-1)
-    is_best = np.arange(bank.n_components) == best[..., None]
+    is_best = heaviest_mask(lw)
     mean, cov = bank.estimate()
-    d_yaw = bank.means[..., YAW] - mean[..., None, YAW]
-    d_yaw = np.abs(np.arctan2(np.sin(d_yaw), np.cos(d_yaw)))
+    d_yaw = np.abs(angle_diff(bank.means[..., YAW], mean[..., None, YAW]))
     spread = np.sqrt(bank.covs[..., YAW, YAW] + cov[..., None, YAW, YAW])
-    merged = np.isfinite(lw) & ~is_best & (d_yaw <= settings.merge_sigmas * spread)
     w = np.where(np.isfinite(lw), np.exp(lw), 0.0)
-    w = np.where(is_best, w + np.sum(np.where(merged, w, 0.0), axis=-1, keepdims=True), w)
-    w = np.where(merged, 0.0, w)
-    keep = w >= settings.prune_ratio * np.max(w, axis=-1, keepdims=True)
+    w = absorb_weights(w, is_best, d_yaw <= settings.merge_sigmas * spread)
+    keep = prune_mask(w, settings.prune_ratio * np.max(w, axis=-1, keepdims=True))
     w = np.where(keep, w, 0.0)
     w = w / w.sum(axis=-1, keepdims=True)
     dominant = np.max(w, axis=-1) >= settings.collapse_weight
