@@ -115,7 +115,7 @@ def _one_point(n: int, factor: int) -> dict[str, Any]:
             if timed:
                 t_scan += t1 - t0
                 n_scan += 1
-                counts = np.bincount(fus.tracks.owner, minlength=n)
+                counts = np.bincount(fus.tracks.groups, minlength=n)
                 comps.extend(counts.tolist())
     cpu = t_pred + t_scan
     base_ms = _baseline_ms_per_scan(sc, u_meas, u_self, scans, warm, every)

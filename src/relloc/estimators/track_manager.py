@@ -35,13 +35,12 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from relloc.core.gaussian import Gaussian
+from relloc.core.gaussian import Gaussian, GaussianMixture
 from relloc.core.kalman import Innovation
 from relloc.errors import ConfigError
 from relloc.estimators.initialisation import InitContext, InitPolicy
 from relloc.estimators.relative import UPDATE_KINDS, FilterSettings, predict_arrays
 from relloc.estimators.yaw_bank import (
-    YawBank,
     YawBankSettings,
     predict_yaw_bank,
     spread_yaw_bank,
@@ -152,7 +151,7 @@ class _Track:
     created_t: float
     last_update_t: float
     settings: FilterSettings
-    bank: YawBank | None = None
+    bank: GaussianMixture | None = None
 
     def predict(self, u_l: Array, u_c: Array, dt: float, where: str) -> None:
         noise = self.settings.motion_noise
@@ -162,7 +161,7 @@ class _Track:
             )
         else:
             self.bank = predict_yaw_bank(self.bank, u_l, u_c, dt, noise)
-            self.mean, self.cov = self.bank.estimate()
+            self.mean, self.cov = self.bank.heaviest()
 
     def update(self, z: Array, bank_settings: YawBankSettings | None, where: str) -> Innovation:
         if self.bank is None or bank_settings is None:
@@ -171,8 +170,8 @@ class _Track:
             )
             return inn
         self.bank, inns = update_yaw_bank(self.bank, z, self.settings, bank_settings)
-        k = int(self.bank.best_index)
-        self.mean, self.cov = self.bank.estimate()
+        k = int(self.bank.heaviest_index)
+        self.mean, self.cov = self.bank.heaviest()
         if int(self.bank.alive.sum()) == 1:  # collapsed: a single filter from now on
             self.bank = None
         return Innovation(
