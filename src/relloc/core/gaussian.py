@@ -97,11 +97,8 @@ class GaussianMixture:
         covs = np.asarray(self.covs, dtype=float)
         w = np.asarray(self.weights, dtype=float)
         shape = w.shape
-        if (
-            w.ndim == 0
-            or means.shape[:-1] != shape
-            or covs.shape != (*shape, means.shape[-1], means.shape[-1])
-        ):
+        n = means.shape[-1] if means.ndim else -1
+        if w.ndim == 0 or means.shape[:-1] != shape or covs.shape != (*shape, n, n):
             raise ModelError(
                 f"GaussianMixture: shapes means {means.shape}, covs {covs.shape}, weights "
                 f"{shape} must be (..., K, n), (..., K, n, n), (..., K)"

@@ -173,9 +173,9 @@ def reduce_bank(bank: GaussianMixture, settings: YawBankSettings) -> GaussianMix
     the best component of a bank where it holds ``collapse_weight``. Dropped slots get weight 0
     and the best component's state (see module docstring).
     """
-    w = bank.weights / np.max(bank.weights, axis=-1, keepdims=True)
-    is_best = heaviest_mask(w)
+    is_best = heaviest_mask(bank.weights)
     mean, cov = bank.heaviest()
+    w = bank.weights / np.max(bank.weights, axis=-1, keepdims=True)
     d_yaw = np.abs(angle_diff(bank.means[..., YAW], mean[..., None, YAW]))
     spread = np.sqrt(bank.covs[..., YAW, YAW] + cov[..., None, YAW, YAW])
     w = absorb_weights(w, is_best, d_yaw <= settings.merge_sigmas * spread)
