@@ -60,17 +60,11 @@ def _swap(M: Array) -> Array:
     return np.swapaxes(M, -1, -2)
 
 
-@dataclass(frozen=True)
-class _Factored:
-    """``S`` and what the gain needs from it: ``P Hᵀ`` and the inverse Cholesky factor."""
-
-    innovation: Innovation
-    PHt: Array
-    L_inv: Array
-
-
-def _factor(cov: Array, residual: Array, H: Array, R: Array, where: str) -> _Factored:
-    """``S = H P Hᵀ + R``, ``L⁻¹`` and ``NIS = ‖L⁻¹ ν‖²`` (``ModelError`` if ``S`` is not PD)."""
+def _factor(
+    cov: Array, residual: Array, H: Array, R: Array, where: str
+) -> tuple[Array, Array, Array, Array]:
+    """``(S, NIS, P Hᵀ, L⁻¹)``: ``S = H P Hᵀ + R = L Lᵀ``, ``NIS = ‖L⁻¹ ν‖²``, and what the gain
+    needs (``ModelError`` naming ``where`` if ``S`` is not positive definite)."""
     PHt = cov @ _swap(H)
     S = H @ PHt + R
     S = 0.5 * (S + _swap(S))
@@ -82,14 +76,14 @@ def _factor(cov: Array, residual: Array, H: Array, R: Array, where: str) -> _Fac
     L_inv = np.linalg.solve(L, eye)
     w = np.einsum("...ij,...j->...i", L_inv, residual)
     nis = np.einsum("...i,...i->...", w, w)
-    return _Factored(Innovation(residual=residual, cov=S, nis=nis, meas_cov=R), PHt, L_inv)
+    return S, nis, PHt, L_inv
 
 
 def _correct(
-    mean: Array, cov: Array, residual: Array, H: Array, R: Array, f: _Factored
+    mean: Array, cov: Array, residual: Array, H: Array, R: Array, PHt: Array, L_inv: Array
 ) -> tuple[Array, Array]:
     """Gain ``K = P Hᵀ L⁻ᵀ L⁻¹``, ``x⁺ = x + K ν`` and the Joseph-form ``P⁺``."""
-    K = f.PHt @ (_swap(f.L_inv) @ f.L_inv)
+    K = PHt @ (_swap(L_inv) @ L_inv)
     new_mean = mean + np.einsum("...ij,...j->...i", K, residual)
     A = np.eye(cov.shape[-1]) - K @ H
     new_cov = A @ cov @ _swap(A) + K @ R @ _swap(K)
@@ -104,9 +98,9 @@ def kalman_update(
     Returns ``(mean⁺, cov⁺, innovation)``. Raises :class:`ModelError` naming ``where`` if some
     ``S`` is not positive definite.
     """
-    f = _factor(cov, residual, H, R, where)
-    new_mean, new_cov = _correct(mean, cov, residual, H, R, f)
-    return new_mean, new_cov, f.innovation
+    S, nis, PHt, L_inv = _factor(cov, residual, H, R, where)
+    new_mean, new_cov = _correct(mean, cov, residual, H, R, PHt, L_inv)
+    return new_mean, new_cov, Innovation(residual=residual, cov=S, nis=nis, meas_cov=R)
 
 
 @lru_cache(maxsize=64)
@@ -146,10 +140,10 @@ def gated_update(
             f"gated_update{' at ' + where if where else ''}: one block, residual shape "
             f"{residual.shape}"
         )
-    f = _factor(cov, residual, H, R, where)
-    nis = float(f.innovation.nis)
-    innovation = Innovation(residual=residual, cov=f.innovation.cov, nis=nis, meas_cov=R)
+    S, nis_array, PHt, L_inv = _factor(cov, residual, H, R, where)
+    nis = float(nis_array)
+    innovation = Innovation(residual=residual, cov=S, nis=nis, meas_cov=R)
     if probability is not None and nis > chi2_threshold(residual.size, probability):
         return mean, cov, innovation, False
-    new_mean, new_cov = _correct(mean, cov, residual, H, R, f)
+    new_mean, new_cov = _correct(mean, cov, residual, H, R, PHt, L_inv)
     return new_mean, new_cov, innovation, True

@@ -541,13 +541,15 @@ class GaussianSumFuser:
                     np.broadcast_to(R, (hi.size, nb, nb)),
                     where=f"fuser {self.robot} bearings t={self.time:.3f}",
                 )
-                det = replace(
-                    t.take(hi),
+                det = Tracks(
+                    groups=t.groups[hi],
                     means=new_m,
                     covs=new_P,
+                    prior_means=t.prior_means[hi],
+                    prior_covs=t.prior_covs[hi],
                     weights=w_det[hi, ri],
-                    assoc=ri.astype(np.int64),
                     history=branch(t.history, hi, self._ids(hi.size)),
+                    assoc=ri.astype(np.int64),
                 )
                 parts.append(det)
         elif k:
