@@ -110,8 +110,8 @@ def chi2_threshold(dim: int, probability: float) -> float:
         raise ConfigError(f"chi2_threshold: dim must be ≥ 1, got {dim}")
     if not 0.0 < probability < 1.0:
         raise ConfigError(f"chi2_threshold: probability must lie in (0, 1), got {probability}")
-    # scipy.stats is imported here, not at module level: it takes seconds to import and most
-    # users of this module (the relative filters) never gate
+    # scipy.stats is imported here, not at module level: it takes about a second to import and
+    # most users of this module (the relative filters) never gate
     from scipy.stats import chi2
 
     return float(chi2.ppf(probability, dim))
