@@ -73,9 +73,10 @@ from typing import Literal, Protocol
 import numpy as np
 from numpy.typing import NDArray
 
-from relloc.association.gating import chi2_gate, mahalanobis_batch
+from relloc.association.gating import mahalanobis_batch
 from relloc.core.contract import Belief, HeldOdometry, Silent, UpdateRecord
 from relloc.core.gaussian import Gaussian
+from relloc.core.kalman import chi2_threshold
 from relloc.core.recording import NO_TARGET, Measurements, kind_code
 from relloc.errors import ConfigError, DataError, ModelError
 from relloc.estimators.eif import ExtendedInformationFilter
@@ -611,7 +612,7 @@ def group_innovations(lin: LinearisedRows, P: Array) -> GroupInnovations:
 def outside_gate(groups: GroupInnovations, p_gate: float) -> BoolArray:
     """Groups whose NIS exceeds ``χ²_{dof}(p_gate)``."""
     dofs, which = np.unique(groups.dof, return_inverse=True)
-    thresholds = np.array([chi2_gate(int(d), p_gate) for d in dofs])[which]
+    thresholds = np.array([chi2_threshold(int(d), p_gate) for d in dofs])[which]
     return ~(groups.nis <= thresholds)
 
 

@@ -274,7 +274,7 @@ class GaussianSumEstimator:
     def _note_tracks(self, t: float) -> None:
         """Track the start time of every filter's tracks and record its events."""
         has = np.zeros(self._team.size, dtype=bool)
-        has[self.fuser.tracks.owner] = True
+        has[self.fuser.tracks.groups] = True
         for local, j in enumerate(self._team.tolist()):
             if has[local] and j not in self._since:
                 self._since[j] = t
