@@ -27,14 +27,15 @@ nothing and loads no optional dependency):
   NIS, conditioning), :func:`accuracy_and_consistency` (RMSE, ±3σ, ANEES, % beyond χ² bounds),
   :func:`nees_band_check` (run-averaged NEES against its 95 % band), :func:`convergence_time`.
 
-Subpackages by role: :mod:`relloc.core` (recording, beliefs, pose algebra, the Kalman core),
-:mod:`relloc.models`, :mod:`relloc.estimators`, :mod:`relloc.association`,
-:mod:`relloc.fusion`, :mod:`relloc.control`, :mod:`relloc.geometry`; :mod:`relloc.sim` and
-:mod:`relloc.datasets` (inputs), :mod:`relloc.calibration` (error models fitted on a stated
-window); :mod:`relloc.pipeline` (replay, evaluation, Monte Carlo, outputs);
-:mod:`relloc.metrics`, :mod:`relloc.observability`, :mod:`relloc.plotting`;
-:mod:`relloc.experiments` (seed reproductions), :mod:`relloc.bench`, :mod:`relloc.runtime`
-(one process per robot over Zenoh), :mod:`relloc.cli`; :mod:`relloc.errors`.
+Subpackages by role: :mod:`relloc.core` (the recording, the estimator contract, the event loop,
+the estimates record, beliefs, pose algebra, the Kalman core), :mod:`relloc.models`,
+:mod:`relloc.estimators`, :mod:`relloc.association`, :mod:`relloc.fusion`,
+:mod:`relloc.control`, :mod:`relloc.geometry`; :mod:`relloc.sim` and :mod:`relloc.datasets`
+(inputs), :mod:`relloc.calibration` (error models fitted on a stated window);
+:mod:`relloc.pipeline` (replay, evaluation, Monte Carlo, outputs); :mod:`relloc.metrics`,
+:mod:`relloc.observability`, :mod:`relloc.plotting`; :mod:`relloc.experiments` (seed
+reproductions), :mod:`relloc.bench`, :mod:`relloc.runtime` (one process per robot over Zenoh),
+:mod:`relloc.cli`; :mod:`relloc.errors`.
 """
 
 from __future__ import annotations
@@ -56,19 +57,19 @@ _API: dict[str, str] = {
     "load_scenario": "relloc.sim.scenario",
     "default_scenario": "relloc.sim.scenario",
     "load_mrclam": "relloc.datasets.mrclam",
-    "Belief": "relloc.pipeline.contract",
-    "Estimator": "relloc.pipeline.contract",
-    "HeldOdometry": "relloc.pipeline.contract",
+    "Belief": "relloc.core.contract",
+    "Estimator": "relloc.core.contract",
+    "HeldOdometry": "relloc.core.contract",
     "TrackManager": "relloc.estimators.track_manager",
     "GaussianSumEstimator": "relloc.fusion.gaussian_sum_estimator",
     "SwitchingEkf": "relloc.estimators.switching_ekf",
     "TrackManagerSettings": "relloc.estimators.track_manager",
     "managers_for": "relloc.estimators.track_manager",
     "replay": "relloc.pipeline.replay",
-    "run_events": "relloc.pipeline.replay",
-    "BeliefSeries": "relloc.pipeline.estimates",
-    "Estimates": "relloc.pipeline.estimates",
-    "UpdateSeries": "relloc.pipeline.estimates",
+    "run_events": "relloc.core.events",
+    "BeliefSeries": "relloc.core.estimates",
+    "Estimates": "relloc.core.estimates",
+    "UpdateSeries": "relloc.core.estimates",
     "SeriesEvaluation": "relloc.pipeline.evaluation",
     "accuracy_and_consistency": "relloc.pipeline.evaluation",
     "convergence_time": "relloc.pipeline.evaluation",

@@ -7,13 +7,13 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from relloc.core.contract import Estimator, HeldOdometry
 from relloc.core.gaussian import Gaussian
 from relloc.core.recording import Measurements, empty_measurements, measurement_rows
 from relloc.errors import ConfigError, DataError
 from relloc.estimators.switching_ekf import SwitchingEkf, SwitchingEkfSettings, select_mode
 from relloc.models.airground import Mode
 from relloc.models.unicycle import unicycle_step
-from relloc.pipeline.contract import Estimator, HeldOdometry
 
 DT = 0.05
 #: A camera frame every tick: a sighting holds its pair in S for one tick.

@@ -6,10 +6,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from relloc.core.estimates import Estimates
 from relloc.core.gaussian import Gaussian
 from relloc.core.recording import Recording
 from relloc.estimators.cooperative import CooperativeEstimator, CooperativeSettings
-from relloc.pipeline.estimates import Estimates
 from relloc.pipeline.replay import replay
 from relloc.sim.cooperative import CooperativeScenario, simulate
 

@@ -5,6 +5,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from relloc.core.contract import Estimator
 from relloc.core.gaussian import Gaussian
 from relloc.core.recording import Measurements, measurement_rows
 from relloc.estimators.cooperative import (
@@ -21,7 +22,6 @@ from relloc.estimators.eif import ExtendedInformationFilter
 from relloc.estimators.joint_ekf import JointEkf
 from relloc.models.planar_measurement import RowKind, ScalarRows, linearise_rows
 from relloc.models.unicycle import unicycle_jacobians, unicycle_step
-from relloc.pipeline.contract import Estimator
 from relloc.sim.cooperative import sharma2013_scenario, simulate
 
 

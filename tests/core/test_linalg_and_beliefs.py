@@ -7,7 +7,6 @@ from relloc.core import (
     Gaussian,
     GaussianMixture,
     condition_log10,
-    joseph_update,
     mahalanobis_sq,
     wrap_angle,
 )
@@ -20,17 +19,6 @@ def test_wrap_angle_range_and_scalars():
     assert np.all(w >= -np.pi) and np.all(w < np.pi)
     assert np.allclose(np.sin(w), np.sin(a)) and np.allclose(np.cos(w), np.cos(a))
     assert isinstance(wrap_angle(3 * np.pi), float)
-
-
-def test_joseph_equals_standard_form_with_optimal_gain():
-    rng = np.random.default_rng(0)
-    A = rng.normal(size=(4, 4))
-    P = A @ A.T + np.eye(4)
-    H = rng.normal(size=(2, 4))
-    R = np.diag([0.1, 0.2])
-    S = H @ P @ H.T + R
-    K = P @ H.T @ np.linalg.inv(S)
-    assert np.allclose(joseph_update(P, K, H, R), (np.eye(4) - K @ H) @ P, atol=1e-10)
 
 
 def test_information_round_trip_and_mahalanobis():
@@ -47,13 +35,38 @@ def test_not_positive_definite_is_model_error():
     assert condition_log10(np.diag([1.0, 100.0])) == pytest.approx(2.0)
 
 
-def test_mixture_moments_and_validation():
-    mix = GaussianMixture(
-        means=np.array([[0.0], [2.0]]), covs=np.array([[[1.0]], [[1.0]]]), weights=np.array([1, 1])
+def test_mixture_layouts_weights_and_validation():
+    """Rectangular batch ``(B, K)`` and flat components with ``groups``: same normalised weights;
+    the heaviest component of each mixture; bad shapes or weights are ModelErrors."""
+    means = np.arange(12.0).reshape(2, 3, 2)
+    covs = np.broadcast_to(np.eye(2), (2, 3, 2, 2))
+    weights = np.array([[1.0, 3.0, 0.0], [2.0, 2.0, 4.0]])
+    batch = GaussianMixture(means=means, covs=covs, weights=weights)
+    np.testing.assert_allclose(batch.normalised_weights(), [[0.25, 0.75, 0.0], [0.25, 0.25, 0.5]])
+    np.testing.assert_array_equal(batch.alive, weights > 0)
+    np.testing.assert_array_equal(batch.heaviest_index, [1, 2])
+    mean, cov = batch.heaviest()
+    np.testing.assert_array_equal(mean, [means[0, 1], means[1, 2]])
+    np.testing.assert_array_equal(cov, np.broadcast_to(np.eye(2), (2, 2, 2)))
+    flat = GaussianMixture(
+        means=means.reshape(6, 2),
+        covs=covs.reshape(6, 2, 2),
+        weights=weights.reshape(6),
+        groups=np.repeat([0, 1], 3),
     )
-    m = mix.moments()
-    assert np.isclose(m.mean[0], 1.0) and np.isclose(m.cov[0, 0], 2.0)
-    with pytest.raises(ModelError):
+    assert flat.size == batch.size == 6
+    np.testing.assert_allclose(flat.normalised_weights(), batch.normalised_weights().reshape(6))
+    with pytest.raises(ModelError, match="rectangular"):
+        _ = flat.heaviest_index
+    with pytest.raises(ModelError, match="shapes"):
+        GaussianMixture(means=np.zeros((2, 1)), covs=np.ones((2, 1, 1)), weights=np.ones(3))
+    with pytest.raises(ModelError, match="≥ 0"):
         GaussianMixture(means=np.zeros((2, 1)), covs=np.ones((2, 1, 1)), weights=np.array([-1, 2]))
+    with pytest.raises(ModelError, match="weight > 0"):
+        GaussianMixture(means=np.zeros((2, 1)), covs=np.ones((2, 1, 1)), weights=np.zeros(2))
+    with pytest.raises(ModelError, match="groups"):
+        GaussianMixture(
+            means=np.zeros((2, 1)), covs=np.ones((2, 1, 1)), weights=np.ones(2), groups=np.zeros(3)
+        )
     with pytest.raises(ModelError, match="non-finite"):
         Gaussian(mean=np.array([np.nan]), cov=np.eye(1))

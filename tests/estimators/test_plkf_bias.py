@@ -38,7 +38,7 @@ def radial_bias_and_rmse(kind: str, seed: int = 2024, pairs: int = 100, updates:
 
 def test_bias_compensation_removes_the_plkf_range_overestimate() -> None:
     plkf_bias, plkf_rmse = radial_bias_and_rmse("plkf")
-    bc_bias, bc_rmse = radial_bias_and_rmse("plkf_bc")
+    bc_bias, bc_rmse = radial_bias_and_rmse("bcplkf")
     tekf_bias, _ = radial_bias_and_rmse("tekf")
     # the plain PLKF places the robot centimetres too far away ...
     assert plkf_bias > 0.02

@@ -4,17 +4,17 @@ import numpy as np
 import pytest
 
 from relloc.core.gaussian import Gaussian
+from relloc.core.kalman import kalman_update
 from relloc.errors import ConfigError, DataError, ModelError
 from relloc.estimators.relative import (
     FilterSettings,
     RelativeTracker,
-    kalman_update,
     predict,
     predict_arrays,
+    update_bcplkf,
+    update_bcplkf_arrays,
     update_plkf,
     update_plkf_arrays,
-    update_plkf_bc,
-    update_plkf_bc_arrays,
     update_tekf,
     update_tekf_arrays,
 )
@@ -90,7 +90,7 @@ def test_batched_updates_equal_single_pair_updates(covariance: str) -> None:
     batched = {
         "tekf": update_tekf_arrays(pm, pc, z, NOISY),
         "plkf": update_plkf_arrays(pm, pc, z, NOISY, covariance=covariance),
-        "plkf_bc": update_plkf_bc_arrays(pm, pc, z, NOISY, covariance=covariance),
+        "bcplkf": update_bcplkf_arrays(pm, pc, z, NOISY, covariance=covariance),
     }
     for i in range(n):
         g = predict(Gaussian(mean=means[i], cov=covs[i]), u_l[i], u_c[i], 0.05, MOTION)
@@ -98,7 +98,7 @@ def test_batched_updates_equal_single_pair_updates(covariance: str) -> None:
         singles = {
             "tekf": update_tekf(g, z[i], NOISY),
             "plkf": update_plkf(g, z[i], NOISY, covariance=covariance),  # type: ignore[arg-type]
-            "plkf_bc": update_plkf_bc(g, z[i], NOISY, covariance=covariance),  # type: ignore[arg-type]
+            "bcplkf": update_bcplkf(g, z[i], NOISY, covariance=covariance),  # type: ignore[arg-type]
         }
         for kind, (belief, inn) in singles.items():
             b_mean, b_cov, b_inn = batched[kind]
@@ -135,12 +135,10 @@ def test_bad_input_is_reported_with_its_place() -> None:
         FilterSettings(kind="ukf", motion_noise=MOTION, sensor_noise=PRECISE)  # type: ignore[arg-type]
     with pytest.raises(ConfigError, match="pseudo_linear_covariance"):
         FilterSettings(motion_noise=MOTION, sensor_noise=PRECISE, pseudo_linear_covariance="x")  # type: ignore[arg-type]
-    with pytest.raises(ModelError, match="where-label"):
-        kalman_update(
-            np.zeros(4),
-            -np.eye(4),
-            np.zeros(3),
-            np.eye(3, 4),
-            np.zeros((3, 3)),
-            where="where-label",
+    broken = Gaussian(mean=np.ones(4), cov=-np.eye(4))
+    with pytest.raises(ModelError, match="not positive definite at l1->c2"):
+        RelativeTracker(broken, settings, label="l1->c2").update(np.array([1.0, 0.1, 0.0]))
+    with pytest.raises(ModelError, match="not positive definite at pair 7"):
+        update_tekf_arrays(
+            broken.mean, broken.cov, np.array([1.0, 0.1, 0.0]), PRECISE, where="pair 7"
         )

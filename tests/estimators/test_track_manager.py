@@ -7,6 +7,8 @@ import dataclasses
 import numpy as np
 import pytest
 
+from relloc.core.contract import Estimator, HeldOdometry
+from relloc.core.estimates import Estimates
 from relloc.core.recording import (
     GroundTruth,
     Measurements,
@@ -16,16 +18,14 @@ from relloc.core.recording import (
 )
 from relloc.errors import ConfigError
 from relloc.estimators.initialisation import InitPolicy
+from relloc.estimators.relative import UPDATE_KINDS
 from relloc.estimators.track_manager import (
-    FILTERS,
     TrackManager,
     TrackManagerSettings,
     managers_for,
 )
 from relloc.estimators.yaw_bank import YawBankSettings
 from relloc.metrics import anees, anees_band, nees, state_errors
-from relloc.pipeline.contract import Estimator, HeldOdometry
-from relloc.pipeline.estimates import Estimates
 from relloc.pipeline.replay import merge_times, record_grid, replay
 from relloc.sim.scenario import (
     RobotSpec,
@@ -134,7 +134,7 @@ def test_lazy_deletion_equals_deleting_after_every_event():
     np.testing.assert_array_equal(a.age, b.age[common])
 
 
-@pytest.mark.parametrize("name", list(FILTERS))
+@pytest.mark.parametrize("name", list(UPDATE_KINDS))
 def test_every_filter_tracks_the_pair(name):
     rec = _two_robot_recording([(0.1, 12.0)])
     est = _track(rec, TrackManagerSettings(filter=name, init=InitPolicy(name="known")))

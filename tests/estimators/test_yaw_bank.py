@@ -8,11 +8,11 @@ import math
 import numpy as np
 import pytest
 
-from relloc.core.gaussian import Gaussian
+from relloc.core.gaussian import Gaussian, GaussianMixture
+from relloc.core.kalman import Innovation
 from relloc.errors import ConfigError, ModelError
-from relloc.estimators.relative import FilterSettings, Innovation, RelativeTracker
+from relloc.estimators.relative import FilterSettings, RelativeTracker
 from relloc.estimators.yaw_bank import (
-    YawBank,
     YawBankSettings,
     YawBankTracker,
     reduce_bank,
@@ -34,38 +34,38 @@ def test_spread_puts_hypotheses_evenly_on_the_circle() -> None:
     yaws = np.sort(np.mod(bank.means[:, 3] - 3.0, 2 * math.pi))
     np.testing.assert_allclose(yaws, 2 * math.pi * np.arange(8) / 8, atol=1e-12)
     np.testing.assert_allclose(bank.covs[:, 3, 3], (math.pi / 8) ** 2)
-    np.testing.assert_allclose(bank.weights, 1 / 8)
+    np.testing.assert_allclose(bank.normalised_weights(), 1 / 8)
     np.testing.assert_allclose(bank.means[:, :3], np.tile([1.0, 2.0, 0.5], (8, 1)))
 
 
 def test_known_yaw_prior_is_a_single_filter_and_batches_must_agree() -> None:
     known = np.diag([0.01, 0.01, 0.01, 0.02**2])
     bank = spread_yaw_bank(np.zeros(4), known, YawBankSettings())
-    assert bank.n_components == 1
+    assert bank.weights.shape == (1,)
     batch_cov = np.stack([known, UNKNOWN])
     with pytest.raises(ModelError, match="all unknown-yaw or all known-yaw"):
         spread_yaw_bank(np.zeros((2, 4)), batch_cov, YawBankSettings())
     batched = spread_yaw_bank(np.zeros((3, 4)), np.stack([UNKNOWN] * 3), YawBankSettings())
     assert batched.means.shape == (3, 12, 4)
-    assert batched.estimate()[0].shape == (3, 4)
+    assert batched.heaviest()[0].shape == (3, 4)
 
 
 def test_reweight_follows_the_innovation_likelihood() -> None:
     S = np.stack([np.eye(3), np.eye(3), 4 * np.eye(3)])
     inn = Innovation(residual=np.zeros((3, 3)), cov=S, nis=np.array([1.0, 9.0, 1.0]), meas_cov=S)
-    lw = reweight(np.array([0.0, 0.0, -np.inf]), inn)
+    w = reweight(np.array([1.0, 1.0, 0.0]), inn)
     # log N ratio between the first two: -(1 - 9)/2 = 4; the dropped slot stays dropped
-    assert lw[0] == 0.0 and lw[1] == pytest.approx(-4.0)
-    assert lw[2] == -np.inf
+    assert w[0] == 1.0 and w[1] == pytest.approx(math.exp(-4.0))
+    assert w[2] == 0.0
 
 
-def _bank(yaws: list[float], log_w: list[float], sigma: float = 0.05) -> YawBank:
+def _bank(yaws: list[float], log_w: list[float], sigma: float = 0.05) -> GaussianMixture:
     k = len(yaws)
     means = np.zeros((k, 4))
     means[:, 0] = np.arange(k)  # distinct states, to see which one survives
     means[:, 3] = yaws
     covs = np.tile(np.diag([0.01, 0.01, 0.01, sigma**2]), (k, 1, 1))
-    return YawBank(means, covs, np.array(log_w))
+    return GaussianMixture(means=means, covs=covs, weights=np.exp(log_w))
 
 
 def test_reduce_merges_neighbours_prunes_the_unlikely_and_collapses() -> None:
@@ -74,7 +74,7 @@ def test_reduce_merges_neighbours_prunes_the_unlikely_and_collapses() -> None:
     # slot 2 is far and likely enough to stay; slot 3 is far and below the prune ratio
     bank = reduce_bank(_bank([0.0, 0.05, 2.0, -2.0], [0.0, -0.5, -1.0, -9.0]), settings)
     assert list(bank.alive) == [True, False, True, False]
-    w = bank.weights
+    w = bank.normalised_weights()
     expected = np.array([1 + math.exp(-0.5), math.exp(-1.0)])
     np.testing.assert_allclose(w[[0, 2]], expected / expected.sum())
     # dropped slots carry the best state so they cannot disturb later batched updates
@@ -82,7 +82,7 @@ def test_reduce_merges_neighbours_prunes_the_unlikely_and_collapses() -> None:
     # a dominant hypothesis collapses the bank
     collapsed = reduce_bank(_bank([0.0, 2.0], [0.0, -6.0]), settings)
     assert list(collapsed.alive) == [True, False]
-    assert collapsed.estimate()[0][0] == 0.0
+    assert collapsed.heaviest()[0][0] == 0.0
 
 
 def test_settings_are_validated() -> None:
@@ -92,8 +92,8 @@ def test_settings_are_validated() -> None:
         YawBankSettings(prune_ratio=0.0)
     with pytest.raises(ConfigError, match="collapse_weight"):
         YawBankSettings(collapse_weight=0.3)
-    with pytest.raises(ModelError, match="live component"):
-        YawBank(np.zeros((2, 4)), np.zeros((2, 4, 4)), np.full(2, -np.inf))
+    with pytest.raises(ModelError, match="weight > 0"):
+        GaussianMixture(means=np.zeros((2, 4)), covs=np.zeros((2, 4, 4)), weights=np.zeros(2))
 
 
 def test_bank_recovers_a_yaw_error_near_pi_where_the_plkf_stalls() -> None:

@@ -4,19 +4,19 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from scipy.stats import chi2
 
 from relloc.association.assignment import assign
-from relloc.association.gating import GateSettings, chi2_gate, modified_gate_covariance
+from relloc.association.gating import GateSettings, modified_gate_covariance
 from relloc.association.hypotheses import FormationSettings, birth_tracks, formation_weights
 from relloc.association.mixture_reduction import (
-    cap_indices,
+    absorb_weights,
+    cap_mask,
+    heaviest_mask,
     merge_groups,
     merge_moments,
     prune_mask,
 )
 from relloc.association.nscan import branch, family_keep_mask, new_history
-from relloc.core.gaussian import GaussianMixture
 from relloc.errors import ConfigError, ModelError
 
 
@@ -25,13 +25,7 @@ def _random_spd(rng: np.random.Generator, n: int) -> np.ndarray:
     return A @ A.T + n * np.eye(n)
 
 
-def test_chi2_gate_matches_scipy_and_rejects_bad_input() -> None:
-    for dim, p in ((1, 0.95), (2, 0.99), (4, 0.9)):
-        assert chi2_gate(dim, p) == pytest.approx(chi2.ppf(p, dim))
-    with pytest.raises(ConfigError, match="p_gate"):
-        chi2_gate(2, 1.0)
-    with pytest.raises(ConfigError, match="dim"):
-        chi2_gate(0, 0.5)
+def test_gate_settings_are_validated() -> None:
     with pytest.raises(ConfigError, match="p_gate"):
         GateSettings(p_gate=0.0)
 
@@ -54,9 +48,11 @@ def test_merge_preserves_first_two_moments() -> None:
     covs = np.stack([_random_spd(rng, n) for _ in range(k)])
     w = rng.random(k)
     mean, cov, total = merge_moments(means, covs, w, np.arange(k))
-    ref = GaussianMixture(means=means, covs=covs, weights=w).moments()
-    np.testing.assert_allclose(mean, ref.mean, atol=1e-12)
-    np.testing.assert_allclose(cov, ref.cov, atol=1e-12)
+    ref_mean = np.average(means, axis=0, weights=w)
+    spread = np.einsum("k,ki,kj->ij", w, means - ref_mean, means - ref_mean) / w.sum()
+    ref_cov = np.average(covs, axis=0, weights=w) + spread
+    np.testing.assert_allclose(mean, ref_mean, atol=1e-12)
+    np.testing.assert_allclose(cov, ref_cov, atol=1e-12)
     assert total == pytest.approx(w.sum())
 
 
@@ -84,7 +80,40 @@ def test_prune_and_cap_keep_the_heaviest_per_group() -> None:
     w = np.array([1e-5, 2e-5, 0.5, 0.2])
     groups = np.array([0, 0, 1, 1])
     np.testing.assert_array_equal(prune_mask(w, 1e-3, groups), [False, True, True, True])
-    np.testing.assert_array_equal(cap_indices(w, 2), [2, 3])
+    np.testing.assert_array_equal(cap_mask(w, 2), [False, False, True, True])
+    np.testing.assert_array_equal(cap_mask(w, 1, groups), [False, True, True, False])
+    with pytest.raises(ModelError, match="max_components"):
+        cap_mask(w, 0)
+
+
+def test_both_layouts_reduce_alike() -> None:
+    """A rectangular batch ``(B, K)`` and the same components flat with ``groups`` give the same
+    heaviest, prune and cap masks (ties: the lower index first)."""
+    rng = np.random.default_rng(5)
+    w = rng.random((4, 6))
+    w[1, 2] = w[1, 4] = w[1].max() + 0.1  # a tie for the heaviest
+    w[2, :] = 0.0
+    w[2, 3] = 1.0  # a single live component
+    flat, groups = w.reshape(-1), np.repeat(np.arange(4), 6)
+    threshold = 0.3 * w.max(axis=-1, keepdims=True)
+    np.testing.assert_array_equal(heaviest_mask(w).reshape(-1), heaviest_mask(flat, groups))
+    assert heaviest_mask(w)[1, 2] and not heaviest_mask(w)[1, 4]
+    np.testing.assert_array_equal(
+        prune_mask(w, threshold).reshape(-1),
+        prune_mask(flat, np.repeat(threshold[:, 0], 6), groups),
+    )
+    for cap in (1, 2, 5, 6):
+        np.testing.assert_array_equal(cap_mask(w, cap).reshape(-1), cap_mask(flat, cap, groups))
+        assert (cap_mask(w, cap).sum(axis=-1) == cap).all()
+
+
+def test_absorb_moves_the_weights_into_the_chosen_component() -> None:
+    w = np.array([[0.2, 0.5, 0.1, 0.2], [0.4, 0.3, 0.2, 0.1]])
+    into = heaviest_mask(w)
+    members = np.array([[True, True, False, True], [False, False, False, False]])
+    out = absorb_weights(w, into, members)
+    np.testing.assert_allclose(out, [[0.0, 0.9, 0.1, 0.0], [0.4, 0.3, 0.2, 0.1]])
+    np.testing.assert_allclose(out.sum(axis=-1), w.sum(axis=-1))
 
 
 def test_nscan_prunes_light_families_but_keeps_the_best() -> None:

@@ -45,12 +45,12 @@ def _settings(**kw: object) -> GaussianSumSettings:
 
 def _one_track(mean: np.ndarray, cov: np.ndarray, depth: int) -> Tracks:
     return Tracks(
-        owner=np.zeros(1, dtype=np.int64),
-        mean=mean[None].copy(),
-        cov=cov[None].copy(),
-        prior_mean=mean[None].copy(),
-        prior_cov=cov[None].copy(),
-        weight=np.ones(1),
+        groups=np.zeros(1, dtype=np.int64),
+        means=mean[None].copy(),
+        covs=cov[None].copy(),
+        prior_means=mean[None].copy(),
+        prior_covs=cov[None].copy(),
+        weights=np.ones(1),
         history=np.zeros((1, depth + 1), dtype=np.int64),
         assoc=np.full(1, -1, dtype=np.int64),
     )
@@ -76,7 +76,7 @@ def test_single_component_without_clutter_equals_the_ekf() -> None:
     u_self, u_mate = np.array([0.3, 0.0, 0.0, 0.1]), np.array([0.2, 0.1, 0.0, -0.2])
     fus.predict(u_self, u_mate[None], 0.1)
     x, P = predict_arrays(x0, P0, u_self, u_mate, 0.1, NOISE)
-    np.testing.assert_allclose(fus.tracks.mean[0], x)
+    np.testing.assert_allclose(fus.tracks.means[0], x)
     true = np.array([3.05, 1.1, 0.52, 0.3])
     h_meas, r_meas = true[2] + 0.004, np.linalg.norm(true[:3]) - 0.01
     az = np.arctan2(true[1], true[0]) + 0.02
@@ -119,9 +119,9 @@ def test_out_of_gate_known_measurement_leaves_the_track_alone() -> None:
     x0 = np.array([3.0, 0.0, 0.0, 0.0])
     fus.tracks = _one_track(x0, np.eye(4) * 0.01, st.nscan_depth)
     fus.update_known("range", [10.0])
-    np.testing.assert_allclose(fus.tracks.mean[0], x0)
+    np.testing.assert_allclose(fus.tracks.means[0], x0)
     fus.update_known("range", [np.nan])
-    np.testing.assert_allclose(fus.tracks.mean[0], x0)
+    np.testing.assert_allclose(fus.tracks.means[0], x0)
     with pytest.raises(DataError, match="one value per teammate"):
         fus.update_known("range", [1.0, 2.0])
 
@@ -143,8 +143,7 @@ def test_converged_track_survives_an_unlucky_scan_but_a_kidnapped_one_is_refound
     )
     for height, rng_m, bearings, expected_xy in cases:
         fus = GaussianSumFuser(0, [1, 2], st)
-        second = _one_track(x2, cov, st.nscan_depth)
-        second.owner[:] = 1
+        second = replace(_one_track(x2, cov, st.nscan_depth), groups=np.ones(1, dtype=np.int64))
         fus.tracks = Tracks.concat([_one_track(x1, cov, st.nscan_depth), second])
         fus.direct_scan([height, x2[2]], [rng_m, r2], np.array(bearings))
         mix = fus.mixture(1)
@@ -224,8 +223,8 @@ def test_predict_fusers_equals_separate_predictions() -> None:
     predict_fusers([fa, fb], [u0, u1], [u1[None], u0[None]], 0.05)
     ga.predict(u0, u1[None], 0.05)
     gb.predict(u1, u0[None], 0.05)
-    np.testing.assert_allclose(fa.tracks.mean, ga.tracks.mean)
-    np.testing.assert_allclose(fb.tracks.cov, gb.tracks.cov)
+    np.testing.assert_allclose(fa.tracks.means, ga.tracks.means)
+    np.testing.assert_allclose(fb.tracks.covs, gb.tracks.covs)
 
 
 def test_settings_are_validated() -> None:

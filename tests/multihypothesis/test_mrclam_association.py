@@ -102,10 +102,10 @@ def test_mrclam_association_names_a_missing_folder(tmp_path: Path) -> None:
 
 def test_hidden_correspondence_turns_frames_into_scans(tmp_path: Path) -> None:
     from relloc.core.recording import CLUTTER, NO_TARGET
-    from relloc.datasets.mrclam import load_mrclam
+    from relloc.datasets.mrclam import load_mrclam, to_recording
 
     folder = _synthetic_folder(tmp_path / "data", np.random.default_rng(1))
-    raw = mrclam_association._mrclam_recording(load_mrclam(folder))
+    raw = to_recording(load_mrclam(folder))
     assert raw.robots == ("1", "2", "3") and raw.landmarks.shape == (1, 3)
     camera = raw.measurements.of_kind("range_bearing")
     rec, counts = mrclam_association._hidden_correspondence(

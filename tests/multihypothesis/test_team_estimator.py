@@ -10,6 +10,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from relloc.core.contract import Estimator, HeldOdometry, Silent
+from relloc.core.estimates import Recorder
 from relloc.core.recording import (
     CLUTTER,
     KIND_NAMES,
@@ -34,8 +36,6 @@ from relloc.fusion.gaussian_sum_estimator import (
     team,
 )
 from relloc.fusion.messages import EquivalentMeasurement
-from relloc.pipeline.contract import Estimator, HeldOdometry, Silent
-from relloc.pipeline.estimates import Recorder
 from relloc.pipeline.montecarlo import spawn_seeds
 from relloc.pipeline.replay import feed_ticks, replay
 from relloc.sim.multihypothesis import ROBOT_NAMES, DeSilvaScenario, simulate
@@ -321,7 +321,7 @@ def test_leader_scores_look_up_origins_and_wrap_the_yaw() -> None:
 
 
 def _belief(subject: str, mean: Any, info: dict[str, float]) -> Any:
-    from relloc.pipeline.contract import Belief
+    from relloc.core.contract import Belief
 
     return Belief(
         subject=subject, frame="relative_pose4", mean=mean, cov=np.eye(4) * 0.01, info=info

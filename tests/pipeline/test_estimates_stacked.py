@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
+from relloc.core.contract import Belief
+from relloc.core.estimates import Recorder
 from relloc.errors import ConfigError
-from relloc.pipeline.contract import Belief
-from relloc.pipeline.estimates import Recorder
 
 
 def test_stacked_orders_subjects_and_requires_common_times():

@@ -149,8 +149,8 @@ def test_bad_estimate_batches_are_refused(overrides, match):
 
 
 def test_estimates_travel_as_est_bodies_and_come_back_whole():
-    from relloc.pipeline.contract import Belief, UpdateRecord
-    from relloc.pipeline.estimates import Recorder
+    from relloc.core.contract import Belief, UpdateRecord
+    from relloc.core.estimates import Recorder
     from relloc.runtime.messages import est_bodies, estimates_from_bodies
 
     rec = Recorder("plkf")

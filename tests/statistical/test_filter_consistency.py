@@ -64,7 +64,7 @@ def run_consistency(
     }
 
 
-@pytest.mark.parametrize("kind", ["tekf", "plkf", "plkf_bc"])
+@pytest.mark.parametrize("kind", ["tekf", "plkf", "bcplkf"])
 def test_filter_is_consistent(kind: str) -> None:
     result = run_consistency(kind)
     lo, hi = anees_band(4, RUNS)
@@ -81,7 +81,7 @@ def test_noisy_sensor_makes_the_plkf_overconfident_and_bias_compensation_helps()
     brings the NEES most of the way back (not always inside the band: the compensation is
     second order and evaluated at the estimate)."""
     plkf = run_consistency("plkf", sensor=NOISY)
-    bc = run_consistency("plkf_bc", sensor=NOISY)
+    bc = run_consistency("bcplkf", sensor=NOISY)
     _, hi = anees_band(4, RUNS)
     assert plkf["anees_final"] > hi, plkf
     assert bc["anees_all"] < plkf["anees_all"] - 0.1, (bc, plkf)

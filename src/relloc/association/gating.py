@@ -6,7 +6,7 @@ innovation covariance ``S`` when the squared Mahalanobis distance
     d² = (z − ẑ)ᵀ S⁻¹ (z − ẑ)  ≤  γ,      γ = F⁻¹_{χ²(n_z)}(P_G),
 
 so that a correct measurement is kept with probability ``P_G`` (the *gate probability*). The
-threshold comes from ``scipy.stats.chi2``.
+threshold is :func:`relloc.core.kalman.chi2_threshold`, the one χ² gate of every filter.
 
 Modified gate for tracks whose yaw is still (close to) uniform. A new track starts with yaw
 variance 4π (seed 002 Eq. 13), and the linearised prediction of such a track turns the
@@ -25,25 +25,13 @@ Kalman update itself untouched.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.stats import chi2
 
 from relloc.errors import ConfigError
 
 Array = NDArray[np.float64]
-
-
-@lru_cache(maxsize=64)
-def chi2_gate(dim: int, p_gate: float) -> float:
-    """Gate threshold ``γ`` with ``P(χ²(dim) ≤ γ) = p_gate``."""
-    if dim < 1:
-        raise ConfigError(f"chi2_gate: dim must be ≥ 1, got {dim}")
-    if not 0.0 < p_gate < 1.0:
-        raise ConfigError(f"chi2_gate: p_gate must lie in (0, 1), got {p_gate}")
-    return float(chi2.ppf(p_gate, dim))
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -107,8 +95,3 @@ def modified_gate_covariance(
     radius2 = np.where(uniform, (speed * settings.horizon) ** 2, 0.0)
     Hxy = H[..., :2]
     return S + radius2[:, None, None] * (Hxy @ np.swapaxes(Hxy, -1, -2))
-
-
-def in_gate(d2: Array, dim: int, p_gate: float) -> NDArray[np.bool_]:
-    """Boolean mask ``d² ≤ γ(dim, p_gate)``."""
-    return np.asarray(d2 <= chi2_gate(dim, p_gate))

@@ -1,21 +1,37 @@
-"""Reduction of a Gaussian mixture: low-weight pruning, Mahalanobis merging and a size cap.
+"""Reduction of Gaussian mixtures: pruning, merging and a size cap (seed 002 §II-D.5).
 
-Seed 002 §II-D.5 limits the growth of hypotheses by deleting tracks of low weight and
-combining tracks that lie within a Mahalanobis distance of each other. Merging here is greedy
-and moment preserving (Salmond's joining, as in the GM-PHD filter): the heaviest remaining
-component ``a`` absorbs every component ``b`` with
+One module reduces both kinds of mixture in relloc: the Gaussian-sum fuser's filters
+(:mod:`relloc.estimators.gaussian_sum`) and the yaw-hypothesis banks
+(:mod:`relloc.estimators.yaw_bank`). Both store many mixtures in one set of arrays
+(:class:`relloc.core.gaussian.GaussianMixture`): either as a rectangular batch, one mixture per
+leading index with its ``K`` components on the last axis (``weights (..., K)``), or as one flat
+list of components labelled by ``groups (K,)`` (components with equal labels form one mixture).
+Every function below takes either layout (``groups=None``: the last axis) and never mixes
+components of different mixtures.
 
-    (m_b − m_a)ᵀ P_a⁻¹ (m_b − m_a) ≤ U,
+* **Prune**: keep the components whose weight reaches a threshold, and always the heaviest one
+  of each mixture (:func:`prune_mask`). The threshold may be per mixture (a relative threshold
+  is ``ratio × max w``).
+* **Cap**: keep the ``max_components`` heaviest components of each mixture (:func:`cap_mask`).
+* **Merge**, moment preserving (Salmond's joining, as in the GM-PHD filter): greedily, the
+  heaviest remaining component ``a`` absorbs every component ``b`` with
 
-and, symmetrically, ``(m_a − m_b)ᵀ P_b⁻¹ (m_a − m_b) ≤ U`` (so a broad component — e.g. a new
-track whose yaw is still uniform — is not averaged into a sharp one it merely overlaps), and
-the group ``G`` is replaced by the single Gaussian with the same first two moments::
+      (m_b − m_a)ᵀ P_a⁻¹ (m_b − m_a) ≤ U,
 
-    w = Σ_G w_b,   m = Σ_G w_b m_b / w,   P = Σ_G w_b (P_b + (m_b − m)(m_b − m)ᵀ) / w.
+  and, symmetrically, ``(m_a − m_b)ᵀ P_b⁻¹ (m_a − m_b) ≤ U`` (so a broad component — e.g. a new
+  track whose yaw is still uniform — is not averaged into a sharp one it merely overlaps), and
+  the group ``G`` is replaced by the single Gaussian with the same first two moments
+  (:func:`merge_groups`, :func:`merge_moments`)::
 
-Headings are not wrapped in states; before merging, the heading of each member is moved by a
-multiple of 2π next to the heading of ``a`` (``angle_index``), so the merge happens on the
-circle's local chart and the moments above are exact for the aligned values.
+      w = Σ_G w_b,   m = Σ_G w_b m_b / w,   P = Σ_G w_b (P_b + (m_b − m)(m_b − m)ᵀ) / w.
+
+  Headings are not wrapped in states; before merging, the heading of each member is moved by a
+  multiple of 2π next to the heading of ``a`` (``angle_index``), so the merge happens on the
+  circle's local chart and the moments above are exact for the aligned values.
+* **Merge by weight** into the heaviest component (:func:`absorb_weights`): the members' weights
+  are added to it and its mean and covariance stay. This is the merge for duplicates of a
+  hypothesis that has already won (a yaw bank's neighbours that converged onto its best
+  component), where averaging the states would only blur the winner.
 """
 
 from __future__ import annotations
@@ -28,6 +44,7 @@ from relloc.errors import ModelError
 
 Array = NDArray[np.float64]
 IntArray = NDArray[np.int64]
+BoolArray = NDArray[np.bool_]
 
 
 def align_angles(means: Array, reference: Array, angle_index: int | None) -> Array:
@@ -60,7 +77,7 @@ def merge_groups(
     angle_index: int | None = None,
     groups: IntArray | None = None,
 ) -> list[IntArray]:
-    """Greedy Mahalanobis grouping (module docstring); groups listed heaviest first.
+    """Greedy Mahalanobis grouping of flat components (module docstring); heaviest first.
 
     ``groups`` labels independent mixtures sharing the arrays: components of different
     mixtures are never merged.
@@ -105,14 +122,29 @@ def merge_moments(
     return mean, 0.5 * (cov + cov.T), total
 
 
-def heaviest_mask(weights: Array, groups: IntArray | None = None) -> NDArray[np.bool_]:
-    """``True`` at the heaviest component of each group (of the whole mixture if ``None``)."""
-    mask = np.zeros(weights.size, dtype=bool)
-    if weights.size == 0:
-        return mask
+def absorb_weights(weights: Array, into: BoolArray, members: BoolArray) -> Array:
+    """Merge by weight along the last axis (module docstring).
+
+    ``into`` marks one component per mixture (``(..., K)``, usually :func:`heaviest_mask`); it
+    takes the summed weight of the components ``members`` marks, whose weights become 0.
+    """
+    absorbed = members & ~into
+    total = np.sum(np.where(absorbed, weights, 0.0), axis=-1, keepdims=True)
+    return np.asarray(np.where(absorbed, 0.0, np.where(into, weights + total, weights)))
+
+
+def heaviest_mask(weights: Array, groups: IntArray | None = None) -> BoolArray:
+    """``True`` at the heaviest component of each mixture (ties: the lowest index).
+
+    ``weights (..., K)`` with ``groups=None`` (one mixture per leading index), or flat
+    ``weights (K,)`` labelled by ``groups (K,)``. Only the order of the weights matters, so log
+    weights give the same mask.
+    """
+    if weights.shape[-1] == 0:
+        return np.zeros(weights.shape, dtype=bool)
     if groups is None:
-        mask[int(np.argmax(weights))] = True
-        return mask
+        return np.asarray(np.arange(weights.shape[-1]) == np.argmax(weights, axis=-1)[..., None])
+    mask = np.zeros(weights.size, dtype=bool)
     order = np.lexsort((-weights, groups))
     first = np.ones(order.size, dtype=bool)
     first[1:] = groups[order][1:] != groups[order][:-1]
@@ -121,15 +153,26 @@ def heaviest_mask(weights: Array, groups: IntArray | None = None) -> NDArray[np.
 
 
 def prune_mask(
-    weights: Array, threshold: float, groups: IntArray | None = None
-) -> NDArray[np.bool_]:
-    """Components to keep: weight ≥ threshold, and always the heaviest one (of each group)."""
+    weights: Array, threshold: float | Array, groups: IntArray | None = None
+) -> BoolArray:
+    """Components to keep: weight ≥ ``threshold`` (a number, or one per mixture broadcasting
+    against ``weights``), and always the heaviest one of each mixture."""
     return np.asarray((weights >= threshold) | heaviest_mask(weights, groups))
 
 
-def cap_indices(weights: Array, max_components: int) -> IntArray:
-    """Indices of the ``max_components`` heaviest components (heaviest first)."""
+def cap_mask(weights: Array, max_components: int, groups: IntArray | None = None) -> BoolArray:
+    """Components to keep: the ``max_components`` heaviest of each mixture (ties: the lower
+    index first), in either layout (see :func:`heaviest_mask`)."""
     if max_components < 1:
-        raise ModelError(f"cap_indices: max_components must be ≥ 1, got {max_components}")
-    order = np.argsort(-weights, kind="stable")
-    return np.asarray(order[:max_components], dtype=np.int64)
+        raise ModelError(f"cap_mask: max_components must be ≥ 1, got {max_components}")
+    if groups is None:
+        order = np.argsort(-weights, axis=-1, kind="stable")
+        rank = np.empty_like(order)
+        np.put_along_axis(rank, order, np.arange(weights.shape[-1]), axis=-1)
+        return np.asarray(rank < max_components)
+    order = np.lexsort((-weights, groups))
+    sorted_groups = groups[order]
+    rank = np.arange(order.size) - np.searchsorted(sorted_groups, sorted_groups, side="left")
+    mask = np.zeros(weights.size, dtype=bool)
+    mask[order[rank < max_components]] = True
+    return mask

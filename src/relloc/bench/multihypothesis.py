@@ -29,12 +29,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from relloc.core.angles import wrap_angle
+from relloc.core.contract import Belief, HeldOdometry, TrackEvent, UpdateRecord
 from relloc.core.recording import Measurements, Odometry, Recording, measurement_rows
 from relloc.estimators.relative import predict_arrays, update_tekf_arrays
 from relloc.experiments.desilva2015 import filter_settings
 from relloc.fusion.gaussian_sum_estimator import GaussianSumEstimator
 from relloc.models.measurement import RangeBearingNoise
-from relloc.pipeline.contract import Belief, HeldOdometry, TrackEvent, UpdateRecord
 from relloc.pipeline.replay import replay
 from relloc.sim.multihypothesis import DeSilvaScenario
 

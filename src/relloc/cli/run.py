@@ -26,7 +26,7 @@ DEFAULT_OUT = Path("out/run")
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     from relloc.estimators.initialisation import POLICY_NAMES
-    from relloc.estimators.track_manager import FILTERS
+    from relloc.estimators.relative import UPDATE_KINDS
 
     p = subparsers.add_parser(
         "run",
@@ -47,7 +47,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     p.add_argument("--seed", type=int, default=2026, help="master seed (default 2026)")
     p.add_argument("--runs", type=int, default=10, help="Monte-Carlo runs (default 10)")
     p.add_argument(
-        "--filter", choices=tuple(FILTERS), default="plkf", help="relative filter (default plkf)"
+        "--filter", choices=UPDATE_KINDS, default="plkf", help="relative filter (default plkf)"
     )
     p.add_argument(
         "--init",

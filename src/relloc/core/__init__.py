@@ -1,12 +1,12 @@
-"""Core containers and math shared by every estimator (no filter logic here)."""
+"""Core containers and math shared by every estimator: angles, poses, PSD-safe linear algebra,
+the belief containers, and the one Kalman update and χ² gate (:mod:`relloc.core.kalman`)."""
 
 from relloc.core.angles import angle_diff, circular_interp, wrap_angle
 from relloc.core.gaussian import Gaussian, GaussianMixture, InformationState
+from relloc.core.kalman import Innovation, chi2_threshold, gated_update, kalman_update
 from relloc.core.linalg import (
     cholesky,
     condition_log10,
-    is_psd,
-    joseph_update,
     mahalanobis_sq,
     solve_psd,
     symmetrise,
@@ -17,14 +17,16 @@ __all__ = [
     "Gaussian",
     "GaussianMixture",
     "InformationState",
+    "Innovation",
     "angle_diff",
+    "chi2_threshold",
     "cholesky",
     "circular_interp",
     "compose",
     "condition_log10",
+    "gated_update",
     "inverse",
-    "is_psd",
-    "joseph_update",
+    "kalman_update",
     "mahalanobis_sq",
     "relative",
     "solve_psd",

@@ -5,7 +5,7 @@ All are frozen dataclasses; estimators return new instances instead of mutating.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
@@ -70,49 +70,85 @@ class InformationState:
         return Gaussian(mean=P @ self.info_vector, cov=symmetrise(P))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class GaussianMixture:
-    """Σ_k w_k N(means[k], covs[k]); weights are normalised on construction.
+    """Gaussian mixtures as parallel arrays: ``Σ_k w_k N(means[k], covs[k]) / Σ_k w_k``.
 
-    ``means`` (K, n), ``covs`` (K, n, n), ``weights`` (K,). ``labels`` are optional per-component
-    tags (e.g. track ids) that estimators may carry along.
+    The weights are ≥ 0 and need not be normalised (:meth:`normalised_weights`). One instance
+    holds many mixtures in one of two layouts, both reduced by
+    :mod:`relloc.association.mixture_reduction`:
+
+    * **rectangular** (``groups is None``): ``means (..., K, n)``, ``covs (..., K, n, n)``,
+      ``weights (..., K)``; each leading index is one mixture of ``K`` slots and a slot of weight
+      0 is empty, so that all mixtures stay one array and update in one numpy call (the yaw
+      banks of :mod:`relloc.estimators.yaw_bank`). Every mixture has a slot of weight > 0.
+    * **flat** (``groups (K,)`` integers): ``means (K, n)``, ``covs (K, n, n)``, ``weights (K,)``
+      and components with equal ``groups`` form one mixture, of any size (the Gaussian-sum
+      filters of :mod:`relloc.estimators.gaussian_sum`, one per teammate).
     """
 
     means: Array
     covs: Array
     weights: Array
-    labels: tuple[object, ...] = field(default=())
+    groups: NDArray[np.int64] | None = None
 
     def __post_init__(self) -> None:
-        means = np.atleast_2d(np.asarray(self.means, dtype=float))
-        covs = np.asarray(self.covs, dtype=float).reshape(means.shape[0], means.shape[1], -1)
-        w = np.asarray(self.weights, dtype=float).reshape(-1)
-        if covs.shape[1:] != (means.shape[1], means.shape[1]) or w.size != means.shape[0]:
+        means = np.asarray(self.means, dtype=float)
+        covs = np.asarray(self.covs, dtype=float)
+        w = np.asarray(self.weights, dtype=float)
+        shape = w.shape
+        n = means.shape[-1] if means.ndim else -1
+        if w.ndim == 0 or means.shape[:-1] != shape or covs.shape != (*shape, n, n):
             raise ModelError(
-                f"GaussianMixture: shapes means {means.shape}, covs {covs.shape}, weights {w.shape}"
+                f"GaussianMixture: shapes means {means.shape}, covs {covs.shape}, weights "
+                f"{shape} must be (..., K, n), (..., K, n, n), (..., K)"
             )
-        if np.any(w < 0) or not np.isfinite(w).all() or w.sum() <= 0:
-            raise ModelError(f"GaussianMixture: weights must be finite, ≥ 0, not all 0: {w}")
-        if self.labels and len(self.labels) != w.size:
-            raise ModelError("GaussianMixture: one label per component is required")
+        if w.size and not (w.min() >= 0.0 and w.max() < np.inf):  # NaN fails both
+            raise ModelError(f"GaussianMixture: weights must be finite and ≥ 0: {w}")
+        if self.groups is None:
+            if shape[-1] == 0 or not (w > 0.0).any(axis=-1).all():
+                raise ModelError("GaussianMixture: every mixture needs a component of weight > 0")
+        else:
+            groups = np.asarray(self.groups, dtype=np.int64)
+            if w.ndim != 1 or groups.shape != shape or (groups.size and groups.min() < 0):
+                raise ModelError(
+                    f"GaussianMixture: groups {groups.shape} must be indices ≥ 0 labelling flat "
+                    f"weights {shape}"
+                )
+            object.__setattr__(self, "groups", groups)
         object.__setattr__(self, "means", means)
-        object.__setattr__(self, "covs", symmetrise(covs))
-        object.__setattr__(self, "weights", w / w.sum())
+        object.__setattr__(self, "covs", covs)
+        object.__setattr__(self, "weights", w)
 
     @property
     def size(self) -> int:
+        """Number of components (slots) in all mixtures together."""
         return int(self.weights.size)
 
-    def moments(self) -> Gaussian:
-        """Moment-matched single Gaussian: mean Σ w m, cov Σ w (P + (m − m̄)(m − m̄)ᵀ)."""
-        mean = self.weights @ self.means
-        d = self.means - mean
-        cov = np.einsum("k,kij->ij", self.weights, self.covs) + np.einsum(
-            "k,ki,kj->ij", self.weights, d, d
-        )
-        return Gaussian(mean=mean, cov=cov)
+    @property
+    def alive(self) -> NDArray[np.bool_]:
+        """Components of weight > 0 (empty slots are ``False``)."""
+        return np.asarray(self.weights > 0.0)
 
-    def dominant(self) -> Gaussian:
-        """The highest-weight component."""
-        k = int(np.argmax(self.weights))
-        return Gaussian(mean=self.means[k], cov=self.covs[k])
+    def normalised_weights(self) -> Array:
+        """Weights divided by the total of their mixture (a mixture of total 0 keeps its 0s)."""
+        if self.groups is None:
+            totals = self.weights.sum(axis=-1, keepdims=True)
+            return np.asarray(self.weights / np.where(totals > 0.0, totals, 1.0))
+        totals = np.bincount(self.groups, weights=self.weights)
+        return np.asarray(self.weights / np.where(totals > 0.0, totals, 1.0)[self.groups])
+
+    @property
+    def heaviest_index(self) -> NDArray[np.int64]:
+        """Index of the heaviest component of each mixture, ``(...)`` (rectangular layout)."""
+        if self.groups is not None:
+            raise ModelError("GaussianMixture.heaviest_index: needs the rectangular layout")
+        return np.asarray(np.argmax(self.weights, axis=-1))
+
+    def heaviest(self) -> tuple[Array, Array]:
+        """Mean ``(..., n)`` and covariance ``(..., n, n)`` of each mixture's heaviest component
+        (rectangular layout)."""
+        k = self.heaviest_index[..., None, None]
+        mean = np.take_along_axis(self.means, k, axis=-2)[..., 0, :]
+        cov = np.take_along_axis(self.covs, k[..., None], axis=-3)[..., 0, :, :]
+        return mean, cov

@@ -30,24 +30,6 @@ def cholesky(P: Array, *, where: str = "") -> Array:
         ) from exc
 
 
-def is_psd(P: Array, *, tol: float = 1e-9) -> bool:
-    """True when ``P`` is symmetric with eigenvalues ≥ −tol·max(1, ‖P‖)."""
-    if not np.allclose(P, np.swapaxes(P, -1, -2), atol=1e-9 * max(1.0, float(np.abs(P).max()))):
-        return False
-    eig = np.linalg.eigvalsh(symmetrise(P))
-    return bool(np.all(eig >= -tol * max(1.0, float(np.abs(eig).max()))))
-
-
-def joseph_update(P: Array, K: Array, H: Array, R: Array) -> Array:
-    """Joseph-form covariance update, stable and PSD-preserving for any gain K.
-
-    ``P⁺ = (I − K H) P (I − K H)ᵀ + K R Kᵀ``  (works on stacks ``(..., n, n)``).
-    """
-    n = P.shape[-1]
-    A = np.eye(n) - K @ H
-    return symmetrise(A @ P @ np.swapaxes(A, -1, -2) + K @ R @ np.swapaxes(K, -1, -2))
-
-
 def solve_psd(S: Array, B: Array, *, where: str = "") -> Array:
     """Solve ``S X = B`` for symmetric positive definite ``S`` (``ModelError`` if not PD)."""
     L = cholesky(S, where=where)

@@ -2,7 +2,7 @@
 
 :class:`CooperativeEstimator` is the centralised joint filter of the whole team — the EIF of
 :mod:`relloc.estimators.eif` or the covariance-form EKF of :mod:`relloc.estimators.joint_ekf` —
-behind the estimator contract of :mod:`relloc.pipeline.contract` (owner ``"team"``), so
+behind the estimator contract of :mod:`relloc.core.contract` (owner ``"team"``), so
 :func:`relloc.pipeline.replay.replay` drives it over any :class:`~relloc.core.recording.Recording`
 of planar robots:
 
@@ -73,8 +73,10 @@ from typing import Literal, Protocol
 import numpy as np
 from numpy.typing import NDArray
 
-from relloc.association.gating import chi2_gate, mahalanobis_batch
+from relloc.association.gating import mahalanobis_batch
+from relloc.core.contract import Belief, HeldOdometry, Silent, UpdateRecord
 from relloc.core.gaussian import Gaussian
+from relloc.core.kalman import chi2_threshold
 from relloc.core.recording import NO_TARGET, Measurements, kind_code
 from relloc.errors import ConfigError, DataError, ModelError
 from relloc.estimators.eif import ExtendedInformationFilter
@@ -89,7 +91,6 @@ from relloc.models.planar_measurement import (
     range_bias_features,
 )
 from relloc.models.unicycle import unicycle_jacobians, unicycle_step
-from relloc.pipeline.contract import Belief, HeldOdometry, Silent, UpdateRecord
 
 Array = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -611,7 +612,7 @@ def group_innovations(lin: LinearisedRows, P: Array) -> GroupInnovations:
 def outside_gate(groups: GroupInnovations, p_gate: float) -> BoolArray:
     """Groups whose NIS exceeds ``χ²_{dof}(p_gate)``."""
     dofs, which = np.unique(groups.dof, return_inverse=True)
-    thresholds = np.array([chi2_gate(int(d), p_gate) for d in dofs])[which]
+    thresholds = np.array([chi2_threshold(int(d), p_gate) for d in dofs])[which]
     return ~(groups.nis <= thresholds)
 
 

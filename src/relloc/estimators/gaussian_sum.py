@@ -7,7 +7,7 @@ is ``RelPose4 = (x, y, z, φ)`` of ``j`` in ``i``'s body frame. Seed 002's proce
 is the same 4-DOF relative kinematics as seed 000 Eq. 1 (``θ̇ = ω_j − ω_i``, ``ż = v_zj − v_zi``),
 so the prediction is :func:`relloc.estimators.relative.predict_arrays`, applied to all tracks
 of all teammates in one batched call; the Kalman update is
-:func:`relloc.estimators.relative.kalman_update` (Joseph form).
+:func:`relloc.core.kalman.kalman_update` (Joseph form).
 
 Measurements (seed 002 Eq. 6; the paper names azimuth α and elevation β, ``relloc.models``
 names them θ and α), processed **sensor by sensor** (gate → form → update), so that clutter on
@@ -69,22 +69,18 @@ robot's own direct information (what was fused from others is never sent back to
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields, replace
 from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from relloc.association.assignment import assign
-from relloc.association.gating import (
-    GateSettings,
-    chi2_gate,
-    mahalanobis_batch,
-    modified_gate_covariance,
-)
+from relloc.association.gating import GateSettings, mahalanobis_batch, modified_gate_covariance
 from relloc.association.hypotheses import FormationSettings, birth_tracks, formation_weights
 from relloc.association.mixture_reduction import (
     align_angles,
+    cap_mask,
     heaviest_mask,
     merge_groups,
     merge_moments,
@@ -93,8 +89,9 @@ from relloc.association.mixture_reduction import (
 from relloc.association.nscan import branch, family_keep_mask, new_history
 from relloc.core.angles import wrap_angle
 from relloc.core.gaussian import Gaussian, GaussianMixture
+from relloc.core.kalman import chi2_threshold, kalman_update
 from relloc.errors import ConfigError, DataError
-from relloc.estimators.relative import kalman_update, predict_arrays
+from relloc.estimators.relative import predict_arrays
 from relloc.fusion.covariance_intersection import covariance_intersection
 from relloc.fusion.decorrelation import decorrelated_fusion, pose_difference
 from relloc.fusion.messages import EquivalentMeasurement
@@ -240,70 +237,59 @@ class GaussianSumSettings:
         return 2.0 * np.pi * (np.pi if self.use_elevation else 1.0)
 
 
-@dataclass
-class Tracks:
-    """Mixture components of all filters of one fuser, stored as parallel arrays.
+@dataclass(frozen=True, kw_only=True)
+class Tracks(GaussianMixture):
+    """The tracks of all filters of one fuser: a :class:`~relloc.core.gaussian.GaussianMixture`
+    in the flat layout whose ``groups[k]`` is the local index of the teammate whose filter holds
+    track ``k``, with three more arrays per track.
 
-    ``owner[k]`` is the local index of the teammate whose filter holds track ``k``.
-    ``prior_mean``/``prior_cov`` are the track at the previous broadcast, propagated (Eq. 8).
-    ``assoc[k]`` is the index of the bearing the track was last updated with (−1: none).
+    ``prior_means``/``prior_covs`` are the track at the previous broadcast, propagated (Eq. 8);
+    ``history`` its ancestry (:mod:`relloc.association.nscan`); ``assoc[k]`` the index of the
+    bearing the track was last updated with (−1: none).
+
+    Only the fuser builds tracks, from arrays it has checked, a dozen times per scan (sub-sets,
+    concatenations, updates), so construction skips the checks of
+    :class:`~relloc.core.gaussian.GaussianMixture` (a few microseconds each, several per cent of
+    a one-teammate scan of under a millisecond).
     """
 
-    owner: IntArray
-    mean: Array
-    cov: Array
-    prior_mean: Array
-    prior_cov: Array
-    weight: Array
+    groups: IntArray
+    prior_means: Array
+    prior_covs: Array
     history: IntArray
     assoc: IntArray
+
+    def __post_init__(self) -> None:
+        """No checks (class docstring)."""
 
     @staticmethod
     def empty(depth: int) -> Tracks:
         """No tracks."""
         return Tracks(
-            owner=np.zeros(0, dtype=np.int64),
-            mean=np.zeros((0, 4)),
-            cov=np.zeros((0, 4, 4)),
-            prior_mean=np.zeros((0, 4)),
-            prior_cov=np.zeros((0, 4, 4)),
-            weight=np.zeros(0),
+            groups=np.zeros(0, dtype=np.int64),
+            means=np.zeros((0, 4)),
+            covs=np.zeros((0, 4, 4)),
+            prior_means=np.zeros((0, 4)),
+            prior_covs=np.zeros((0, 4, 4)),
+            weights=np.zeros(0),
             history=np.zeros((0, depth + 1), dtype=np.int64),
             assoc=np.zeros(0, dtype=np.int64),
         )
 
-    @property
-    def size(self) -> int:
-        """Number of tracks."""
-        return int(self.weight.size)
-
     def take(self, idx: ArrayLike) -> Tracks:
         """Sub-set (or repetition) of tracks by index."""
         i = np.asarray(idx, dtype=np.int64)
-        return Tracks(
-            owner=self.owner[i],
-            mean=self.mean[i],
-            cov=self.cov[i],
-            prior_mean=self.prior_mean[i],
-            prior_cov=self.prior_cov[i],
-            weight=self.weight[i],
-            history=self.history[i],
-            assoc=self.assoc[i],
-        )
+        return Tracks(**{name: getattr(self, name)[i] for name in _TRACK_FIELDS})
 
     @staticmethod
     def concat(parts: Sequence[Tracks]) -> Tracks:
         """Tracks of all parts, in order."""
         return Tracks(
-            owner=np.concatenate([p.owner for p in parts]),
-            mean=np.concatenate([p.mean for p in parts]),
-            cov=np.concatenate([p.cov for p in parts]),
-            prior_mean=np.concatenate([p.prior_mean for p in parts]),
-            prior_cov=np.concatenate([p.prior_cov for p in parts]),
-            weight=np.concatenate([p.weight for p in parts]),
-            history=np.concatenate([p.history for p in parts]),
-            assoc=np.concatenate([p.assoc for p in parts]),
+            **{name: np.concatenate([getattr(p, name) for p in parts]) for name in _TRACK_FIELDS}
         )
+
+
+_TRACK_FIELDS = tuple(f.name for f in fields(Tracks))
 
 
 @dataclass(frozen=True)
@@ -345,15 +331,6 @@ def predict_fusers(
     for f, size in zip(fusers, sizes, strict=True):
         f._set_predicted(m[start : start + size], P[start : start + size])
         start += size
-
-
-def _cap_per_owner(t: Tracks, max_components: int) -> IntArray:
-    """Indices (sorted) of the ``max_components`` heaviest tracks of every filter."""
-    order = np.lexsort((-t.weight, t.owner))
-    owners = t.owner[order]
-    start = np.searchsorted(owners, owners, side="left")
-    rank = np.arange(order.size) - start
-    return np.sort(order[rank < max_components])
 
 
 def _gaussian_density(nu: Array, S: Array) -> Array:
@@ -411,8 +388,7 @@ class GaussianSumFuser:
         t = self.tracks
         if t.size == 0:
             return
-        totals = np.bincount(t.owner, weights=t.weight, minlength=len(self.teammates))
-        t.weight = t.weight / np.where(totals > 0.0, totals, 1.0)[t.owner]
+        self.tracks = replace(t, weights=t.normalised_weights())
 
     def _per_teammate(self, values: ArrayLike, what: str) -> Array:
         arr = np.asarray(values, dtype=float).reshape(-1)
@@ -455,17 +431,17 @@ class GaussianSumFuser:
         self.time += float(dt)
         self._speed = np.hypot(u_team[:, 0], u_team[:, 1])
         t = self.tracks
-        means = np.concatenate([t.mean, t.prior_mean])
-        covs = np.concatenate([t.cov, t.prior_cov])
-        u_c = np.concatenate([u_team[t.owner], u_team[t.owner]])
+        means = np.concatenate([t.means, t.prior_means])
+        covs = np.concatenate([t.covs, t.prior_covs])
+        u_c = np.concatenate([u_team[t.groups], u_team[t.groups]])
         u_l = np.broadcast_to(u_self, u_c.shape)
         return means, covs, u_l, u_c
 
     def _set_predicted(self, m: Array, P: Array) -> None:
-        t = self.tracks
-        k = t.size
-        t.mean, t.prior_mean = m[:k], m[k:]
-        t.cov, t.prior_cov = P[:k], P[k:]
+        k = self.tracks.size
+        self.tracks = replace(
+            self.tracks, means=m[:k], prior_means=m[k:], covs=P[:k], prior_covs=P[k:]
+        )
 
     # ------------------------------------------------------------------ direct fusion
 
@@ -479,11 +455,11 @@ class GaussianSumFuser:
         t = self.tracks
         if t.size == 0:
             return
-        z = vals[t.owner]
+        z = vals[t.groups]
         sel = np.flatnonzero(np.isfinite(z))
         if sel.size == 0:
             return
-        mean, cov = t.mean[sel], t.cov[sel]
+        mean, cov = t.means[sel], t.covs[sel]
         if kind == "height":
             H = np.broadcast_to(_H_HEIGHT, (sel.size, 1, 4))
             pred = mean[:, 2:3]
@@ -504,9 +480,11 @@ class GaussianSumFuser:
         new_m, new_P, _ = kalman_update(
             mean, cov, nu, H, R, where=f"fuser {self.robot} {kind} t={self.time:.3f}"
         )
-        t.mean[sel] = np.where(inside[:, None], new_m, mean)
-        t.cov[sel] = np.where(inside[:, None, None], new_P, cov)
-        t.weight[sel] = t.weight[sel] * (valid + outlier)
+        means, covs, weights = t.means.copy(), t.covs.copy(), t.weights.copy()
+        means[sel] = np.where(inside[:, None], new_m, mean)
+        covs[sel] = np.where(inside[:, None, None], new_P, cov)
+        weights[sel] = t.weights[sel] * (valid + outlier)
+        self.tracks = replace(t, means=means, covs=covs, weights=weights)
 
     def update_bearings(self, bearings: ArrayLike, ranges: ArrayLike, heights: ArrayLike) -> None:
         """Gate, form and update with a bearing set of unknown correspondence.
@@ -529,48 +507,55 @@ class GaussianSumFuser:
         near = np.zeros((k, m), dtype=bool)
         parts: list[Tracks] = []
         if k and m:
-            hz = range_bearing(t.mean)[:, st.bearing_rows]
-            H = range_bearing_jacobian(t.mean)[:, st.bearing_rows, :]
+            hz = range_bearing(t.means)[:, st.bearing_rows]
+            H = range_bearing_jacobian(t.means)[:, st.bearing_rows, :]
             R = st.bearing_noise
-            S = H @ t.cov @ np.swapaxes(H, -1, -2) + R
+            S = H @ t.covs @ np.swapaxes(H, -1, -2) + R
             nu = Z[None, :, :] - hz[:, None, :]
             nu[..., 0] = wrap_angle(nu[..., 0])
             S_gate = modified_gate_covariance(
-                S, H, t.cov[:, _YAW, _YAW], self._speed[t.owner], st.gate
+                S, H, t.covs[:, _YAW, _YAW], self._speed[t.groups], st.gate
             )
             d2 = mahalanobis_batch(nu, S_gate[:, None, :, :])
-            gated = d2 <= chi2_gate(nb, st.gate.p_gate)
-            near = d2 <= chi2_gate(nb, st.gate.p_birth_exclusion)
+            gated = d2 <= chi2_threshold(nb, st.gate.p_gate)
+            near = d2 <= chi2_threshold(nb, st.gate.p_birth_exclusion)
             lik = _gaussian_density(nu, np.broadcast_to(S[:, None], (k, m, nb, nb)))
             kappa = self._false_density(lik, m, p_det)
             w_fa, w_det = formation_weights(
-                t.weight, lik, gated, st.formation, kappa[t.owner], p_detect=p_det[t.owner]
+                t.weights, lik, gated, st.formation, kappa[t.groups], p_detect=p_det[t.groups]
             )
-            fa = t.take(np.arange(k))
-            fa.weight = w_fa
-            fa.assoc = np.full(k, -1, dtype=np.int64)
-            fa.history = branch(t.history, np.arange(k), self._ids(k))
+            fa = replace(
+                t,
+                weights=w_fa,
+                assoc=np.full(k, -1, dtype=np.int64),
+                history=branch(t.history, np.arange(k), self._ids(k)),
+            )
             parts.append(fa)
             hi, ri = np.nonzero(gated)
             if hi.size:
-                det = t.take(hi)
                 new_m, new_P, _ = kalman_update(
-                    t.mean[hi],
-                    t.cov[hi],
+                    t.means[hi],
+                    t.covs[hi],
                     nu[hi, ri],
                     H[hi],
                     np.broadcast_to(R, (hi.size, nb, nb)),
                     where=f"fuser {self.robot} bearings t={self.time:.3f}",
                 )
-                det.mean, det.cov = new_m, new_P
-                det.weight = w_det[hi, ri]
-                det.assoc = ri.astype(np.int64)
-                det.history = branch(t.history, hi, self._ids(hi.size))
+                det = Tracks(
+                    groups=t.groups[hi],
+                    means=new_m,
+                    covs=new_P,
+                    prior_means=t.prior_means[hi],
+                    prior_covs=t.prior_covs[hi],
+                    weights=w_det[hi, ri],
+                    history=branch(t.history, hi, self._ids(hi.size)),
+                    assoc=ri.astype(np.int64),
+                )
                 parts.append(det)
         elif k:
             # no bearing at all: every track is a false-alarm branch with the same factor
             # (1 − P_D P_G), which normalisation cancels; only the associations change
-            t.assoc[:] = -1
+            self.tracks = replace(t, assoc=np.full(k, -1, dtype=np.int64))
             return
         if m:
             if not k:
@@ -594,10 +579,9 @@ class GaussianSumFuser:
         dens = np.zeros((n_team, m))
         tracked = np.zeros(n_team, dtype=bool)
         if t.size:
-            totals = np.bincount(t.owner, weights=t.weight, minlength=n_team)
-            w = t.weight / np.where(totals > 0.0, totals, 1.0)[t.owner]
-            np.add.at(dens, t.owner, w[:, None] * lik)
-            tracked[t.owner] = True
+            w = t.normalised_weights()
+            np.add.at(dens, t.groups, w[:, None] * lik)
+            tracked[t.groups] = True
         dens[~tracked] = 1.0 / st.bearing_volume
         dens *= p_det[:, None]
         others = dens.sum(axis=0)[None, :] - dens
@@ -615,7 +599,7 @@ class GaussianSumFuser:
         # hit[j, b]: bearing b lies in the gate of some track of teammate j
         hit = np.zeros((n_team, Z.shape[0]), dtype=bool)
         if t.size:
-            np.logical_or.at(hit, t.owner, near)
+            np.logical_or.at(hit, t.groups, near)
         usable = np.isfinite(r) & (r > 0.0) & np.isfinite(h) & (p_det > 0.0)
         jj, bb = np.nonzero(~hit & usable[:, None])
         if jj.size == 0:
@@ -637,12 +621,12 @@ class GaussianSumFuser:
         ids = self._ids(jj.size)
         return [
             Tracks(
-                owner=jj.astype(np.int64),
-                mean=means,
-                cov=covs,
-                prior_mean=means.copy(),
-                prior_cov=covs.copy(),
-                weight=w,
+                groups=jj.astype(np.int64),
+                means=means,
+                covs=covs,
+                prior_means=means.copy(),
+                prior_covs=covs.copy(),
+                weights=w,
                 history=new_history(ids, st.nscan_depth),
                 assoc=bb.astype(np.int64),
             )
@@ -668,8 +652,8 @@ class GaussianSumFuser:
         t = self.tracks
         cost = np.full((n_team, Z.shape[0]), np.inf)
         if t.size and Z.shape[0]:
-            dom = np.flatnonzero(heaviest_mask(t.weight, t.owner))
-            mean, cov = t.mean[dom], t.cov[dom]
+            dom = np.flatnonzero(heaviest_mask(t.weights, t.groups))
+            mean, cov = t.means[dom], t.covs[dom]
             H = range_bearing_jacobian(mean)[:, st.bearing_rows, :]
             S = H @ cov @ np.swapaxes(H, -1, -2) + st.bearing_noise
             nu = Z[None, :, :] - range_bearing(mean)[:, st.bearing_rows][:, None, :]
@@ -677,11 +661,11 @@ class GaussianSumFuser:
             d2 = mahalanobis_batch(nu, S[:, None, :, :])
             kappa = max(st.expected_clutter, 1e-3) / st.bearing_volume
             c = 0.5 * d2 + 0.5 * np.log(np.linalg.det(2.0 * np.pi * S))[:, None]
-            owner_pd = p_det[t.owner[dom]]
+            owner_pd = p_det[t.groups[dom]]
             with np.errstate(divide="ignore"):
                 c += np.log(kappa) - np.log(owner_pd)[:, None]
-            inside = (d2 <= chi2_gate(nb, st.gate.p_gate)) & (owner_pd > 0.0)[:, None]
-            cost[t.owner[dom]] = np.where(inside, c, np.inf)
+            inside = (d2 <= chi2_threshold(nb, st.gate.p_gate)) & (owner_pd > 0.0)[:, None]
+            cost[t.groups[dom]] = np.where(inside, c, np.inf)
         miss = -np.log(1.0 - p_det * st.formation.p_gate)
         return assign(cost, miss)
 
@@ -706,8 +690,8 @@ class GaussianSumFuser:
         t = self.tracks
         if t.size == 0:
             return
-        usable = (np.linalg.norm(t.mean[:, :3], axis=1) <= st.max_range) & (
-            np.trace(t.cov[:, :3, :3], axis1=1, axis2=2) <= st.max_position_sigma**2
+        usable = (np.linalg.norm(t.means[:, :3], axis=1) <= st.max_range) & (
+            np.trace(t.covs[:, :3, :3], axis1=1, axis2=2) <= st.max_position_sigma**2
         )
         t = t.take(np.flatnonzero(usable))
         self.tracks = t
@@ -715,36 +699,40 @@ class GaussianSumFuser:
             return
         self._normalise()
         t = self.tracks
-        keep = prune_mask(t.weight, st.prune_weight, t.owner)
+        keep = prune_mask(t.weights, st.prune_weight, t.groups)
         t = t.take(np.flatnonzero(keep))
-        t = t.take(np.flatnonzero(family_keep_mask(t.history, t.weight, st.nscan_weight, t.owner)))
+        t = t.take(
+            np.flatnonzero(family_keep_mask(t.history, t.weights, st.nscan_weight, t.groups))
+        )
         if t.size > 1:
-            t = self._merge(t.take(_cap_per_owner(t, 4 * st.max_components)))
-            t = t.take(_cap_per_owner(t, st.max_components))
+            t = self._merge(
+                t.take(np.flatnonzero(cap_mask(t.weights, 4 * st.max_components, t.groups)))
+            )
+            t = t.take(np.flatnonzero(cap_mask(t.weights, st.max_components, t.groups)))
         self.tracks = t
         self._normalise()
 
     def _merge(self, sub: Tracks) -> Tracks:
         """Moment-preserving Mahalanobis merging within each filter (priors merged alike)."""
-        groups = merge_groups(
-            sub.mean,
-            sub.cov,
-            sub.weight,
+        clusters = merge_groups(
+            sub.means,
+            sub.covs,
+            sub.weights,
             self.settings.merge_threshold,
             angle_index=_YAW,
-            groups=sub.owner,
+            groups=sub.groups,
         )
-        if len(groups) == sub.size:
+        if len(clusters) == sub.size:
             return sub
-        out = sub.take([g[0] for g in groups])
-        for n, g in enumerate(groups):
+        out = sub.take([g[0] for g in clusters])
+        for n, g in enumerate(clusters):
             if g.size == 1:
                 continue
-            out.mean[n], out.cov[n], out.weight[n] = merge_moments(
-                sub.mean, sub.cov, sub.weight, g, angle_index=_YAW
+            out.means[n], out.covs[n], out.weights[n] = merge_moments(
+                sub.means, sub.covs, sub.weights, g, angle_index=_YAW
             )
-            out.prior_mean[n], out.prior_cov[n], _ = merge_moments(
-                sub.prior_mean, sub.prior_cov, sub.weight, g, angle_index=_YAW
+            out.prior_means[n], out.prior_covs[n], _ = merge_moments(
+                sub.prior_means, sub.prior_covs, sub.weights, g, angle_index=_YAW
             )
         return out
 
@@ -753,35 +741,30 @@ class GaussianSumFuser:
     def mixture(self, robot: int) -> GaussianMixture | None:
         """``GSF^(i,robot)`` as a :class:`GaussianMixture` (``None`` while it has no track)."""
         j = self.teammate_index(robot)
-        sel = np.flatnonzero(self.tracks.owner == j)
+        sel = np.flatnonzero(self.tracks.groups == j)
         if sel.size == 0:
             return None
         t = self.tracks
-        return GaussianMixture(
-            means=t.mean[sel],
-            covs=t.cov[sel],
-            weights=t.weight[sel],
-            labels=tuple(int(x) for x in t.history[sel, -1]),
-        )
+        return GaussianMixture(means=t.means[sel], covs=t.covs[sel], weights=t.weights[sel])
 
     def summary(self, robot: int) -> TrackSummary | None:
         """The dominant track of ``GSF^(i,robot)`` and whether it is confirmed."""
         j = self.teammate_index(robot)
-        sel = np.flatnonzero(self.tracks.owner == j)
+        sel = np.flatnonzero(self.tracks.groups == j)
         if sel.size == 0:
             return None
         t = self.tracks
-        best = sel[int(np.argmax(t.weight[sel]))]
-        P = t.cov[best]
+        best = sel[int(np.argmax(t.weights[sel]))]
+        P = t.covs[best]
         st = self.settings
         confirmed = bool(
-            t.weight[best] >= st.confirm_weight
+            t.weights[best] >= st.confirm_weight
             and np.sqrt(np.trace(P[:3, :3])) <= st.confirm_position_sigma
             and np.sqrt(P[_YAW, _YAW]) <= st.confirm_yaw_sigma
         )
         return TrackSummary(
-            belief=Gaussian(mean=t.mean[best], cov=P),
-            weight=float(t.weight[best]),
+            belief=Gaussian(mean=t.means[best], cov=P),
+            weight=float(t.weights[best]),
             components=int(sel.size),
             confirmed=confirmed,
             assoc=int(t.assoc[best]),
@@ -794,7 +777,7 @@ class GaussianSumFuser:
         t = self.tracks
         out = []
         for j, robot in enumerate(self.teammates):
-            sel = np.flatnonzero(t.owner == j)
+            sel = np.flatnonzero(t.groups == j)
             if sel.size == 0:
                 continue
             out.append(
@@ -802,15 +785,14 @@ class GaussianSumFuser:
                     sender=self.robot,
                     subject=robot,
                     time=self.time,
-                    means=t.mean[sel],
-                    covs=t.cov[sel],
-                    prior_means=t.prior_mean[sel],
-                    prior_covs=t.prior_cov[sel],
-                    weights=t.weight[sel],
+                    means=t.means[sel],
+                    covs=t.covs[sel],
+                    prior_means=t.prior_means[sel],
+                    prior_covs=t.prior_covs[sel],
+                    weights=t.weights[sel],
                 )
             )
-        t.prior_mean = t.mean.copy()
-        t.prior_cov = t.cov.copy()
+        self.tracks = replace(t, prior_means=t.means.copy(), prior_covs=t.covs.copy())
         return out
 
     def fuse(self, msg: EquivalentMeasurement) -> str:
@@ -835,18 +817,18 @@ class GaussianSumFuser:
         j = self._index[msg.subject]
         l_idx = self._index[msg.sender]
         t = self.tracks
-        reg = np.flatnonzero((t.owner == l_idx) & (t.weight >= self.settings.registration_weight))
+        reg = np.flatnonzero((t.groups == l_idx) & (t.weights >= self.settings.registration_weight))
         if reg.size == 0:
             return "skipped"
         parts_m, parts_P, parts_pm, parts_pP, parts_w = [], [], [], [], []
         for k in reg:
-            m, P, from_a = compose_beliefs(t.mean[k], t.cov[k], msg.means, msg.covs)
-            pm, pP = register_prior(t.mean[k], msg.prior_means, msg.prior_covs, from_a)
+            m, P, from_a = compose_beliefs(t.means[k], t.covs[k], msg.means, msg.covs)
+            pm, pP = register_prior(t.means[k], msg.prior_means, msg.prior_covs, from_a)
             parts_m.append(m)
             parts_P.append(P)
             parts_pm.append(pm)
             parts_pP.append(pP)
-            parts_w.append(t.weight[k] * msg.weights)
+            parts_w.append(t.weights[k] * msg.weights)
         self._fuse_tracks(
             j,
             np.concatenate(parts_m),
@@ -869,61 +851,66 @@ class GaussianSumFuser:
         """Gate, form, fuse and reduce received tracks into ``GSF^(i,j)`` (module docstring)."""
         st = self.settings
         t = self.tracks
-        mine = np.flatnonzero(t.owner == j)
-        others = t.take(np.flatnonzero(t.owner != j))
-        gamma = chi2_gate(4, st.gate.p_gate)
+        mine = np.flatnonzero(t.groups == j)
+        others = t.take(np.flatnonzero(t.groups != j))
+        gamma = chi2_threshold(4, st.gate.p_gate)
         local = t.take(mine)
         n_loc, n_rx = local.size, weights.size
         parts: list[Tracks] = [others]
         gated = np.zeros((n_loc, n_rx), dtype=bool)
         if n_loc:
             rx_aligned = align_angles(
-                np.broadcast_to(means[None], (n_loc, n_rx, 4)), local.mean[:, None, :], _YAW
+                np.broadcast_to(means[None], (n_loc, n_rx, 4)), local.means[:, None, :], _YAW
             )
-            diff = rx_aligned - local.mean[:, None, :]
-            S = local.cov[:, None] + covs[None, :]
+            diff = rx_aligned - local.means[:, None, :]
+            S = local.covs[:, None] + covs[None, :]
             d2 = mahalanobis_batch(diff, S)
             gated = d2 <= gamma
             dens = _gaussian_density(diff, S)
-            S_mean = local.cov + np.einsum("k,kij->ij", weights, covs)[None]
-            keep = local.take(np.arange(n_loc))
-            keep.weight = local.weight * (1.0 - st.gate.p_gate) * _edge_density(S_mean, gamma)
-            keep.history = branch(local.history, np.arange(n_loc), self._ids(n_loc))
+            S_mean = local.covs + np.einsum("k,kij->ij", weights, covs)[None]
+            keep = replace(
+                local,
+                weights=local.weights * (1.0 - st.gate.p_gate) * _edge_density(S_mean, gamma),
+                history=branch(local.history, np.arange(n_loc), self._ids(n_loc)),
+            )
             parts.append(keep)
             hi, ri = np.nonzero(gated)
             if hi.size:
                 fused = local.take(hi)
                 for n, (a, b) in enumerate(zip(hi, ri, strict=True)):
-                    fused.mean[n], fused.cov[n] = self._fuse_pair(
-                        local.mean[a],
-                        local.cov[a],
+                    fused.means[n], fused.covs[n] = self._fuse_pair(
+                        local.means[a],
+                        local.covs[a],
                         means[b],
                         covs[b],
                         prior_means[b],
                         prior_covs[b],
                     )
-                    fused.prior_mean[n], fused.prior_cov[n] = self._fuse_pair(
-                        local.prior_mean[a],
-                        local.prior_cov[a],
+                    fused.prior_means[n], fused.prior_covs[n] = self._fuse_pair(
+                        local.prior_means[a],
+                        local.prior_covs[a],
                         means[b],
                         covs[b],
                         prior_means[b],
                         prior_covs[b],
                     )
-                fused.weight = local.weight[hi] * weights[ri] * dens[hi, ri]
-                fused.history = branch(local.history, hi, self._ids(hi.size))
+                fused = replace(
+                    fused,
+                    weights=local.weights[hi] * weights[ri] * dens[hi, ri],
+                    history=branch(local.history, hi, self._ids(hi.size)),
+                )
                 parts.append(fused)
         free = np.flatnonzero(~gated.any(axis=0)) if n_loc else np.arange(n_rx)
         if free.size:
             ids = self._ids(free.size)
             parts.append(
                 Tracks(
-                    owner=np.full(free.size, j, dtype=np.int64),
-                    mean=means[free].copy(),
-                    cov=covs[free].copy(),
-                    prior_mean=means[free].copy(),
-                    prior_cov=covs[free].copy(),
-                    weight=st.formation.p_birth * weights[free] * _edge_density(covs[free], gamma),
+                    groups=np.full(free.size, j, dtype=np.int64),
+                    means=means[free].copy(),
+                    covs=covs[free].copy(),
+                    prior_means=means[free].copy(),
+                    prior_covs=covs[free].copy(),
+                    weights=st.formation.p_birth * weights[free] * _edge_density(covs[free], gamma),
                     history=new_history(ids, st.nscan_depth),
                     assoc=np.full(free.size, -1, dtype=np.int64),
                 )

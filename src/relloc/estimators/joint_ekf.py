@@ -15,7 +15,8 @@ Eqs. 5, 8, 9, accumulated exactly over many odometry steps, see
 
 computed block-wise in ``O(n²)`` instead of the dense ``O(n³)`` product.
 
-Update (all rows of one epoch at once, linearised at the prior mean):
+Update (all rows of one epoch at once, linearised at the prior mean), the Joseph-form
+:func:`relloc.core.kalman.kalman_update`:
 
     S = H P Hᵀ + R,  K = P Hᵀ S⁻¹,  X⁺ = X + K ν,  P⁺ = (I − K H) P (I − K H)ᵀ + K R Kᵀ.
 """
@@ -28,7 +29,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from relloc.core.gaussian import Gaussian
-from relloc.core.linalg import joseph_update, solve_psd, symmetrise
+from relloc.core.kalman import kalman_update
+from relloc.core.linalg import symmetrise
 from relloc.errors import ModelError
 from relloc.models.planar_measurement import LinearisedRows
 
@@ -74,11 +76,9 @@ def ekf_update(belief: Gaussian, rows: LinearisedRows) -> Gaussian:
     n = belief.dim // 3
     H = rows.dense_jacobian(n)
     R = np.diag(rows.sigma**2)
-    PHt = belief.cov @ H.T
-    S = symmetrise(H @ PHt + R)
-    K = solve_psd(S, PHt.T, where="joint EKF innovation covariance").T
-    mean = belief.mean + K @ rows.residual
-    cov = joseph_update(belief.cov, K, H, R)
+    mean, cov, _ = kalman_update(
+        belief.mean, belief.cov, rows.residual, H, R, where="joint EKF update"
+    )
     return Gaussian(mean=mean, cov=cov)
 
 

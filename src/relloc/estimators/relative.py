@@ -14,7 +14,7 @@ and differ only in the update (seed 000 Eq. 8), computed in Joseph form::
   (and elevation) residual wrapped to [−π, π), ``R = diag(σ_r², σ_θ², σ_α²)``.
 * PLKF (pseudo-linear KF, seed 000 §3.3): ``H = H_pmo(θ̃, α̃)`` from the *measured* bearings,
   ``ν = [r̃, 0, 0] − H x⁻``, ``R = R_pmo`` (Eq. 6 simplified, or the full ``J Σ Jᵀ`` of Eqs. 4–5).
-* Bias-compensated PLKF (``update_plkf_bc``): the measured bearings inside ``H`` correlate the
+* Bias-compensated PLKF (``update_bcplkf``): the measured bearings inside ``H`` correlate the
   gain with the pseudo-linear noise, and the pseudo-linear noise itself has a non-zero mean
   (``u_r(θ̃, α̃)·p = r cos γ < r`` for a bearing error ``γ``), so ``E[K ν_pm] ≠ 0`` and the
   plain PLKF pushes the estimate outwards (range over-estimated). Following the
@@ -36,7 +36,8 @@ dimension (``mean (..., 4)``, ``cov (..., 4, 4)``, ``z (..., 3)``) so many pairs
 numpy call; the :class:`~relloc.core.Gaussian` wrappers (``predict``, ``update_*``) are the
 single-pair API; :class:`RelativeTracker` is the thin stateful wrapper. All of them run the
 hand-unrolled kernels of :mod:`relloc.estimators.kernels`, which are tested to equal the general
-matrix form (the models' Jacobians and the generic Joseph-form :func:`kalman_update`).
+matrix form (the models' Jacobians and the Joseph-form
+:func:`relloc.core.kalman.kalman_update`).
 """
 
 from __future__ import annotations
@@ -50,6 +51,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from relloc.core.gaussian import Gaussian
+from relloc.core.kalman import Innovation, not_positive_definite
 from relloc.errors import ConfigError, DataError, ModelError
 from relloc.estimators.kernels import (
     ARRAY_OPS,
@@ -74,26 +76,8 @@ from relloc.models.measurement import (
 from relloc.models.motion import VelocityNoise
 
 Array = NDArray[np.float64]
-UpdateKind = Literal["plkf", "plkf_bc", "tekf"]
-UPDATE_KINDS: tuple[str, ...] = ("plkf", "plkf_bc", "tekf")
-
-
-@dataclass(frozen=True)
-class Innovation:
-    """What an update saw: residual ``ν (..., m)``, its covariance ``S``, ``nis = νᵀS⁻¹ν``, and
-    the measurement covariance ``R`` used (for conditioning checks, seed 000 §7.3).
-
-    For a single pair ``nis`` is a float; for a batch it is an array ``(...,)``.
-    """
-
-    residual: Array
-    cov: Array
-    nis: float | Array
-    meas_cov: Array
-
-
-def _swap(M: Array) -> Array:
-    return np.swapaxes(M, -1, -2)
+UpdateKind = Literal["plkf", "tekf", "bcplkf"]
+UPDATE_KINDS: tuple[str, ...] = ("plkf", "tekf", "bcplkf")
 
 
 def _check_finite(name: str, value: ArrayLike, last: int, where: str) -> Array:
@@ -105,42 +89,13 @@ def _check_finite(name: str, value: ArrayLike, last: int, where: str) -> Array:
     return arr
 
 
-def kalman_update(
-    mean: Array, cov: Array, residual: Array, H: Array, R: Array, *, where: str = ""
-) -> tuple[Array, Array, Innovation]:
-    """Batched Joseph-form Kalman update given ``ν``, ``H`` and ``R`` (shared by every update).
-
-    Raises :class:`ModelError` naming ``where`` if some ``S`` cannot be factorised.
-    """
-    PHt = cov @ _swap(H)
-    S = H @ PHt + R
-    S = 0.5 * (S + _swap(S))
-    try:
-        L = np.linalg.cholesky(S)
-    except np.linalg.LinAlgError as exc:
-        raise ModelError(
-            f"innovation covariance is not positive definite{' at ' + where if where else ''}"
-        ) from exc
-    # K = P Hᵀ S⁻¹ via the Cholesky factor: S⁻¹ = L⁻ᵀ L⁻¹
-    eye = np.broadcast_to(np.eye(S.shape[-1]), S.shape)
-    L_inv = np.linalg.solve(L, eye)
-    S_inv = _swap(L_inv) @ L_inv
-    K = PHt @ S_inv
-    w = np.einsum("...ij,...j->...i", L_inv, residual)
-    nis = np.einsum("...i,...i->...", w, w)
-    new_mean = mean + np.einsum("...ij,...j->...i", K, residual)
-    A = np.eye(cov.shape[-1]) - K @ H
-    new_cov = A @ cov @ _swap(A) + K @ R @ _swap(K)
-    new_cov = 0.5 * (new_cov + _swap(new_cov))
-    return new_mean, new_cov, Innovation(residual=residual, cov=S, nis=nis, meas_cov=R)
-
-
 # --------------------------------------------------------------------------- array (batched) API
 #
 # The functions below run the hand-unrolled kernels of :mod:`relloc.estimators.kernels` on
 # Python floats (one pair) or on numpy arrays holding one entry for every pair. They equal the
 # general matrix composition ``relative_step`` / ``relative_jacobians`` / ``process_noise`` and
-# :func:`kalman_update` with the models' ``h``, ``H``, ``R`` (tests/estimators/test_kernels.py).
+# :func:`relloc.core.kalman.kalman_update` with the models' ``h``, ``H``, ``R``
+# (tests/estimators/test_kernels.py).
 
 
 def _check_cov(cov: ArrayLike, where: str) -> Array:
@@ -220,9 +175,7 @@ def _kernel_update(
         correction = bias(m, P, out[0], ops)
         out = None if correction is None else out
     if out is None:
-        raise ModelError(
-            f"innovation covariance is not positive definite{' at ' + where if where else ''}"
-        )
+        raise not_positive_definite(where)
     new_mean, new_cov, S, nis = out
     if correction is not None:
         new_mean = tuple(a - b for a, b in zip(new_mean, correction, strict=True))
@@ -292,7 +245,7 @@ def update_plkf_arrays(
     return _plkf_update(mean, cov, z, noise, covariance, where, compensate_bias=False)
 
 
-def update_plkf_bc_arrays(
+def update_bcplkf_arrays(
     mean: ArrayLike,
     cov: ArrayLike,
     z: ArrayLike,
@@ -350,7 +303,7 @@ def update_plkf(
     )
 
 
-def update_plkf_bc(
+def update_bcplkf(
     belief: Gaussian,
     z: ArrayLike,
     noise: RangeBearingNoise,
@@ -360,7 +313,7 @@ def update_plkf_bc(
 ) -> tuple[Gaussian, Innovation]:
     """Bias-compensated PLKF update of one pair with a measurement ``z = (r, θ, α)``."""
     return _single(
-        update_plkf_bc_arrays(belief.mean, belief.cov, z, noise, covariance=covariance, where=where)
+        update_bcplkf_arrays(belief.mean, belief.cov, z, noise, covariance=covariance, where=where)
     )
 
 
@@ -369,8 +322,8 @@ BatchUpdate = Callable[..., tuple[Array, Array, Innovation]]
 #: Batched update function of each filter kind (``covariance=`` is ignored by the TEKF).
 BATCH_UPDATES: dict[str, BatchUpdate] = {
     "plkf": update_plkf_arrays,
-    "plkf_bc": update_plkf_bc_arrays,
     "tekf": update_tekf_arrays,
+    "bcplkf": update_bcplkf_arrays,
 }
 
 
@@ -378,7 +331,7 @@ BATCH_UPDATES: dict[str, BatchUpdate] = {
 class FilterSettings:
     """Which update a relative filter uses and its noise models.
 
-    ``kind``: ``"plkf"`` (seed 000), ``"plkf_bc"`` (bias-compensated PLKF) or ``"tekf"``;
+    ``kind``: ``"plkf"`` (seed 000), ``"bcplkf"`` (bias-compensated PLKF) or ``"tekf"``;
     ``pseudo_linear_covariance``: ``"simplified"`` (Eq. 6) or ``"full"`` (Eqs. 4–5), PLKF only.
     """
 
@@ -485,14 +438,12 @@ class RelativeTracker:
             )
         out = update_kernel(self._mean, self._cov, A, nu, R, SCALAR_OPS)
         bias = None
-        if out is not None and kind == "plkf_bc":
+        if out is not None and kind == "bcplkf":
             bias = plkf_bias_kernel(
                 self._mean, self._cov, out[0], self._var_z, SCALAR_OPS, full_covariance=self._full
             )
-        if out is None or (kind == "plkf_bc" and bias is None):
-            raise ModelError(
-                f"innovation covariance is not positive definite at {self.label or 'tracker'}"
-            )
+        if out is None or (kind == "bcplkf" and bias is None):
+            raise not_positive_definite(self.label or "tracker")
         mean, self._cov, S, nis = out
         if bias is not None:
             mean = tuple(a - b for a, b in zip(mean, bias, strict=True))

@@ -2,7 +2,7 @@
 
 Follower ``R_i`` estimates ``x = [r_x, r_y, θ_i, θ_0]`` (:mod:`relloc.models.airground`; the
 frame ``airground_follower`` of :mod:`relloc.pipeline.frames`) and implements the estimator
-contract (:mod:`relloc.pipeline.contract`):
+contract (:mod:`relloc.core.contract`):
 
 - :meth:`SwitchingEkf.advance` predicts with Eq. 3 from both robots' commands — its own and the
   leader's ``(v, 0, 0, ω)`` rows of the held odometry, ``u = [v_i, ω_i, v_0, ω_0]``;
@@ -38,8 +38,9 @@ refusal is counted.
 
 Outliers. UWB ranges have a heavy positive tail (:mod:`relloc.models.uwb_noise`). Each block
 is χ²-gated: it is applied only if its NIS ``νᵀS⁻¹ν`` is below the ``gate_probability``
-quantile of χ²(m); rejections are counted per block kind. Angle residuals are wrapped. The
-update itself is the Joseph-form :func:`relloc.estimators.relative.kalman_update`.
+quantile of χ²(m); rejections are counted per block kind. Angle residuals are wrapped. Gate and
+update are :func:`relloc.core.kalman.gated_update`: ``S`` and the NIS first, then the Joseph-form
+update only for an accepted block.
 """
 
 from __future__ import annotations
@@ -47,18 +48,17 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from functools import lru_cache
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.stats import chi2
 
 from relloc.core.angles import wrap_angle
+from relloc.core.contract import Belief, HeldOdometry, Silent, UpdateRecord
 from relloc.core.gaussian import Gaussian
+from relloc.core.kalman import gated_update
 from relloc.core.linalg import condition_log10
 from relloc.core.recording import Measurements, kind_code
 from relloc.errors import ConfigError, DataError
-from relloc.estimators.relative import kalman_update
 from relloc.geometry.triangle import TriangleBearing, triangle_bearing
 from relloc.models.airground import (
     STATE_DIM,
@@ -71,7 +71,6 @@ from relloc.models.airground import (
     range_h,
     relative_step,
 )
-from relloc.pipeline.contract import Belief, HeldOdometry, Silent, UpdateRecord
 
 Array = NDArray[np.float64]
 #: Block kinds counted by the filter, with their measurement dimension.
@@ -183,13 +182,7 @@ class BlockResult:
     accepted: bool
 
 
-@lru_cache(maxsize=64)
-def gate_threshold(probability: float, dim: int) -> float:
-    """χ²(dim) quantile at ``probability`` (cached: it is asked for every update)."""
-    return float(chi2.ppf(probability, dim))
-
-
-def gated_update(
+def block_update(
     belief: Gaussian,
     z: Array,
     h: Array,
@@ -200,16 +193,16 @@ def gated_update(
     *,
     where: str = "",
 ) -> BlockResult:
-    """Joseph-form update of one block, skipped when its NIS exceeds the χ² gate."""
+    """χ²-gated Joseph-form update of one block (residual ``z − h``, angles wrapped)."""
     residual = np.asarray(z, dtype=float) - np.asarray(h, dtype=float)
     for k, ang in enumerate(is_angle):
         if ang:
             residual[k] = float(wrap_angle(residual[k]))
-    mean, cov, innov = kalman_update(belief.mean, belief.cov, residual, H, R, where=where)
-    nis = float(innov.nis)
-    if gate_probability is not None and nis > gate_threshold(gate_probability, len(z)):
-        return BlockResult(belief, nis, len(z), False)
-    return BlockResult(Gaussian(mean, cov), nis, len(z), True)
+    mean, cov, innov, accepted = gated_update(
+        belief.mean, belief.cov, residual, H, R, gate_probability, where=where
+    )
+    after = Gaussian(mean, cov) if accepted else belief
+    return BlockResult(after, float(innov.nis), len(z), accepted)
 
 
 @dataclass
@@ -414,7 +407,7 @@ class SwitchingEkf(Silent):
     ) -> None:
         """One gated block update, recorded (NIS, dof, conditioning of R and S) and counted."""
         prior = self.belief
-        res = gated_update(
+        res = block_update(
             prior,
             z,
             h,

@@ -19,7 +19,7 @@ deletion gets a new track. :class:`TrackManager` does exactly that for one obser
 - a track with no update for longer than ``keep_window_s`` is **deleted**; the next measurement
   of that robot **re-creates** it.
 
-The manager implements the estimator contract of :mod:`relloc.pipeline.contract`, so
+The manager implements the estimator contract of :mod:`relloc.core.contract`, so
 :func:`relloc.pipeline.replay.replay` (in-process) and a robot node (window by window) drive it
 alike. At an event time ``t`` it is advanced, then measured (the owner's
 ``range_bearing_elevation`` rows of known targets, one at a time in row order), then stale
@@ -47,12 +47,21 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.core.contract import (
+    Belief,
+    EventKind,
+    HeldOdometry,
+    Silent,
+    TrackEvent,
+    UpdateRecord,
+)
+from relloc.core.gaussian import GaussianMixture
+from relloc.core.kalman import Innovation
 from relloc.core.recording import KIND_NAMES, KINDS, Measurements, Recording, kind_code
 from relloc.errors import ConfigError
 from relloc.estimators.initialisation import InitContext, InitPolicy
-from relloc.estimators.relative import FilterSettings, Innovation, predict_arrays
+from relloc.estimators.relative import UPDATE_KINDS, FilterSettings, predict_arrays
 from relloc.estimators.yaw_bank import (
-    YawBank,
     YawBankSettings,
     predict_yaw_bank,
     spread_yaw_bank,
@@ -61,19 +70,9 @@ from relloc.estimators.yaw_bank import (
 from relloc.metrics.conditioning import condition_log10_batch
 from relloc.models.measurement import RangeBearingNoise
 from relloc.models.motion import VelocityNoise
-from relloc.pipeline.contract import (
-    Belief,
-    EventKind,
-    HeldOdometry,
-    Silent,
-    TrackEvent,
-    UpdateRecord,
-)
 
 Array = NDArray[np.float64]
 
-#: Filter names of ``relloc run --filter`` → update kinds of :mod:`relloc.estimators.relative`.
-FILTERS: dict[str, str] = {"plkf": "plkf", "tekf": "tekf", "bcplkf": "plkf_bc"}
 
 #: The reading the manager fuses: range, azimuth and elevation of a robot (seed 000 Eq. 2).
 MEASUREMENT_KIND = "range_bearing_elevation"
@@ -101,8 +100,10 @@ class TrackManagerSettings:
     yaw_bank: YawBankSettings | None = None
 
     def __post_init__(self) -> None:
-        if self.filter not in FILTERS:
-            raise ConfigError(f"filter: must be one of {', '.join(FILTERS)}, got {self.filter!r}")
+        if self.filter not in UPDATE_KINDS:
+            raise ConfigError(
+                f"filter: must be one of {', '.join(UPDATE_KINDS)}, got {self.filter!r}"
+            )
         w = self.keep_window_s
         if isinstance(w, bool) or not isinstance(w, (int, float)) or not 0.0 <= w < np.inf:
             raise ConfigError(f"keep_window_s: must be a finite number ≥ 0, got {w!r}")
@@ -126,7 +127,7 @@ class _Track:
     created_t: float
     last_update_t: float
     settings: FilterSettings
-    bank: YawBank | None = None
+    bank: GaussianMixture | None = None
 
     def predict(self, u_l: Array, u_c: Array, dt: float, where: str) -> None:
         noise = self.settings.motion_noise
@@ -136,7 +137,7 @@ class _Track:
             )
         else:
             self.bank = predict_yaw_bank(self.bank, u_l, u_c, dt, noise)
-            self.mean, self.cov = self.bank.estimate()
+            self.mean, self.cov = self.bank.heaviest()
 
     def update(self, z: Array, bank_settings: YawBankSettings | None, where: str) -> Innovation:
         if self.bank is None or bank_settings is None:
@@ -145,8 +146,8 @@ class _Track:
             )
             return inn
         self.bank, inns = update_yaw_bank(self.bank, z, self.settings, bank_settings)
-        k = int(self.bank.best_index)
-        self.mean, self.cov = self.bank.estimate()
+        k = int(self.bank.heaviest_index)
+        self.mean, self.cov = self.bank.heaviest()
         if int(self.bank.alive.sum()) == 1:  # collapsed: a single filter from now on
             self.bank = None
         return Innovation(
@@ -275,7 +276,7 @@ class TrackManager(Silent):
         fs = self._settings_cache.get(key)
         if fs is None:
             fs = FilterSettings(
-                kind=FILTERS[self.settings.filter],  # type: ignore[arg-type]
+                kind=self.settings.filter,  # type: ignore[arg-type]
                 motion_noise=VelocityNoise(
                     observer=self._sigma[self._me],  # type: ignore[arg-type]
                     observed=self._sigma[j],  # type: ignore[arg-type]

@@ -31,11 +31,13 @@ Alspach & Sorenson, IEEE TAC 17(4), 1972)::
 The estimate is the highest-weight component (its mean and covariance); a moment-matched
 mean would average headings that are far apart on the circle and sit between the modes.
 
-Batching. Banks are arrays with any leading batch shape: ``means (..., K, 4)``,
-``covs (..., K, 4, 4)``, ``log_weights (..., K)``. A dropped component keeps its slot (the
-arrays stay rectangular so many banks update in one numpy call): its log-weight is ``−∞`` and
-its state is overwritten with the surviving best component, so it costs arithmetic but can
-never be chosen, revived or make an update fail.
+Batching. A bank is a :class:`~relloc.core.gaussian.GaussianMixture` in the rectangular layout,
+with any leading batch shape: ``means (..., K, 4)``, ``covs (..., K, 4, 4)``,
+``weights (..., K)``. Bayes' rule runs on the log weights (the likelihoods of far-off
+hypotheses underflow) and is shifted so that the best weight is 1 before going back to weights.
+A dropped component keeps its slot (the arrays stay rectangular so many banks update in one
+numpy call): its weight is 0 and its state is overwritten with the surviving best component, so
+it costs arithmetic but can never be chosen, revived or make an update fail.
 
 A prior whose yaw standard deviation is below ``spread_above`` is not spread: the bank is that
 single filter (``K = 1``), so known-yaw cases run unchanged.
@@ -49,13 +51,15 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from relloc.core.gaussian import Gaussian
+from relloc.association.mixture_reduction import absorb_weights, heaviest_mask, prune_mask
+from relloc.core.angles import angle_diff
+from relloc.core.gaussian import Gaussian, GaussianMixture
+from relloc.core.kalman import Innovation
 from relloc.errors import ConfigError, ModelError
-from relloc.estimators.relative import FilterSettings, Innovation, predict_arrays
+from relloc.estimators.relative import FilterSettings, predict_arrays
 from relloc.models.motion import VelocityNoise
 
 Array = NDArray[np.float64]
-BoolArray = NDArray[np.bool_]
 
 YAW = 3
 
@@ -101,62 +105,9 @@ class YawBankSettings:
         return math.pi / self.n_components
 
 
-@dataclass(frozen=True)
-class YawBank:
-    """Gaussian sum over relative yaw (see module docstring); dead slots have weight ``−∞``."""
-
-    means: Array
-    covs: Array
-    log_weights: Array
-
-    def __post_init__(self) -> None:
-        m = np.asarray(self.means, dtype=float)
-        P = np.asarray(self.covs, dtype=float)
-        lw = np.asarray(self.log_weights, dtype=float)
-        if m.ndim < 2 or m.shape[-1] != 4 or P.shape != (*m.shape, 4) or lw.shape != m.shape[:-1]:
-            raise ModelError(
-                f"YawBank: shapes means {m.shape}, covs {P.shape}, log_weights {lw.shape} "
-                "must be (..., K, 4), (..., K, 4, 4), (..., K)"
-            )
-        if not np.all(np.isfinite(lw).any(axis=-1)):
-            raise ModelError("YawBank: every bank needs at least one live component")
-        object.__setattr__(self, "means", m)
-        object.__setattr__(self, "covs", P)
-        object.__setattr__(self, "log_weights", lw)
-
-    @property
-    def n_components(self) -> int:
-        """Slots ``K`` per bank (live or dropped)."""
-        return int(self.means.shape[-2])
-
-    @property
-    def alive(self) -> BoolArray:
-        """Which slots still hold a hypothesis, ``(..., K)``."""
-        return np.asarray(np.isfinite(self.log_weights))
-
-    @property
-    def weights(self) -> Array:
-        """Normalised weights ``(..., K)`` (0 for dropped slots)."""
-        lw = self.log_weights - np.max(self.log_weights, axis=-1, keepdims=True)
-        w = np.exp(lw)
-        return np.asarray(w / w.sum(axis=-1, keepdims=True))
-
-    @property
-    def best_index(self) -> NDArray[np.int64]:
-        """Index of the highest-weight component of each bank, ``(...)``."""
-        return np.asarray(np.argmax(self.log_weights, axis=-1))
-
-    def estimate(self) -> tuple[Array, Array]:
-        """Mean ``(..., 4)`` and covariance ``(..., 4, 4)`` of each bank's best component."""
-        k = self.best_index[..., None, None]
-        mean = np.take_along_axis(self.means, k, axis=-2)[..., 0, :]
-        cov = np.take_along_axis(self.covs, k[..., None], axis=-3)[..., 0, :, :]
-        return mean, cov
-
-
 def spread_yaw_bank(
     prior_mean: ArrayLike, prior_cov: ArrayLike, settings: YawBankSettings
-) -> YawBank:
+) -> GaussianMixture:
     """Bank for a prior ``N(prior_mean, prior_cov)`` over ``(x, y, z, φ)`` (batched).
 
     If every prior yaw σ is at least ``spread_above`` the bank has ``K`` components at
@@ -169,7 +120,11 @@ def spread_yaw_bank(
         raise ModelError(f"spread_yaw_bank: prior shapes {mean.shape}, {cov.shape}")
     sigma_yaw = np.sqrt(cov[..., YAW, YAW])
     if np.all(sigma_yaw < settings.spread_above):
-        return YawBank(mean[..., None, :], cov[..., None, :, :], np.zeros((*mean.shape[:-1], 1)))
+        return GaussianMixture(
+            means=mean[..., None, :],
+            covs=cov[..., None, :, :],
+            weights=np.ones((*mean.shape[:-1], 1)),
+        )
     if np.any(sigma_yaw < settings.spread_above):
         raise ModelError(
             "spread_yaw_bank: a batch must be all unknown-yaw or all known-yaw priors "
@@ -185,60 +140,61 @@ def spread_yaw_bank(
     covs[..., YAW, :] = 0.0
     covs[..., :, YAW] = 0.0
     covs[..., YAW, YAW] = settings.component_sigma**2
-    return YawBank(means, covs, np.zeros((*mean.shape[:-1], K)))
+    return GaussianMixture(means=means, covs=covs, weights=np.ones((*mean.shape[:-1], K)))
 
 
 def predict_yaw_bank(
-    bank: YawBank, u_l: ArrayLike, u_c: ArrayLike, dt: float, noise: VelocityNoise
-) -> YawBank:
+    bank: GaussianMixture, u_l: ArrayLike, u_c: ArrayLike, dt: float, noise: VelocityNoise
+) -> GaussianMixture:
     """Shared predict of every component (inputs broadcast over the component axis)."""
     u_l = np.asarray(u_l, dtype=float)[..., None, :]
     u_c = np.asarray(u_c, dtype=float)[..., None, :]
     means, covs = predict_arrays(bank.means, bank.covs, u_l, u_c, dt, noise, where="yaw bank")
-    return YawBank(means, covs, bank.log_weights)
+    return GaussianMixture(means=means, covs=covs, weights=bank.weights)
 
 
-def reweight(log_weights: Array, innovation: Innovation) -> Array:
-    """Bayes' rule on the weights: ``log w_k − ½ (NIS_k + log det S_k)``, max shifted to 0."""
+def reweight(weights: Array, innovation: Innovation) -> Array:
+    """Bayes' rule on the weights: ``log w_k − ½ (NIS_k + log det S_k)``, shifted so that the
+    best weight of each bank is 1; empty slots stay 0."""
     _, logdet = np.linalg.slogdet(innovation.cov)
-    lw = log_weights - 0.5 * (np.asarray(innovation.nis) + logdet)
-    lw = np.where(np.isfinite(log_weights), lw, -np.inf)
-    return np.asarray(lw - np.max(lw, axis=-1, keepdims=True))
+    with np.errstate(divide="ignore"):
+        log_w = np.log(weights)
+    lw = log_w - 0.5 * (np.asarray(innovation.nis) + logdet)
+    lw = np.where(np.isfinite(log_w), lw, -np.inf)
+    return np.asarray(np.exp(lw - np.max(lw, axis=-1, keepdims=True)))
 
 
-def reduce_bank(bank: YawBank, settings: YawBankSettings) -> YawBank:
+def reduce_bank(bank: GaussianMixture, settings: YawBankSettings) -> GaussianMixture:
     """Merge into the best component, prune below ``prune_ratio`` × best, collapse if dominant.
 
-    Dropped slots get weight ``−∞`` and the best component's state (see module docstring).
+    The steps are those of :mod:`relloc.association.mixture_reduction`, along the component
+    axis: merge by weight (:func:`absorb_weights`) into the best component
+    (:func:`heaviest_mask`), prune with a relative threshold (:func:`prune_mask`), and keep only
+    the best component of a bank where it holds ``collapse_weight``. Dropped slots get weight 0
+    and the best component's state (see module docstring).
     """
-    lw = bank.log_weights - np.max(bank.log_weights, axis=-1, keepdims=True)
-    best = np.argmax(lw, axis=-1)
-    is_best = np.arange(bank.n_components) == best[..., None]
-    mean, cov = bank.estimate()
-    d_yaw = bank.means[..., YAW] - mean[..., None, YAW]
-    d_yaw = np.abs(np.arctan2(np.sin(d_yaw), np.cos(d_yaw)))
+    is_best = heaviest_mask(bank.weights)
+    mean, cov = bank.heaviest()
+    w = bank.weights / np.max(bank.weights, axis=-1, keepdims=True)
+    d_yaw = np.abs(angle_diff(bank.means[..., YAW], mean[..., None, YAW]))
     spread = np.sqrt(bank.covs[..., YAW, YAW] + cov[..., None, YAW, YAW])
-    merged = np.isfinite(lw) & ~is_best & (d_yaw <= settings.merge_sigmas * spread)
-    w = np.where(np.isfinite(lw), np.exp(lw), 0.0)
-    w = np.where(is_best, w + np.sum(np.where(merged, w, 0.0), axis=-1, keepdims=True), w)
-    w = np.where(merged, 0.0, w)
-    keep = w >= settings.prune_ratio * np.max(w, axis=-1, keepdims=True)
+    w = absorb_weights(w, is_best, d_yaw <= settings.merge_sigmas * spread)
+    keep = prune_mask(w, settings.prune_ratio * np.max(w, axis=-1, keepdims=True))
     w = np.where(keep, w, 0.0)
     w = w / w.sum(axis=-1, keepdims=True)
     dominant = np.max(w, axis=-1) >= settings.collapse_weight
     keep = np.where(dominant[..., None], is_best, keep)
-    with np.errstate(divide="ignore"):
-        new_lw = np.where(keep, np.log(np.where(keep, w, 1.0)), -np.inf)
+    new_w = np.where(keep, w, 0.0)
     if keep.all():
-        return YawBank(bank.means, bank.covs, new_lw)
+        return GaussianMixture(means=bank.means, covs=bank.covs, weights=new_w)
     means = np.where(keep[..., None], bank.means, mean[..., None, :])
     covs = np.where(keep[..., None, None], bank.covs, cov[..., None, :, :])
-    return YawBank(means, covs, new_lw)
+    return GaussianMixture(means=means, covs=covs, weights=new_w)
 
 
 def update_yaw_bank(
-    bank: YawBank, z: ArrayLike, filter_settings: FilterSettings, settings: YawBankSettings
-) -> tuple[YawBank, Innovation]:
+    bank: GaussianMixture, z: ArrayLike, filter_settings: FilterSettings, settings: YawBankSettings
+) -> tuple[GaussianMixture, Innovation]:
     """Update every component with ``z (..., 3)``, reweight, prune and collapse.
 
     Returns the new bank and the innovation of every component (shapes ``(..., K, ...)``).
@@ -247,12 +203,12 @@ def update_yaw_bank(
     means, covs, innovation = filter_settings.update_arrays(
         bank.means, bank.covs, z, where="yaw bank"
     )
-    updated = YawBank(means, covs, reweight(bank.log_weights, innovation))
+    updated = GaussianMixture(means=means, covs=covs, weights=reweight(bank.weights, innovation))
     return reduce_bank(updated, settings), innovation
 
 
 class YawBankTracker:
-    """Stateful single-pair wrapper around a :class:`YawBank` (same interface as
+    """Stateful single-pair wrapper around a yaw bank (same interface as
     :class:`relloc.estimators.relative.RelativeTracker`): ``predict``, ``update``, ``belief``."""
 
     def __init__(
@@ -271,7 +227,7 @@ class YawBankTracker:
         self._bank = spread_yaw_bank(prior.mean, prior.cov, self.settings)
 
     @property
-    def bank(self) -> YawBank:
+    def bank(self) -> GaussianMixture:
         """The current Gaussian sum."""
         return self._bank
 
@@ -283,7 +239,7 @@ class YawBankTracker:
     @property
     def belief(self) -> Gaussian:
         """The highest-weight hypothesis."""
-        mean, cov = self._bank.estimate()
+        mean, cov = self._bank.heaviest()
         return Gaussian(mean=mean, cov=cov)
 
     def predict(self, u_l: ArrayLike, u_c: ArrayLike, dt: float) -> Gaussian:
@@ -294,7 +250,7 @@ class YawBankTracker:
     def update(self, z: ArrayLike) -> Innovation:
         """Fuse ``z = (r, θ, α)``; returns the innovation of the (new) best hypothesis."""
         self._bank, innovation = update_yaw_bank(self._bank, z, self.filter_settings, self.settings)
-        k = int(self._bank.best_index)
+        k = int(self._bank.heaviest_index)
         return Innovation(
             residual=innovation.residual[k],
             cov=innovation.cov[k],

@@ -20,7 +20,7 @@ Each run: :func:`relloc.sim.multihypothesis.simulate` gives a
 :class:`~relloc.core.recording.Recording`; the leaders'
 :class:`~relloc.fusion.gaussian_sum_estimator.GaussianSumEstimator` s are replayed over it by
 :func:`relloc.pipeline.replay.replay`, recording their dominant tracks at their scan times; the
-:class:`~relloc.pipeline.estimates.Estimates` are scored by
+:class:`~relloc.core.estimates.Estimates` are scored by
 :func:`relloc.experiments.multihypothesis_scores.leader_scores` (errors and NEES from
 :mod:`relloc.pipeline.evaluation`, the true origins of the bearings used from the recording).
 

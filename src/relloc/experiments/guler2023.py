@@ -42,7 +42,7 @@ runs), ``formation_rmse_m`` (true ``r − r_des``), ``anees_position`` with its 
 
 Scoring: the estimation RMSE per follower and axis (and of θ_i) is
 :func:`relloc.pipeline.evaluation.accuracy_and_consistency` of the follower's series of the
-run's :class:`~relloc.pipeline.estimates.Estimates`; the NEES is that of the relative position
+run's :class:`~relloc.core.estimates.Estimates`; the NEES is that of the relative position
 (the ``r`` block of the evaluation's error and the belief's covariance), pooled over followers,
 ticks and runs; the mode fractions come from the ``sw`` the beliefs carry, block and refusal
 counts from the estimates' counters, the NIS per block kind and the refusal reasons from the

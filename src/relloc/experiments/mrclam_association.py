@@ -6,12 +6,12 @@ Real data (Leung, Barfoot & Liu, IJRR 2011; any folder in MRCLAM layout, default
 robot runs a fuser (:class:`~relloc.fusion.gaussian_sum_estimator.GaussianSumEstimator`) with
 one Gaussian-sum filter per other robot, as in seed 002. The dataset becomes a
 :class:`~relloc.core.recording.Recording` (:func:`relloc.datasets.mrclam.to_recording`), whose
-camera rows of one time stamp (a camera frame) form a scan (:func:`_hidden_correspondence`). Each robot-to-robot
-row keeps its *range* with its barcode (known correspondence, like the paper's ranging sensor)
-but its *bearing* goes, without the barcode, into the scan's bearing set, together with
-``CLUTTER_PER_SCAN`` injected false bearings (Poisson, seeded), uniform over the camera's field
-of view (the widest |bearing| of any row, ±0.59 rad in run 6; the filter's
-clutter density is set to match). Range and bearing come from one camera detection, so the
+camera rows of one time stamp (a camera frame) form a scan (:func:`_hidden_correspondence`).
+Each robot-to-robot row keeps its *range* with its barcode (known correspondence, like the
+paper's ranging sensor) but its *bearing* goes, without the barcode, into the scan's bearing
+set, together with ``CLUTTER_PER_SCAN`` injected false bearings (Poisson, seeded), uniform
+over the camera's field of view (the widest |bearing| of any row, ±0.59 rad in run 6; the
+filter's clutter density is set to match). Range and bearing come from one camera detection, so the
 fuser runs with ``ranges_mark_detections``: a robot with a range in a frame has its bearing in
 the set, one without has none. The same data are also run with seed 002's separate-sensor model
 (bearing ``P_D`` fitted, independent of the ranges) and reported as ``separate_sensors``.

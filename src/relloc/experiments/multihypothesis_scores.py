@@ -16,10 +16,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.core.estimates import Estimates
 from relloc.core.recording import Recording
 from relloc.errors import DataError
 from relloc.fusion.gaussian_sum_estimator import NO_BEARING, bearing_rows
-from relloc.pipeline.estimates import Estimates
 from relloc.pipeline.evaluation import evaluate_series
 
 Array = NDArray[np.float64]

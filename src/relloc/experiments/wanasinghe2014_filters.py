@@ -25,9 +25,11 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.core.gaussian import GaussianMixture
+from relloc.core.kalman import Innovation
 from relloc.errors import ConfigError, DataError
-from relloc.estimators.relative import FilterSettings, Innovation, UpdateKind, predict_arrays
-from relloc.estimators.yaw_bank import YawBank, YawBankSettings, spread_yaw_bank, update_yaw_bank
+from relloc.estimators.relative import FilterSettings, UpdateKind, predict_arrays
+from relloc.estimators.yaw_bank import YawBankSettings, spread_yaw_bank, update_yaw_bank
 from relloc.metrics.conditioning import condition_log10_batch
 from relloc.metrics.consistency import nees
 from relloc.metrics.errors import state_errors
@@ -128,7 +130,7 @@ class _Block:
     kind: UpdateKind
     specs: list[int]
     rows: IntArray
-    log_weights: Array | None = None
+    weights: Array | None = None
     detail: NDArray[np.bool_] = field(default_factory=lambda: np.zeros(0, dtype=bool))
 
 
@@ -165,7 +167,7 @@ def _build_groups(
             s = specs[i]
             if s.bank:
                 bank = spread_yaw_bank(s.prior_mean, s.prior_cov, bank_settings)
-                k = bank.n_components
+                k = bank.weights.shape[-1]
                 m, P = bank.means, bank.covs
             else:
                 k = 1
@@ -181,7 +183,7 @@ def _build_groups(
         for (_, _, is_bank, k), block in blocks.items():
             block.detail = np.array([specs[i].detail for i in block.specs])
             if is_bank:
-                block.log_weights = np.zeros((len(block.specs), k))
+                block.weights = np.ones((len(block.specs), k))
         groups.append(
             _Group(
                 noise=noise,
@@ -244,25 +246,25 @@ def _update_block(
     settings = FilterSettings(kind=block.kind, motion_noise=group.noise, sensor_noise=target.sensor)
     z = target.z[m_idx]
     where = f"{target.name}, measurement {m_idx}"
-    if block.log_weights is None:
+    if block.weights is None:
         rows = block.rows
         mean, cov, inn = settings.update_arrays(group.means[rows], group.covs[rows], z, where=where)
         group.means[rows] = mean
         group.covs[rows] = cov
         _record(records, block, m_idx, mean, cov, inn, target.truth[m_idx], None)
         return
-    nb, k = block.log_weights.shape
-    bank = YawBank(
-        group.means[block.rows].reshape(nb, k, 4),
-        group.covs[block.rows].reshape(nb, k, 4, 4),
-        block.log_weights,
+    nb, k = block.weights.shape
+    bank = GaussianMixture(
+        means=group.means[block.rows].reshape(nb, k, 4),
+        covs=group.covs[block.rows].reshape(nb, k, 4, 4),
+        weights=block.weights,
     )
     bank, inn = update_yaw_bank(bank, z, settings, bank_settings)
     group.means[block.rows] = bank.means.reshape(nb * k, 4)
     group.covs[block.rows] = bank.covs.reshape(nb * k, 4, 4)
-    block.log_weights = bank.log_weights
-    mean, cov = bank.estimate()
-    best = bank.best_index
+    block.weights = bank.weights
+    mean, cov = bank.heaviest()
+    best = bank.heaviest_index
     pick = np.arange(nb), best
     best_inn = Innovation(
         residual=inn.residual[pick],

@@ -64,7 +64,7 @@ TABLE2: dict[str, tuple[float, float, float]] = {
 #: "yaw bank" is relloc's initialisation (:mod:`relloc.estimators.yaw_bank`) on PLKF components.
 REPLAY_FILTERS: dict[str, str] = {
     "PLKF": "plkf",
-    "BC-PLKF": "plkf_bc",
+    "BC-PLKF": "bcplkf",
     "TEKF": "tekf",
     "yaw bank": "plkf",
 }

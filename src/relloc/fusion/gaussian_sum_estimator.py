@@ -46,11 +46,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.core.contract import Belief, EventKind, HeldOdometry, TrackEvent, UpdateRecord
 from relloc.core.recording import KIND_NAMES, NO_TARGET, Measurements, kind_code
 from relloc.errors import ConfigError, DataError
 from relloc.estimators.gaussian_sum import GaussianSumFuser, GaussianSumSettings
 from relloc.fusion.messages import EquivalentMeasurement
-from relloc.pipeline.contract import Belief, EventKind, HeldOdometry, TrackEvent, UpdateRecord
 
 Array = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -274,7 +274,7 @@ class GaussianSumEstimator:
     def _note_tracks(self, t: float) -> None:
         """Track the start time of every filter's tracks and record its events."""
         has = np.zeros(self._team.size, dtype=bool)
-        has[self.fuser.tracks.owner] = True
+        has[self.fuser.tracks.groups] = True
         for local, j in enumerate(self._team.tolist()):
             if has[local] and j not in self._since:
                 self._since[j] = t

@@ -1,6 +1,6 @@
 """The one evaluation: estimates against the truth of a recording, and their pooled figures.
 
-:func:`evaluate` scores every belief series of an :class:`~relloc.pipeline.estimates.Estimates`
+:func:`evaluate` scores every belief series of an :class:`~relloc.core.estimates.Estimates`
 against the recording's ground truth in the series' frame (:mod:`relloc.pipeline.frames`):
 
 - error ``e = x̂ − x`` with the frame's angles wrapped to [−π, π), the filter's standard
@@ -28,12 +28,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.core.estimates import BeliefSeries, Estimates, UpdateSeries, series_label
 from relloc.core.recording import Recording
 from relloc.errors import ConfigError
 from relloc.metrics.conditioning import condition_log10_batch
 from relloc.metrics.consistency import anees, chi2_upper, mean_chi2_band, nees, percent_beyond
 from relloc.metrics.errors import state_errors
-from relloc.pipeline.estimates import BeliefSeries, Estimates, UpdateSeries, series_label
 from relloc.pipeline.frames import frame
 
 Array = NDArray[np.float64]

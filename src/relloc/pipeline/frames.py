@@ -1,6 +1,6 @@
 """Named state layouts (frames) of beliefs, and the true state of each from a recording.
 
-A :class:`~relloc.pipeline.contract.Belief` names its frame; evaluation asks the frame for the
+A :class:`~relloc.core.contract.Belief` names its frame; evaluation asks the frame for the
 true state of ``subject`` as ``owner`` would estimate it, at the record times:
 
 - ``relative_pose4`` — ``(x, y, z, φ)`` of the subject in the owner's body frame (seed 000

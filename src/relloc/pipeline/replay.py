@@ -1,13 +1,15 @@
-"""The one event loop: any recording through any estimators (:mod:`relloc.pipeline.contract`).
+"""Any recording through any estimators, on the one event loop of :mod:`relloc.core.events`.
 
 :func:`replay` turns a :class:`~relloc.core.recording.Recording` into event times — the union
 of every robot's odometry time stamps, the measurement times and the record times, within the
-recording's span (events closer than :data:`TIME_TOL` are one) — and hands them to
-:func:`run_events`, the loop that robot nodes also call, window by window, on what they have
-received. At each event ``t_k`` every estimator is advanced with the velocities in force since
-``t_{k−1}`` (each robot's last report at or before ``t_{k−1}``: zero-order hold), then given the
-readings stamped in ``(t_{k−1}, t_k]`` that were not given yet, then its outbox is delivered to
-the other estimators; at record times the beliefs are recorded.
+recording's span (events closer than :data:`relloc.core.events.TIME_TOL` are one) — and hands
+them to :func:`~relloc.core.events.run_events`, the loop that robot nodes also call, window by
+window, on what they have received. Readings outside the replayed window are not fed, and are
+counted (``Estimates.counts["rows_outside_window"]``). At each event ``t_k`` every estimator
+is advanced with the velocities in force since ``t_{k−1}`` (each robot's last report at or
+before ``t_{k−1}``: zero-order hold), then given the readings stamped in ``(t_{k−1}, t_k]`` that
+were not given yet, then its outbox is delivered to the other estimators; at record times the
+beliefs are recorded.
 
 An estimator that runs on a fixed clock (seed 002's filter steps at 20 Hz) is replayed with
 ``clock``: the events are then the clock's ticks only, and every reading is fed at the first
@@ -22,14 +24,13 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from relloc.core.recording import Measurements, Recording
+from relloc.core.contract import Estimator
+from relloc.core.estimates import Estimates, Recorder
+from relloc.core.events import TIME_TOL, run_events
+from relloc.core.recording import Recording
 from relloc.errors import ConfigError
-from relloc.pipeline.contract import Estimator, HeldOdometry
-from relloc.pipeline.estimates import Estimates, Recorder
 
 Array = NDArray[np.float64]
-TIME_TOL = 1e-9
-"""Event times closer than this are one event."""
 
 
 def feed_ticks(stamps: Array, ticks: Array) -> Array:
@@ -43,7 +44,8 @@ def feed_ticks(stamps: Array, ticks: Array) -> Array:
 
 
 def merge_times(*arrays: Array) -> Array:
-    """Sorted union of time stamps, with stamps closer than :data:`TIME_TOL` merged."""
+    """Sorted union of time stamps, with stamps closer than
+    :data:`relloc.core.events.TIME_TOL` merged."""
     t = np.unique(np.concatenate([np.asarray(a, dtype=float).reshape(-1) for a in arrays]))
     if t.size < 2:
         return t
@@ -56,76 +58,6 @@ def record_grid(t0: float, t1: float, rate_hz: float) -> Array:
         raise ConfigError(f"record_rate_hz: must be > 0, got {rate_hz}")
     n = int(np.floor((t1 - t0) * rate_hz + TIME_TOL))
     return np.asarray(t0 + np.arange(n + 1) / rate_hz, dtype=float)
-
-
-def run_events(
-    estimators: Sequence[Estimator],
-    times: Array,
-    held: Array,
-    stamps: Array,
-    measurements: Measurements,
-    record_times: Array | Mapping[str, Array],
-    recorder: Recorder,
-) -> None:
-    """The loop (module docstring) over event times ``times (K,)`` (increasing).
-
-    ``held (K, n, 4)`` and ``stamps (K, n)``: the velocities (and their time stamps) in force
-    from the previous event up to ``times[k]``; ``measurements`` sorted by time, each fed at the
-    first event at or after its stamp; ``record_times`` — for every estimator, or per owner —
-    must be among the event times.
-    """
-    times = np.asarray(times, dtype=float)
-    marks = _record_marks(estimators, times, record_times)
-    ends = np.searchsorted(measurements.t, times + TIME_TOL, side="right")
-    done = 0
-    for k, t in enumerate(times):
-        t = float(t)
-        odometry = HeldOdometry(velocity=held[k], stamp=stamps[k])
-        for est in estimators:
-            est.advance(t, odometry)
-        end = int(ends[k])
-        if end > done:
-            batch = measurements.select(slice(done, end))
-            for est in estimators:
-                est.measure(batch)
-            done = end
-        if len(estimators) > 1:
-            outgoing = [(est, m) for est in estimators for m in est.outbox()]
-            if outgoing:
-                for est in estimators:
-                    est.receive([m for sender, m in outgoing if sender is not est])
-        else:
-            estimators[0].outbox()  # a lone estimator's messages reach no one
-        for est, is_record in zip(estimators, marks, strict=True):
-            if is_record[k]:
-                recorder.record(t, est.owner, est.beliefs())
-    for est in estimators:
-        recorder.add_updates(est.owner, est.take_updates())
-        recorder.add_events(est.take_events())
-        take_counts = getattr(est, "take_counts", None)  # optional (see the contract)
-        if take_counts is not None:
-            recorder.count(take_counts())
-
-
-def _record_marks(
-    estimators: Sequence[Estimator], times: Array, record_times: Array | Mapping[str, Array]
-) -> list[NDArray[np.bool_]]:
-    def marks(rt: Array) -> NDArray[np.bool_]:
-        rt = np.asarray(rt, dtype=float).reshape(-1)
-        idx = np.searchsorted(times, rt - TIME_TOL)
-        if rt.size and (
-            np.any(idx >= times.size)
-            or np.any(np.abs(times[np.minimum(idx, times.size - 1)] - rt) > TIME_TOL)
-        ):
-            raise ConfigError("run_events: every record time must be an event time")
-        out = np.zeros(times.size, dtype=bool)
-        out[idx] = True
-        return out
-
-    if isinstance(record_times, Mapping):
-        return [marks(record_times.get(est.owner, np.zeros(0))) for est in estimators]
-    shared = marks(np.asarray(record_times))
-    return [shared for _ in estimators]
 
 
 def replay(
@@ -146,7 +78,7 @@ def replay(
     inside the window, the window defaults to ``[clock[0], clock[-1]]``, the record times
     (default: every tick) must be ticks, and readings are fed at the first tick at or after
     their stamp (module docstring). Returns the
-    :class:`~relloc.pipeline.estimates.Estimates` of all of them.
+    :class:`~relloc.core.estimates.Estimates` of all of them.
     """
     if not estimators:
         raise ConfigError("replay: no estimators given")
@@ -168,7 +100,8 @@ def replay(
         else np.asarray(record_times, dtype=float)
     )
     m = recording.measurements
-    m = m.select((m.t >= t0 - TIME_TOL) & (m.t <= t1 + TIME_TOL))
+    inside = (m.t >= t0 - TIME_TOL) & (m.t <= t1 + TIME_TOL)
+    m = m.select(inside)
     if ticks is None:
         odo_times = [od.t[(od.t > t0) & (od.t < t1)] for od in recording.odometry]
         times = merge_times(np.array([t0, t1]), all_record, m.t, *odo_times)
@@ -180,6 +113,9 @@ def replay(
     held = np.stack([od.held_at(before) for od in recording.odometry], axis=1)
     stamps = np.stack([od.stamp_at(before) for od in recording.odometry], axis=1)
     recorder = Recorder(name or "+".join(sorted({e.name for e in estimators})))
+    outside = int(inside.size - inside.sum())
+    if outside:
+        recorder.count({"rows_outside_window": outside})
     run_events(estimators, times, held, stamps, m, record_times, recorder)
     return recorder.results()
 

@@ -4,7 +4,7 @@
 (:mod:`relloc.runtime.team`) both track every robot a team observes with one
 :class:`~relloc.estimators.track_manager.TrackManager` per observing robot
 (:func:`track_team`, through :func:`relloc.pipeline.replay.replay`), score each run's
-:class:`~relloc.pipeline.estimates.Estimates` with :func:`relloc.pipeline.evaluation.evaluate`
+:class:`~relloc.core.estimates.Estimates` with :func:`relloc.pipeline.evaluation.evaluate`
 (:func:`score_run`), pool the runs into ``summary.json`` (:func:`summarise`,
 :func:`build_summary`) and write ``report.md`` with figures (:func:`write_team_report`).
 
@@ -38,6 +38,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.core.contract import TrackEvent
+from relloc.core.estimates import Estimates
 from relloc.core.recording import Recording
 from relloc.errors import ConfigError
 from relloc.estimators.track_manager import (
@@ -47,8 +49,6 @@ from relloc.estimators.track_manager import (
     managers_for,
 )
 from relloc.metrics.conditioning import ILL_CONDITIONED_LOG10
-from relloc.pipeline.contract import TrackEvent
-from relloc.pipeline.estimates import Estimates
 from relloc.pipeline.evaluation import (
     SeriesEvaluation,
     accuracy_and_consistency,

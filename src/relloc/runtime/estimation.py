@@ -1,6 +1,6 @@
 """A robot node's estimator: its own :class:`~relloc.estimators.track_manager.TrackManager` —
 the very one the in-process run gives that robot — driven window by window by the one event
-loop, :func:`relloc.pipeline.replay.run_events`, on what the node has (its own sensors,
+loop, :func:`relloc.core.events.run_events`, on what the node has (its own sensors,
 teammates' odometry as received).
 
 For a window ``[t0, t1)`` the event times are — exactly as in
@@ -15,9 +15,9 @@ its motion can no longer be predicted — and are counted; its track then expire
 window (``deleted``) and is re-created when the teammate is back and seen again (``recreated``,
 i.e. re-found).
 
-A :class:`~relloc.pipeline.estimates.Recorder` collects what the manager believed and did;
+A :class:`~relloc.core.estimates.Recorder` collects what the manager believed and did;
 :meth:`TrackManagerEstimator.take_new` returns only what is *new* since its last call (an
-:class:`~relloc.pipeline.estimates.Estimates` increment); a node ships it every report period,
+:class:`~relloc.core.estimates.Estimates` increment); a node ships it every report period,
 so a node that is killed mid-run has already shipped everything up to its last report.
 """
 
@@ -28,11 +28,12 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.core.contract import Belief
+from relloc.core.estimates import Estimates, Recorder
+from relloc.core.events import TIME_TOL, run_events
 from relloc.core.recording import measurement_rows
 from relloc.estimators.track_manager import MEASUREMENT_KIND, TrackManager
-from relloc.pipeline.contract import Belief
-from relloc.pipeline.estimates import Estimates, Recorder
-from relloc.pipeline.replay import TIME_TOL, merge_times, run_events
+from relloc.pipeline.replay import merge_times
 from relloc.runtime.sources import MeasurementBatch
 from relloc.runtime.teammates import ReceivedOdometry
 

@@ -19,13 +19,13 @@ checked against their declared shape, ``-1`` meaning "any length". Kinds:
   low broadcast rate (1 Hz in seed 002).
 - ``est`` — the sender's new estimates of one ``target`` (its track ``track``, ``""`` for the
   one track) for the collector (monitoring, not fusion): one increment of a
-  :class:`~relloc.pipeline.estimates.BeliefSeries` — beliefs in ``frame`` (a 4-state frame of
+  :class:`~relloc.core.estimates.BeliefSeries` — beliefs in ``frame`` (a 4-state frame of
   :mod:`relloc.pipeline.frames`) on the recording grid ``stamps`` (n,), ``means`` (n, 4),
   ``covs`` (n, 4, 4), track ``ages`` (n,) — and of its
-  :class:`~relloc.pipeline.estimates.UpdateSeries` — ``update_stamps`` (m,) with the track's
+  :class:`~relloc.core.estimates.UpdateSeries` — ``update_stamps`` (m,) with the track's
   ``update_ages``, ``nis`` and its degrees of freedom ``update_dofs``, ``cond_r``, ``cond_s``
   (m,) (log10 condition numbers of R, S). :func:`est_bodies` and :func:`estimates_from_bodies`
-  convert between these bodies and :class:`~relloc.pipeline.estimates.Estimates`.
+  convert between these bodies and :class:`~relloc.core.estimates.Estimates`.
 - ``evt`` — track events of the sender: ``stamps`` (e,), ``targets`` (e,), ``kinds`` (e,) in
   ``{"created", "deleted", "recreated"}``.
 - ``stats`` — the sender's counters (messages sent/received/rejected, estimates, tracks).
@@ -53,8 +53,8 @@ from typing import Any, TypeVar
 import msgpack
 import numpy as np
 
+from relloc.core.estimates import BeliefSeries, Estimates, SeriesKey, UpdateSeries, concatenate
 from relloc.errors import DataError
-from relloc.pipeline.estimates import BeliefSeries, Estimates, SeriesKey, UpdateSeries, concatenate
 from relloc.pipeline.frames import FRAMES
 
 SCHEMA_VERSION = 2

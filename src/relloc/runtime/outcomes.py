@@ -25,8 +25,8 @@ from typing import Any
 
 import numpy as np
 
+from relloc.core.estimates import Estimates
 from relloc.core.recording import Recording
-from relloc.pipeline.estimates import Estimates
 from relloc.pipeline.team_report import RunResult
 from relloc.runtime.faults import FaultSettings
 

@@ -1,6 +1,6 @@
 """Turn what the launcher collected into the run's results.
 
-:func:`assemble_estimates` rebuilds an :class:`~relloc.pipeline.estimates.Estimates` — the
+:func:`assemble_estimates` rebuilds an :class:`~relloc.core.estimates.Estimates` — the
 very record the in-process run produces — from the robots' ``est``/``evt`` streams, so the
 distributed run is scored by the same functions as ``relloc run``. :func:`robot_messages` and
 :func:`team_message_totals` add what only a distributed run has: per-robot message counts
@@ -15,9 +15,9 @@ from typing import Any
 
 import numpy as np
 
+from relloc.core.contract import TrackEvent
+from relloc.core.estimates import Estimates
 from relloc.errors import ConfigError
-from relloc.pipeline.contract import TrackEvent
-from relloc.pipeline.estimates import Estimates
 from relloc.runtime.launcher import Collected
 from relloc.runtime.messages import estimates_from_bodies
 

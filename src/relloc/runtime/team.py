@@ -1,6 +1,6 @@
 """``run_team``: launch a team, collect, score and write ``summary.json`` + ``report.md``.
 
-The distributed estimates are rebuilt into an :class:`~relloc.pipeline.estimates.Estimates`
+The distributed estimates are rebuilt into an :class:`~relloc.core.estimates.Estimates`
 and scored by the very functions of the in-process ``relloc run``
 (:func:`relloc.pipeline.team_report.build_summary` and
 :func:`~relloc.pipeline.team_report.write_team_report`) on the same seeded recording (run 0 of
@@ -28,9 +28,9 @@ from typing import Any
 
 import numpy as np
 
+from relloc.core.estimates import Estimates
 from relloc.estimators.initialisation import InitPolicy
 from relloc.estimators.track_manager import TrackManagerSettings
-from relloc.pipeline.estimates import Estimates
 from relloc.pipeline.output import fmt, markdown_table, prepare_out_dir, write_report
 from relloc.pipeline.team_report import (
     RECORD_RATE_HZ,

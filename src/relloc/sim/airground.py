@@ -2,7 +2,7 @@
 
 :func:`simulate_airground` is given the followers' estimators (one per follower, each built by
 the caller's factory and driven through the estimator contract of
-:mod:`relloc.pipeline.contract`) and their controller. Per tick ``k`` (period ``dt``, the
+:mod:`relloc.core.contract`) and their controller. Per tick ``k`` (period ``dt``, the
 filters' 20 Hz of the paper) it
 
 1. **Commands.** The leader follows its path (constant arc, or an S-shaped curve with
@@ -29,7 +29,7 @@ filters' 20 Hz of the paper) it
    drone, target R_i): the bearing φ_i of ``p_0 − p_i`` in F_G and the headings θ_i, θ_0, with
    white noise plus its own slowly varying heading-hold error (common to the three angles).
 5. **Estimation.** The estimators are driven through the contract by
-   :func:`relloc.pipeline.replay.run_events` over the one event at the end of the tick: advance
+   :func:`relloc.core.events.run_events` over the one event at the end of the tick: advance
    with the UGVs' commands as odometry ``(v, 0, 0, ω)`` (a drone's: its commanded planar
    velocity ``(v_x, v_y, 0, 0)`` along F_G, its commanded heading), measure the batch, record
    the beliefs. The simulator imports the contract, never an estimator.
@@ -53,6 +53,9 @@ from numpy.typing import NDArray
 
 from relloc.control.drone_schedule import DroneSchedule, Policy
 from relloc.control.formation import Frame, desired_relative
+from relloc.core.contract import Estimator
+from relloc.core.estimates import Estimates, Recorder
+from relloc.core.events import run_events
 from relloc.core.gaussian import Gaussian
 from relloc.core.recording import (
     GroundTruth,
@@ -66,9 +69,6 @@ from relloc.errors import ConfigError
 from relloc.models.airground import drone_step
 from relloc.models.unicycle import unicycle_step
 from relloc.models.uwb_noise import UwbNoiseModel, sample_range_errors
-from relloc.pipeline.contract import Estimator
-from relloc.pipeline.estimates import Estimates, Recorder
-from relloc.pipeline.replay import run_events
 
 Array = NDArray[np.float64]
 PathKind = Literal["arc", "s_curve", "straight"]

@@ -23,8 +23,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.core.contract import Belief, TrackEvent, UpdateRecord
 from relloc.errors import ConfigError
-from relloc.pipeline.contract import Belief, TrackEvent, UpdateRecord
 
 Array = NDArray[np.float64]
 IntArray = NDArray[np.int64]

@@ -1,7 +1,7 @@
 """The estimator contract: the one interface every relloc estimator implements.
 
 An estimator is an object that lives on a clock and is driven by
-:func:`relloc.pipeline.replay.run_events` (in-process) or by a robot node (window by window over
+:func:`relloc.core.events.run_events` (in-process) or by a robot node (window by window over
 the network). At every event time ``t`` the loop calls, in this order,
 
 1. :meth:`Estimator.advance` ``(t, odometry)`` — move the belief from the previous event to ``t``
@@ -21,7 +21,7 @@ and ``S``) and the track events (created, deleted, re-created) recorded since th
 An estimator that counts what it did not use (rows of a kind it does not model, of an unknown
 target, ...) may also offer ``take_counts() -> dict[str, int]`` (the counts since the last call;
 :class:`Silent` gives none); the loop adds them to :attr:`Estimates.counts
-<relloc.pipeline.estimates.Estimates.counts>`.
+<relloc.core.estimates.Estimates.counts>`.
 
 Estimators keep no reference to the truth and never read :attr:`Measurements.origin`.
 """

@@ -1,0 +1,98 @@
+"""The one event loop (:func:`run_events`) over estimators that implement the contract of
+:mod:`relloc.core.contract`.
+
+At each event time ``t_k`` every estimator is advanced with the velocities in force since
+``t_{k−1}`` (:class:`~relloc.core.contract.HeldOdometry`), then given the readings stamped up to
+``t_k`` that were not given yet, then the messages in its outbox are delivered to every other
+estimator; at record times the beliefs are recorded into a
+:class:`~relloc.core.estimates.Recorder`. :func:`relloc.pipeline.replay.replay` builds the
+events of a whole :class:`~relloc.core.recording.Recording`; a robot node builds them window by
+window from what it received; the closed-loop air-ground simulator runs one event per tick. It
+lives in core so that estimators, simulators and the runtime all share it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from relloc.core.contract import Estimator, HeldOdometry
+from relloc.core.estimates import Recorder
+from relloc.core.recording import Measurements
+from relloc.errors import ConfigError
+
+Array = NDArray[np.float64]
+TIME_TOL = 1e-9
+"""Event times closer than this are one event."""
+
+
+def run_events(
+    estimators: Sequence[Estimator],
+    times: Array,
+    held: Array,
+    stamps: Array,
+    measurements: Measurements,
+    record_times: Array | Mapping[str, Array],
+    recorder: Recorder,
+) -> None:
+    """The loop (module docstring) over event times ``times (K,)`` (increasing).
+
+    ``held (K, n, 4)`` and ``stamps (K, n)``: the velocities (and their time stamps) in force
+    from the previous event up to ``times[k]``; ``measurements`` sorted by time, each fed at the
+    first event at or after its stamp; ``record_times`` — for every estimator, or per owner —
+    must be among the event times.
+    """
+    times = np.asarray(times, dtype=float)
+    marks = _record_marks(estimators, times, record_times)
+    ends = np.searchsorted(measurements.t, times + TIME_TOL, side="right")
+    done = 0
+    for k, t in enumerate(times):
+        t = float(t)
+        odometry = HeldOdometry(velocity=held[k], stamp=stamps[k])
+        for est in estimators:
+            est.advance(t, odometry)
+        end = int(ends[k])
+        if end > done:
+            batch = measurements.select(slice(done, end))
+            for est in estimators:
+                est.measure(batch)
+            done = end
+        if len(estimators) > 1:
+            outgoing = [(est, m) for est in estimators for m in est.outbox()]
+            if outgoing:
+                for est in estimators:
+                    est.receive([m for sender, m in outgoing if sender is not est])
+        else:
+            estimators[0].outbox()  # a lone estimator's messages reach no one
+        for est, is_record in zip(estimators, marks, strict=True):
+            if is_record[k]:
+                recorder.record(t, est.owner, est.beliefs())
+    for est in estimators:
+        recorder.add_updates(est.owner, est.take_updates())
+        recorder.add_events(est.take_events())
+        take_counts = getattr(est, "take_counts", None)  # optional (see the contract)
+        if take_counts is not None:
+            recorder.count(take_counts())
+
+
+def _record_marks(
+    estimators: Sequence[Estimator], times: Array, record_times: Array | Mapping[str, Array]
+) -> list[NDArray[np.bool_]]:
+    def marks(rt: Array) -> NDArray[np.bool_]:
+        rt = np.asarray(rt, dtype=float).reshape(-1)
+        idx = np.searchsorted(times, rt - TIME_TOL)
+        if rt.size and (
+            np.any(idx >= times.size)
+            or np.any(np.abs(times[np.minimum(idx, times.size - 1)] - rt) > TIME_TOL)
+        ):
+            raise ConfigError("run_events: every record time must be an event time")
+        out = np.zeros(times.size, dtype=bool)
+        out[idx] = True
+        return out
+
+    if isinstance(record_times, Mapping):
+        return [marks(record_times.get(est.owner, np.zeros(0))) for est in estimators]
+    shared = marks(np.asarray(record_times))
+    return [shared for _ in estimators]

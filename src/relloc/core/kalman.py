@@ -1,0 +1,149 @@
+"""The Kalman update and the χ² gate shared by every covariance-form filter.
+
+Update, in Joseph form (seed 000 Eq. 8; seed 001 §2.1; seed 003 Algorithm 1), for a residual
+``ν``, a measurement matrix ``H`` and a measurement covariance ``R``::
+
+    S = H P Hᵀ + R,   K = P Hᵀ S⁻¹,   x⁺ = x + K ν,   P⁺ = (I − K H) P (I − K H)ᵀ + K R Kᵀ.
+
+``S⁻¹`` comes from the Cholesky factor ``S = L Lᵀ`` (``S⁻¹ = L⁻ᵀ L⁻¹``), which also gives the
+normalised innovation squared ``NIS = νᵀ S⁻¹ ν = ‖L⁻¹ ν‖²``. Every argument may carry leading
+batch dimensions (``mean (..., n)``, ``cov (..., n, n)``, ``residual (..., m)``,
+``H (..., m, n)``, ``R (..., m, m)``), so many independent updates run in one numpy call.
+
+Gate: a measurement block of dimension ``m`` is consistent with the prediction when
+
+    NIS ≤ γ,   γ = F⁻¹_{χ²(m)}(p),
+
+so that a correct measurement is accepted with probability ``p``. :func:`gated_update` computes
+``S`` and the NIS first, decides, and forms the gain and the update only for an accepted block.
+
+The hand-unrolled kernels of :mod:`relloc.estimators.kernels` are the same update written out for
+the 4-state relative model (tested equal to :func:`kalman_update` in
+tests/estimators/test_kernels.py).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+from numpy.typing import NDArray
+
+from relloc.errors import ConfigError, ModelError
+
+Array = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class Innovation:
+    """What an update saw: residual ``ν (..., m)``, its covariance ``S``, ``nis = νᵀS⁻¹ν``, and
+    the measurement covariance ``R`` used (for conditioning checks, seed 000 §7.3).
+
+    For a single update ``nis`` is a float; for a batch it is an array ``(...,)``.
+    """
+
+    residual: Array
+    cov: Array
+    nis: float | Array
+    meas_cov: Array
+
+
+def not_positive_definite(where: str) -> ModelError:
+    """The error of an update whose innovation covariance ``S`` cannot be factorised."""
+    return ModelError(
+        f"innovation covariance is not positive definite{' at ' + where if where else ''}"
+    )
+
+
+def _swap(M: Array) -> Array:
+    return np.swapaxes(M, -1, -2)
+
+
+def _factor(
+    cov: Array, residual: Array, H: Array, R: Array, where: str
+) -> tuple[Array, Array, Array, Array]:
+    """``(S, NIS, P Hᵀ, L⁻¹)``: ``S = H P Hᵀ + R = L Lᵀ``, ``NIS = ‖L⁻¹ ν‖²``, and what the gain
+    needs (``ModelError`` naming ``where`` if ``S`` is not positive definite)."""
+    PHt = cov @ _swap(H)
+    S = H @ PHt + R
+    S = 0.5 * (S + _swap(S))
+    try:
+        L = np.linalg.cholesky(S)
+    except np.linalg.LinAlgError as exc:
+        raise not_positive_definite(where) from exc
+    eye = np.broadcast_to(np.eye(S.shape[-1]), S.shape)
+    L_inv = np.linalg.solve(L, eye)
+    w = np.einsum("...ij,...j->...i", L_inv, residual)
+    nis = np.einsum("...i,...i->...", w, w)
+    return S, nis, PHt, L_inv
+
+
+def _correct(
+    mean: Array, cov: Array, residual: Array, H: Array, R: Array, PHt: Array, L_inv: Array
+) -> tuple[Array, Array]:
+    """Gain ``K = P Hᵀ L⁻ᵀ L⁻¹``, ``x⁺ = x + K ν`` and the Joseph-form ``P⁺``."""
+    K = PHt @ (_swap(L_inv) @ L_inv)
+    new_mean = mean + np.einsum("...ij,...j->...i", K, residual)
+    A = np.eye(cov.shape[-1]) - K @ H
+    new_cov = A @ cov @ _swap(A) + K @ R @ _swap(K)
+    return new_mean, 0.5 * (new_cov + _swap(new_cov))
+
+
+def kalman_update(
+    mean: Array, cov: Array, residual: Array, H: Array, R: Array, *, where: str = ""
+) -> tuple[Array, Array, Innovation]:
+    """Joseph-form Kalman update (module docstring), batched over leading dimensions.
+
+    Returns ``(mean⁺, cov⁺, innovation)``. Raises :class:`ModelError` naming ``where`` if some
+    ``S`` is not positive definite.
+    """
+    S, nis, PHt, L_inv = _factor(cov, residual, H, R, where)
+    new_mean, new_cov = _correct(mean, cov, residual, H, R, PHt, L_inv)
+    return new_mean, new_cov, Innovation(residual=residual, cov=S, nis=nis, meas_cov=R)
+
+
+@lru_cache(maxsize=64)
+def chi2_threshold(dim: int, probability: float) -> float:
+    """Gate threshold ``γ`` with ``P(χ²(dim) ≤ γ) = probability`` (cached)."""
+    if dim < 1:
+        raise ConfigError(f"chi2_threshold: dim must be ≥ 1, got {dim}")
+    if not 0.0 < probability < 1.0:
+        raise ConfigError(f"chi2_threshold: probability must lie in (0, 1), got {probability}")
+    # scipy.stats is imported here, not at module level: it takes about a second to import and
+    # most users of this module (the relative filters) never gate
+    from scipy.stats import chi2
+
+    return float(chi2.ppf(probability, dim))
+
+
+def gated_update(
+    mean: Array,
+    cov: Array,
+    residual: Array,
+    H: Array,
+    R: Array,
+    probability: float | None,
+    *,
+    where: str = "",
+) -> tuple[Array, Array, Innovation, bool]:
+    """χ²-gated Kalman update of one measurement block (no batch dimension).
+
+    Computes ``S`` and the NIS first; if ``NIS > chi2_threshold(m, probability)`` the block is
+    rejected and the prior ``(mean, cov)`` is returned unchanged, otherwise the update is that of
+    :func:`kalman_update`. ``probability=None`` disables the gate. Returns
+    ``(mean⁺, cov⁺, innovation, accepted)``.
+    """
+    residual = np.asarray(residual, dtype=float)
+    if residual.ndim != 1:
+        raise ModelError(
+            f"gated_update{' at ' + where if where else ''}: one block, residual shape "
+            f"{residual.shape}"
+        )
+    S, nis_array, PHt, L_inv = _factor(cov, residual, H, R, where)
+    nis = float(nis_array)
+    innovation = Innovation(residual=residual, cov=S, nis=nis, meas_cov=R)
+    if probability is not None and nis > chi2_threshold(residual.size, probability):
+        return mean, cov, innovation, False
+    new_mean, new_cov = _correct(mean, cov, residual, H, R, PHt, L_inv)
+    return new_mean, new_cov, innovation, True
