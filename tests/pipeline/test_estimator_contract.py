@@ -5,13 +5,13 @@ for, as ``(recording, estimators built fresh from a recording, the kinds it mode
 degrees of freedom it may report)``. Parametrised over every case, through the one loop
 :func:`relloc.pipeline.replay.replay`:
 
-- each estimator is an :class:`~relloc.pipeline.contract.Estimator` (runtime-checked Protocol);
+- each estimator is an :class:`~relloc.core.contract.Estimator` (runtime-checked Protocol);
 - every recorded belief has its frame's dimension (:mod:`relloc.pipeline.frames`), a finite
   mean and a symmetric positive semi-definite covariance (eigenvalues ≥ −1e-9·scale);
 - every update record has a finite NIS ≥ 0 and a dof ≥ 1 that the modelled kinds allow, and is
   stamped at a time with a reading of one of those kinds;
 - replay is deterministic (same recording, fresh estimators → identical
-  :class:`~relloc.pipeline.estimates.Estimates`) and never reads ``Measurements.origin`` (a
+  :class:`~relloc.core.estimates.Estimates`) and never reads ``Measurements.origin`` (a
   recording whose origin column is scrambled gives identical Estimates);
 - :func:`relloc.pipeline.evaluation.evaluate` and ``accuracy_and_consistency`` run on the result.
 
@@ -26,8 +26,8 @@ equations (``x⁻ = F x``, ``P⁻ = F P Fᵀ + Q``; ``S = H P⁻ Hᵀ + R``, ``K
 - the cooperative EIF and EKF of :class:`~relloc.estimators.cooperative.CooperativeEstimator`
   with only absolute pose fixes of still unicycles (``f`` the identity, ``H = I`` on the fixed
   robot's block);
-- the Joseph-form updates themselves (:func:`relloc.estimators.relative.kalman_update`,
-  :func:`relloc.core.linalg.joseph_update`).
+- the one Joseph-form update itself (:func:`relloc.core.kalman.kalman_update`) and its χ²-gated
+  form (:func:`relloc.core.kalman.gated_update`: the update inside the gate, the prior outside).
 
 No linear special case exists for: the TEKF (``h(x) = (r, θ, α)`` is nonlinear in the state);
 the bias-compensated PLKF (its correction ``b̂`` is a nonlinear function of the estimate); a
@@ -51,8 +51,11 @@ import pytest
 from numpy.typing import NDArray
 
 from relloc.core.angles import wrap_angle
+from relloc.core.contract import Estimator
+from relloc.core.estimates import Estimates
+from relloc.core.events import TIME_TOL
 from relloc.core.gaussian import Gaussian
-from relloc.core.linalg import joseph_update
+from relloc.core.kalman import chi2_threshold, gated_update, kalman_update
 from relloc.core.recording import (
     CLUTTER,
     KINDS,
@@ -72,7 +75,6 @@ from relloc.estimators.cooperative import (
     SensorModel,
 )
 from relloc.estimators.initialisation import InitPolicy
-from relloc.estimators.relative import kalman_update
 from relloc.estimators.track_manager import TrackManagerSettings, managers_for
 from relloc.estimators.yaw_bank import YawBankSettings
 from relloc.experiments.desilva2015 import filter_settings
@@ -87,11 +89,9 @@ from relloc.models.measurement import (
 from relloc.models.motion import VelocityNoise, process_noise, relative_jacobians, relative_step
 from relloc.models.unicycle import unicycle_jacobians, unicycle_step
 from relloc.models.uwb_noise import UwbNoiseModel
-from relloc.pipeline.contract import Estimator
-from relloc.pipeline.estimates import Estimates
 from relloc.pipeline.evaluation import accuracy_and_consistency, evaluate
 from relloc.pipeline.frames import frame
-from relloc.pipeline.replay import TIME_TOL, replay
+from relloc.pipeline.replay import replay
 from relloc.sim import cooperative, multihypothesis
 from relloc.sim.airground import robot_names
 from relloc.sim.scenario import default_scenario
@@ -606,17 +606,30 @@ def _random_problem(rng: np.random.Generator, n: int, m: int, batch: tuple[int, 
 
 
 @pytest.mark.parametrize("m", [1, 2, 3, 4])
-def test_joseph_updates_are_the_textbook_update(m: int) -> None:
+def test_the_core_kalman_update_is_the_textbook_update(m: int) -> None:
     rng = np.random.default_rng(100 + m)
     x, P, nu, H, R = _random_problem(rng, 4, m, (6,))
     mean, cov, inn = kalman_update(x, P, nu, H, R)
+    decisions: set[bool] = set()
     for k in range(6):
         x_ref, P_ref, S_ref, nis_ref = textbook_update(x[k], P[k], nu[k], H[k], R[k])
         np.testing.assert_allclose(mean[k], x_ref, rtol=1e-10, atol=1e-12)
         np.testing.assert_allclose(cov[k], P_ref, rtol=1e-10, atol=1e-10)
         np.testing.assert_allclose(inn.cov[k], S_ref, rtol=1e-12, atol=1e-12)
         np.testing.assert_allclose(np.asarray(inn.nis)[k], nis_ref, rtol=1e-10)
-        K = P[k] @ H[k].T @ np.linalg.inv(S_ref)
-        np.testing.assert_allclose(
-            joseph_update(P[k], K, H[k], R[k]), P_ref, rtol=1e-10, atol=1e-10
-        )
+        # the gated update: the textbook update inside the gate, the prior outside it (a
+        # residual 100 times larger is far outside)
+        for scale in (1.0, 100.0):
+            r = scale * nu[k]
+            r_mean, r_cov, _, r_nis = textbook_update(x[k], P[k], r, H[k], R[k])
+            g_mean, g_cov, g_inn, accepted = gated_update(x[k], P[k], r, H[k], R[k], 0.99)
+            assert accepted == (r_nis <= chi2_threshold(m, 0.99))
+            decisions.add(accepted)
+            np.testing.assert_allclose(g_inn.nis, r_nis, rtol=1e-10)
+            np.testing.assert_allclose(g_mean, r_mean if accepted else x[k], rtol=1e-10, atol=1e-9)
+            np.testing.assert_allclose(g_cov, r_cov if accepted else P[k], rtol=1e-10, atol=1e-10)
+        o_mean, o_cov, _, always = gated_update(x[k], P[k], nu[k], H[k], R[k], None)
+        assert always
+        np.testing.assert_allclose(o_mean, x_ref, rtol=1e-10, atol=1e-12)
+        np.testing.assert_allclose(o_cov, P_ref, rtol=1e-10, atol=1e-10)
+    assert decisions == {True, False}
