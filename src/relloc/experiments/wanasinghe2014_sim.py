@@ -135,7 +135,7 @@ def streams_from_log(log: Log, observer: str, targets: tuple[str, ...]) -> PairS
     for name in targets:
         j = log.index(name)
         m = log.measurements
-        rows = (m.observer == i) & (m.observed == j)
+        rows = (m.observer == i) & (m.target == j)
         t_m = m.t[rows]
         step = np.rint(t_m / dt).astype(np.int64)
         if not rows.any():
@@ -155,7 +155,7 @@ def streams_from_log(log: Log, observer: str, targets: tuple[str, ...]) -> PairS
                     sigma_elevation=float(sigma[2]),
                 ),
                 step=step,
-                z=np.asarray(m.z[rows]),
+                z=np.asarray(m.value[rows]),
                 truth=log.relative_truth(i, j, t_m),
             )
         )
