@@ -346,7 +346,7 @@ class RelativeFilterBatch(Silent):
         cond = condition_log10_batch(np.concatenate(matrices)).tolist()
         n = len(cond) // 2
         cond_r, cond_s = cond[:n], cond[n:]
-        out = []
+        out: list[UpdateRecord] = []
         for p in pending:
             for nis, i in zip(p.nis.tolist(), p.specs, strict=True):
                 k = len(out)
