@@ -128,9 +128,8 @@ class ReplayData:
 
     The pair ``robots = (observer, observed)`` on the window's grid ``t``: ``odometry`` held on
     the grid with the fitted noise σ, ``truth`` with the observed plane raised; ``valid`` marks
-    the grid times outside ground-truth gaps. Each draw adds its readings with
-    :meth:`recording` (the draws' workers get these parts, not a :class:`Recording`, whose
-    read-only ``meta`` view cannot be pickled).
+    the grid times outside ground-truth gaps. Each draw builds its :class:`Recording` from
+    these parts and its own readings (:meth:`recording`).
     """
 
     source: str
