@@ -12,6 +12,7 @@ import json
 import math
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from relloc.datasets.paths import default_mrclam_dataset
@@ -24,8 +25,14 @@ from relloc.experiments.wanasinghe2014 import (
     Wanasinghe2014Config,
     run_reproduction,
 )
-from relloc.experiments.wanasinghe2014_mrclam import ReplaySettings, prepare_replay
+from relloc.experiments.wanasinghe2014_mrclam import (
+    TABLE2,
+    ReplaySettings,
+    prepare_replay,
+    replay_recording,
+)
 from relloc.experiments.wanasinghe2014_sim import SimSettings
+from relloc.models.measurement import range_bearing
 from relloc.sim.scenario import default_scenario
 
 KEEP_SECONDS = 45.0
@@ -151,46 +158,25 @@ def test_replay_rejects_a_folder_too_short(small_dataset: Path) -> None:
         prepare_replay(ReplaySettings(dataset=small_dataset, observed=5))
 
 
-def test_batched_runner_equals_one_tracker_per_filter() -> None:
-    """Stacking filters into one batch must not change any of them."""
-    import numpy as np
-
-    from relloc.core.gaussian import Gaussian
-    from relloc.estimators.initialisation import fully_unknown, known_pose
-    from relloc.estimators.relative import FilterSettings, RelativeTracker
-    from relloc.experiments.wanasinghe2014_filters import TrackSpec, run_tracks
-    from relloc.experiments.wanasinghe2014_sim import streams_from_log
-    from relloc.metrics.errors import state_errors
-    from relloc.sim.simulate import simulate
-
-    scenario = default_scenario()
-    scenario = dataclasses.replace(scenario, robots=scenario.robots[:3], duration_s=1.0)
-    log = simulate(scenario, np.random.default_rng(3))
-    streams = streams_from_log(log, "observer", ("aerial1", "aerial2"))
-    truth0 = log.relative_truth(0, 1, 0.0)[0]
-    priors = [
-        known_pose(truth0),
-        fully_unknown(np.array([4.0, -1.0, 0.0, 2.5]), sigma_position=5.0),
-    ]
-    specs = [
-        TrackSpec(target=t, kind=kind, prior_mean=p.mean, prior_cov=p.cov)
-        for t in (0, 1)
-        for kind in ("plkf", "tekf")
-        for p in priors
-    ]
-    records = run_tracks(streams, specs)
-    for spec, rec in zip(specs, records, strict=True):
-        target = streams.targets[spec.target]
-        tracker = RelativeTracker(
-            Gaussian(mean=spec.prior_mean, cov=spec.prior_cov),
-            FilterSettings(kind=spec.kind, motion_noise=target.noise, sensor_noise=target.sensor),
-        )
-        errors = []
-        m = 0
-        for k in range(streams.n_steps):
-            tracker.predict(streams.u_l[k], target.u_c[k], streams.dt)
-            while m < len(target.step) and target.step[m] == k + 1:
-                tracker.update(target.z[m])
-                errors.append(state_errors(tracker.belief.mean, target.truth[m]))
-                m += 1
-        np.testing.assert_allclose(rec.errors, np.array(errors), rtol=1e-9, atol=1e-12)
+def test_a_replay_draw_is_four_sensors_of_the_observer(small_dataset: Path) -> None:
+    """The experiment's transformation of the MRCLAM recording: the pair, the odometry held on
+    the grid with the fitted noise, the observed plane raised, one sensor per Table-2 setting."""
+    settings = ReplaySettings(
+        dataset=small_dataset, duration_s=10.0, min_duration_s=8.0, start_after_odometry_s=1.0
+    )
+    data = prepare_replay(settings)
+    rec = replay_recording(data, np.random.default_rng(0))
+    assert rec.robots == ("1", "3")
+    assert rec.truth is not None and np.all(rec.truth[1].pose[:, 2] == settings.height)
+    for od, fit in zip(rec.odometry, (data.fits["observer"], data.fits["observed"]), strict=True):
+        np.testing.assert_array_equal(od.t, data.t[:-1])
+        np.testing.assert_array_equal(od.sigma, [fit.sigma_v, fit.sigma_lateral, 0.0, fit.sigma_w])
+    m = rec.measurements
+    assert np.all(m.observer == 0) and np.all(m.target == 1)
+    for sensor, (case, (s_r, s_b, rate)) in enumerate(TABLE2.items()):
+        rows = m.sensor == sensor
+        assert rows.sum() + data.skipped_epochs[case] == round(settings.duration_s * rate)
+        np.testing.assert_array_equal(m.sigma[rows], np.tile([s_r, s_b, s_b], (rows.sum(), 1)))
+        # noise-free readings would be the raised truth's range, azimuth and elevation
+        truth = rec.relative_truth(0, 1, m.t[rows])
+        np.testing.assert_allclose(m.value[rows], range_bearing(truth), atol=6 * max(s_r, s_b))

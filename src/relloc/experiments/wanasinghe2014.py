@@ -14,6 +14,15 @@ What is run (run counts: the paper's where it gives one)
   (:mod:`relloc.experiments.wanasinghe2014_mrclam`). The paper reports one recorded run; one
   draw of sensor noise is a noisy statistic, five are a compromise with the run time.
 
+Each draw runs all its filters of the observing robot in one
+:class:`~relloc.estimators.relative_batch.RelativeFilterBatch` through
+:func:`relloc.pipeline.replay.replay` and scores each at its own updates with
+:func:`relloc.pipeline.evaluation.evaluate` (:mod:`relloc.experiments.wanasinghe2014_filters`);
+the pooled RMSE, ±3σ containment, ANEES and % NEES/NIS beyond their bounds are
+:func:`relloc.pipeline.evaluation.accuracy_and_consistency`; Table 1 (updates to converge of
+the RMSE over draws), Table 3 (RMSE over draws per instant), the radial bias and the PCRLB
+ratios are built here on those evaluations.
+
 ``--runs N`` sets the team draws to N and the sweep and replay draws to ``min(N, 4)`` and
 ``min(N, 5)``. Every Monte-Carlo loop goes through :func:`relloc.pipeline.montecarlo.
 run_monte_carlo` with ``--executor``; seeds: team ``S``, replay ``S + 1``, sweep level ``i``
@@ -66,6 +75,7 @@ from relloc.experiments.wanasinghe2014_mrclam import (
     TABLE2,
     ReplayData,
     ReplaySettings,
+    ReplayTrack,
     prepare_replay,
     replay_filters,
     replay_task,
@@ -76,11 +86,12 @@ from relloc.experiments.wanasinghe2014_sim import (
     team_task,
     true_pair_inputs,
 )
-from relloc.metrics.consistency import anees, anees_band, chi2_upper, percent_beyond
+from relloc.metrics.consistency import anees_band
 from relloc.metrics.convergence import FIXED_THRESHOLDS, paper_thresholds, updates_to_converge
 from relloc.metrics.errors import rmse
 from relloc.models.motion import VelocityNoise
 from relloc.observability.pcrlb import pcrlb_ratio, relative_pair_pcrlb
+from relloc.pipeline.evaluation import SeriesEvaluation, accuracy_and_consistency
 from relloc.pipeline.montecarlo import run_monte_carlo
 from relloc.pipeline.output import (
     figure_md,
@@ -273,54 +284,56 @@ def run_reproduction(
 # ---------------------------------------------------------------------------------------------
 
 
-def _stack(team: list[dict[str, Any]], robot: str, key: str) -> Array:
-    return np.stack([run["accuracy"][robot][key] for run in team])
+#: The per-update series of a filter stacked over draws (figures, PCRLB): name →
+#: :class:`~relloc.pipeline.evaluation.SeriesEvaluation` field.
+SERIES_FIELDS: dict[str, str] = {
+    "errors": "error",
+    "sigma": "sigma",
+    "nees": "nees",
+    "nis": "nis",
+    "cond_p": "cond_p",
+    "cond_r": "cond_r",
+    "cond_s": "cond_s",
+}
+
+
+def stacked_series(runs: list[SeriesEvaluation], t: Array) -> dict[str, Array]:
+    """``{"t": t, name: (draws, updates, ...)}`` of one filter over its draws."""
+    out = {"t": t}
+    for name, attr in SERIES_FIELDS.items():
+        out[name] = np.stack([getattr(r, attr) for r in runs])
+    return out
 
 
 def accuracy_summary(
     team: list[dict[str, Any]], config: Wanasinghe2014Config
 ) -> tuple[dict[str, Any], dict[str, dict[str, Array]]]:
-    """Per observed robot: steady-state RMSE, ±3σ containment, ANEES, NIS (and the series)."""
+    """Per observed robot: steady-state RMSE; ±3σ containment, ANEES, NEES and NIS beyond
+    their bounds over every update; and the series stacked over draws."""
     out: dict[str, Any] = {}
     series: dict[str, dict[str, Array]] = {}
     for robot in config.sim.targets:
-        t = team[0]["accuracy"][robot]["t"]
-        E = _stack(team, robot, "errors")
-        S = _stack(team, robot, "sigma")
-        nees_v = _stack(team, robot, "nees")
-        nis_v = _stack(team, robot, "nis")
-        ss = t >= config.steady_state_s
-        per_state = rmse(E[:, ss], axis=(0, 1))
-        pos = float(np.sqrt(np.nanmean(np.sum(E[:, ss, :3] ** 2, axis=-1))))
-        inside = np.mean(np.abs(E) <= 3.0 * S, axis=(0, 1))
-        n = int(np.isfinite(nees_v).sum())
+        runs = [run["accuracy"][robot] for run in team]
+        steady = accuracy_and_consistency(runs, settle_s=config.steady_state_s)
+        every = accuracy_and_consistency(runs, settle_s=0.0)
         out[robot] = {
-            "position_rmse_m": pos,
-            "yaw_rmse_rad": float(per_state[3]),
-            "rmse": dict(zip(STATES, per_state.tolist(), strict=True)),
-            "inside_3sigma": dict(zip(STATES, inside.tolist(), strict=True)),
-            "anees": anees(nees_v, 4),
-            "anees_band_95": list(anees_band(4, n)),
-            "nees_percent_beyond": percent_beyond(nees_v, chi2_upper(4)),
-            "nis_percent_beyond": percent_beyond(nis_v, chi2_upper(3)),
-            "updates": int(t.size),
+            "position_rmse_m": steady["position_rmse_m"],
+            "yaw_rmse_rad": steady["yaw_rmse_rad"],
+            "rmse": steady["rmse"],
+            "inside_3sigma": {k: v / 100.0 for k, v in every["within_3sigma_percent"].items()},
+            "anees": every["anees"],
+            "anees_band_95": list(anees_band(4, every["samples"])),
+            "nees_percent_beyond": every["nees_percent_beyond"],
+            "nis_percent_beyond": every["nis_percent_beyond"],
+            "updates": int(runs[0].t.size),
             "paper": {k: list(v) for k, v in PAPER_ACCURACY.items()},
         }
-        series[robot] = {
-            "t": t,
-            "errors": E,
-            "sigma": S,
-            "nees": nees_v,
-            "nis": nis_v,
-            "cond_p": _stack(team, robot, "cond_p"),
-            "cond_r": _stack(team, robot, "cond_r"),
-            "cond_s": _stack(team, robot, "cond_s"),
-        }
+        series[robot] = stacked_series(runs, runs[0].t)
     return out, series
 
 
 def odometry_noise_summary(
-    config: Wanasinghe2014Config, sweep: list[list[dict[str, dict[str, Array]]]], data: ReplayData
+    config: Wanasinghe2014Config, sweep: list[list[dict[str, SeriesEvaluation]]], data: ReplayData
 ) -> dict[str, Any]:
     """The σ the team uses, the sweep's RMSE per scale, and the σ fitted for the replay."""
     scenario = config.sim.scenario
@@ -343,10 +356,9 @@ def odometry_noise_summary(
             "yaw_rmse_rad": {},
         }
         for robot in config.sim.targets:
-            t = runs[0][robot]["t"]
-            E = np.stack([run[robot]["errors"] for run in runs])[:, t >= steady]
-            row["position_rmse_m"][robot] = float(np.sqrt(np.nanmean(np.sum(E[..., :3] ** 2, -1))))
-            row["yaw_rmse_rad"][robot] = float(rmse(E[..., 3], axis=(0, 1)))
+            pooled = accuracy_and_consistency([run[robot] for run in runs], settle_s=steady)
+            row["position_rmse_m"][robot] = pooled["position_rmse_m"]
+            row["yaw_rmse_rad"][robot] = pooled["yaw_rmse_rad"]
         rows.append(row)
     return {
         "team": used,
@@ -479,69 +491,60 @@ def _table3_entry(E: Array, ss: NDArray[np.bool_], case: str) -> dict[str, Any]:
     }
 
 
-def _consistency_entry(stacked: dict[str, Array], ss: NDArray[np.bool_]) -> dict[str, Any]:
-    """% NEES beyond χ²(4, 0.95), % NIS beyond χ²(3, 0.95), ANEES and max conditioning."""
-    nees_ss = stacked["nees"][:, ss]
+def _consistency_entry(runs: list[SeriesEvaluation], settle_s: float) -> dict[str, Any]:
+    """Steady-state % NEES beyond χ²(4, 0.95), % NIS beyond χ²(3, 0.95) and ANEES; max
+    conditioning of P, R and S over every update."""
+    pooled = accuracy_and_consistency(runs, settle_s=settle_s)
     return {
-        "nees_percent_beyond": percent_beyond(nees_ss, chi2_upper(4)),
-        "nis_percent_beyond": percent_beyond(stacked["nis"][:, ss], chi2_upper(3)),
-        "anees": anees(nees_ss, 4),
+        "nees_percent_beyond": pooled["nees_percent_beyond"],
+        "nis_percent_beyond": pooled["nis_percent_beyond"],
+        "anees": pooled["anees"],
         "max_conditioning": {
-            "P": float(np.nanmax(stacked["cond_p"])),
-            "R": float(np.nanmax(stacked["cond_r"])),
-            "S": float(np.nanmax(stacked["cond_s"])),
+            "P": float(max(np.max(r.cond_p) for r in runs)),
+            "R": float(max(np.max(r.cond_r) for r in runs)),
+            "S": float(max(np.max(r.cond_s) for r in runs)),
         },
-        "samples": int(np.isfinite(nees_ss).sum()),
+        "samples": pooled["samples"],
     }
 
 
-REPLAY_SERIES: tuple[str, ...] = (
-    "errors",
-    "radial",
-    "sigma",
-    "nees",
-    "nis",
-    "cond_p",
-    "cond_r",
-    "cond_s",
-)
-
-
 def replay_summary(
-    replay: list[dict[str, dict[str, dict[str, Array]]]], config: Wanasinghe2014Config
+    replay: list[dict[str, dict[str, ReplayTrack]]], config: Wanasinghe2014Config
 ) -> tuple[dict[str, Any], ...]:
-    """Table 3 (PLKF; yaw bank in ``table3_best``), Table 4, bias comparison, series."""
+    """Table 3 (PLKF; yaw bank in ``table3_best``), Table 4, bias comparison, series (time
+    from the start of the window)."""
     table3: dict[str, Any] = {}
     table3_best: dict[str, Any] = {}
     table4: dict[str, Any] = {}
     bias: dict[str, Any] = {}
     series: dict[str, dict[str, dict[str, Array]]] = {}
+    settle = config.replay_steady_state_s
     for case in TABLE2:
         bias[case] = {}
         series[case] = {}
         for filt in replay_filters(case):
-            t = replay[0][case][filt]["t"]
-            ss = t >= config.replay_steady_state_s
-            stacked = {
-                key: np.stack([run[case][filt][key] for run in replay]) for key in REPLAY_SERIES
-            }
-            series[case][filt] = {"t": t, **stacked}
-            E = stacked["errors"]
+            runs = [run[case][filt].evaluation for run in replay]
+            t = runs[0].age
+            ss = t >= settle
+            stacked = stacked_series(runs, t)
+            radial = np.stack([run[case][filt].radial for run in replay])
+            series[case][filt] = {**stacked, "radial": radial}
+            pooled = accuracy_and_consistency(runs, settle_s=settle)
             bias[case][filt] = {
-                "radial_bias_m": float(np.nanmean(stacked["radial"][:, ss])),
-                "position_rmse_m": float(np.sqrt(np.nanmean(np.sum(E[:, ss, :3] ** 2, -1)))),
-                "yaw_rmse_rad": float(rmse(E[:, ss, 3], axis=(0, 1))),
+                "radial_bias_m": float(np.nanmean(radial[:, ss])),
+                "position_rmse_m": pooled["position_rmse_m"],
+                "yaw_rmse_rad": pooled["yaw_rmse_rad"],
             }
             if filt == "PLKF":
-                table3[case] = _table3_entry(E, ss, case)
+                table3[case] = _table3_entry(stacked["errors"], ss, case)
                 table4[case] = {
-                    **_consistency_entry(stacked, ss),
+                    **_consistency_entry(runs, settle),
                     "paper_nees_percent_beyond": PAPER_TABLE4[case],
                     "paper_max_conditioning_below": 6.0,
                 }
             elif filt == "yaw bank":
-                table3_best[case] = _table3_entry(E, ss, case)
-                table4[case]["yaw_bank"] = _consistency_entry(stacked, ss)
+                table3_best[case] = _table3_entry(stacked["errors"], ss, case)
+                table4[case]["yaw_bank"] = _consistency_entry(runs, settle)
     return table3, table3_best, table4, bias, series
 
 

@@ -4,21 +4,25 @@ The paper replays two Pioneer robots with map-based localisation as ground truth
 observed robot as if it flew 2 m above its real plane, drives the filter with the recorded
 odometry and synthesises range/azimuth/elevation from the ground truth at the four Table-2
 sensor settings. Here the same is done with two robots of any MRCLAM-layout dataset
-(:mod:`relloc.datasets.mrclam`; default run 6):
+(:mod:`relloc.datasets.mrclam`; default run 6), as a transformation of the dataset's
+:class:`~relloc.core.recording.Recording` (:func:`to_recording`):
 
-* the observer's and the observed robot's **recorded odometry** ``(v, ω)`` are the velocity
-  inputs ``u = (v, 0, 0, ω)``, held between records, on a 100 Hz grid;
-* the **truth** is the Vicon pose of both robots interpolated on that grid (yaw on the circle),
-  the observed robot's plane raised by ``height``; measurement epochs falling in a ground-truth
-  gap are skipped (counted);
-* the **odometry noise** the filters assume is fitted from the recording itself
-  (:func:`relloc.calibration.odometry.fit_odometry_noise`: equivalent white noise over 1 s
-  windows, over each robot's whole recording — the calibration window, stated with each fit in
-  ``odometry_noise.replay_fit``), not chosen to match a paper number;
-* each Monte-Carlo draw adds fresh sensor noise for the four Table-2 settings and starts the
-  PLKF, the bias-compensated PLKF and the TEKF from one arbitrary pose drawn in the field of
-  view (seed 000 §6: unknown initialisation), together with relloc's yaw bank from the same
-  pose.
+* the pair only; the observer's and the observed robot's **recorded odometry** ``(v, ω)`` are
+  the velocity inputs ``u = (v, 0, 0, ω)``, held between records, resampled on a 100 Hz grid;
+* the **truth** is the Vicon pose of both robots (interpolated at the record times, yaw on the
+  circle), the observed robot's plane raised by ``height``; measurement epochs falling in a
+  ground-truth gap are skipped (counted);
+* the **odometry noise** the filters assume — the σ the transformed recording states — is
+  fitted from the recording itself (:func:`relloc.calibration.odometry.fit_odometry_noise`:
+  equivalent white noise over 1 s windows, over each robot's whole recording — the calibration
+  window, stated with each fit in ``odometry_noise.replay_fit``), not chosen to match a paper
+  number;
+* each Monte-Carlo draw adds fresh readings for the four Table-2 settings — four sensors of
+  the observer (sensor ``s`` is the ``s``-th setting of :data:`TABLE2`), each stating its σ — and
+  starts the PLKF, the bias-compensated PLKF and the TEKF from one arbitrary pose drawn in the
+  field of view (seed 000 §6: unknown initialisation), together with relloc's yaw bank from
+  the same pose, all in one :class:`~relloc.estimators.relative_batch.RelativeFilterBatch`
+  (:func:`relloc.experiments.wanasinghe2014_filters.run_filters`).
 
 The window starts ``start_after_odometry_s`` after both robots' first odometry record (they
 stand still before) and lasts ``duration_s`` (160 s: the paper's 1600 NEES samples at 10 Hz),
@@ -37,18 +41,22 @@ from numpy.typing import NDArray
 
 from relloc.calibration.odometry import OdometryNoiseFit, fit_odometry_noise
 from relloc.calibration.window import odometry_and_truth
-from relloc.core.recording import relative_pose
-from relloc.datasets.mrclam import load_mrclam
+from relloc.core.recording import (
+    GroundTruth,
+    Measurements,
+    Odometry,
+    Recording,
+    measurement_rows,
+    relative_pose,
+)
+from relloc.datasets.mrclam import load_mrclam, to_recording
 from relloc.errors import ConfigError, DataError
 from relloc.estimators.initialisation import fully_unknown, pose_in_fov
-from relloc.experiments.wanasinghe2014_filters import (
-    PairStreams,
-    TargetStream,
-    TrackSpec,
-    run_tracks,
-)
-from relloc.models.measurement import RangeBearingNoise, range_bearing
-from relloc.models.motion import VelocityNoise
+from relloc.estimators.relative_batch import TrackSpec
+from relloc.estimators.yaw_bank import YawBankSettings
+from relloc.experiments.wanasinghe2014_filters import run_filters
+from relloc.models.measurement import range_bearing
+from relloc.pipeline.evaluation import SeriesEvaluation
 from relloc.sim.sensors import add_noise
 
 Array = NDArray[np.float64]
@@ -113,15 +121,20 @@ class ReplaySettings:
 
 @dataclass(frozen=True)
 class ReplayData:
-    """The deterministic part of the replay, built once and shared by every draw."""
+    """The deterministic part of the replay, built once and shared by every draw.
+
+    The pair ``robots = (observer, observed)`` on the window's grid ``t``: ``odometry`` held on
+    the grid with the fitted noise σ, ``truth`` with the observed plane raised; ``valid`` marks
+    the grid times outside ground-truth gaps. Each draw builds its :class:`Recording` from
+    these parts and its own readings (:meth:`recording`).
+    """
 
     source: str
+    robots: tuple[str, str]
     t: Array
-    u_l: Array
-    u_c: Array
-    truth: Array
+    odometry: tuple[Odometry, Odometry]
+    truth: tuple[GroundTruth, GroundTruth]
     valid: NDArray[np.bool_]
-    noise: VelocityNoise
     fits: dict[str, OdometryNoiseFit]
     skipped_epochs: dict[str, int]
     load_report: dict[str, Any]
@@ -130,31 +143,55 @@ class ReplayData:
     def dt(self) -> float:
         return float(self.t[1] - self.t[0])
 
+    def relative_truth(self, t: Array) -> Array:
+        """True pose of the observed robot in the observer's frame at times ``t``."""
+        return relative_pose(self.truth[0].at(t), self.truth[1].at(t))
 
-def _inputs(v: Array, w: Array) -> Array:
-    u = np.zeros((v.size, 4))
-    u[:, 0] = v
-    u[:, 3] = w
-    return u
+    def recording(self, measurements: Measurements) -> Recording:
+        """The pair with ``measurements``."""
+        return Recording(
+            robots=self.robots,
+            platforms=("ground", "ground"),
+            odometry=self.odometry,
+            measurements=measurements,
+            truth=self.truth,
+            source=self.source,
+        )
 
 
-def _sigma(fit: OdometryNoiseFit) -> tuple[float, float, float, float]:
+# ----------------------------------------------------------------------------------------------
+# The experiment's transformation of the recording
+# ----------------------------------------------------------------------------------------------
+
+
+def _held(od: Odometry, t: Array, sigma: Array, where: str) -> Odometry:
+    """``od`` held on the grid ``t[:-1]`` (zero-order hold), stating the noise ``sigma``."""
+    return Odometry(t=t[:-1], velocity=od.held_at(t[:-1]), sigma=sigma, where=where)
+
+
+def _raised(gt: GroundTruth, height: float) -> GroundTruth:
+    """``gt`` with its plane at ``z = height``."""
+    pose = np.array(gt.pose)
+    pose[:, 2] = height
+    return GroundTruth(t=gt.t, pose=pose, where=f"{gt.where} raised {height:g} m")
+
+
+def _sigma(fit: OdometryNoiseFit) -> Array:
     """Velocity-noise σ of a ground robot whose plane is fixed: (v, lateral, 0, ω)."""
-    return (fit.sigma_v, fit.sigma_lateral, 0.0, fit.sigma_w)
+    return np.array([fit.sigma_v, fit.sigma_lateral, 0.0, fit.sigma_w])
 
 
 def prepare_replay(settings: ReplaySettings) -> ReplayData:
-    """Load the dataset, cut the window, build inputs and truth, fit the odometry noise."""
+    """Load the dataset, cut the window, hold the odometry on the grid, raise the observed
+    robot's plane, fit the odometry noise."""
     ds = load_mrclam(settings.dataset)
     obs, tgt = ds.robot(settings.observer), ds.robot(settings.observed)
-    start = max(obs.odometry.t[0], tgt.odometry.t[0]) + settings.start_after_odometry_s
-    end = min(
-        start + settings.duration_s,
-        obs.groundtruth.t[-1],
-        tgt.groundtruth.t[-1],
-        obs.odometry.t[-1],
-        tgt.odometry.t[-1],
-    )
+    recording = to_recording(ds)
+    i, j = recording.index(str(settings.observer)), recording.index(str(settings.observed))
+    truth = recording.require_truth("the seed-000 replay")
+    od_l, od_c = recording.odometry[i], recording.odometry[j]
+    start = max(od_l.t[0], od_c.t[0]) + settings.start_after_odometry_s
+    end = min(start + settings.duration_s, truth[i].t[-1], truth[j].t[-1], od_l.t[-1], od_c.t[-1])
     if end - start < settings.min_duration_s:
         raise DataError(
             f"{settings.dataset}: robots {settings.observer} and {settings.observed} share only "
@@ -164,9 +201,7 @@ def prepare_replay(settings: ReplaySettings) -> ReplayData:
     dt = 1.0 / settings.rate_hz
     n = math.floor((end - start) * settings.rate_hz + 1e-9)
     t = start + dt * np.arange(n + 1)
-    ql, qc = obs.groundtruth.at(t), tgt.groundtruth.at(t)
-    pose_l = np.stack([ql.x, ql.y, np.zeros_like(ql.x), ql.theta], axis=-1)
-    pose_c = np.stack([qc.x, qc.y, np.full_like(qc.x, settings.height), qc.theta], axis=-1)
+    valid = np.asarray(obs.groundtruth.at(t).valid & tgt.groundtruth.at(t).valid)
     fits = {
         label: fit_odometry_noise(
             robot,
@@ -178,15 +213,17 @@ def prepare_replay(settings: ReplaySettings) -> ReplayData:
     }
     return ReplayData(
         source=f"{ds.path} robots {settings.observer} → {settings.observed}",
+        robots=(recording.robots[i], recording.robots[j]),
         t=t,
-        u_l=_inputs(*obs.odometry.at(t[:-1])),
-        u_c=_inputs(*tgt.odometry.at(t[:-1])),
-        truth=relative_pose(pose_l, pose_c),
-        valid=np.asarray(ql.valid & qc.valid),
-        noise=VelocityNoise(observer=_sigma(fits["observer"]), observed=_sigma(fits["observed"])),
+        odometry=(
+            _held(od_l, t, _sigma(fits["observer"]), f"{od_l.where} on the grid"),
+            _held(od_c, t, _sigma(fits["observed"]), f"{od_c.where} on the grid"),
+        ),
+        truth=(truth[i], _raised(truth[j], settings.height)),
+        valid=valid,
         fits=fits,
         skipped_epochs={
-            case: int(np.count_nonzero(~np.asarray(ql.valid & qc.valid)[_epochs(t, rate)]))
+            case: int(np.count_nonzero(~valid[_epochs(t, rate)]))
             for case, (_, _, rate) in TABLE2.items()
         },
         load_report=ds.report.to_dict(),
@@ -199,59 +236,76 @@ def _epochs(t: Array, rate_hz: float) -> NDArray[np.int64]:
     return np.arange(stride, t.size, stride, dtype=np.int64)
 
 
-def replay_streams(data: ReplayData, rng: np.random.Generator) -> PairStreams:
-    """One draw of the four Table-2 sensor settings as four targets sharing the inputs."""
-    targets = []
-    for case, (s_r, s_b, rate) in TABLE2.items():
+def replay_recording(data: ReplayData, rng: np.random.Generator) -> Recording:
+    """One draw of the readings: range, azimuth and elevation synthesised from the truth with
+    fresh noise at every valid epoch of each Table-2 setting — setting ``s`` is the observer's
+    sensor ``s`` (in :data:`TABLE2` order), stating its σ."""
+    parts = []
+    for sensor, (s_r, s_b, rate) in enumerate(TABLE2.values()):
         steps = _epochs(data.t, rate)
         steps = steps[data.valid[steps]]
-        truth = data.truth[steps]
         sigma = np.array([s_r, s_b, s_b])
-        z = add_noise(range_bearing(truth), sigma, rng)
-        targets.append(
-            TargetStream(
-                name=case,
-                u_c=data.u_c,
-                noise=data.noise,
-                sensor=RangeBearingNoise(sigma_r=s_r, sigma_azimuth=s_b, sigma_elevation=s_b),
-                step=steps.astype(np.int64),
-                z=z,
-                truth=truth,
+        z = add_noise(range_bearing(data.relative_truth(data.t[steps])), sigma, rng)
+        parts.append(
+            measurement_rows(
+                "range_bearing_elevation",
+                t=data.t[steps],
+                observer=0,
+                target=1,
+                value=z,
+                sigma=sigma,
+                sensor=sensor,
             )
         )
-    return PairStreams(dt=data.dt, u_l=data.u_l, targets=tuple(targets))
+    return data.recording(Measurements.concatenate(parts))
+
+
+@dataclass(frozen=True)
+class ReplayTrack:
+    """One filter on one draw: its evaluation at its updates and the radial error
+    ``|p̂| − |p|`` (m) of the position at each."""
+
+    evaluation: SeriesEvaluation
+    radial: Array
 
 
 def replay_task(
     seed: np.random.SeedSequence, run_index: int, data: ReplayData, settings: ReplaySettings
-) -> dict[str, dict[str, dict[str, Array]]]:
-    """One draw: ``{case: {filter: {"t", "errors", "radial", "sigma", "nees", "nis", …}}}``."""
+) -> dict[str, dict[str, ReplayTrack]]:
+    """One draw: ``{case: {filter: ReplayTrack}}`` (the filters of :func:`replay_filters`)."""
     rng = np.random.default_rng(seed)
-    streams = replay_streams(data, rng)
+    recording = replay_recording(data, rng)
     guess = pose_in_fov(rng, fov_deg=360.0, range_limits=settings.init_range)
     prior = fully_unknown(guess, sigma_position=settings.init_range[1] / math.sqrt(3.0))
+    observer, observed = data.robots
     specs = [
         TrackSpec(
-            target=j,
+            label=f"{case}/{name}",
+            subject=observed,
             kind=REPLAY_FILTERS[name],  # type: ignore[arg-type]
             prior_mean=np.asarray(prior.mean),
             prior_cov=np.asarray(prior.cov),
+            sensor=sensor,
             bank=name == "yaw bank",
-            detail=True,
         )
-        for j, target in enumerate(streams.targets)
-        for name in replay_filters(target.name)
+        for sensor, case in enumerate(TABLE2)
+        for name in replay_filters(case)
     ]
-    records = iter(run_tracks(streams, specs))
-    out: dict[str, dict[str, dict[str, Array]]] = {}
-    for target in streams.targets:
-        p_true = target.truth[:, :3]
-        out[target.name] = {}
-        for name in replay_filters(target.name):
-            rec = next(records)
-            p_est = p_true + rec.errors[:, :3]
+    scored = run_filters(
+        recording,
+        specs,
+        observer=observer,
+        bank=YawBankSettings(),
+        start=float(data.t[0]),
+        end=float(data.t[-1]),
+    )
+    out: dict[str, dict[str, ReplayTrack]] = {}
+    for case in TABLE2:
+        out[case] = {}
+        for name in replay_filters(case):
+            ev = scored[(observed, f"{case}/{name}")]
+            p_true = data.relative_truth(ev.t)[:, :3]
+            p_est = p_true + ev.error[:, :3]
             radial = np.linalg.norm(p_est, axis=-1) - np.linalg.norm(p_true, axis=-1)
-            entry = {"t": data.t[target.step] - data.t[0], "errors": rec.errors, "radial": radial}
-            entry.update(rec.detail)
-            out[target.name][name] = entry
+            out[case][name] = ReplayTrack(evaluation=ev, radial=radial)
     return out

@@ -3,10 +3,13 @@
 One Monte-Carlo draw (:func:`team_task`) simulates the built-in default scenario
 (:func:`relloc.sim.scenario.default_scenario`: one observing ground robot, aerial robots at
 +2.0 m and +1.5 m, ground robots at −0.1 m and −0.2 m, Table-2 case-(1) sensor at 10 Hz,
-100 Hz propagation) and runs, on that one log, every filter the reproduction needs:
+100 Hz propagation) and runs, on that one recording, every filter the reproduction needs — all of
+them side by side in one :class:`~relloc.estimators.relative_batch.RelativeFilterBatch` of the
+observer, through :func:`relloc.pipeline.replay.replay`
+(:func:`relloc.experiments.wanasinghe2014_filters.run_filters`):
 
 * **accuracy** (seed 000 §5, Figs. 3–4): a PLKF per observed robot started from the known
-  pose (case 1), with σ, NEES, NIS and conditioning recorded;
+  pose (case 1), scored with σ, NEES, NIS and conditioning at every update;
 * **Table 1** (§5.1) for the aerial robot at +2.0 m: case 1 (known pose) for PLKF and TEKF,
   and for cases 2–4 the 13 initial guesses of :func:`relloc.estimators.initialisation.
   poses_spread_in_fov` (spread over the sensor's field of view and the circle of yaws) for the
@@ -28,8 +31,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from relloc.core.recording import Recording as Log
-from relloc.core.recording import relative_pose
+from relloc.core.recording import Recording, relative_pose
 from relloc.errors import ConfigError
 from relloc.estimators.initialisation import (
     FieldOfView,
@@ -39,16 +41,10 @@ from relloc.estimators.initialisation import (
     known_yaw_unknown_position,
     poses_spread_in_fov,
 )
+from relloc.estimators.relative_batch import TrackSpec
 from relloc.estimators.yaw_bank import YawBankSettings
-from relloc.experiments.wanasinghe2014_filters import (
-    PairStreams,
-    TargetStream,
-    TrackRecord,
-    TrackSpec,
-    run_tracks,
-)
-from relloc.models.measurement import RangeBearingNoise
-from relloc.models.motion import VelocityNoise
+from relloc.experiments.wanasinghe2014_filters import run_filters
+from relloc.pipeline.evaluation import SeriesEvaluation
 from relloc.sim.scenario import OdometryNoise, Scenario, SensorSpec, default_scenario
 from relloc.sim.simulate import propagation_grid, simulate
 from relloc.sim.trajectories import robot_motion
@@ -56,8 +52,6 @@ from relloc.sim.trajectories import robot_motion
 Array = NDArray[np.float64]
 
 CASES: tuple[str, ...] = ("case1", "case2", "case3", "case4")
-FILTERS: tuple[str, ...] = ("PLKF", "TEKF")
-KIND = {"PLKF": "plkf", "TEKF": "tekf"}
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -126,40 +120,17 @@ class SimSettings:
         return dataclasses.replace(self.scenario, robots=robots)
 
 
-def streams_from_log(log: Log, observer: str, targets: tuple[str, ...]) -> PairStreams:
-    """The observer's and each target's odometry and measurements as :class:`PairStreams`."""
-    i = log.index(observer)
-    odo_l = log.odometry[i]
-    dt = float(odo_l.t[1] - odo_l.t[0])
-    streams = []
-    for name in targets:
-        j = log.index(name)
-        m = log.measurements
-        rows = (m.observer == i) & (m.target == j)
-        t_m = m.t[rows]
-        step = np.rint(t_m / dt).astype(np.int64)
-        if not rows.any():
-            raise ConfigError(f"scenario: {observer!r} never sees {name!r}; nothing to track")
-        sigma = m.sigma[rows][0]
-        streams.append(
-            TargetStream(
-                name=name,
-                u_c=np.asarray(log.odometry[j].velocity),
-                noise=VelocityNoise(
-                    observer=tuple(odo_l.sigma.tolist()),  # type: ignore[arg-type]
-                    observed=tuple(log.odometry[j].sigma.tolist()),  # type: ignore[arg-type]
-                ),
-                sensor=RangeBearingNoise(
-                    sigma_r=float(sigma[0]),
-                    sigma_azimuth=float(sigma[1]),
-                    sigma_elevation=float(sigma[2]),
-                ),
-                step=step,
-                z=np.asarray(m.value[rows]),
-                truth=log.relative_truth(i, j, t_m),
+def simulated_recording(settings: SimSettings, rng: np.random.Generator) -> Recording:
+    """One draw of the (noise-scaled) scenario; every observed robot must be seen."""
+    recording = simulate(settings.simulated_scenario(), rng)
+    m = recording.measurements
+    i = recording.index(settings.observer)
+    for name in settings.targets:
+        if not np.any((m.observer == i) & (m.target == recording.index(name))):
+            raise ConfigError(
+                f"scenario: {settings.observer!r} never sees {name!r}; nothing to track"
             )
-        )
-    return PairStreams(dt=dt, u_l=np.asarray(odo_l.velocity), targets=tuple(streams))
+    return recording
 
 
 def initial_guesses(settings: SimSettings) -> Array:
@@ -201,18 +172,58 @@ def table1_priors(
     }
 
 
-def _accuracy_specs(log: Log, settings: SimSettings, rng: np.random.Generator) -> list[TrackSpec]:
-    i = log.index(settings.observer)
+ACCURACY = "accuracy"
+"""Label of the accuracy filter of each observed robot (PLKF, known initial pose)."""
+
+
+def table1_label(case: str, filt: str, guess: int) -> str:
+    """Label of the Table-1 filter ``filt`` of ``case`` started from initial guess ``guess``."""
+    return f"table1/{case}/{filt}/guess{guess}"
+
+
+def _accuracy_specs(
+    recording: Recording, settings: SimSettings, rng: np.random.Generator
+) -> list[TrackSpec]:
+    i = recording.index(settings.observer)
     specs = []
-    for j, name in enumerate(settings.targets):
-        truth0 = log.relative_truth(i, log.index(name), 0.0)[0]
+    for name in settings.targets:
+        truth0 = recording.relative_truth(i, recording.index(name), 0.0)[0]
         prior = known_pose(truth0, rng=rng)
         specs.append(
             TrackSpec(
-                target=j, kind="plkf", prior_mean=prior.mean, prior_cov=prior.cov, detail=True
+                label=ACCURACY,
+                subject=name,
+                kind="plkf",
+                prior_mean=prior.mean,
+                prior_cov=prior.cov,
             )
         )
     return specs
+
+
+def _table1_specs(
+    recording: Recording, settings: SimSettings, rng: np.random.Generator
+) -> list[TrackSpec]:
+    """Every Table-1 filter of every case and guess (case 1's PLKF is the accuracy filter of
+    the Table-1 robot: same prior, same data)."""
+    target = settings.table1_target
+    truth0 = recording.relative_truth(
+        recording.index(settings.observer), recording.index(target), 0.0
+    )[0]
+    priors = table1_priors(truth0, settings, rng)
+    return [
+        TrackSpec(
+            label=table1_label(case, filt, g),
+            subject=target,
+            kind="tekf" if filt == "TEKF" else "plkf",
+            prior_mean=mean,
+            prior_cov=cov,
+            bank=filt == "bank",
+        )
+        for case in CASES
+        for filt in _table1_filters(case)
+        for g, (mean, cov) in enumerate(priors[case])
+    ]
 
 
 def team_task(
@@ -220,61 +231,39 @@ def team_task(
 ) -> dict[str, Any]:
     """One Monte-Carlo draw of the team (see module docstring); picklable for any executor.
 
-    Returns ``{"accuracy": {robot: record dict}, "table1": {case: {filter: errors
-    (n_guesses, updates, 4)}}, "table1_detail": {filter: record dict of guess 0 of case 4}}``.
+    Returns ``{"accuracy": {robot: SeriesEvaluation at its updates}, "table1": {case: {filter:
+    errors (n_guesses, updates, 4)}}}`` (case 1's PLKF is the accuracy filter).
     """
     rng = np.random.default_rng(seed)
-    scenario = settings.simulated_scenario()
-    log = simulate(scenario, rng)
-    streams = streams_from_log(log, settings.observer, settings.targets)
-    specs = _accuracy_specs(log, settings, rng)
-    records_needed: list[tuple[str, str, int]] = []  # (case, filter, spec index)
+    recording = simulated_recording(settings, rng)
+    specs = _accuracy_specs(recording, settings, rng)
     if settings.table1:
-        j = settings.targets.index(settings.table1_target)
-        truth0 = log.relative_truth(
-            log.index(settings.observer), log.index(settings.table1_target), 0.0
-        )[0]
-        priors = table1_priors(truth0, settings, rng)
-        # case 1 PLKF is the accuracy filter of the Table-1 robot (same prior, same data)
-        records_needed.append(("case1", "PLKF", j))
-        for case in CASES:
-            for filt in _table1_filters(case):
-                for g, (mean, cov) in enumerate(priors[case]):
-                    records_needed.append((case, filt, len(specs)))
-                    specs.append(
-                        TrackSpec(
-                            target=j,
-                            kind="tekf" if filt == "TEKF" else "plkf",
-                            prior_mean=mean,
-                            prior_cov=cov,
-                            bank=filt == "bank",
-                            detail=case == "case4" and g == 0 and filt != "bank",
-                        )
-                    )
-    records = run_tracks(streams, specs, settings.bank)
-    times = {t.name: np.asarray(t.step * streams.dt, dtype=float) for t in streams.targets}
+        specs += _table1_specs(recording, settings, rng)
+    scored = run_filters(recording, specs, observer=settings.observer, bank=settings.bank)
     out: dict[str, Any] = {
-        "accuracy": {
-            name: _as_dict(records[j], times[name]) for j, name in enumerate(settings.targets)
-        },
+        "accuracy": {name: scored[(name, ACCURACY)] for name in settings.targets},
         "table1": {},
-        "table1_detail": {},
     }
-    errors: dict[str, dict[str, list[Array]]] = {}
-    alive: dict[str, list[Array]] = {}
-    for case, filt, idx in records_needed:
-        rec = records[idx]
-        errors.setdefault(case, {}).setdefault(filt, []).append(rec.errors)
-        if rec.n_alive is not None:
-            alive.setdefault(case, []).append(rec.n_alive)
-        if case == "case4" and rec.detail:
-            out["table1_detail"][filt] = _as_dict(rec, times[settings.table1_target])
-    out["table1"] = {
-        case: {filt: np.stack(errs) for filt, errs in by_filter.items()}
-        for case, by_filter in errors.items()
-    }
-    out["bank_alive"] = {case: np.stack(series) for case, series in alive.items()}
+    if settings.table1:
+        out["table1"] = _table1_errors(scored, settings)
     return out
+
+
+def _table1_errors(
+    scored: dict[tuple[str, str], SeriesEvaluation], settings: SimSettings
+) -> dict[str, dict[str, Array]]:
+    """``{case: {filter: errors (n_guesses, updates, 4)}}`` of the Table-1 robot's filters."""
+    target = settings.table1_target
+    table1: dict[str, dict[str, Array]] = {
+        "case1": {"PLKF": scored[(target, ACCURACY)].error[None]}
+    }
+    for case in CASES:
+        guesses = 1 if case == "case1" else settings.n_poses
+        for filt in _table1_filters(case):
+            table1.setdefault(case, {})[filt] = np.stack(
+                [scored[(target, table1_label(case, filt, g))].error for g in range(guesses)]
+            )
+    return table1
 
 
 def _table1_filters(case: str) -> tuple[str, ...]:
@@ -287,27 +276,16 @@ def _table1_filters(case: str) -> tuple[str, ...]:
     return ("PLKF", "TEKF", "bank")
 
 
-def _as_dict(record: TrackRecord, t: Array) -> dict[str, Array]:
-    out = {"t": t, "errors": record.errors}
-    out.update(record.detail)
-    return out
-
-
 def sweep_task(
     seed: np.random.SeedSequence, run_index: int, settings: SimSettings
-) -> dict[str, dict[str, Array]]:
-    """One draw of the accuracy filters only (the odometry-noise sweep)."""
+) -> dict[str, SeriesEvaluation]:
+    """One draw of the accuracy filters only (the odometry-noise sweep): their evaluation at
+    their updates, per observed robot."""
     rng = np.random.default_rng(seed)
-    log = simulate(settings.simulated_scenario(), rng)
-    streams = streams_from_log(log, settings.observer, settings.targets)
-    records = run_tracks(streams, _accuracy_specs(log, settings, rng), settings.bank)
-    return {
-        name: {
-            "t": np.asarray(streams.targets[j].step * streams.dt, dtype=float),
-            "errors": records[j].errors,
-        }
-        for j, name in enumerate(settings.targets)
-    }
+    recording = simulated_recording(settings, rng)
+    specs = _accuracy_specs(recording, settings, rng)
+    scored = run_filters(recording, specs, observer=settings.observer, bank=settings.bank)
+    return {name: scored[(name, ACCURACY)] for name in settings.targets}
 
 
 def true_pair_inputs(settings: SimSettings, target: str) -> tuple[Array, Array, Array, Array]:

@@ -21,6 +21,7 @@ time-correlated samples of one run pooled as if independent give a band far too 
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -29,6 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from relloc.core.estimates import BeliefSeries, Estimates, UpdateSeries, series_label
+from relloc.core.events import TIME_TOL
 from relloc.core.recording import Recording
 from relloc.errors import ConfigError
 from relloc.metrics.conditioning import condition_log10_batch
@@ -109,10 +111,36 @@ def evaluate_series(
     )
 
 
-def evaluate(estimates: Estimates, recording: Recording) -> tuple[SeriesEvaluation, ...]:
-    """Score every belief series of ``estimates`` (in their order)."""
-    return tuple(
-        evaluate_series(s, estimates.updates_of(*s.key), recording) for s in estimates.beliefs
+def evaluate(
+    estimates: Estimates, recording: Recording, *, at_updates: bool = False
+) -> tuple[SeriesEvaluation, ...]:
+    """Score every belief series of ``estimates`` (in their order).
+
+    With ``at_updates`` each series is scored only at its own update times — the belief just
+    after each measurement update, which must have been recorded at those events — so that the
+    per-record arrays (error, σ, NEES, …) and the per-update ones (NIS, …) align one to one.
+    """
+    out = []
+    for s in estimates.beliefs:
+        updates = estimates.updates_of(*s.key)
+        out.append(evaluate_series(at_times(s, updates.t) if at_updates else s, updates, recording))
+    return tuple(out)
+
+
+def at_times(series: BeliefSeries, t: Array) -> BeliefSeries:
+    """The records of ``series`` at the times ``t`` (each must be a record time, within
+    :data:`TIME_TOL`; ConfigError otherwise)."""
+    t = np.asarray(t, dtype=float)
+    idx = np.clip(np.searchsorted(series.t, t - TIME_TOL), 0, max(series.t.size - 1, 0))
+    if t.size and (series.t.size == 0 or np.any(np.abs(series.t[idx] - t) > TIME_TOL)):
+        raise ConfigError(f"{series.label}: not recorded at every requested time")
+    return dataclasses.replace(
+        series,
+        t=series.t[idx],
+        mean=series.mean[idx],
+        cov=series.cov[idx],
+        age=series.age[idx],
+        info={k: v[idx] for k, v in series.info.items()},
     )
 
 
