@@ -92,7 +92,7 @@ def run(args: argparse.Namespace) -> int:
     from relloc.errors import ConfigError
     from relloc.estimators.initialisation import InitPolicy
     from relloc.estimators.track_manager import TrackManagerSettings
-    from relloc.experiments.team_run import TeamRunSettings, run_team
+    from relloc.experiments.team_run import TeamRunSettings, run_scenario
     from relloc.pipeline.team_report import summary_rows
     from relloc.sim.scenario import default_scenario, load_scenario
 
@@ -115,7 +115,7 @@ def run(args: argparse.Namespace) -> int:
         executor=args.executor,
         quiet=args.quiet,
     )
-    summary, _ = run_team(scenario, settings, args.out)
+    summary, _ = run_scenario(scenario, settings, args.out)
     if summary["team"]["samples"] == 0:
         print(
             f"relloc: note: no steady-state results: no track reached the settle time "

@@ -111,7 +111,7 @@ class RunConfig:
 
 
 @dataclass(frozen=True)
-class RunResult:
+class LeaderRunScores:
     """Per-run outcome, indexed ``[leader, scan, robot]`` (leader = 0 for L1, 1 for L2);
     ``wrong``/``used`` (and the joint decision's) are counts per ``[leader, robot]``,
     ``world_xy (T, robot, 2)`` the true paths."""
@@ -132,7 +132,7 @@ class RunResult:
     world_xy: Array
 
 
-def _task(seed_seq: np.random.SeedSequence, run_index: int, config: RunConfig) -> RunResult:
+def _task(seed_seq: np.random.SeedSequence, run_index: int, config: RunConfig) -> LeaderRunScores:
     """Simulate one run, replay it through the leaders' fusers and score it (top-level,
     picklable)."""
     del run_index
@@ -159,7 +159,7 @@ def _task(seed_seq: np.random.SeedSequence, run_index: int, config: RunConfig) -
     return _run_result(scores, recording)
 
 
-def _run_result(scores: list[LeaderScores], recording: Recording) -> RunResult:
+def _run_result(scores: list[LeaderScores], recording: Recording) -> LeaderRunScores:
     """The per-run figures of every leader's scores (leaders scan at the same times)."""
     out: dict[str, list[NDArray[Any]]] = {}
 
@@ -186,7 +186,7 @@ def _run_result(scores: list[LeaderScores], recording: Recording) -> RunResult:
         add("estimate_xy", sc.estimate[..., :2])
         add("truth_xy", _relative_truth_xy(recording, sc.observer, sc.t))
     assert recording.truth is not None
-    return RunResult(
+    return LeaderRunScores(
         times=scores[0].t,
         **{name: np.stack(values) for name, values in out.items()},
         world_xy=np.stack([g.pose[:, :2] for g in recording.truth], axis=1),
@@ -217,7 +217,7 @@ def _rms(x: Array) -> float:
     return float(np.sqrt(np.mean(x**2))) if x.size else float("nan")
 
 
-def _metrics(results: list[RunResult]) -> dict[str, Any]:
+def _metrics(results: list[LeaderRunScores]) -> dict[str, Any]:
     """Figures of merit of one configuration over its runs."""
     t = results[0].times
     final = t >= t[-1] - FINAL_WINDOW_S
@@ -279,7 +279,7 @@ def _metrics(results: list[RunResult]) -> dict[str, Any]:
     }
 
 
-def _time_series(results: list[RunResult]) -> dict[str, dict[str, Array]]:
+def _time_series(results: list[LeaderRunScores]) -> dict[str, dict[str, Array]]:
     """RMS over runs of position / yaw error, mean components, per pair and time."""
     pe = np.stack([r.pos_err for r in results])
     ye = np.stack([r.yaw_err for r in results])
@@ -297,7 +297,7 @@ def _time_series(results: list[RunResult]) -> dict[str, dict[str, Array]]:
     return out
 
 
-def _kidnap_metrics(results: list[RunResult]) -> dict[str, Any]:
+def _kidnap_metrics(results: list[LeaderRunScores]) -> dict[str, Any]:
     t = results[0].times
     robot, when = KIDNAP[0], KIDNAP[1]
     final = t >= t[-1] - FINAL_WINDOW_S
@@ -324,7 +324,7 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
     runs = args.runs if args.runs is not None else PAPER_RUNS
     base = DeSilvaScenario(duration=DURATION_S)
 
-    def run(config: RunConfig, n: int, label: str) -> list[RunResult]:
+    def run(config: RunConfig, n: int, label: str) -> list[LeaderRunScores]:
         return run_monte_carlo(
             _task,
             n,
@@ -438,8 +438,8 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
 
 def _figures(
     out: Any,
-    paper_res: list[RunResult],
-    nosh_res: list[RunResult],
+    paper_res: list[LeaderRunScores],
+    nosh_res: list[LeaderRunScores],
     clutter_sweep: dict[str, Any],
     pd_sweep: dict[str, Any],
 ) -> dict[str, str]:

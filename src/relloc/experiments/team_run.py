@@ -5,7 +5,7 @@ the scenario with its own random stream, tracks every robot each observing robot
 (:func:`relloc.pipeline.team_report.track_team`: one
 :class:`~relloc.estimators.track_manager.TrackManager` per observer, through
 :func:`relloc.pipeline.replay.replay`) and scores the run
-(:func:`relloc.pipeline.team_report.score_run`). :func:`run_team` pools the runs into
+(:func:`relloc.pipeline.team_report.score_run`). :func:`run_scenario` pools the runs into
 ``summary.json`` and writes ``report.md`` with figures (keys: :mod:`relloc.pipeline.team_report`).
 """
 
@@ -79,7 +79,7 @@ def team_task(
     return score_run(estimates, recording, keep_paths=run_index == 0)
 
 
-def run_team(
+def run_scenario(
     scenario: Scenario, settings: TeamRunSettings, out_dir: Path | None = None
 ) -> tuple[dict[str, Any], list[RunResult]]:
     """Monte-Carlo runs of a scenario; writes summary, report and figures if ``out_dir``."""
