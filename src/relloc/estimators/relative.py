@@ -52,6 +52,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from relloc.core.gaussian import Gaussian
 from relloc.core.kalman import Innovation, not_positive_definite
+from relloc.core.recording import KIND_NAMES, KINDS, Measurements, kind_code
 from relloc.errors import ConfigError, DataError, ModelError
 from relloc.estimators.kernels import (
     ARRAY_OPS,
@@ -78,6 +79,31 @@ from relloc.models.motion import VelocityNoise
 Array = NDArray[np.float64]
 UpdateKind = Literal["plkf", "tekf", "bcplkf"]
 UPDATE_KINDS: tuple[str, ...] = ("plkf", "tekf", "bcplkf")
+
+#: The reading the relative filters fuse: range, azimuth and elevation of a robot (seed 000
+#: Eq. 2), and the degrees of freedom of its NIS.
+MEASUREMENT_KIND = "range_bearing_elevation"
+MEASUREMENT_DOF = KINDS[MEASUREMENT_KIND].dim
+#: The frame of their beliefs (:mod:`relloc.pipeline.frames`).
+FRAME = "relative_pose4"
+_RBE = kind_code(MEASUREMENT_KIND)
+
+
+def is_relative_reading(kind: NDArray[np.int64]) -> NDArray[np.bool_]:
+    """Which rows of a table's ``kind`` column are :data:`MEASUREMENT_KIND` readings."""
+    return np.asarray(kind) == _RBE
+
+
+def unfusable_reason(batch: Measurements, q: int) -> str:
+    """Why row ``q`` of ``batch`` cannot update a relative filter (empty if it can): another
+    kind, an unknown target (unknown correspondence or a landmark), or no stated σ."""
+    if int(batch.kind[q]) != _RBE:
+        return f"rows_of_kind_{KIND_NAMES[int(batch.kind[q])]}"
+    if int(batch.target[q]) < 0:
+        return "rows_of_unknown_target"
+    if not np.all(np.isfinite(batch.sigma[q, :MEASUREMENT_DOF])):
+        return "rows_without_sigma"
+    return ""
 
 
 def _check_finite(name: str, value: ArrayLike, last: int, where: str) -> Array:

@@ -42,9 +42,17 @@ from numpy.typing import ArrayLike, NDArray
 from relloc.core.contract import Belief, HeldOdometry, Silent, UpdateRecord
 from relloc.core.gaussian import GaussianMixture
 from relloc.core.kalman import Innovation
-from relloc.core.recording import KIND_NAMES, KINDS, Measurements, kind_code
+from relloc.core.recording import Measurements
 from relloc.errors import ConfigError, DataError
-from relloc.estimators.relative import UPDATE_KINDS, FilterSettings, UpdateKind, predict_arrays
+from relloc.estimators.relative import (
+    FRAME,
+    MEASUREMENT_DOF,
+    UPDATE_KINDS,
+    FilterSettings,
+    UpdateKind,
+    predict_arrays,
+    unfusable_reason,
+)
 from relloc.estimators.yaw_bank import YawBankSettings, spread_yaw_bank, update_yaw_bank
 from relloc.metrics.conditioning import condition_log10_batch
 from relloc.models.measurement import PseudoLinearCovariance, RangeBearingNoise
@@ -53,14 +61,6 @@ from relloc.models.motion import VelocityNoise
 Array = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
-#: The reading every filter fuses: range, azimuth and elevation of a robot (seed 000 Eq. 2).
-MEASUREMENT_KIND = "range_bearing_elevation"
-#: Degrees of freedom of its NIS.
-MEASUREMENT_DOF = KINDS[MEASUREMENT_KIND].dim
-#: The frame of the beliefs.
-FRAME = "relative_pose4"
-
-_RBE = kind_code(MEASUREMENT_KIND)
 _TIME_TOL = 1e-9
 
 
@@ -372,17 +372,14 @@ class RelativeFilterBatch(Silent):
         return self.t
 
     def _unusable(self, batch: Measurements, q: int) -> str:
-        """Why row ``q`` of the owner cannot be fused (empty if it can)."""
+        """Why row ``q`` of the owner cannot be fused (empty if it can): the relative filters'
+        rule (:func:`relloc.estimators.relative.unfusable_reason`), or no track of its
+        (target, sensor)."""
         assert batch.sensor is not None
-        if int(batch.kind[q]) != _RBE:
-            return f"rows_of_kind_{KIND_NAMES[int(batch.kind[q])]}"
-        if int(batch.target[q]) < 0:
-            return "rows_of_unknown_target"
-        if (int(batch.target[q]), int(batch.sensor[q])) not in self._blocks_of:
+        reason = unfusable_reason(batch, q)
+        if not reason and (int(batch.target[q]), int(batch.sensor[q])) not in self._blocks_of:
             return "rows_of_untracked_target_or_sensor"
-        if not np.all(np.isfinite(batch.sigma[q, :MEASUREMENT_DOF])):
-            return "rows_without_sigma"
-        return ""
+        return reason
 
     def _filter_settings(
         self, kind: UpdateKind, noise: VelocityNoise, sensor: RangeBearingNoise

@@ -57,10 +57,18 @@ from relloc.core.contract import (
 )
 from relloc.core.gaussian import GaussianMixture
 from relloc.core.kalman import Innovation
-from relloc.core.recording import KIND_NAMES, KINDS, Measurements, Recording, kind_code
+from relloc.core.recording import Measurements, Recording
 from relloc.errors import ConfigError
 from relloc.estimators.initialisation import InitContext, InitPolicy
-from relloc.estimators.relative import UPDATE_KINDS, FilterSettings, predict_arrays
+from relloc.estimators.relative import (
+    FRAME,
+    MEASUREMENT_DOF,
+    UPDATE_KINDS,
+    FilterSettings,
+    is_relative_reading,
+    predict_arrays,
+    unfusable_reason,
+)
 from relloc.estimators.yaw_bank import (
     YawBankSettings,
     predict_yaw_bank,
@@ -74,15 +82,7 @@ from relloc.models.motion import VelocityNoise
 Array = NDArray[np.float64]
 
 
-#: The reading the manager fuses: range, azimuth and elevation of a robot (seed 000 Eq. 2).
-MEASUREMENT_KIND = "range_bearing_elevation"
-#: Degrees of freedom of its NIS.
-MEASUREMENT_DOF = KINDS[MEASUREMENT_KIND].dim
-#: The frame of the beliefs.
-FRAME = "relative_pose4"
-
 _TIME_TOL = 1e-9
-_RBE = kind_code(MEASUREMENT_KIND)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -228,7 +228,7 @@ class TrackManager(Silent):
         count the owner's other rows by reason."""
         now = self._now("measure")
         for q in np.flatnonzero(batch.observer == self._me):
-            reason = _unusable(batch, int(q))
+            reason = unfusable_reason(batch, int(q))
             if reason:
                 self._counts[reason] = self._counts.get(reason, 0) + 1
                 continue
@@ -352,17 +352,6 @@ class TrackManager(Silent):
             )
 
 
-def _unusable(batch: Measurements, q: int) -> str:
-    """Why row ``q`` cannot be fused (empty if it can)."""
-    if int(batch.kind[q]) != _RBE:
-        return f"rows_of_kind_{KIND_NAMES[int(batch.kind[q])]}"
-    if int(batch.target[q]) < 0:
-        return "rows_of_unknown_target"
-    if not np.all(np.isfinite(batch.sigma[q, :MEASUREMENT_DOF])):
-        return "rows_without_sigma"
-    return ""
-
-
 def managers_for(
     recording: Recording,
     settings: TrackManagerSettings,
@@ -377,7 +366,7 @@ def managers_for(
     simulation, or a dataset with ground truth).
     """
     m = recording.measurements
-    observing = np.unique(m.observer[m.kind == _RBE])
+    observing = np.unique(m.observer[is_relative_reading(m.kind)])
     return [
         track_manager_of(recording, recording.robots[int(i)], settings, rng=rng) for i in observing
     ]

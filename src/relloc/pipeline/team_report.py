@@ -42,12 +42,8 @@ from relloc.core.contract import TrackEvent
 from relloc.core.estimates import Estimates
 from relloc.core.recording import Recording
 from relloc.errors import ConfigError
-from relloc.estimators.track_manager import (
-    FRAME,
-    MEASUREMENT_DOF,
-    TrackManagerSettings,
-    managers_for,
-)
+from relloc.estimators.relative import FRAME, MEASUREMENT_DOF
+from relloc.estimators.track_manager import TrackManagerSettings, managers_for
 from relloc.metrics.conditioning import ILL_CONDITIONED_LOG10
 from relloc.pipeline.evaluation import (
     SeriesEvaluation,

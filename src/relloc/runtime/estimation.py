@@ -32,7 +32,8 @@ from relloc.core.contract import Belief
 from relloc.core.estimates import Estimates, Recorder
 from relloc.core.events import TIME_TOL, run_events
 from relloc.core.recording import measurement_rows
-from relloc.estimators.track_manager import MEASUREMENT_KIND, TrackManager
+from relloc.estimators.relative import MEASUREMENT_KIND
+from relloc.estimators.track_manager import TrackManager
 from relloc.pipeline.replay import merge_times
 from relloc.runtime.sources import MeasurementBatch
 from relloc.runtime.teammates import ReceivedOdometry

@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 
 from relloc.errors import ConfigError
-from relloc.estimators.track_manager import FRAME
+from relloc.estimators.relative import FRAME
 from relloc.runtime import keys
 from relloc.runtime.estimation import TrackManagerEstimator
 from relloc.runtime.faults import FAULTED_KINDS, FaultSettings, LinkEmulator
