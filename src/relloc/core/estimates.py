@@ -31,18 +31,11 @@ IntArray = NDArray[np.int64]
 
 
 @dataclass(frozen=True, kw_only=True)
-class BeliefSeries:
-    """``owner``'s recorded belief of ``subject`` (its track ``track``) in ``frame``:
-    ``t (K,)``, ``mean (K, d)``, ``cov (K, d, d)``, ``age (K,)`` and ``info[name] (K,)``."""
+class _Series:
+    """What identifies a series: ``owner``'s view of ``subject``, its track ``track``."""
 
     owner: str
     subject: str
-    frame: str
-    t: Array
-    mean: Array
-    cov: Array
-    age: Array
-    info: Mapping[str, Array] = field(default_factory=dict)
     track: str = ""
 
     @property
@@ -55,26 +48,28 @@ class BeliefSeries:
 
 
 @dataclass(frozen=True, kw_only=True)
-class UpdateSeries:
+class BeliefSeries(_Series):
+    """``owner``'s recorded belief of ``subject`` (its track ``track``) in ``frame``:
+    ``t (K,)``, ``mean (K, d)``, ``cov (K, d, d)``, ``age (K,)`` and ``info[name] (K,)``."""
+
+    frame: str
+    t: Array
+    mean: Array
+    cov: Array
+    age: Array
+    info: Mapping[str, Array] = field(default_factory=dict)
+
+
+@dataclass(frozen=True, kw_only=True)
+class UpdateSeries(_Series):
     """``owner``'s measurement updates of its belief of ``subject``, one entry each."""
 
-    owner: str
-    subject: str
     t: Array
     age: Array
     nis: Array
     dof: IntArray
     cond_r: Array
     cond_s: Array
-    track: str = ""
-
-    @property
-    def key(self) -> SeriesKey:
-        return (self.owner, self.subject, self.track)
-
-    @property
-    def label(self) -> str:
-        return series_label(self.key)
 
 
 #: ``(owner, subject, track)`` — what identifies a series.
