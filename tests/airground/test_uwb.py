@@ -20,7 +20,7 @@ def test_shared_tiers_recording_loads():
     if not path.is_file():
         pytest.skip(f"shared UWB data not found at {path} (outside the workspace)")
     rec = load_uwb_csv(path)
-    assert rec.n_rows == 8712 and rec.skipped.count == 0
+    assert rec.n_rows == 8712 and rec.skipped.n_skipped == 0
     assert rec.links() == [(1, 3), (1, 4), (1, 5), (3, 4), (3, 5), (4, 5)]
 
 
@@ -40,11 +40,11 @@ def test_malformed_rows_are_counted_with_reasons(tmp_path):
     path.write_text("".join(rows))
     rec = load_uwb_csv(path)
     assert rec.n_rows == 30
-    assert rec.skipped.count == 6
-    text = " ".join(rec.skipped.examples)
+    assert rec.skipped.n_skipped == 6
+    text = " ".join(e.text for e in rec.skipped.examples)
     for reason in ("not a number", "columns", "node1 = node2", "back in time"):
         assert reason in text
-    assert "line 12" in rec.skipped.examples[0]
+    assert rec.skipped.examples[0].line == 12
     assert "6 rows skipped" in rec.skipped.describe()
 
 

@@ -52,7 +52,7 @@ def check_recording(rec: UwbRecording, data: bytes) -> None:
     """The row invariant and what every recording's arrays guarantee."""
     data_rows, blank = count_lines(data)
     assert rec.data_rows == data_rows and rec.blank_lines == blank
-    assert rec.n_rows + rec.skipped.count == data_rows
+    assert rec.n_rows + rec.skipped.n_skipped == data_rows
     assert rec.n_rows >= 1
     for arr in (rec.t, rec.node1, rec.node2, rec.uwb_range, rec.mocap_range):
         assert arr.shape == (rec.n_rows,)
@@ -62,4 +62,4 @@ def check_recording(rec: UwbRecording, data: bytes) -> None:
     assert np.all(rec.node1 != rec.node2)
     for r in (rec.uwb_range, rec.mocap_range):
         assert np.all((r > 0.0) & (r <= MAX_RANGE))
-    assert len(rec.skipped.examples) == min(rec.skipped.count, 5)
+    assert len(rec.skipped.examples) == min(rec.skipped.n_skipped, 5)

@@ -170,5 +170,5 @@ def fit_uwb_noise(rec: UwbRecording, window: CalibrationWindow) -> UwbNoiseFit:
         sample_period=float(np.median(periods)) if periods else 0.0,
         lag1_correlation=float(np.median(rho)) if rho else 0.0,
         link_biases=medians,
-        rows_skipped=rec.skipped.count,
+        rows_skipped=rec.skipped.n_skipped,
     )

@@ -544,6 +544,14 @@ class FileSkips:
     def n_skipped(self) -> int:
         return sum(self.skipped.values())
 
+    def describe(self) -> str:
+        """One line for logs and reports: counts by reason and the first examples."""
+        if self.n_skipped == 0:
+            return "no rows skipped"
+        reasons = ", ".join(f"{n} {reason}" for reason, n in sorted(self.skipped.items()))
+        first = "; ".join(f"line {e.line}: {e.text}" for e in self.examples)
+        return f"{self.n_skipped} rows skipped: {reasons} (first: {first})"
+
 
 @dataclass(frozen=True)
 class SkipReport:

@@ -17,7 +17,7 @@ own (``csv`` rules within the line, so a stray quote never joins it to the next 
 row is either *read* (it is in the arrays) or *skipped* (counted by reason in
 :attr:`UwbRecording.skipped`, the first few kept with their line number)::
 
-    n_rows + skipped.count == data_rows
+    n_rows + skipped.n_skipped == data_rows
     1 + data_rows + blank_lines == number of lines
 
 Which rows are skipped
@@ -56,14 +56,14 @@ import bisect
 import csv
 import math
 from collections import Counter
-from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from decimal import Decimal, InvalidOperation
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.core.recording import FileSkips, SkippedRow
 from relloc.errors import DataError
 
 REQUIRED_COLUMNS = ("timestamp", "node1", "node2", "uwb_range", "mocap_range")
@@ -90,30 +90,10 @@ _DATA_HINT = (
 
 
 @dataclass(frozen=True, kw_only=True)
-class SkipReport:
-    """Rows a loader could not use: counts by reason, and the first few as ``"line N: detail"``."""
-
-    by_reason: Mapping[str, int] = field(default_factory=dict)
-    examples: tuple[str, ...] = ()
-
-    @property
-    def count(self) -> int:
-        """Rows skipped, all reasons."""
-        return sum(self.by_reason.values())
-
-    def describe(self) -> str:
-        """One line for logs and reports."""
-        if self.count == 0:
-            return "no rows skipped"
-        reasons = ", ".join(f"{n} {reason}" for reason, n in sorted(self.by_reason.items()))
-        return f"{self.count} rows skipped: {reasons} (first: {'; '.join(self.examples)})"
-
-
-@dataclass(frozen=True, kw_only=True)
 class UwbRecording:
     """A validated UWB recording; arrays share one row index, in file order.
 
-    ``n_rows + skipped.count == data_rows`` (see the module docstring for what a data row is).
+    ``n_rows + skipped.n_skipped == data_rows`` (see the module docstring for what a data row is).
     """
 
     path: Path
@@ -124,7 +104,7 @@ class UwbRecording:
     mocap_range: NDArray[np.float64]
     data_rows: int
     blank_lines: int = 0
-    skipped: SkipReport = field(default_factory=SkipReport)
+    skipped: FileSkips
 
     @property
     def error(self) -> NDArray[np.float64]:
@@ -363,11 +343,14 @@ class _SkipLog:
     def add(self, line: int, reason: str, detail: str) -> None:
         self._rows.append((line, reason, detail))
 
-    def report(self) -> SkipReport:
+    def report(self, path: Path, rows_read: int, rows_kept: int) -> FileSkips:
         first = sorted(self._rows)[:MAX_SKIP_EXAMPLES]
-        return SkipReport(
-            by_reason=dict(Counter(reason for _, reason, _ in self._rows)),
-            examples=tuple(f"line {line}: {detail}" for line, _, detail in first),
+        return FileSkips(
+            file=str(path),
+            rows_read=rows_read,
+            rows_kept=rows_kept,
+            skipped=dict(Counter(reason for _, reason, _ in self._rows)),
+            examples=tuple(SkippedRow(line, reason, detail) for line, reason, detail in first),
         )
 
 
@@ -427,11 +410,11 @@ def load_uwb_csv(path: Path | str) -> UwbRecording:
         except _BadRow as bad:
             skips.add(line, bad.reason, bad.detail)
     kept = _in_time_order(rows, skips)
-    report = skips.report()
+    report = skips.report(path, data_rows, len(kept))
     if not kept:
         raise DataError(
             f"{path}: no usable row ({data_rows} data rows, "
-            + (report.describe() if report.count else "none after the header")
+            + (report.describe() if report.n_skipped else "none after the header")
             + ")"
         )
     return UwbRecording(
