@@ -59,7 +59,7 @@ def test_round_trip_every_kind():
         "est": _est(),
         "evt": {"stamps": [0.1], "targets": ["air1"], "kinds": ["created"]},
         "stats": {"counters": {"sent.odom": 10, "rejected.malformed": 1}},
-        "tick": {"k": 5, "dt": 0.1},
+        "tick": {"k": 5, "n": 40, "dt": 0.1},
         "ack": {"k": 5},
         "ctl": {"action": "kill", "robot": "air1"},
     }

@@ -190,7 +190,7 @@ class Clock:
                     time.sleep(-lag)
             self._acks = set()
             expected = set(self.present)
-            self._publish(tick_pub, "tick", {"k": k, "dt": s.tick_s})
+            self._publish(tick_pub, "tick", {"k": k, "n": s.n_ticks, "dt": s.tick_s})
             acked = self._wait(
                 inbox, lambda e=expected: e & self.present <= self._acks, s.ack_timeout_s, k
             )

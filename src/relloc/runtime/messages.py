@@ -29,7 +29,7 @@ checked against their declared shape, ``-1`` meaning "any length". Kinds:
 - ``evt`` — track events of the sender: ``stamps`` (e,), ``targets`` (e,), ``kinds`` (e,) in
   ``{"created", "deleted", "recreated"}``.
 - ``stats`` — the sender's counters (messages sent/received/rejected, estimates, tracks).
-- ``tick`` — the clock process' simulated time step ``k`` (header ``t`` is the time).
+- ``tick`` — the clock process' simulated time step ``k`` of ``n`` (header ``t`` is the time).
 - ``ack`` — a node finished tick ``k``.
 - ``ctl`` — a control event from the clock process: ``action`` in ``{"kill", "restart",
   "end"}`` and the ``robot`` it concerns (``""`` for ``end``).
@@ -96,7 +96,7 @@ SCHEMA: dict[str, dict[str, str | Shape]] = {
     },
     "evt": {"stamps": (-1,), "targets": "strlist", "kinds": "strlist"},
     "stats": {"counters": "intmap"},
-    "tick": {"k": "int", "dt": "float"},
+    "tick": {"k": "int", "n": "int", "dt": "float"},
     "ack": {"k": "int"},
     "ctl": {"action": "str", "robot": "str"},
 }

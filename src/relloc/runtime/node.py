@@ -136,6 +136,7 @@ class RobotNode:
         self._next_report_s = 0.0
         self._done = False
         self._end_deadline: float | None = None
+        self._last_tick_seen = False
 
     # ------------------------------------------------------------------ process main loop
     def run(self) -> dict[str, int]:
@@ -226,8 +227,12 @@ class RobotNode:
                 mate.present = True
                 mate.joins += 1
                 self.counters["teammate.joins"] += 1
-            elif not joined and mate.present and self._end_deadline is not None:
-                # after ctl(end) teammates exit normally; their streams are complete
+            elif not joined and mate.present and (
+                self._last_tick_seen or self._end_deadline is not None
+            ):
+                # after the last tick teammates exit normally (the clock sends ctl(end) once every
+                # robot acked that tick, and a teammate may leave before our ctl(end) arrives);
+                # their streams are complete
                 self.counters["teammate.exits_after_end"] += 1
             elif not joined and mate.present:
                 mate.present = False
@@ -244,6 +249,7 @@ class RobotNode:
         t, self._dt = msg.t, float(msg.body["dt"])
         self._t = t
         self.counters["ticks"] += 1
+        self._last_tick_seen = int(msg.body["k"]) >= int(msg.body["n"])
         if self._window_start is None:  # first tick heard (a restarted node joins mid-run)
             self._window_start = self._filtered_until = t - self._dt
             self._next_eqm_s = self._next_report_s = t
