@@ -227,8 +227,10 @@ class RobotNode:
                 mate.present = True
                 mate.joins += 1
                 self.counters["teammate.joins"] += 1
-            elif not joined and mate.present and (
-                self._last_tick_seen or self._end_deadline is not None
+            elif (
+                not joined
+                and mate.present
+                and (self._last_tick_seen or self._end_deadline is not None)
             ):
                 # after the last tick teammates exit normally (the clock sends ctl(end) once every
                 # robot acked that tick, and a teammate may leave before our ctl(end) arrives);
