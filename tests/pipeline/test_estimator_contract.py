@@ -75,6 +75,7 @@ from relloc.estimators.cooperative import (
     SensorModel,
 )
 from relloc.estimators.initialisation import InitPolicy
+from relloc.estimators.relative_batch import RelativeFilterBatch, TrackSpec
 from relloc.estimators.track_manager import TrackManagerSettings, managers_for
 from relloc.estimators.yaw_bank import YawBankSettings
 from relloc.experiments.desilva2015 import filter_settings
@@ -137,6 +138,46 @@ def _track_manager_case(filter_name: str, *, yaw_bank: bool, init: str = "measur
     return Case(
         recording=rec,
         build=lambda r: list(managers_for(r, settings)),
+        kinds=("range_bearing_elevation",),
+        dofs=frozenset({KINDS["range_bearing_elevation"].dim}),
+    )
+
+
+def _relative_batch_case() -> Case:
+    """Seed 000's batched filters: the observer of the default scenario runs, per teammate, a
+    PLKF, a TEKF, a BC-PLKF and a PLKF yaw bank from the true relative pose at the first event
+    (plus a 0.5 m, 0.3 rad offset) with a broad prior, over the first 3 s."""
+    rec = simulate(
+        dataclasses.replace(default_scenario(), duration_s=3.0), np.random.default_rng(0)
+    )
+    assert rec.truth is not None
+    t0 = float(rec.measurements.t.min())
+    poses = [g.at(t0).reshape(-1) for g in rec.truth]
+    prior_cov = np.diag([1.0, 1.0, 0.25, 0.5])
+    offset = np.array([0.5, -0.5, 0.0, 0.3])
+    specs = [
+        TrackSpec(
+            label=f"{kind}{'-bank' if bank else ''}",
+            subject=subject,
+            kind=kind,  # type: ignore[arg-type]
+            prior_mean=relative_pose(poses[0], poses[j]).reshape(4) + offset,
+            prior_cov=prior_cov,
+            bank=bank,
+        )
+        for j, subject in enumerate(rec.robots)
+        if j > 0
+        for kind, bank in (("plkf", False), ("tekf", False), ("bcplkf", False), ("plkf", True))
+    ]
+
+    def build(r: Recording) -> list[Estimator]:
+        sigma = [od.sigma for od in r.odometry]
+        return [
+            RelativeFilterBatch(specs, owner=r.robots[0], robots=r.robots, odometry_sigma=sigma)
+        ]
+
+    return Case(
+        recording=rec,
+        build=build,
         kinds=("range_bearing_elevation",),
         dofs=frozenset({KINDS["range_bearing_elevation"].dim}),
     )
@@ -225,6 +266,7 @@ CASES: dict[str, Callable[[], Case]] = {
     "track_manager-plkf-known_init": lambda: _track_manager_case(
         "plkf", yaw_bank=False, init="known"
     ),
+    "relative_batch-four_kinds": _relative_batch_case,
     "gaussian_sum-sharing": lambda: _gaussian_sum_case(sharing=True),
     "gaussian_sum-alone": lambda: _gaussian_sum_case(sharing=False),
     "switching_ekf-one_drone": lambda: _switching_ekf_case("one_drone"),
