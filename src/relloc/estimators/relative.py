@@ -50,6 +50,8 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from relloc.core.contract import Silent
+from relloc.core.events import TIME_TOL
 from relloc.core.gaussian import Gaussian
 from relloc.core.kalman import Innovation, not_positive_definite
 from relloc.core.recording import KIND_NAMES, KINDS, Measurements, kind_code
@@ -104,6 +106,43 @@ def unfusable_reason(batch: Measurements, q: int) -> str:
     if not np.all(np.isfinite(batch.sigma[q, :MEASUREMENT_DOF])):
         return "rows_without_sigma"
     return ""
+
+
+class ObserverClock(Silent):
+    """The event clock and the count of unfused rows that a relative estimator of one observing
+    robot keeps: ``t`` is the latest event time (``None`` before the first advance)."""
+
+    t: float | None
+    _counts: dict[str, int]
+
+    def _start_clock(self) -> None:
+        self.t = None
+        self._counts = {}
+
+    def _elapsed(self, t: float) -> float | None:
+        """``t − t_previous`` (``None`` at the first event, which only sets the clock)."""
+        if self.t is None:
+            self.t = t
+            return None
+        dt = t - self.t
+        if dt < -TIME_TOL:
+            raise ConfigError(
+                f"{type(self).__name__}.advance: time went backwards ({self.t} -> {t})"
+            )
+        return dt
+
+    def _now(self, what: str) -> float:
+        if self.t is None:
+            raise ConfigError(f"{type(self).__name__}.{what}: called before the first advance")
+        return self.t
+
+    def _count(self, reason: str) -> None:
+        self._counts[reason] = self._counts.get(reason, 0) + 1
+
+    def take_counts(self) -> dict[str, int]:
+        """The owner's rows not fused since the previous call, by reason."""
+        out, self._counts = self._counts, {}
+        return out
 
 
 def _check_finite(name: str, value: ArrayLike, last: int, where: str) -> Array:

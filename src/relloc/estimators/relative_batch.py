@@ -39,7 +39,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from relloc.core.contract import Belief, HeldOdometry, Silent, UpdateRecord
+from relloc.core.contract import Belief, HeldOdometry, UpdateRecord
 from relloc.core.gaussian import GaussianMixture
 from relloc.core.kalman import Innovation
 from relloc.core.recording import Measurements
@@ -49,6 +49,7 @@ from relloc.estimators.relative import (
     MEASUREMENT_DOF,
     UPDATE_KINDS,
     FilterSettings,
+    ObserverClock,
     UpdateKind,
     predict_arrays,
     unfusable_reason,
@@ -60,8 +61,6 @@ from relloc.models.motion import VelocityNoise
 
 Array = NDArray[np.float64]
 IntArray = NDArray[np.int64]
-
-_TIME_TOL = 1e-9
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -144,7 +143,7 @@ class _PendingUpdates:
     cov: Array
 
 
-class RelativeFilterBatch(Silent):
+class RelativeFilterBatch(ObserverClock):
     """The relative filters ``specs`` of robot ``owner`` (module docstring).
 
     ``robots`` names the team (the indices of :class:`HeldOdometry` and of the measurements);
@@ -189,11 +188,9 @@ class RelativeFilterBatch(Silent):
             for b in g.blocks:
                 self._blocks_of.setdefault((b.subject, b.sensor), []).append((g, b))
         self._settings: dict[tuple[str, VelocityNoise, tuple[float, ...]], FilterSettings] = {}
-        self.t: float | None = None
-        """The time of the latest event (``None`` before the first :meth:`advance`)."""
+        self._start_clock()
         self._t0 = 0.0
         self._pending: list[_PendingUpdates] = []
-        self._counts: dict[str, int] = {}
 
     # ------------------------------------------------------------------ building
     def _subject_index(self, spec: TrackSpec) -> int:
@@ -261,12 +258,10 @@ class RelativeFilterBatch(Silent):
         """Predict every filter from the previous event to ``t`` with the body velocities
         ``odometry.velocity (n_robots, 4)`` held since (the first call only sets the clock)."""
         t = float(t)
-        if self.t is None:
-            self.t = self._t0 = t
+        dt = self._elapsed(t)
+        if dt is None:
+            self._t0 = t
             return
-        dt = t - self.t
-        if dt < -_TIME_TOL:
-            raise ConfigError(f"RelativeFilterBatch.advance: time went backwards ({self.t} -> {t})")
         velocity = np.asarray(odometry.velocity, dtype=float)
         if velocity.shape != (len(self.robots), 4):
             raise DataError(
@@ -284,7 +279,7 @@ class RelativeFilterBatch(Silent):
                 g.means, g.covs = predict_arrays(
                     g.means, g.covs, u_l, u_c, dt, g.noise, where=where
                 )
-        self.t = max(self.t, t)
+        self.t = max(self._now("advance"), t)
 
     def measure(self, batch: Measurements) -> None:
         """Fuse the owner's ``range_bearing_elevation`` rows of tracked (robot, sensor) pairs in
@@ -294,7 +289,7 @@ class RelativeFilterBatch(Silent):
         for q in np.flatnonzero(batch.observer == self._me).tolist():
             reason = self._unusable(batch, q)
             if reason:
-                self._counts[reason] = self._counts.get(reason, 0) + 1
+                self._count(reason)
                 continue
             j, s = int(batch.target[q]), int(batch.sensor[q])
             z = np.asarray(batch.value[q, :MEASUREMENT_DOF])
@@ -360,17 +355,7 @@ class RelativeFilterBatch(Silent):
                 )
         return out
 
-    def take_counts(self) -> dict[str, int]:
-        """The owner's rows not fused since the previous call, by reason."""
-        out, self._counts = self._counts, {}
-        return out
-
     # ------------------------------------------------------------------ internals
-    def _now(self, what: str) -> float:
-        if self.t is None:
-            raise ConfigError(f"RelativeFilterBatch.{what}: called before the first advance")
-        return self.t
-
     def _unusable(self, batch: Measurements, q: int) -> str:
         """Why row ``q`` of the owner cannot be fused (empty if it can): the relative filters'
         rule (:func:`relloc.estimators.relative.unfusable_reason`), or no track of its

@@ -51,7 +51,6 @@ from relloc.core.contract import (
     Belief,
     EventKind,
     HeldOdometry,
-    Silent,
     TrackEvent,
     UpdateRecord,
 )
@@ -65,6 +64,7 @@ from relloc.estimators.relative import (
     MEASUREMENT_DOF,
     UPDATE_KINDS,
     FilterSettings,
+    ObserverClock,
     is_relative_reading,
     predict_arrays,
     unfusable_reason,
@@ -80,9 +80,6 @@ from relloc.models.measurement import RangeBearingNoise
 from relloc.models.motion import VelocityNoise
 
 Array = NDArray[np.float64]
-
-
-_TIME_TOL = 1e-9
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -163,7 +160,7 @@ TruthFn = Callable[[int, float], Array]
 only for the initialisation policies that start from the truth (seed 000 Table 1 cases 1–3)."""
 
 
-class TrackManager(Silent):
+class TrackManager(ObserverClock):
     """The tracks one robot (``owner``) holds of its teammates (module docstring).
 
     ``robots`` names the team (measurement indices index it); ``odometry_sigma[i]`` is robot
@@ -191,15 +188,13 @@ class TrackManager(Silent):
         self.name = settings.filter
         self._me = self.robots.index(owner)
         self._sigma = [tuple(float(s) for s in sig) for sig in odometry_sigma]
-        self.t: float | None = None
-        """The time of the latest event (``None`` before the first :meth:`advance`)."""
+        self._start_clock()
         self._truth = truth
         self._rng = rng
         self._tracks: dict[int, _Track] = {}
         self._ever_tracked: set[int] = set()
         self._updates: list[UpdateRecord] = []
         self._events: list[TrackEvent] = []
-        self._counts: dict[str, int] = {}
         self._settings_cache: dict[tuple[int, tuple[float, ...]], FilterSettings] = {}
 
     # ------------------------------------------------------------------ the contract
@@ -207,12 +202,9 @@ class TrackManager(Silent):
         """Delete the tracks stale at the previous event, then predict every live track to
         ``t`` with the body velocities ``odometry.velocity (n_robots, 4)`` held since."""
         t = float(t)
-        if self.t is None:
-            self.t = t
+        dt = self._elapsed(t)
+        if dt is None:
             return
-        dt = t - self.t
-        if dt < -_TIME_TOL:
-            raise ConfigError(f"TrackManager.advance: time went backwards ({self.t} -> {t})")
         self._expire()
         if dt > 0.0:
             # One track at a time: the relative filter's scalar kernels are faster than numpy
@@ -221,7 +213,7 @@ class TrackManager(Silent):
             u_l = odometry.velocity[self._me]
             for j, tr in self._tracks.items():
                 tr.predict(u_l, odometry.velocity[j], dt, where)
-        self.t = max(self.t, t)
+        self.t = max(self._now("advance"), t)
 
     def measure(self, batch: Measurements) -> None:
         """Fuse the owner's ``range_bearing_elevation`` rows of known robots, in row order;
@@ -230,7 +222,7 @@ class TrackManager(Silent):
         for q in np.flatnonzero(batch.observer == self._me):
             reason = unfusable_reason(batch, int(q))
             if reason:
-                self._counts[reason] = self._counts.get(reason, 0) + 1
+                self._count(reason)
                 continue
             self._fuse(int(batch.target[q]), batch.value[q], batch.sigma[q], now)
 
@@ -260,17 +252,7 @@ class TrackManager(Silent):
         out, self._events = self._events, []
         return out
 
-    def take_counts(self) -> dict[str, int]:
-        """Rows of the owner not fused since the previous call, by reason."""
-        out, self._counts = self._counts, {}
-        return out
-
     # ------------------------------------------------------------------ internals
-    def _now(self, what: str) -> float:
-        if self.t is None:
-            raise ConfigError(f"TrackManager.{what}: called before the first advance")
-        return self.t
-
     def _filter_settings(self, j: int, sensor_sigma: Array) -> FilterSettings:
         key = (j, tuple(float(s) for s in sensor_sigma))
         fs = self._settings_cache.get(key)
