@@ -23,25 +23,14 @@ from relloc.experiments.guler2023 import (
     run_scenario_once,
     simulate_case,
 )
-from relloc.models.uwb_noise import UwbNoiseModel
+from relloc.models.uwb_noise import TIERS_ROUNDED
 from relloc.pipeline.frames import frame
 from relloc.pipeline.replay import replay
 from relloc.sim.airground import robot_names, simulate_airground
 
-#: The TIERS fit rounded (so these tests do not need the shared data).
-TIERS_LIKE = UwbNoiseModel(
-    bias=0.35,
-    spread=0.075,
-    outlier_rate=0.04,
-    outlier_excess_mean=0.15,
-    outlier_positive_fraction=0.9,
-    link_bias_std=0.1,
-    correlation_time=1.2,
-)
-
 
 def test_seeded_two_drone_runs_meet_the_paper_bound():
-    case = build_cases(TIERS_LIKE)["two_drones"].with_scenario(duration=30.0)
+    case = build_cases(TIERS_ROUNDED)["two_drones"].with_scenario(duration=30.0)
     for ss in np.random.SeedSequence(20260).spawn(2):
         res = run_scenario_once(ss, 1, case, False)
         assert res.rmse.shape == (4, 2)
@@ -49,7 +38,7 @@ def test_seeded_two_drone_runs_meet_the_paper_bound():
 
 
 def test_recording_holds_the_team_its_commands_and_readings():
-    case = build_cases(TIERS_LIKE)["two_drones"].with_scenario(duration=3.0)
+    case = build_cases(TIERS_ROUNDED)["two_drones"].with_scenario(duration=3.0)
     run, _ = simulate_case(case, np.random.default_rng(1))
     rec, sc = run.recording, case.scenario
     assert rec.robots == robot_names(sc) == ("R_0", "R_1", "R_2", "R_3", "R_4", "D_1", "D_2")
@@ -76,7 +65,7 @@ def test_recording_holds_the_team_its_commands_and_readings():
 def test_frame_truth_is_the_relative_state_of_the_model(yaw):
     # airground_follower of (owner R_2, subject R_0) is x = [r, θ_2, θ_0] with r = p_0 − p_2,
     # all in the common frame F_G whose x axis is at ``common_frame_yaw``.
-    case = build_cases(TIERS_LIKE)["formation"].with_scenario(duration=2.0)
+    case = build_cases(TIERS_ROUNDED)["formation"].with_scenario(duration=2.0)
     run, _ = simulate_case(case, np.random.default_rng(2))
     rec = replace(run.recording, meta={"common_frame_yaw": yaw})
     t = rec.truth[0].t
@@ -102,7 +91,7 @@ def _replayed(case, run):
 def test_replaying_the_recording_gives_the_same_estimates(name):
     # one_drone: commands do not depend on the estimates (open loop); two_drones: the formation
     # controller closes the loop, and its commands are in the recording as odometry.
-    case = build_cases(TIERS_LIKE)[name].with_scenario(duration=12.0)
+    case = build_cases(TIERS_ROUNDED)[name].with_scenario(duration=12.0)
     run, _ = simulate_case(case, np.random.default_rng(7))
     again = _replayed(case, run)
     assert again.labels == run.estimates.labels
@@ -118,7 +107,7 @@ def test_replaying_the_recording_gives_the_same_estimates(name):
 
 
 def test_simulated_modes_follow_the_broadcast_detections():
-    case = build_cases(TIERS_LIKE)["one_drone"].with_scenario(duration=20.0)
+    case = build_cases(TIERS_ROUNDED)["one_drone"].with_scenario(duration=20.0)
     run, _ = simulate_case(case, np.random.default_rng(4))
     sightings = run.recording.measurements.of_kind("pair_sighting")
     sc = case.scenario
@@ -140,7 +129,7 @@ def test_simulated_modes_follow_the_broadcast_detections():
 def test_the_drone_flies_its_schedule():
     # one drone, midpoints m_4, m_1, m_2 for 8 s each (offset 3): near the end of each window it
     # hovers closest to the scheduled midpoint (p_0 + p_i) / 2.
-    case = build_cases(TIERS_LIKE)["one_drone"].with_scenario(duration=20.0)
+    case = build_cases(TIERS_ROUNDED)["one_drone"].with_scenario(duration=20.0)
     run, _ = simulate_case(case, np.random.default_rng(4))
     truth = run.recording.truth
     assert truth is not None
@@ -154,7 +143,7 @@ def test_the_drone_flies_its_schedule():
 
 
 def test_the_controller_must_match_the_control_mode():
-    case = build_cases(TIERS_LIKE)["two_drones"].with_scenario(duration=1.0)
+    case = build_cases(TIERS_ROUNDED)["two_drones"].with_scenario(duration=1.0)
     with pytest.raises(ConfigError, match="needs a follower controller"):
         simulate_airground(case.scenario, FilterFactory(case), None, np.random.default_rng(0))
 

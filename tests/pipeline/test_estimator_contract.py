@@ -89,7 +89,7 @@ from relloc.models.measurement import (
 )
 from relloc.models.motion import VelocityNoise, process_noise, relative_jacobians, relative_step
 from relloc.models.unicycle import unicycle_jacobians, unicycle_step
-from relloc.models.uwb_noise import UwbNoiseModel
+from relloc.models.uwb_noise import TIERS_ROUNDED
 from relloc.pipeline.evaluation import accuracy_and_consistency, evaluate
 from relloc.pipeline.frames import frame
 from relloc.pipeline.replay import replay
@@ -198,22 +198,10 @@ def _gaussian_sum_case(*, sharing: bool) -> Case:
     )
 
 
-#: The TIERS UWB fit, rounded (so the cases do not need the shared data).
-TIERS_LIKE = UwbNoiseModel(
-    bias=0.35,
-    spread=0.075,
-    outlier_rate=0.04,
-    outlier_excess_mean=0.15,
-    outlier_positive_fraction=0.9,
-    link_bias_std=0.1,
-    correlation_time=1.2,
-)
-
-
 def _switching_ekf_case(name: str) -> Case:
     """Seed 003: the recording of a 3 s closed-loop run, replayed through fresh followers'
     filters started from the run's priors."""
-    case = build_cases(TIERS_LIKE)[name].with_scenario(duration=3.0)
+    case = build_cases(TIERS_ROUNDED)[name].with_scenario(duration=3.0)
     run, _ = simulate_case(case, np.random.default_rng(7))
     assert run.recording.robots == robot_names(case.scenario)
     factory = FilterFactory(case)

@@ -60,6 +60,19 @@ class UwbNoiseModel:
                 raise ConfigError(f"UwbNoiseModel.{name}: invalid value {getattr(self, name)!r}")
 
 
+#: The fit of :func:`relloc.calibration.uwb.fit_uwb_noise` to the TIERS UWB recording (the
+#: guler2023 calibration), rounded: a data-free model for examples and tests.
+TIERS_ROUNDED = UwbNoiseModel(
+    bias=0.35,
+    spread=0.075,
+    outlier_rate=0.04,
+    outlier_excess_mean=0.15,
+    outlier_positive_fraction=0.9,
+    link_bias_std=0.1,
+    correlation_time=1.2,
+)
+
+
 def sample_range_errors(
     model: UwbNoiseModel,
     n_steps: int,
