@@ -19,9 +19,10 @@ reason, which the receiver counts (``rejected_by_reason`` in the summary):
   :data:`FUTURE_BOUND_S` ahead of the receiver's clock is rejected (``future``) — teammates are
   at most one tick ahead under the clock's barrier, and kept future samples would never be
   released;
-- **ticks** (:class:`TickGuard`): ticks advance (``k`` increasing, the same ``n`` and ``dt``,
-  ``t ≤ n·dt``) — a tick at t = 10¹² would make the node publish every remaining sample in one
-  message (``bad_tick``); ``ctl(end)`` is accepted only after the last tick (``premature_end``);
+- **ticks** (:class:`TickGuard`): ticks advance one at a time (``k`` by one, ``t`` by ``dt``,
+  the same ``n`` and ``dt``, ``t`` within the run) — a tick at t = 10¹² would make the node
+  publish every remaining sample in one message (``bad_tick``); ``ctl(end)`` is accepted only
+  after the last tick (``premature_end``);
 - **rate** (:class:`SenderBudget`): at most ``capacity`` data messages per sender between two of
   the receiver's ticks (``rate_limited``).
 
@@ -47,6 +48,8 @@ from relloc.runtime.messages import (
 CLOCK_SENDER = "clock"
 """The infrastructure sender of ``tick`` and ``ctl`` (the launcher's clock process)."""
 CLOCK_KINDS = frozenset({"tick", "ctl"})
+MAX_TICK_S = 10.0
+"""Longest tick accepted (s): the ``--tick`` limit of ``relloc team up``."""
 FUTURE_BOUND_S = 2.0
 """How far ahead of the receiver's latest tick a teammate's message may be stamped (s)."""
 TIME_TOL = 1e-9
@@ -92,10 +95,14 @@ def check_not_future(msg: Message, now_s: float, bound_s: float = FUTURE_BOUND_S
 
 
 class TickGuard:
-    """Ticks must advance: ``k`` increasing with the same ``n`` and ``dt`` as the first tick
-    heard, ``t`` increasing, at most ``(k − k_last)·dt`` after the last tick and ``≤ n·dt``."""
+    """Ticks must advance one at a time: after the first tick heard, ``k`` is the previous one
+    plus one, ``n`` and ``dt`` are unchanged and ``t`` is the previous time plus ``dt``; every
+    tick has ``dt ≤`` :data:`MAX_TICK_S` and ``t ≤ min(n·dt, end_s + dt)`` (``end_s``: the
+    end of the node's own sensor stream, when it has one). A node filters and publishes one
+    window ``[t_{k−1}, t_k)`` per tick, so these bounds keep every window one tick long."""
 
-    def __init__(self) -> None:
+    def __init__(self, end_s: float | None = None) -> None:
+        self.end_s = end_s
         self.k: int | None = None
         self.n = 0
         self.dt = 0.0
@@ -103,21 +110,22 @@ class TickGuard:
 
     def check(self, msg: Message) -> None:
         """Accept ``msg`` (a validated ``tick``) and remember it, or raise ``bad_tick``."""
-        k, n, dt = int(msg.body["k"]), int(msg.body["n"]), float(msg.body["dt"])
-        tol = TIME_TOL * max(1.0, abs(msg.t), n * dt)
-        if self.k is None:
-            ok = msg.t <= n * dt + tol
-        else:
+        k, n, dt, t = int(msg.body["k"]), int(msg.body["n"]), float(msg.body["dt"]), msg.t
+        tol = TIME_TOL * max(1.0, abs(t), n * dt)
+        ok = dt <= MAX_TICK_S and t <= n * dt + tol
+        if self.end_s is not None:
+            ok = ok and t <= self.end_s + dt + tol
+        if self.k is not None:
             ok = (
-                k > self.k
+                ok
+                and k == self.k + 1
                 and n == self.n
                 and abs(dt - self.dt) <= tol
-                and self.t < msg.t <= self.t + (k - self.k) * dt + tol
-                and msg.t <= n * dt + tol
+                and abs(t - (self.t + dt)) <= tol + TIME_TOL * 1e3 * dt
             )
         if not ok:
-            raise MessageRejected("bad_tick", f"tick k={k}/{n} t={msg.t:g} after k={self.k}")
-        self.k, self.n, self.dt, self.t = k, n, dt, msg.t
+            raise MessageRejected("bad_tick", f"tick k={k}/{n} t={t:g} after k={self.k}")
+        self.k, self.n, self.dt, self.t = k, n, dt, t
 
     @property
     def last_tick_seen(self) -> bool:

@@ -138,7 +138,7 @@ class RobotNode:
         self._done = False
         self._end_deadline: float | None = None
         self._last_tick_seen = False
-        self._ticks = TickGuard()
+        self._ticks = TickGuard(end_s=getattr(source, "end_time", None))
         self._budget = SenderBudget.for_team(len(settings.roster))
         self._inbox: Inbox | None = None
 
