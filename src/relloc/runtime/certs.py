@@ -10,8 +10,9 @@ Layout of a certificate folder (``relloc certs DIR --team NAME --robots a,b,c``)
 Every certificate's subject common name (CN) is its holder's id: Zenoh's access control matches
 mutual-TLS peers by that name (``cert_common_names``), so a robot can be allowed to publish only
 under its own key prefix. Leaf certificates are valid for both TLS roles (a Zenoh peer listens
-and connects) and name ``localhost`` and ``127.0.0.1`` as subject alternative names, so a
-connecting peer verifies the listener's name on loopback. Private keys (EC P-256) are written
+and connects) and name ``localhost``, ``127.0.0.1`` and any extra ``hosts`` (DNS names or IP
+addresses of the robots' machines) as subject alternative names, so a connecting peer can verify
+the listener's name. Private keys (EC P-256) are written
 with permissions 0600.
 """
 
@@ -34,6 +35,7 @@ LAUNCHER_ID = "launcher"
 (the launcher and the clock process it starts both hold it)."""
 VALID_DAYS = 365
 SUBJECT_ALT_NAMES = ("localhost", "127.0.0.1")
+"""Names every leaf certificate is valid for (``hosts`` add to them)."""
 
 
 @dataclass(frozen=True)
@@ -60,7 +62,9 @@ class TeamCerts:
         return member
 
 
-def make_team_certs(folder: Path, team: str, robots: Sequence[str]) -> TeamCerts:
+def make_team_certs(
+    folder: Path, team: str, robots: Sequence[str], hosts: Sequence[str] = ()
+) -> TeamCerts:
     """Write a CA and one key/certificate per robot plus the launcher's into ``folder``."""
     keys.check_id(team, "--team")
     robots = tuple(robots)
@@ -76,7 +80,7 @@ def make_team_certs(folder: Path, team: str, robots: Sequence[str]) -> TeamCerts
     _write_key(folder / "ca.key", ca_key)
     _write_pem(folder / "ca.pem", ca_cert)
     for member in (*robots, LAUNCHER_ID):
-        key, cert = _leaf(member, ca_key, ca_cert)
+        key, cert = _leaf(member, ca_key, ca_cert, (*SUBJECT_ALT_NAMES, *hosts))
         _write_key(folder / f"{member}.key", key)
         _write_pem(folder / f"{member}.pem", cert)
     manifest = {"team": team, "robots": list(robots), "launcher": LAUNCHER_ID}
@@ -161,16 +165,23 @@ def _certificate_authority(team: str) -> tuple[Any, Any]:
     return key, _validity(builder).sign(key, hashes.SHA256())
 
 
-def _leaf(member: str, ca_key: Any, ca_cert: Any) -> tuple[Any, Any]:
+def _alt_name(name: str) -> Any:
+    x509 = require("cryptography.x509", "runtime")
+    try:
+        return x509.IPAddress(ipaddress.ip_address(name))
+    except ValueError:
+        if not name or any(c.isspace() or c in "/:@" for c in name):
+            raise ConfigError(f"--host: {name!r} is neither an IP address nor a DNS name") from None
+        return x509.DNSName(name)
+
+
+def _leaf(member: str, ca_key: Any, ca_cert: Any, hosts: Sequence[str]) -> tuple[Any, Any]:
     x509 = require("cryptography.x509", "runtime")
     from cryptography.hazmat.primitives import hashes
     from cryptography.x509.oid import ExtendedKeyUsageOID
 
     key = _new_key()
-    alt_names = [
-        x509.DNSName("localhost"),
-        x509.IPAddress(ipaddress.ip_address("127.0.0.1")),
-    ]
+    alt_names = [_alt_name(h) for h in dict.fromkeys(hosts)]
     builder = (
         x509.CertificateBuilder()
         .subject_name(_name(member))
