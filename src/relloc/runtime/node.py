@@ -137,7 +137,6 @@ class RobotNode:
         self._next_report_s = 0.0
         self._done = False
         self._end_deadline: float | None = None
-        self._last_tick_seen = False
         self._ticks = TickGuard(end_s=getattr(source, "end_time", None))
         self._budget = SenderBudget.for_team(len(settings.roster))
         self._inbox: Inbox | None = None
@@ -234,7 +233,7 @@ class RobotNode:
             elif (
                 not joined
                 and mate.present
-                and (self._last_tick_seen or self._end_deadline is not None)
+                and (self._ticks.last_tick_seen or self._end_deadline is not None)
             ):
                 # after the last tick teammates exit normally (the clock sends ctl(end) once every
                 # robot acked that tick, and a teammate may leave before our ctl(end) arrives);
@@ -256,7 +255,6 @@ class RobotNode:
         self._t = t
         self._budget.new_interval()
         self.counters["ticks"] += 1
-        self._last_tick_seen = int(msg.body["k"]) >= int(msg.body["n"])
         if self._window_start is None:  # first tick heard (a restarted node joins mid-run)
             self._window_start = self._filtered_until = t - self._dt
             self._next_eqm_s = self._next_report_s = t
