@@ -12,4 +12,5 @@ BENCHMARKS: dict[str, str] = {
     "cooperative": "relloc.bench.cooperative",
     "multihypothesis": "relloc.bench.multihypothesis",
     "runtime": "relloc.bench.runtime",
+    "secure": "relloc.bench.secure",
 }

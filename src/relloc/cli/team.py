@@ -8,6 +8,10 @@ robot's estimates and writes ``summary.json`` and ``report.md`` (see
     --drop P  --delay MS  --jitter MS  --duplicate P  --reorder P
     --kill ROBOT@SECONDS  --restart ROBOT@SECONDS  --partition A,B@T1-T2
 
+``--secure`` runs every process with mutual TLS only and Zenoh access control: each robot may
+publish only under its own key prefix, only the launcher's certificate may send ``tick``/``ctl``
+(certificates from ``--certs DIR``, see ``relloc certs``, or made in ``OUT/certs``).
+
 ``relloc team clock`` runs only the clock/simulator process (for robots started by hand).
 """
 
@@ -52,6 +56,18 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     )
     up.add_argument("--port", type=int, default=None, help="hub port on 127.0.0.1 (default free)")
     up.add_argument("--timeout", type=float, default=300.0, help="wall-clock limit, s")
+    up.add_argument(
+        "--secure",
+        action="store_true",
+        help="mutual TLS only, one certificate per robot, Zenoh access control by identity",
+    )
+    up.add_argument(
+        "--certs",
+        type=Path,
+        default=None,
+        metavar="DIR",
+        help="certificate folder of 'relloc certs' (default with --secure: made in OUT/certs)",
+    )
     up.add_argument("--quiet", action="store_true", help="print nothing")
     faults = add_network_fault_arguments(up)
     faults.add_argument("--kill", action="append", default=[], metavar="ROBOT@SECONDS")
@@ -95,6 +111,8 @@ def run_up(args: argparse.Namespace) -> int:
         port=args.port,
         wall_timeout_s=args.timeout,
         filter_kind=args.filter,
+        secure=args.secure,
+        certs_dir=args.certs,
     )
     summary = run_team(settings)
     if not args.quiet:

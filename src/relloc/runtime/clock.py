@@ -33,8 +33,9 @@ import numpy as np
 
 from relloc.errors import ConfigError, RellocError
 from relloc.runtime import keys
+from relloc.runtime.admission import CLOCK_SENDER, admit
 from relloc.runtime.faults import RobotEvent
-from relloc.runtime.messages import MessageRejected, decode, encode
+from relloc.runtime.messages import DEFAULT_MAX_BYTES, MessageRejected, encode
 from relloc.runtime.transport import Inbox, TransportSettings, declare_publisher, open_session
 
 
@@ -86,6 +87,7 @@ class ClockReport:
     events: list[dict[str, Any]] = field(default_factory=list)
     max_tick_lag_s: float = 0.0
     rejected: int = 0
+    rejected_by_reason: dict[str, int] = field(default_factory=dict)
 
     def as_dict(self) -> dict[str, Any]:
         return dict(self.__dict__)
@@ -104,7 +106,7 @@ class Clock:
         self._t = 0.0
 
     def _publish(self, pub: Any, kind: str, body: dict[str, Any]) -> None:
-        pub.put(encode(kind, "clock", self._seq, self._t, body))
+        pub.put(encode(kind, CLOCK_SENDER, self._seq, self._t, body))
         self._seq += 1
 
     def _handle(self, item: Any, waiting_k: int | None) -> None:
@@ -122,13 +124,12 @@ class Clock:
                 self.present.discard(member)
                 self.report.departures.append({"robot": member, "t": self._t})
             return
-        parsed = keys.parse_robot_key(item.key)
-        if parsed is None:
-            return
         try:
-            msg = decode(item.payload, roster=self.s.roster, key_sender=parsed[0])
-        except MessageRejected:
+            msg = admit(item.key, item.payload, roster=self.s.roster)
+        except MessageRejected as exc:
             self.report.rejected += 1
+            reasons = self.report.rejected_by_reason
+            reasons[exc.reason] = reasons.get(exc.reason, 0) + 1
             return
         if msg.kind == "ack" and msg.body["k"] == waiting_k:
             self._acks.add(msg.sender)
@@ -147,7 +148,7 @@ class Clock:
     def run(self) -> ClockReport:
         s = self.s
         session = open_session(s.transport)
-        inbox = Inbox()
+        inbox = Inbox(max_message_bytes=DEFAULT_MAX_BYTES)
         try:
             inbox.watch_presence(session, keys.alive_wildcard(s.team))
             inbox.watch_presence(session, keys.ready_wildcard(s.team))

@@ -81,8 +81,17 @@ def ready_wildcard(team: str) -> str:
 def parse_robot_key(key: str) -> tuple[str, str] | None:
     """``(robot, kind)`` of a robot key expression, or None if it is not one."""
     parts = key.split("/")
-    if len(parts) == 5 and parts[0] == "relloc" and parts[2] == "robot":
+    if len(parts) == 5 and parts[0] == "relloc" and parts[2] == "robot" and parts[4] in ROBOT_KINDS:
         return parts[3], parts[4]
+    return None
+
+
+def parse_clock_key(key: str) -> str | None:
+    """The kind (``tick`` or ``ctl``) of a clock key expression, or None if it is not one."""
+    parts = key.split("/")
+    if len(parts) == 4 and parts[0] == "relloc" and parts[2] == "clock":
+        if parts[3] in ("tick", "ctl"):
+            return parts[3]
     return None
 
 

@@ -1,15 +1,20 @@
 """``relloc team up``: a whole team as separate OS processes on this machine.
 
 The launcher process is the Zenoh hub and the collector: it *listens* on one explicit loopback
-endpoint; the clock/simulator process and every robot process *connect* to it (multicast
-scouting off). It then
+endpoint; the clock/simulator process and every robot process *connect* to it and listen on
+loopback only (multicast scouting off). With ``--secure`` every process speaks mutual TLS only,
+with one certificate per robot and one for the launcher and clock, and Zenoh access control
+(:mod:`relloc.runtime.access`). It then
 
 - starts ``relloc team clock`` (the clock/simulator process) and one ``relloc node`` per robot,
   each robot simulating the same seeded scenario and reading only its own sensor slice;
-- collects every robot's ``est`` batches and ``stats`` counters, and watches liveliness;
+- collects every robot's ``est`` batches and ``stats`` counters, and watches liveliness (only
+  messages that pass :func:`relloc.runtime.admission.admit`; rejections counted by reason);
 - executes the clock's ``kill`` events with a real ``SIGKILL`` of the robot's process and its
-  ``restart`` events by starting the robot again (it rejoins mid-run at the current tick);
-- after ``ctl(end)``, waits for every process to exit, then scores the collected estimates with
+  ``restart`` events by starting the robot again (it rejoins mid-run at the current tick) —
+  only events of its own fault schedule, each once;
+- once the clock process has exited (after its ``ctl(end)``), waits for every robot to exit,
+  then scores the collected estimates with
   the same functions as the in-process run (:mod:`relloc.runtime.summary`).
 
 Children are started through a ``forkserver`` that has imported relloc once (a fresh interpreter
@@ -34,10 +39,13 @@ from typing import Any
 
 from relloc.errors import ConfigError, RellocError
 from relloc.runtime import keys
-from relloc.runtime.faults import FaultSettings
-from relloc.runtime.messages import MessageRejected, decode
+from relloc.runtime.access import SecureTeam, secure_team
+from relloc.runtime.admission import admit
+from relloc.runtime.faults import FaultSettings, RobotEvent
+from relloc.runtime.messages import DEFAULT_MAX_BYTES, MessageRejected
 from relloc.runtime.scenario import check_source
 from relloc.runtime.transport import (
+    DEFAULT_LISTEN,
     Inbox,
     TransportSettings,
     free_loopback_port,
@@ -61,6 +69,10 @@ class TeamSettings:
     port: int | None = None
     wall_timeout_s: float = 300.0
     filter_kind: str = "plkf"
+    secure: bool = False
+    """Mutual TLS and access control (:mod:`relloc.runtime.access`) for every process."""
+    certs_dir: Path | None = None
+    """The team's certificate folder (``relloc certs``); made in ``<out>/certs`` if None."""
 
     def __post_init__(self) -> None:
         keys.check_id(self.team, "--team")
@@ -71,6 +83,8 @@ class TeamSettings:
             raise ConfigError(f"--seed: {self.seed} must be ≥ 0")
         if self.wall_timeout_s <= 0:
             raise ConfigError("--timeout: must be > 0")
+        if self.certs_dir is not None and not self.secure:
+            raise ConfigError("--certs: only with --secure")
 
 
 @dataclass
@@ -84,6 +98,9 @@ class Collected:
     stats: dict[str, list[dict[str, int]]] = field(default_factory=dict)
     """Per robot, the counters of each process incarnation (a restart starts a new one)."""
     rejected: int = 0
+    rejected_by_reason: Counter[str] = field(default_factory=Counter)
+    """What the collector rejected (:mod:`relloc.runtime.admission` reasons, ``unscheduled``
+    control events)."""
     presence: list[dict[str, Any]] = field(default_factory=list)
     kills: list[dict[str, Any]] = field(default_factory=list)
     restarts: list[dict[str, Any]] = field(default_factory=list)
@@ -92,7 +109,16 @@ class Collected:
     wall_s: float = 0.0
 
 
-def node_command(settings: TeamSettings, robot: str, endpoint: str) -> list[str]:
+def _transport_arguments(endpoint: str, secure: SecureTeam | None, member: str) -> list[str]:
+    """Connect to the launcher; listen on loopback only (TLS only when secure)."""
+    if secure is None:
+        return ["--connect", endpoint, "--listen", DEFAULT_LISTEN]
+    return ["--connect", endpoint, *secure.arguments(member)]
+
+
+def node_command(
+    settings: TeamSettings, robot: str, endpoint: str, secure: SecureTeam | None = None
+) -> list[str]:
     """The ``relloc`` arguments of one robot process (``relloc node ...``)."""
     f = settings.faults
     cmd = [
@@ -105,8 +131,7 @@ def node_command(settings: TeamSettings, robot: str, endpoint: str) -> list[str]
         str(settings.seed),
         "--team",
         settings.team,
-        "--connect",
-        endpoint,
+        *_transport_arguments(endpoint, secure, robot),
         "--filter",
         settings.filter_kind,
         "--drop",
@@ -131,6 +156,7 @@ def clock_command(
     duration_s: float,
     endpoint: str,
     report: Path,
+    secure: SecureTeam | None = None,
 ) -> list[str]:
     """The ``relloc`` arguments of the clock/simulator process (``relloc team clock ...``)."""
     cmd = [
@@ -146,8 +172,7 @@ def clock_command(
         repr(duration_s),
         "--realtime",
         repr(settings.realtime_factor),
-        "--connect",
-        endpoint,
+        *_transport_arguments(endpoint, secure, "launcher"),
         "--report",
         str(report),
     ]
@@ -215,6 +240,11 @@ class TeamLauncher:
         self._finished: list[tuple[str, Any]] = []
         self._dead: set[str] = set()
         self._received: Counter[tuple[str, str]] = Counter()
+        self._scheduled: dict[str, list[RobotEvent]] = {
+            "kill": sorted(settings.faults.kills, key=lambda e: e.at_s),
+            "restart": sorted(settings.faults.restarts, key=lambda e: e.at_s),
+        }
+        self.secure: SecureTeam | None = None
         self.context = _fork_context()
 
     def _spawn(self, name: str, argv: list[str]) -> Any:
@@ -228,9 +258,18 @@ class TeamLauncher:
     def run(self) -> Collected:
         """Run the team to the end (or the wall timeout) and return what was collected."""
         self.logs.mkdir(parents=True, exist_ok=True)
-        endpoint = self.endpoint = loopback_endpoint(self.s.port or free_loopback_port())
-        session = open_session(TransportSettings(listen=(endpoint,)))
-        inbox = Inbox()
+        port = self.s.port or free_loopback_port()
+        if self.s.secure:
+            self.secure = secure_team(self.s.out_dir, self.s.team, self.roster, self.s.certs_dir)
+            endpoint = self.endpoint = loopback_endpoint(port, "tls")
+            transport = TransportSettings(
+                listen=(endpoint,), config_file=self.secure.config("launcher")
+            )
+        else:
+            endpoint = self.endpoint = loopback_endpoint(port)
+            transport = TransportSettings(listen=(endpoint,))
+        session = open_session(transport)
+        inbox = Inbox(max_message_bytes=DEFAULT_MAX_BYTES)
         start = self._start = time.monotonic()
         try:
             for kind in ("est", "evt", "stats"):
@@ -240,11 +279,18 @@ class TeamLauncher:
             self.procs["clock"] = self._spawn(
                 "clock",
                 clock_command(
-                    self.s, self.roster, self.duration_s, endpoint, self.s.out_dir / "clock.json"
+                    self.s,
+                    self.roster,
+                    self.duration_s,
+                    endpoint,
+                    self.s.out_dir / "clock.json",
+                    self.secure,
                 ),
             )
             for robot in self.roster:
-                self.procs[robot] = self._spawn(robot, node_command(self.s, robot, endpoint))
+                self.procs[robot] = self._spawn(
+                    robot, node_command(self.s, robot, endpoint, self.secure)
+                )
             self._collect(inbox, start)
         finally:
             self._stop_all()
@@ -254,7 +300,8 @@ class TeamLauncher:
         return self.collected
 
     def _collect(self, inbox: Inbox, start: float) -> None:
-        ended = False
+        """Collect until the clock process has exited (after its ``ctl(end)``: the launcher goes
+        by its own child's exit, which no message can fake) and every robot has."""
         end_wall = None
         while True:
             now = time.monotonic()
@@ -269,19 +316,16 @@ class TeamLauncher:
                         f"team up: the {name} process failed (exit {proc.exitcode}); "
                         f"see its log in {self.logs}"
                     )
-            clock = self.procs["clock"]
-            if ended:
+            if self.procs["clock"].exitcode is not None:
+                end_wall = now if end_wall is None else end_wall
                 alive = [r for r in self.roster if self.procs[r].exitcode is None]
-                if not alive and clock.exitcode is not None:
+                if not alive:
                     break
-                if end_wall is not None and now - end_wall > 30.0:
+                if now - end_wall > 30.0:
                     raise RellocError(f"team up: robots {alive} did not exit after the end")
             item = inbox.get(timeout=0.2)
-            if item is None:
-                continue
-            ended = self._on_item(item) or ended
-            if ended and end_wall is None:
-                end_wall = time.monotonic()
+            if item is not None:
+                self._on_item(item)
         # a robot's last report may still be in flight when its process has exited
         deadline = time.monotonic() + FINAL_REPORT_GRACE_S
         while not self._final_reports_in() and time.monotonic() < deadline:
@@ -306,8 +350,8 @@ class TeamLauncher:
                     return False
         return True
 
-    def _on_item(self, item: Any) -> bool:
-        """File one record; True if it was the clock's end event."""
+    def _on_item(self, item: Any) -> None:
+        """File one record (a message that fails admission is counted by reason)."""
         if item.presence != "data":
             token, member = keys.parse_presence_key(item.key)
             self.collected.presence.append(
@@ -318,18 +362,15 @@ class TeamLauncher:
                     "wall_s": time.monotonic() - self._start,
                 }
             )
-            return False
-        parsed = keys.parse_robot_key(item.key)
+            return
         try:
-            msg = decode(
-                item.payload,
-                roster=self.roster,
-                key_sender=parsed[0] if parsed else "clock",
-                max_bytes=16 * 2**20,
-            )
-        except MessageRejected:
-            self.collected.rejected += 1
-            return False
+            msg = admit(item.key, item.payload, roster=self.roster)
+            if msg.kind == "ctl":
+                self._on_control(msg.body["action"], msg.body["robot"], msg.t)
+                return
+        except MessageRejected as exc:
+            self._reject(exc.reason)
+            return
         self._received[(msg.sender, msg.kind)] += 1
         if msg.kind == "est":
             self.collected.estimates.append((msg.sender, msg.body))
@@ -343,13 +384,23 @@ class TeamLauncher:
             while len(per_robot) <= index:
                 per_robot.append({})
             per_robot[index] = dict(msg.body["counters"])
-        elif msg.kind == "ctl":
-            return self._on_control(msg.body["action"], msg.body["robot"], msg.t)
-        return False
 
-    def _on_control(self, action: str, robot: str, t: float) -> bool:
+    def _reject(self, reason: str) -> None:
+        self.collected.rejected += 1
+        self.collected.rejected_by_reason[reason] += 1
+
+    def _on_control(self, action: str, robot: str, t: float) -> None:
+        """Execute a scheduled kill or restart: each event of the fault schedule once, when
+        the clock announces it (at or after its time), for a robot in the right state;
+        anything else raises ``unscheduled`` (``end`` is the clock process' exit)."""
         if action == "end":
-            return True
+            return
+        pending = self._scheduled[action]
+        due = [e for e in pending if e.robot == robot and e.at_s <= t + 1e-6]
+        alive = robot not in self._dead
+        if not due or alive != (action == "kill"):
+            raise MessageRejected("unscheduled", f"ctl {action} {robot!r} at {t:g} s")
+        pending.remove(due[0])
         proc = self.procs.get(robot)
         if action == "kill" and proc is not None:
             os.kill(proc.pid, signal.SIGKILL)
@@ -360,11 +411,12 @@ class TeamLauncher:
         elif action == "restart":
             self.incarnation[robot] += 1
             self._dead.discard(robot)
-            self.procs[robot] = self._spawn(robot, node_command(self.s, robot, self.endpoint))
+            self.procs[robot] = self._spawn(
+                robot, node_command(self.s, robot, self.endpoint, self.secure)
+            )
             self.collected.restarts.append(
                 {"robot": robot, "at_s": t, "pid": self.procs[robot].pid}
             )
-        return False
 
     def _stop_all(self) -> None:
         """Terminate every child still running; SIGKILL those that do not stop in 5 s."""

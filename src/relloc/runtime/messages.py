@@ -36,7 +36,9 @@ checked against their declared shape, ``-1`` meaning "any length". Kinds:
 
 :func:`decode` validates *everything* a receiver relies on — size limit before unpacking, map
 layout, version, kind, field types, array shapes, finite numbers, a symmetric covariance, and a
-sender that is on the team roster and matches the key expression it arrived on. Anything else
+sender that is on the team roster and matches the key expression it arrived on, targets and
+controlled robots on the roster (who may send which kind on which key, how often and how far
+ahead of the clock is checked on top of this by :mod:`relloc.runtime.admission`). Anything else
 raises :class:`MessageRejected` whose ``reason`` is a short stable code the node counts (a bad
 message is dropped and counted, never crashes a node). Pickle is never used for network input.
 """
@@ -221,6 +223,10 @@ def decode(
         unknown = sorted(set(body["targets"]) - set(roster))
         if unknown:
             raise MessageRejected("unknown_target", f"targets {unknown} are not on the roster")
+    if kind == "ctl" and (body["robot"] == "") != (body["action"] == "end"):
+        raise MessageRejected("malformed", "ctl: 'robot' is empty exactly for action 'end'")
+    if kind == "ctl" and body["robot"] and body["robot"] not in roster:
+        raise MessageRejected("unknown_target", f"ctl robot {body['robot']!r} is not on the roster")
     return Message(
         kind=kind,
         sender=sender,
@@ -329,6 +335,8 @@ def _check_consistency(kind: str, body: Mapping[str, Any]) -> None:
             raise MessageRejected("malformed", f"evt: kinds must be in {sorted(EVENT_KINDS)}")
     elif kind == "ctl" and body["action"] not in CTL_ACTIONS:
         raise MessageRejected("malformed", f"ctl: unknown action {body['action']!r}")
+    elif kind == "tick" and not (1 <= body["k"] <= body["n"] and body["dt"] > 0):
+        raise MessageRejected("malformed", "tick: need 1 ≤ k ≤ n and dt > 0")
     covs = body.get("cov")
     if kind == "est":
         covs = body["covs"]

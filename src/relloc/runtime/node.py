@@ -22,9 +22,10 @@ Per clock tick ``k`` (simulated time ``t_k``; see :mod:`relloc.runtime.clock`) a
 Teammates appear and disappear through Zenoh liveliness. Measurements of a teammate that is gone
 are not fused (its motion cannot be predicted without its odometry), so its track expires after
 the keep window; when it is back and seen again the track is re-found. A message that fails
-validation is dropped and counted by reason (see :mod:`relloc.runtime.messages`); nothing a
-teammate sends can crash the node. On ``ctl(end)`` — or if the clock vanishes — the node filters
-what is left, ships its last report and exits cleanly.
+validation is dropped and counted by reason (see :mod:`relloc.runtime.messages` and
+:mod:`relloc.runtime.admission`: roles, ticks, time bound, rate); nothing a teammate — or
+anyone else on the network — sends can crash the node. On ``ctl(end)`` — or if the clock
+vanishes — the node filters what is left, ships its last report and exits cleanly.
 """
 
 from __future__ import annotations
@@ -39,13 +40,13 @@ import numpy as np
 from relloc.errors import ConfigError
 from relloc.estimators.relative import FRAME
 from relloc.runtime import keys
+from relloc.runtime.admission import SenderBudget, TickGuard, admit, check_not_future
 from relloc.runtime.estimation import TrackManagerEstimator
 from relloc.runtime.faults import FAULTED_KINDS, FaultSettings, LinkEmulator
 from relloc.runtime.messages import (
     DEFAULT_MAX_BYTES,
     Message,
     MessageRejected,
-    decode,
     encode,
     est_bodies,
 )
@@ -136,13 +137,15 @@ class RobotNode:
         self._next_report_s = 0.0
         self._done = False
         self._end_deadline: float | None = None
-        self._last_tick_seen = False
+        self._ticks = TickGuard(end_s=getattr(source, "end_time", None))
+        self._budget = SenderBudget.for_team(len(settings.roster))
+        self._inbox: Inbox | None = None
 
     # ------------------------------------------------------------------ process main loop
     def run(self) -> dict[str, int]:
         s = self.s
         self._session = session = open_session(s.transport)
-        inbox = Inbox()
+        inbox = self._inbox = Inbox(max_message_bytes=s.max_bytes)
         try:
             for kind in ("odom", "meas", "eqm"):
                 inbox.subscribe(session, keys.robot_wildcard(s.team, kind))
@@ -167,7 +170,6 @@ class RobotNode:
                         break
                 if item is not None:
                     self._on_incoming(item)
-            self.counters["inbox_overflow"] = inbox.overflow
             self._report()
         finally:
             for token in self._tokens:
@@ -182,16 +184,17 @@ class RobotNode:
             self._on_presence(member, item.presence == "joined")
             return
         parsed = keys.parse_robot_key(item.key)
-        key_sender = parsed[0] if parsed is not None else "clock"
-        if key_sender == self.s.robot:
+        if parsed is not None and parsed[0] == self.s.robot:
             return  # our own publication looped back by the local session
         try:
-            msg = decode(
-                item.payload,
-                roster=self.s.roster,
-                key_sender=key_sender,
-                max_bytes=self.s.max_bytes,
-            )
+            msg = admit(item.key, item.payload, roster=self.s.roster, max_bytes=self.s.max_bytes)
+            if msg.kind == "tick":
+                self._ticks.check(msg)
+            elif msg.kind == "ctl" and msg.body["action"] == "end":
+                self._ticks.check_end(msg)
+            elif msg.kind in FAULTED_KINDS:
+                check_not_future(msg, self._t)
+                self._budget.take(msg.sender)
         except MessageRejected as exc:
             self.counters[f"rejected.{exc.reason}"] += 1
             self.counters["rejected"] += 1
@@ -230,7 +233,7 @@ class RobotNode:
             elif (
                 not joined
                 and mate.present
-                and (self._last_tick_seen or self._end_deadline is not None)
+                and (self._ticks.last_tick_seen or self._end_deadline is not None)
             ):
                 # after the last tick teammates exit normally (the clock sends ctl(end) once every
                 # robot acked that tick, and a teammate may leave before our ctl(end) arrives);
@@ -250,8 +253,8 @@ class RobotNode:
     def _on_tick(self, msg: Message) -> None:
         t, self._dt = msg.t, float(msg.body["dt"])
         self._t = t
+        self._budget.new_interval()
         self.counters["ticks"] += 1
-        self._last_tick_seen = int(msg.body["k"]) >= int(msg.body["n"])
         if self._window_start is None:  # first tick heard (a restarted node joins mid-run)
             self._window_start = self._filtered_until = t - self._dt
             self._next_eqm_s = self._next_report_s = t
@@ -381,6 +384,11 @@ class RobotNode:
     def final_counters(self) -> dict[str, int]:
         """Counters, the link emulator's fault tallies, estimator track counts and latencies."""
         out = dict(self.counters)
+        if self._inbox is not None:  # dropped by the inbox before queueing
+            out["inbox_overflow"] = self._inbox.overflow
+            if self._inbox.oversized:
+                out["rejected.oversized"] = out.get("rejected.oversized", 0) + self._inbox.oversized
+                out["rejected"] = out.get("rejected", 0) + self._inbox.oversized
         out["late_samples"] = sum(m.odometry.late for m in self.teammates.values())
         out["cpu_ms"] = int(time.process_time() * 1000)
         for name, value in self.link.counters.as_dict().items():

@@ -16,12 +16,17 @@ keys:
   largest difference between distributed and in-process beliefs at common times;
 - ``fault_outcomes``: per fault, accuracy before/during/after and tracks kept/deleted/re-found
   (:mod:`relloc.runtime.outcomes`);
-- ``clock``: ticks, wall time, barrier timeouts, arrivals and departures.
+- ``clock``: ticks, wall time, barrier timeouts, arrivals and departures;
+- ``rejected_by_reason``: every message refused anywhere in the team, by receiver (robots
+  together, the collector, the clock) and reason (:mod:`relloc.runtime.messages`,
+  :mod:`relloc.runtime.admission`), with the total; ``secure``: whether the run used mutual TLS
+  and access control (``--secure``).
 """
 
 from __future__ import annotations
 
 import json
+from collections import Counter
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
@@ -40,7 +45,7 @@ from relloc.pipeline.team_report import (
     track_team,
     write_team_report,
 )
-from relloc.runtime.launcher import TeamLauncher, TeamSettings
+from relloc.runtime.launcher import Collected, TeamLauncher, TeamSettings
 from relloc.runtime.outcomes import fault_outcomes
 from relloc.runtime.scenario import Team, load_team, run_seeds
 from relloc.runtime.summary import (
@@ -102,6 +107,8 @@ def run_team(settings: TeamSettings) -> dict[str, Any]:
         },
         "in_process": {"team": reference["team"], "pairs": reference["pairs"]},
         "agreement": agree,
+        "rejected_by_reason": rejected_by_reason(per_robot, collected, clock),
+        "secure": settings.secure,
         "faults": settings.faults.to_dict(),
         "fault_outcomes": fault_outcomes(settings.faults, results[0], distributed, recording),
         "clock": clock,
@@ -117,6 +124,22 @@ def run_team(settings: TeamSettings) -> dict[str, Any]:
     report = (out / "report.md").read_text()
     write_report(out, report.rstrip() + "\n\n" + runtime_markdown(summary))
     return summary
+
+
+def rejected_by_reason(
+    per_robot: dict[str, dict[str, Any]], collected: Collected, clock: dict[str, Any]
+) -> dict[str, Any]:
+    """Rejections by receiver and reason (see the module docstring)."""
+    robots: Counter[str] = Counter()
+    for m in per_robot.values():
+        robots.update(m["rejected_by_reason"])
+    by_receiver = {
+        "robots": dict(sorted(robots.items())),
+        "collector": dict(sorted(collected.rejected_by_reason.items())),
+        "clock": dict(sorted(clock.get("rejected_by_reason", {}).items())),
+    }
+    total = sum(sum(v.values()) for v in by_receiver.values())
+    return by_receiver | {"total": total}
 
 
 def team_meta(team: Team, settings: TeamSettings, tracker: TrackManagerSettings) -> dict[str, Any]:
@@ -198,6 +221,9 @@ def runtime_markdown(summary: dict[str, Any]) -> str:
         "",
         f"Transport loss (data messages that never arrived, faults excluded): "
         f"{fmt(team['transport_loss_rate'])} (not defined when a robot was killed).",
+        "",
+        f"Network: {'mutual TLS + access control' if summary['secure'] else 'plain TCP'}; "
+        f"rejected messages: {json.dumps(summary['rejected_by_reason'])}.",
         "",
         "### Distributed vs in-process (same seed)",
         "",

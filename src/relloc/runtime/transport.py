@@ -1,16 +1,22 @@
 """Zenoh sessions on explicit endpoints, one inbox per process, liveliness-based presence.
 
-Topology used by ``relloc team up``: the clock process opens a ``peer`` session that *listens* on
-one explicit loopback endpoint (``tcp/127.0.0.1:<port>``); every robot process opens a ``peer``
-session that *connects* to it and listens on an ephemeral loopback port, so Zenoh's gossip can
-link peers directly. Multicast scouting is off unless asked for, so nothing leaves loopback and
-two teams on one machine never meet. Any Zenoh JSON5 configuration file (TLS, access control,
-other transports) can be loaded first with ``config_file``; the explicit fields override it.
+Topology used by ``relloc team up``: the launcher opens a ``peer`` session that *listens* on
+one explicit loopback endpoint (``tcp/127.0.0.1:<port>``, ``tls/...`` with ``--secure``); the
+clock and every robot process open a ``peer`` session that *connects* to it and listens on an
+ephemeral loopback port, so Zenoh's gossip can link peers directly. A session given neither
+``listen`` endpoints nor a configuration file listens on ``tcp/127.0.0.1:0`` only (loopback,
+never all interfaces: pass ``listen`` to be reachable from another machine). Multicast scouting
+is off unless asked for, so nothing leaves loopback and two teams on one machine never meet. Any
+Zenoh JSON5 configuration file (TLS, access control, other transports; ``relloc certs`` writes
+one per team member, see :mod:`relloc.runtime.access`) can be loaded first with
+``config_file``; the explicit fields override it.
 
 Each process has a single :class:`Inbox`: Zenoh callbacks (run on Zenoh's threads) only append
 ``(key, payload)`` records to a bounded thread-safe queue; the process' main loop consumes it, so
-all estimator work is single-threaded and deterministic given the arrival order. A full inbox
-drops the record and counts it (``overflow``) instead of blocking Zenoh.
+all estimator work is single-threaded and deterministic given the arrival order. A payload larger
+than the message limit is dropped in the callback, before it is copied or queued (counted
+``oversized``), and the queue is bounded both in records and in bytes: a full inbox drops the
+record and counts it (``overflow``) instead of blocking Zenoh or growing without bound.
 
 Presence: each member declares a liveliness token ``relloc/<team>/alive/<id>``; a liveliness
 subscriber with ``history=True`` reports the members already there and then every appearance
@@ -22,6 +28,7 @@ from __future__ import annotations
 
 import json
 import queue
+import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -30,6 +37,12 @@ from typing import Any, Literal
 from relloc.errors import ConfigError, require
 
 Mode = Literal["peer", "client", "router"]
+DEFAULT_LISTEN = "tcp/127.0.0.1:0"
+"""Where a session listens when nothing else is configured: an ephemeral loopback port."""
+INBOX_RECORDS = 100_000
+INBOX_BYTES = 32 * 2**20
+RECORD_OVERHEAD_BYTES = 256
+"""What one queued record is charged on top of its payload (the record object itself)."""
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -78,6 +91,8 @@ class TransportSettings:
         conf.insert_json5("mode", json.dumps(self.mode))
         if self.listen:
             conf.insert_json5("listen/endpoints", json.dumps(list(self.listen)))
+        elif self.config_file is None:
+            conf.insert_json5("listen/endpoints", json.dumps([DEFAULT_LISTEN]))
         if self.connect:
             conf.insert_json5("connect/endpoints", json.dumps(list(self.connect)))
         conf.insert_json5("scouting/multicast/enabled", json.dumps(self.multicast_scouting))
@@ -106,11 +121,11 @@ def declare_publisher(session: Any, key_expr: str) -> Any:
     )
 
 
-def loopback_endpoint(port: int) -> str:
-    """``tcp/127.0.0.1:<port>``."""
+def loopback_endpoint(port: int, protocol: Literal["tcp", "tls"] = "tcp") -> str:
+    """``tcp/127.0.0.1:<port>`` (or ``tls/...``)."""
     if not (0 <= port <= 65535):
         raise ConfigError(f"port: {port} outside 0–65535")
-    return f"tcp/127.0.0.1:{port}"
+    return f"{protocol}/127.0.0.1:{port}"
 
 
 def free_loopback_port() -> int:
@@ -142,26 +157,63 @@ class Incoming:
 
 
 class Inbox:
-    """The single, bounded message queue of a process (see module docstring)."""
+    """The single, bounded message queue of a process (see module docstring).
 
-    def __init__(self, capacity: int = 100_000) -> None:
-        if capacity < 1:
-            raise ConfigError(f"inbox capacity: {capacity} < 1")
+    ``max_message_bytes`` is the largest payload accepted; ``capacity`` and ``capacity_bytes``
+    bound the queue (payload plus :data:`RECORD_OVERHEAD_BYTES` per record).
+    """
+
+    def __init__(
+        self,
+        capacity: int = INBOX_RECORDS,
+        *,
+        max_message_bytes: int | None = None,
+        capacity_bytes: int = INBOX_BYTES,
+    ) -> None:
+        if capacity < 1 or capacity_bytes < 1:
+            raise ConfigError(f"inbox capacity: {capacity} records, {capacity_bytes} bytes < 1")
         self._queue: queue.Queue[Incoming] = queue.Queue(maxsize=capacity)
+        self.max_message_bytes = max_message_bytes
+        self.capacity_bytes = capacity_bytes
         self.overflow = 0
+        self.oversized = 0
+        self._bytes = 0
+        self._lock = threading.Lock()
         self._handles: list[Any] = []
 
     def _push(self, item: Incoming) -> None:
-        try:
-            self._queue.put_nowait(item)
-        except queue.Full:
-            self.overflow += 1
+        size = len(item.payload) + RECORD_OVERHEAD_BYTES
+        with self._lock:
+            if self._bytes + size > self.capacity_bytes:
+                self.overflow += 1
+                return
+            try:
+                self._queue.put_nowait(item)
+            except queue.Full:
+                self.overflow += 1
+                return
+            self._bytes += size
+
+    def _taken(self, item: Incoming) -> Incoming:
+        with self._lock:
+            self._bytes -= len(item.payload) + RECORD_OVERHEAD_BYTES
+        return item
+
+    @property
+    def queued_bytes(self) -> int:
+        return self._bytes
 
     def subscribe(self, session: Any, key_expr: str) -> None:
-        """Deliver every sample on ``key_expr`` to this inbox."""
+        """Deliver every sample on ``key_expr`` to this inbox (oversized payloads are counted
+        and dropped here, before they are copied)."""
 
         def on_sample(sample: Any) -> None:
-            self._push(Incoming(str(sample.key_expr), sample.payload.to_bytes()))
+            payload = sample.payload
+            if self.max_message_bytes is not None and len(payload) > self.max_message_bytes:
+                with self._lock:
+                    self.oversized += 1
+                return
+            self._push(Incoming(str(sample.key_expr), payload.to_bytes()))
 
         self._handles.append(session.declare_subscriber(key_expr, on_sample))
 
@@ -180,7 +232,7 @@ class Inbox:
     def get(self, timeout: float | None) -> Incoming | None:
         """Next record, waiting up to ``timeout`` seconds (None = forever); None if none came."""
         try:
-            return self._queue.get(timeout=timeout)
+            return self._taken(self._queue.get(timeout=timeout))
         except queue.Empty:
             return None
 
@@ -189,7 +241,7 @@ class Inbox:
         items: list[Incoming] = []
         while True:
             try:
-                items.append(self._queue.get_nowait())
+                items.append(self._taken(self._queue.get_nowait()))
             except queue.Empty:
                 return items
 
