@@ -22,6 +22,7 @@ from typing import Any
 
 from relloc.core.estimates import Estimates
 from relloc.core.recording import Recording
+from relloc.errors import ConfigError
 from relloc.pipeline.evaluation import accuracy_and_consistency, at_times, evaluate_series
 from relloc.pipeline.export.poses import UNKNOWN_VARIANCE, PoseSeries, PoseSet, pose_set
 
@@ -32,6 +33,13 @@ class ExportRequest:
 
     mcap: Path | None = None
     tum: Path | None = None
+
+    def __post_init__(self) -> None:
+        """Fail before any work on paths that cannot be written (ConfigError naming the flag)."""
+        if self.mcap is not None and Path(self.mcap).is_dir():
+            raise ConfigError(f"--mcap: {self.mcap} is a folder; give a file name such as out.mcap")
+        if self.tum is not None and Path(self.tum).exists() and not Path(self.tum).is_dir():
+            raise ConfigError(f"--tum: {self.tum} exists and is not a folder")
 
     @property
     def wanted(self) -> bool:
@@ -53,7 +61,9 @@ def export_estimates(
         "run": run,
         "unknown_variance": UNKNOWN_VARIANCE,
         "series": {
-            p.label: _figures(p, estimates, recording, settle_s) for p in poses.poses if p.trajectory
+            p.label: _figures(p, estimates, recording, settle_s)
+            for p in poses.poses
+            if p.trajectory
         },
     }
     if poses.skipped:
@@ -86,9 +96,7 @@ def _figures(
         return out
     series = at_times(estimates.series(p.owner, p.subject, p.track), p.t[known])
     evaluation = evaluate_series(series, estimates.updates_of(*series.key), recording)
-    out["position_rmse_m"] = accuracy_and_consistency([evaluation], settle_s=0.0)[
-        "position_rmse_m"
-    ]
+    out["position_rmse_m"] = accuracy_and_consistency([evaluation], settle_s=0.0)["position_rmse_m"]
     out["settle_s"] = settle_s
     out["steady_position_rmse_m"] = accuracy_and_consistency([evaluation], settle_s=settle_s)[
         "position_rmse_m"

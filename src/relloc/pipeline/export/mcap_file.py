@@ -80,9 +80,7 @@ class McapWritten:
 def stamp_ns(t: float, where: str) -> int:
     """Nanoseconds of a time ``t`` in seconds (DataError naming ``where`` outside ``[0, 2³¹)``)."""
     if not (np.isfinite(t) and 0.0 <= t < _MAX_STAMP_S):
-        raise DataError(
-            f"{where}: time {t!r} s cannot be a ROS stamp (it must lie in [0, 2^31) s)"
-        )
+        raise DataError(f"{where}: time {t!r} s cannot be a ROS stamp (it must lie in [0, 2^31) s)")
     return round(t * 1e9)
 
 
@@ -169,8 +167,11 @@ def _truth_messages(
             if not np.isfinite(pose[i, k, 3]):
                 continue
             body = f"{names[robot]}/base_link"
-            yield ns, f"/ground_truth/{names[robot]}", POSE, m.pose_stamped(
-                ns, WORLD_FRAME, pose[i, k, :3], q[i, k]
+            yield (
+                ns,
+                f"/ground_truth/{names[robot]}",
+                POSE,
+                m.pose_stamped(ns, WORLD_FRAME, pose[i, k, :3], q[i, k]),
             )
             transforms.append(m.transform(ns, WORLD_FRAME, body, pose[i, k, :3], q[i, k]))
             if robot in poses.common_frame_owners:
@@ -187,9 +188,9 @@ def write_mcap(
     docstring). The file is written next to ``path`` and renamed when complete."""
     started = time.perf_counter()
     m = _Messages()
-    messages = [
-        msg for p in poses.poses for msg in _belief_messages(m, p)
-    ] + list(_truth_messages(m, poses, recording))
+    messages = [msg for p in poses.poses for msg in _belief_messages(m, p)] + list(
+        _truth_messages(m, poses, recording)
+    )
     messages.sort(key=lambda x: x[0])  # (stable) replay order: by stamp
     path = Path(path)
     if path.is_dir():
