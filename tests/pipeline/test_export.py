@@ -176,7 +176,15 @@ def check_topics(topics, est, rec):  # type: ignore[no-untyped-def]
         assert wrap_angle(yaw_of(c.transform.rotation) - expected) == pytest.approx(0, abs=1e-9)
     for i, name in enumerate(("leader", "follower", "r3")):
         gt = topics[f"/ground_truth/{name}"]
-        assert len(gt) == T.size and all(m[1].header.frame_id == "map" for m in gt)
+        assert [m[0] for m in gt] == [round(x * 1e9) for x in T]
+        true = rec.truth[i].at(T)
+        for k, (_, msg, _) in enumerate(gt):
+            assert msg.header.frame_id == "map"
+            p = msg.pose.position
+            np.testing.assert_array_equal([p.x, p.y, p.z], true[k, :3])
+            assert wrap_angle(yaw_of(msg.pose.orientation) - true[k, 3]) == pytest.approx(
+                0, abs=1e-12
+            )
 
 
 def test_mcap_reads_back_with_mcap_ros2(written):  # type: ignore[no-untyped-def]
@@ -241,7 +249,7 @@ def test_a_folder_as_mcap_file_is_a_config_error(tmp_path):  # type: ignore[no-u
 
 
 def test_tum_files_hold_the_poses(written):  # type: ignore[no-untyped-def]
-    d, rec, est, section = written
+    _, rec, est, section = written
     expected = expected_poses(est, rec)
     pairs = section["tum"]["pairs"]
     assert set(pairs) == {"leader->3", "3->leader#bank/k2", "team->follower", "follower->leader"}

@@ -74,7 +74,7 @@ def simulate_and_track(
     tracker: TrackManagerSettings,
     record_rate_hz: float,
 ) -> tuple[Estimates, Recording]:
-    """One run's recording and every observer's tracks of it (its streams from ``seed_sequence``)."""
+    """One run's recording and every observer's tracks of it (streams from ``seed_sequence``)."""
     sim_seed, init_seed = seed_sequence.spawn(2)
     recording = simulate(scenario, np.random.default_rng(sim_seed))
     estimates = track_team(

@@ -181,7 +181,7 @@ def select_pose(state: Array, dofs: Sequence[int]) -> tuple[Array, Array]:
     for k, i in enumerate(dofs):
         if i >= 0:
             values[:, k] = state[:, i]
-    return values[:, :3], wrap_angle(values[:, 5])
+    return values[:, :3], np.asarray(wrap_angle(values[:, 5]), dtype=float)
 
 
 def _truth(rec: Recording, s: BeliefSeries, t: Array) -> Array:
