@@ -22,7 +22,14 @@ pytest.importorskip("mcap", reason="extra 'ros' is not installed")
 
 def test_exporting_experiments_state_their_run():
     exporting = {n for n in registry.available() if registry.exported_run(n) is not None}
-    assert exporting == {"wanasinghe2014", "sharma2013", "desilva2015", "guler2023"}
+    assert exporting == {
+        "wanasinghe2014",
+        "sharma2013",
+        "mrclam-cl",
+        "desilva2015",
+        "mrclam-association",
+        "guler2023",
+    }
 
 
 def test_an_experiment_without_estimates_refuses_mcap(tmp_path, capsys):  # type: ignore[no-untyped-def]
