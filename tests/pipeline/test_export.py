@@ -4,18 +4,30 @@ the TUM files scored by the real ``evo_ape``, every value checked against the es
 from __future__ import annotations
 
 import math
+import re
 from collections import defaultdict
 from pathlib import Path
 
 import numpy as np
 import pytest
 from export_helpers import T, estimates, evo_ape, have_evo, recording, yaw_of
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
 
 from relloc.core.angles import wrap_angle
 from relloc.errors import ConfigError, DataError
 from relloc.pipeline.export import ExportRequest, export_estimates
 from relloc.pipeline.export.mcap_file import stamp_ns
-from relloc.pipeline.export.poses import UNKNOWN_VARIANCE, pose_set, ros_names, ros_token
+from relloc.pipeline.export.poses import (
+    POSE_MAPS,
+    UNKNOWN,
+    UNKNOWN_VARIANCE,
+    pose_set,
+    ros_names,
+    ros_token,
+    select_covariance,
+)
 from relloc.pipeline.frames import frame
 
 pytest.importorskip("mcap_ros2", reason="extra 'ros' (mcap-ros2-support) is not installed")
@@ -276,3 +288,37 @@ def test_evo_ape_rmse_is_relloc_position_rmse(written, tmp_path):  # type: ignor
         stats = evo_ape(Path(files["truth"]), Path(files["estimate"]), tmp_path)
         ours = section["series"][label]["position_rmse_m"]
         assert stats["rmse"] == pytest.approx(ours, rel=1e-9), label
+
+
+# Property tests (hypothesis, derandomized).
+_TOKEN_RULE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+
+
+@settings(derandomize=True, max_examples=60, deadline=None)
+@given(st.text(max_size=12))
+def test_any_name_becomes_a_valid_ros_token(name):  # type: ignore[no-untyped-def]
+    token = ros_token(name)
+    assert _TOKEN_RULE.match(token), token
+    assert ros_token(token) == token  # tokens are left alone
+
+
+@settings(derandomize=True, max_examples=40, deadline=None)
+@given(
+    st.sampled_from(sorted(POSE_MAPS)),
+    arrays(np.float64, (3, 4, 4), elements=st.floats(-3, 3, allow_subnormal=False)),
+)
+def test_ros_covariance_is_the_selected_block_and_stays_psd(name, a):  # type: ignore[no-untyped-def]
+    for m in POSE_MAPS[name]:
+        d = frame(name).dim
+        P = a[:, :d, :d] @ np.swapaxes(a[:, :d, :d], 1, 2)
+        C = select_covariance(P, m.dofs)
+        np.testing.assert_array_equal(C, np.swapaxes(C, 1, 2))
+        assert np.all(np.linalg.eigvalsh(C) >= -1e-9 * (1 + np.abs(P).max()))
+        for i, si in enumerate(m.dofs):
+            for j, sj in enumerate(m.dofs):
+                if si >= 0 and sj >= 0:
+                    np.testing.assert_array_equal(C[:, i, j], P[:, si, sj])
+                elif i == j:
+                    assert np.all(C[:, i, i] == (U if si == UNKNOWN else 0.0))
+                else:
+                    assert np.all(C[:, i, j] == 0.0)
