@@ -24,7 +24,9 @@ from relloc.core.estimates import Estimates
 from relloc.core.recording import Recording
 from relloc.errors import ConfigError
 from relloc.pipeline.evaluation import accuracy_and_consistency, at_times, evaluate_series
+from relloc.pipeline.export.mcap_file import check_mcap_path, write_mcap
 from relloc.pipeline.export.poses import UNKNOWN_VARIANCE, PoseSeries, PoseSet, pose_set
+from relloc.pipeline.export.tum_files import write_tum
 
 
 @dataclass(frozen=True)
@@ -36,8 +38,8 @@ class ExportRequest:
 
     def __post_init__(self) -> None:
         """Fail before any work on paths that cannot be written (ConfigError naming the flag)."""
-        if self.mcap is not None and Path(self.mcap).is_dir():
-            raise ConfigError(f"--mcap: {self.mcap} is a folder; give a file name such as out.mcap")
+        if self.mcap is not None:
+            check_mcap_path(Path(self.mcap))
         if self.tum is not None and Path(self.tum).exists() and not Path(self.tum).is_dir():
             raise ConfigError(f"--tum: {self.tum} exists and is not a folder")
 
@@ -69,13 +71,9 @@ def export_estimates(
     if poses.skipped:
         out["skipped"] = dict(poses.skipped)
     if request.mcap is not None:
-        from relloc.pipeline.export.mcap_file import write_mcap
-
         written = write_mcap(request.mcap, poses, recording, estimator=estimates.estimator)
         out["mcap"] = written.to_dict()
     if request.tum is not None:
-        from relloc.pipeline.export.tum_files import write_tum
-
         pairs = write_tum(request.tum, poses)
         out["tum"] = {"dir": str(request.tum), "pairs": {p.label: p.to_dict() for p in pairs}}
     return out

@@ -35,7 +35,6 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-import relloc
 from relloc.core.recording import Recording
 from relloc.errors import ConfigError, DataError, require
 from relloc.pipeline.export.poses import (
@@ -75,6 +74,13 @@ class McapWritten:
             "topics": dict(sorted(self.messages.items())),
             "seconds": round(self.seconds, 3),
         }
+
+
+def check_mcap_path(path: Path) -> Path:
+    """``path`` if an MCAP file can be written there (ConfigError naming ``--mcap`` if not)."""
+    if path.is_dir():
+        raise ConfigError(f"--mcap: {path} is a folder; give a file name such as out.mcap")
+    return path
 
 
 def stamp_ns(t: float, where: str) -> int:
@@ -192,9 +198,7 @@ def write_mcap(
         _truth_messages(m, poses, recording)
     )
     messages.sort(key=lambda x: x[0])  # (stable) replay order: by stamp
-    path = Path(path)
-    if path.is_dir():
-        raise ConfigError(f"--mcap: {path} is a folder; give a file name such as out.mcap")
+    path = check_mcap_path(Path(path))
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
@@ -223,10 +227,12 @@ def _write(
     recording: Recording,
     estimator: str,
 ) -> None:
+    from relloc import __version__
+
     writer_module = require("mcap.writer", "ros")
     with open(partial, "wb") as f:
         w = writer_module.Writer(f, compression=writer_module.CompressionType.ZSTD)
-        w.start(profile="ros2", library=f"relloc {relloc.__version__}")
+        w.start(profile="ros2", library=f"relloc {__version__}")
         schemas = {
             name: w.register_schema(
                 name=name,

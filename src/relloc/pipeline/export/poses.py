@@ -92,7 +92,7 @@ POSE_MAPS: Mapping[str, tuple[PoseMap, ...]] = MappingProxyType(
 @dataclass(frozen=True, kw_only=True)
 class PoseSeries:
     """One belief series as ROS poses: ``t (K,)``, ``position (K, 3)``, ``yaw (K,)``,
-    ``cov (K, 6, 6)`` (ROS order), ``age (K,)``; ``truth_position``/``truth_yaw`` the true
+    ``cov (K, 6, 6)`` (ROS order); ``truth_position``/``truth_yaw`` the true
     values in the same frame (NaN where the recording has no truth at that time)."""
 
     owner: str
@@ -106,7 +106,6 @@ class PoseSeries:
     position: Array
     yaw: Array
     cov: Array
-    age: Array
     truth_position: Array
     truth_yaw: Array
 
@@ -246,7 +245,6 @@ def pose_set(estimates: Estimates, recording: Recording) -> PoseSet:
                     position=position,
                     yaw=yaw,
                     cov=select_covariance(s.cov[finite], m.dofs),
-                    age=s.age[finite],
                     truth_position=truth_position,
                     truth_yaw=truth_yaw,
                 )
