@@ -1,4 +1,6 @@
-"""``relloc reproduce NAME --out DIR [--runs N] [--seed S] [--dataset PATH] [--executor E]``."""
+"""``relloc reproduce NAME --out DIR [--runs N] [--seed S] [--dataset PATH] [--executor E]
+[--mcap FILE] [--tum DIR]`` (the last two: one representative run's estimates, where the
+experiment states one — :func:`relloc.experiments.registry.exported_run`)."""
 
 from __future__ import annotations
 
@@ -7,6 +9,7 @@ import json
 import sys
 from pathlib import Path
 
+from relloc.cli.export_args import add_export_arguments, export_request, print_export
 from relloc.experiments import registry
 
 
@@ -27,11 +30,21 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         help="'process' (default, all cores), 'serial', or 'dask://HOST:PORT'",
     )
     p.add_argument("--quiet", action="store_true", help="no progress display")
+    add_export_arguments(p, "one representative run's estimates (where the experiment has any)")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     reproduce = registry.get(args.name)
+    export = export_request(args)
+    if export is not None and registry.exported_run(args.name) is None:
+        from relloc.errors import ConfigError
+
+        exporting = [n for n in registry.available() if registry.exported_run(n) is not None]
+        raise ConfigError(
+            f"--mcap/--tum: {args.name} does not export estimates; experiments that do: "
+            + ", ".join(exporting)
+        )
     summary = reproduce(
         registry.ReproduceArgs(
             out_dir=args.out,
@@ -40,6 +53,7 @@ def run(args: argparse.Namespace) -> int:
             dataset=args.dataset,
             executor=args.executor,
             quiet=args.quiet,
+            export=export,
         )
     )
     if not args.quiet:
@@ -48,4 +62,5 @@ def run(args: argparse.Namespace) -> int:
         print(
             json.dumps({"seed": summary.get("seed"), "runs": summary.get("runs")}), file=sys.stdout
         )
+        print_export(summary.get("export"))
     return 0

@@ -2,7 +2,8 @@
 
 plus ``--init`` (track initialisation policy), ``--yaw-bank K`` (yaw hypotheses for an unknown
 initial yaw), ``--keep-window`` (seconds a track survives
-without measurements), ``--duration`` (shorten the scenario) and ``--executor``.
+without measurements), ``--duration`` (shorten the scenario), ``--executor`` and
+``--mcap FILE`` / ``--tum DIR`` (run 0's estimates for ROS tools and evo).
 
 Runs a team scenario (default: the built-in seed-000 air-ground team), prints per-robot
 accuracy and consistency as a table and writes ``DIR/summary.json``, ``DIR/report.md`` and
@@ -15,6 +16,8 @@ import argparse
 import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
+
+from relloc.cli.export_args import add_export_arguments, export_request, print_export
 
 if TYPE_CHECKING:
     from relloc.estimators.initialisation import FieldOfView
@@ -83,6 +86,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         help="'process' (default, all cores), 'serial', or 'dask://HOST:PORT'",
     )
     p.add_argument("--quiet", action="store_true", help="no progress display and no table")
+    add_export_arguments(p, "run 0's estimates and truth")
     p.set_defaults(func=run)
 
 
@@ -115,7 +119,7 @@ def run(args: argparse.Namespace) -> int:
         executor=args.executor,
         quiet=args.quiet,
     )
-    summary, _ = run_scenario(scenario, settings, args.out)
+    summary, _ = run_scenario(scenario, settings, args.out, export=export_request(args))
     if summary["team"]["samples"] == 0:
         print(
             f"relloc: note: no steady-state results: no track reached the settle time "
@@ -145,6 +149,7 @@ def run(args: argparse.Namespace) -> int:
             console = Console(width=max(console.width, 150))
         console.print(table)
         console.print(f"wrote {args.out / 'summary.json'} and {args.out / 'report.md'}")
+        print_export(summary.get("export"))
     return 0
 
 

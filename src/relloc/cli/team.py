@@ -20,6 +20,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from relloc.cli.export_args import add_export_arguments, export_request, print_export
 from relloc.cli.node import (
     add_network_fault_arguments,
     add_transport_arguments,
@@ -72,6 +73,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     faults = add_network_fault_arguments(up)
     faults.add_argument("--kill", action="append", default=[], metavar="ROBOT@SECONDS")
     faults.add_argument("--restart", action="append", default=[], metavar="ROBOT@SECONDS")
+    add_export_arguments(up, "the distributed estimates")
     up.set_defaults(func=run_up)
 
     clock = actions.add_parser("clock", help="run only the clock/simulator process")
@@ -114,11 +116,12 @@ def run_up(args: argparse.Namespace) -> int:
         secure=args.secure,
         certs_dir=args.certs,
     )
-    summary = run_team(settings)
+    summary = run_team(settings, export=export_request(args))
     if not args.quiet:
         from relloc.runtime.team import print_summary
 
         print_summary(summary)
+        print_export(summary.get("export"))
     return 0
 
 

@@ -52,6 +52,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.core.estimates import Estimates
 from relloc.core.recording import Recording
 from relloc.estimators.gaussian_sum import FusionMode, GaussianSumSettings
 from relloc.experiments.multihypothesis_scores import NO_READING, LeaderScores, leader_scores
@@ -59,7 +60,7 @@ from relloc.experiments.registry import ReproduceArgs
 from relloc.fusion.gaussian_sum_estimator import bearing_kind, scan_times, team
 from relloc.metrics.consistency import anees, chi2_upper, percent_beyond
 from relloc.models.motion import VelocityNoise
-from relloc.pipeline.montecarlo import run_monte_carlo
+from relloc.pipeline.montecarlo import run_monte_carlo, spawn_seeds
 from relloc.pipeline.output import (
     figure_md,
     markdown_table,
@@ -74,6 +75,11 @@ from relloc.sim.multihypothesis import ROBOT_NAMES, DeSilvaScenario, simulate
 Array = NDArray[np.float64]
 
 PAPER_RUNS = 25
+#: What ``--mcap``/``--tum`` write (:func:`relloc.experiments.registry.exported_run`).
+EXPORTED_RUN = (
+    "paper settings: each leader's dominant track of every teammate in its body frame, at its "
+    "scan times"
+)
 DURATION_S = 30.0
 STEADY_FROM_S = 5.0
 FINAL_WINDOW_S = 10.0
@@ -132,10 +138,11 @@ class LeaderRunScores:
     world_xy: Array
 
 
-def _task(seed_seq: np.random.SeedSequence, run_index: int, config: RunConfig) -> LeaderRunScores:
-    """Simulate one run, replay it through the leaders' fusers and score it (top-level,
-    picklable)."""
-    del run_index
+def _run(
+    seed_seq: np.random.SeedSequence, config: RunConfig
+) -> tuple[Estimates, Recording, dict[str, Array], GaussianSumSettings]:
+    """Simulate one run and replay it through the leaders' fusers: the estimates (dominant
+    tracks at each leader's scan times), the recording, those times and the settings."""
     rng = np.random.default_rng(seed_seq)
     recording = simulate(config.scenario, rng)
     settings = replace(filter_settings(config.scenario), fusion=config.fusion)
@@ -152,11 +159,35 @@ def _task(seed_seq: np.random.SeedSequence, run_index: int, config: RunConfig) -
         ),
         record_times=times,
     )
+    return estimates, recording, times, settings
+
+
+def _task(seed_seq: np.random.SeedSequence, run_index: int, config: RunConfig) -> LeaderRunScores:
+    """Simulate one run, replay it through the leaders' fusers and score it (top-level,
+    picklable)."""
+    del run_index
+    estimates, recording, times, settings = _run(seed_seq, config)
     kind = bearing_kind(settings)
     scores = [
-        leader_scores(estimates, recording, i, times[recording.robots[i]], kind) for i in leaders
+        leader_scores(estimates, recording, i, times[recording.robots[i]], kind)
+        for i in config.scenario.sensing
     ]
     return _run_result(scores, recording)
+
+
+def export_run0(args: ReproduceArgs, runs: int, config: RunConfig) -> dict[str, Any]:
+    """``--mcap``/``--tum``: run 0 of the paper configuration again in this process (a run
+    depends only on the seed and its index) and write its estimates (:data:`EXPORTED_RUN`)."""
+    from relloc.pipeline.export import export_estimates
+
+    assert args.export is not None
+    estimates, recording, _, _ = _run(spawn_seeds(args.seed, runs)[0], config)
+    return export_estimates(
+        args.export,
+        estimates,
+        recording,
+        run=f"run 0 of {runs} (seed {args.seed}): {EXPORTED_RUN}",
+    )
 
 
 def _run_result(scores: list[LeaderScores], recording: Recording) -> LeaderRunScores:
@@ -431,6 +462,8 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
         "kidnapped": kidnapped,
         "figures": figures,
     }
+    if args.export is not None:
+        summary["export"] = export_run0(args, runs, RunConfig(scenario=base))
     write_summary(out, summary)
     write_report(out, _report(summary, paper, no_sharing))
     return summary

@@ -62,6 +62,7 @@ from numpy.typing import NDArray
 from relloc.calibration.camera import fit_detection_probability, fit_field_of_view
 from relloc.calibration.odometry import fit_odometry_noise
 from relloc.calibration.window import CalibrationWindow, following, spanning
+from relloc.core.estimates import Estimates
 from relloc.core.recording import (
     CLUTTER,
     Measurements,
@@ -76,6 +77,7 @@ from relloc.experiments.multihypothesis_scores import NO_READING, LeaderScores, 
 from relloc.experiments.registry import ReproduceArgs
 from relloc.fusion.gaussian_sum_estimator import bearing_kind, scan_times, team
 from relloc.models.motion import VelocityNoise
+from relloc.pipeline.export import export_estimates
 from relloc.pipeline.output import (
     figure_md,
     markdown_table,
@@ -102,6 +104,11 @@ MIN_SIGMA_W = 0.02
 POS_TOL_M = 0.5
 YAW_TOL_RAD = 0.5
 FUSION_PERIOD_S = 1.0
+#: What ``--mcap``/``--tum`` write (:func:`relloc.experiments.registry.exported_run`).
+EXPORTED_RUN = (
+    "every robot's fuser (ranges marking detections): its dominant track of each teammate in "
+    "its body frame, at the ticks its scans are fed at"
+)
 
 
 def _whole_run(ds: MrclamDataset, source: str) -> CalibrationWindow:
@@ -184,9 +191,11 @@ def _by_time(columns: Array) -> Array:
     return columns[np.argsort(columns[:, 0], kind="stable")]
 
 
-def _run(rec: Recording, settings: GaussianSumSettings, clock: Array) -> list[LeaderScores]:
-    """Every robot's fuser on the filter clock; the scores of each observer, recorded at the
-    ticks its scans are fed at."""
+def _estimates(
+    rec: Recording, settings: GaussianSumSettings, clock: Array
+) -> tuple[Estimates, dict[str, Array]]:
+    """Every robot's fuser on the filter clock: the estimates, recorded at the ticks each
+    observer's scans are fed at, and those ticks per observer."""
     sensing = list(range(rec.n_robots))
     stamps = scan_times(rec.measurements, rec.robots, sensing, settings)
     times = {name: np.unique(feed_ticks(st, clock)) for name, st in stamps.items()}
@@ -196,8 +205,23 @@ def _run(rec: Recording, settings: GaussianSumSettings, clock: Array) -> list[Le
         clock=clock,
         record_times=times,
     )
+    return estimates, times
+
+
+def _scores(
+    estimates: Estimates, rec: Recording, times: dict[str, Array], settings: GaussianSumSettings
+) -> list[LeaderScores]:
+    """The scores of each observer at its ticks."""
     kind = bearing_kind(settings)
-    return [leader_scores(estimates, rec, i, times[rec.robots[i]], kind) for i in sensing]
+    return [
+        leader_scores(estimates, rec, i, times[rec.robots[i]], kind) for i in range(rec.n_robots)
+    ]
+
+
+def _run(rec: Recording, settings: GaussianSumSettings, clock: Array) -> list[LeaderScores]:
+    """Every robot's fuser on the filter clock, scored (:func:`_estimates`, :func:`_scores`)."""
+    estimates, times = _estimates(rec, settings, clock)
+    return _scores(estimates, rec, times, settings)
 
 
 def _settings(
@@ -254,7 +278,8 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
         for st in scan_times(rec.measurements, rec.robots, range(rec.n_robots), settings).values()
     )
     names = [f"R{name}" for name in rec.robots]
-    scores = _run(rec, settings, clock)
+    estimates, times = _estimates(rec, settings, clock)
+    scores = _scores(estimates, rec, times, settings)
     combined, rows = _evaluate(scores, clock[0], names)
     separate, _ = _evaluate(
         _run(rec, replace(settings, ranges_mark_detections=False), clock), clock[0], names
@@ -279,6 +304,10 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
         "scans": n_scans,
         "load_report": ds.report.to_dict(),
     }
+    if args.export is not None:
+        summary["export"] = export_estimates(
+            args.export, estimates, rec, run=f"{folder.name}: {EXPORTED_RUN}"
+        )
     fig_name = _figure(out, scores, clock[0], names)
     summary["figures"] = {"errors": fig_name}
     write_summary(out, summary)

@@ -57,6 +57,7 @@ from relloc.calibration.camera import CameraFit, fit_camera, landmark_wait_s
 from relloc.calibration.inflation import CORRELATION_HORIZON_S
 from relloc.calibration.odometry import OdometryModelFit, fit_odometry_model
 from relloc.calibration.window import CalibrationWindow, leading_fraction
+from relloc.core.estimates import Estimates
 from relloc.core.gaussian import Gaussian
 from relloc.core.recording import Measurements, Odometry, Recording, measurement_rows
 from relloc.estimators.cooperative import (
@@ -87,6 +88,12 @@ RANGE_INTERVAL_S = 1.0
 P_GATE = 0.999
 MODES = ("dead_reckoning", "bearing", "range_bearing")
 ANCHORS = ("none", "2_landmarks", "all_landmarks", "gps_robot1")
+#: The case ``--mcap``/``--tum`` write, and what that is.
+EXPORTED_CASE = ("range_bearing", "all_landmarks")
+EXPORTED_RUN = (
+    "the centralised EIF with ranges, bearings and all landmarks: every robot's (x, y, heading) "
+    "in the world frame, owner 'team'"
+)
 TARGET_POS_RMSE_M = 0.13
 TARGET_HEADING_RMSE_RAD = 0.09
 TARGET_IMPROVEMENT = 20.0
@@ -265,16 +272,24 @@ def case_settings(
     )
 
 
-def run_filter(prepared: Prepared, settings: CooperativeSettings, out_t: Array) -> dict[str, Any]:
+def case_estimates(
+    prepared: Prepared, settings: CooperativeSettings, out_t: Array
+) -> tuple[Estimates, dict[str, Any]]:
     """Replay the recording from ``t_start`` through the team filter, recording at ``out_t``:
-    ``mean (T, n, 3)``, ``cov (T, n, 3, 3)`` and the filter's counts."""
+    the estimates and the filter's counts."""
     rec = prepared.recording
     estimator = CooperativeEstimator(rec.robots, prepared.prior, settings, rec.landmarks)
     estimates = replay(
         rec, [estimator], record_times=out_t, start=prepared.t_start, end=float(out_t[-1])
     )
-    _, mean, cov = estimates.stacked(estimator.owner, rec.robots)
-    return {"mean": mean, "cov": cov, "counts": estimator.counts.to_dict()}
+    return estimates, estimator.counts.to_dict()
+
+
+def run_filter(prepared: Prepared, settings: CooperativeSettings, out_t: Array) -> dict[str, Any]:
+    """:func:`case_estimates` as ``mean (T, n, 3)``, ``cov (T, n, 3, 3)`` and the counts."""
+    estimates, counts = case_estimates(prepared, settings, out_t)
+    _, mean, cov = estimates.stacked(CooperativeEstimator.owner, prepared.recording.robots)
+    return {"mean": mean, "cov": cov, "counts": counts}
 
 
 def run_case(
@@ -417,6 +432,14 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
             "by_reason": skips.skipped_by_reason(),
         },
     }
+    if args.export is not None:
+        from relloc.pipeline.export import export_estimates
+
+        index = keys.index(EXPORTED_CASE)
+        estimates, _ = case_estimates(prepared, settings[index], prepared.out_t)
+        summary["export"] = export_estimates(
+            args.export, estimates, prepared.recording, run=f"{folder.name}: {EXPORTED_RUN}"
+        )
     figures = _figures(out, ds, prepared, by_key, cases)
     write_summary(out, summary)
     write_report(out, _report(summary, figures))

@@ -2,6 +2,13 @@
 
 Each module exposes ``reproduce(args: ReproduceArgs) -> dict`` that writes summary.json,
 report.md and figures into ``args.out_dir`` and returns the summary.
+
+A module whose runs produce estimates may also write one representative run for ROS tools and
+evo (``--mcap``/``--tum``): it states which run in a module constant ``EXPORTED_RUN`` (a
+sentence) and, when ``args.export`` is set, writes that run's
+:class:`~relloc.core.estimates.Estimates` with its recording through
+:func:`relloc.pipeline.export.export_estimates`, putting the returned section under
+``summary["export"]``. :func:`exported_run` reads the constant (``None``: nothing to export).
 """
 
 from __future__ import annotations
@@ -11,9 +18,12 @@ import importlib.util
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from relloc.errors import ConfigError
+
+if TYPE_CHECKING:
+    from relloc.pipeline.export import ExportRequest
 
 EXPERIMENTS: dict[str, str] = {
     "wanasinghe2014": "relloc.experiments.wanasinghe2014",
@@ -29,7 +39,8 @@ EXPERIMENTS: dict[str, str] = {
 
 @dataclass(frozen=True, kw_only=True)
 class ReproduceArgs:
-    """What every reproduction receives. ``runs=None`` means the paper's run count."""
+    """What every reproduction receives. ``runs=None`` means the paper's run count;
+    ``export`` the ``--mcap``/``--tum`` request (module docstring), ``None`` when not asked."""
 
     out_dir: Path
     runs: int | None = None
@@ -37,6 +48,7 @@ class ReproduceArgs:
     dataset: Path | None = None
     executor: str | None = None
     quiet: bool = False
+    export: ExportRequest | None = None
 
     def __post_init__(self) -> None:
         if self.runs is not None and self.runs < 1:
@@ -56,3 +68,12 @@ def get(name: str) -> Callable[[ReproduceArgs], dict[str, Any]]:
         raise ConfigError(f"unknown experiment {name!r}; available: {', '.join(available())}")
     module = importlib.import_module(EXPERIMENTS[name])
     return module.reproduce  # type: ignore[no-any-return]
+
+
+def exported_run(name: str) -> str | None:
+    """Which run experiment ``name`` writes with ``--mcap``/``--tum``, or ``None`` if it has no
+    estimates to write (module docstring)."""
+    get(name)
+    module = importlib.import_module(EXPERIMENTS[name])
+    note = getattr(module, "EXPORTED_RUN", None)
+    return note if isinstance(note, str) else None

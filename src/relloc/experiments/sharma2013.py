@@ -43,9 +43,10 @@ import networkx as nx
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.core.estimates import Estimates
 from relloc.core.recording import Measurements, Recording
 from relloc.experiments.registry import ReproduceArgs
-from relloc.pipeline.montecarlo import run_monte_carlo
+from relloc.pipeline.montecarlo import run_monte_carlo, spawn_seeds
 from relloc.pipeline.output import (
     figure_md,
     markdown_table,
@@ -77,6 +78,12 @@ CASE_LABELS = {
     "two_landmarks": "two landmarks",
     "gps_robot1": "GPS on robot 1",
 }
+#: The case ``--mcap``/``--tum`` write, and what that is.
+EXPORTED_CASE = "two_landmarks"
+EXPORTED_RUN = (
+    "the centralised EIF of the two-landmark case: every robot's (x, y, heading) in the world "
+    "frame, owner 'team'"
+)
 PAPER_BOUNDED = {
     "no_landmark": False,
     "one_landmark": False,
@@ -130,11 +137,11 @@ def _poses(recording: Recording, every: int) -> Array:
     return np.stack([g.pose[::every][:, [0, 1, 3]] for g in truth], axis=1)
 
 
-def run_case(sim: CooperativeSim, settings: CooperativeSettings, out_t: Array) -> dict[str, Any]:
-    """The team EIF over the simulated recording: errors ``(T, n, 3)`` against the truth
-    (:func:`relloc.pipeline.evaluation.evaluate`), the estimates and the filter's counts."""
+def _case_estimates(
+    sim: CooperativeSim, settings: CooperativeSettings, out_t: Array
+) -> tuple[Estimates, Any]:
+    """The team EIF over the simulated recording, beliefs at ``out_t``; and its counts."""
     from relloc.estimators.cooperative import CooperativeEstimator
-    from relloc.pipeline.evaluation import evaluate
     from relloc.pipeline.replay import replay
 
     rec = sim.recording
@@ -142,10 +149,20 @@ def run_case(sim: CooperativeSim, settings: CooperativeSettings, out_t: Array) -
         rec.robots, sim.prior, settings, rec.landmarks, record_updates=False
     )
     estimates = replay(rec, [estimator], record_times=out_t, start=0.0, end=float(out_t[-1]))
-    _, mean, cov = estimates.stacked(estimator.owner, rec.robots)
+    return estimates, estimator.counts
+
+
+def run_case(sim: CooperativeSim, settings: CooperativeSettings, out_t: Array) -> dict[str, Any]:
+    """The team EIF over the simulated recording: errors ``(T, n, 3)`` against the truth
+    (:func:`relloc.pipeline.evaluation.evaluate`), the estimates and the filter's counts."""
+    from relloc.estimators.cooperative import CooperativeEstimator
+    from relloc.pipeline.evaluation import evaluate
+
+    rec = sim.recording
+    estimates, counts = _case_estimates(sim, settings, out_t)
+    _, mean, cov = estimates.stacked(CooperativeEstimator.owner, rec.robots)
     scored = {e.subject: e for e in evaluate(estimates, rec)}
     errors = np.stack([scored[r].error for r in rec.robots], axis=1)
-    counts = estimator.counts
     return {
         "errors": errors,
         "cov": cov,
@@ -155,24 +172,32 @@ def run_case(sim: CooperativeSim, settings: CooperativeSettings, out_t: Array) -
     }
 
 
-def run_once(seed_sequence: np.random.SeedSequence, run_index: int) -> dict[str, Any]:
-    """One Monte-Carlo run: simulate, then the EIF on every case (picklable task)."""
-    from relloc.estimators.cooperative import CooperativeSettings, OdometryModel, SensorModel
+def _simulated(seed_sequence: np.random.SeedSequence) -> tuple[Any, CooperativeSim, Array, int]:
+    """One run's scenario, simulation, truth times and output step (every ``step``-th)."""
     from relloc.sim.cooperative import simulate
 
     scenario = _scenario()
-    rng = np.random.default_rng(seed_sequence)
-    sim = simulate(scenario, rng)
-    rec = sim.recording
-    t = rec.require_truth("sharma2013")[0].t
-    step = round(OUTPUT_EVERY_S / scenario.dt)
-    out_t = t[::step]
+    sim = simulate(scenario, np.random.default_rng(seed_sequence))
+    t = sim.recording.require_truth("sharma2013")[0].t
+    return scenario, sim, t, round(OUTPUT_EVERY_S / scenario.dt)
+
+
+def _case_settings(scenario: Any, case: str) -> CooperativeSettings:
+    from relloc.estimators.cooperative import CooperativeSettings, OdometryModel, SensorModel
+
     odometry = OdometryModel.from_discrete(scenario.sigma_v, scenario.sigma_w, scenario.dt)
     sensor = SensorModel(sigma_bearing=scenario.sigma_bearing)
+    return CooperativeSettings(odometry=odometry, sensor=sensor, filter="eif", **CASES[case])
+
+
+def run_once(seed_sequence: np.random.SeedSequence, run_index: int) -> dict[str, Any]:
+    """One Monte-Carlo run: simulate, then the EIF on every case (picklable task)."""
+    scenario, sim, t, step = _simulated(seed_sequence)
+    rec = sim.recording
+    out_t = t[::step]
     result: dict[str, Any] = {"t": out_t, "truth": _poses(rec, step), "cases": {}}
-    for case, options in CASES.items():
-        settings = CooperativeSettings(odometry=odometry, sensor=sensor, filter="eif", **options)
-        run = run_case(sim, settings, out_t)
+    for case in CASES:
+        run = run_case(sim, _case_settings(scenario, case), out_t)
         if run_index != 0:
             run["mean"] = None
         result["cases"][case] = run
@@ -185,6 +210,22 @@ def run_once(seed_sequence: np.random.SeedSequence, run_index: int) -> dict[str,
         result["mid_state"] = _poses(rec, 1)[k_mid]
         result["mid_inputs"] = np.array([od.velocity[k_mid, [0, 3]] for od in rec.odometry])
     return result
+
+
+def export_run0(args: ReproduceArgs, runs: int) -> dict[str, Any]:
+    """``--mcap``/``--tum``: run 0's :data:`EXPORTED_CASE` again in this process (the same
+    simulation: a run depends only on the seed and its index) and write its estimates."""
+    from relloc.pipeline.export import export_estimates
+
+    assert args.export is not None
+    scenario, sim, t, step = _simulated(spawn_seeds(args.seed, runs)[0])
+    estimates, _ = _case_estimates(sim, _case_settings(scenario, EXPORTED_CASE), t[::step])
+    return export_estimates(
+        args.export,
+        estimates,
+        sim.recording,
+        run=f"run 0 of {runs} (seed {args.seed}): {EXPORTED_RUN}",
+    )
 
 
 def _edges_at(recording: Recording, t: float) -> dict[str, list[tuple[int, int]]]:
@@ -425,6 +466,8 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
         "rpmg": first["rpmg"],
         "cases": cases,
     }
+    if args.export is not None:
+        summary["export"] = export_run0(args, runs)
     figures = _figures(out, first, scenario)
     write_summary(out, summary)
     write_report(out, _report(summary, figures))

@@ -6,7 +6,9 @@ the scenario with its own random stream, tracks every robot each observing robot
 :class:`~relloc.estimators.track_manager.TrackManager` per observer, through
 :func:`relloc.pipeline.replay.replay`) and scores the run
 (:func:`relloc.pipeline.team_report.score_run`). :func:`run_scenario` pools the runs into
-``summary.json`` and writes ``report.md`` with figures (keys: :mod:`relloc.pipeline.team_report`).
+``summary.json`` and writes ``report.md`` with figures (keys: :mod:`relloc.pipeline.team_report`);
+with ``--mcap``/``--tum`` it also writes run 0's estimates for ROS tools and evo
+(:func:`export_run0`; the summary's ``export`` section: :mod:`relloc.pipeline.export`).
 """
 
 from __future__ import annotations
@@ -17,9 +19,12 @@ from typing import Any
 
 import numpy as np
 
+from relloc.core.estimates import Estimates
+from relloc.core.recording import Recording
 from relloc.errors import ConfigError
 from relloc.estimators.track_manager import TrackManagerSettings
-from relloc.pipeline.montecarlo import run_monte_carlo
+from relloc.pipeline.export import ExportRequest, export_estimates
+from relloc.pipeline.montecarlo import run_monte_carlo, spawn_seeds
 from relloc.pipeline.team_report import (
     RECORD_RATE_HZ,
     SETTLE_S,
@@ -63,6 +68,21 @@ class TeamRunSettings:
             raise ConfigError(f"record_rate_hz: must be > 0, got {self.record_rate_hz!r}")
 
 
+def simulate_and_track(
+    seed_sequence: np.random.SeedSequence,
+    scenario: Scenario,
+    tracker: TrackManagerSettings,
+    record_rate_hz: float,
+) -> tuple[Estimates, Recording]:
+    """One run's recording and every observer's tracks of it (streams from ``seed_sequence``)."""
+    sim_seed, init_seed = seed_sequence.spawn(2)
+    recording = simulate(scenario, np.random.default_rng(sim_seed))
+    estimates = track_team(
+        recording, tracker, record_rate_hz=record_rate_hz, rng=np.random.default_rng(init_seed)
+    )
+    return estimates, recording
+
+
 def team_task(
     seed_sequence: np.random.SeedSequence,
     run_index: int,
@@ -71,18 +91,38 @@ def team_task(
     record_rate_hz: float,
 ) -> RunResult:
     """One Monte-Carlo run (top-level, picklable): simulate, track, score."""
-    sim_seed, init_seed = seed_sequence.spawn(2)
-    recording = simulate(scenario, np.random.default_rng(sim_seed))
-    estimates = track_team(
-        recording, tracker, record_rate_hz=record_rate_hz, rng=np.random.default_rng(init_seed)
-    )
+    estimates, recording = simulate_and_track(seed_sequence, scenario, tracker, record_rate_hz)
     return score_run(estimates, recording, keep_paths=run_index == 0)
 
 
+def export_run0(
+    scenario: Scenario, settings: TeamRunSettings, request: ExportRequest
+) -> dict[str, Any]:
+    """``--mcap``/``--tum``: run 0 again in this process (a run depends only on the master seed
+    and its index, so it is the very run 0 the summary pools) and write its estimates; returns
+    the summary's ``export`` section (:func:`relloc.pipeline.export.export_estimates`)."""
+    run0 = spawn_seeds(settings.seed, settings.runs)[0]
+    estimates, recording = simulate_and_track(
+        run0, scenario, settings.tracker, settings.record_rate_hz
+    )
+    return export_estimates(
+        request,
+        estimates,
+        recording,
+        run=f"run 0 of {settings.runs} (seed {settings.seed})",
+        settle_s=settings.settle_s,
+    )
+
+
 def run_scenario(
-    scenario: Scenario, settings: TeamRunSettings, out_dir: Path | None = None
+    scenario: Scenario,
+    settings: TeamRunSettings,
+    out_dir: Path | None = None,
+    *,
+    export: ExportRequest | None = None,
 ) -> tuple[dict[str, Any], list[RunResult]]:
-    """Monte-Carlo runs of a scenario; writes summary, report and figures if ``out_dir``."""
+    """Monte-Carlo runs of a scenario; writes summary, report and figures if ``out_dir``, and
+    run 0's estimates as MCAP/TUM files if ``export`` asks (:func:`export_run0`)."""
     results = run_monte_carlo(
         team_task,
         settings.runs,
@@ -98,6 +138,8 @@ def run_scenario(
         record_rate_hz=settings.record_rate_hz,
         meta=scenario_meta(scenario, seed=settings.seed, tracker=settings.tracker),
     )
+    if export is not None and export.wanted:
+        summary["export"] = export_run0(scenario, settings, export)
     if out_dir is not None:
         arena = (scenario.arena.x, scenario.arena.y)
         write_team_report(

@@ -82,6 +82,7 @@ from relloc.experiments.wanasinghe2014_mrclam import (
 )
 from relloc.experiments.wanasinghe2014_sim import (
     SimSettings,
+    accuracy_run,
     sweep_task,
     team_task,
     true_pair_inputs,
@@ -92,7 +93,8 @@ from relloc.metrics.errors import rmse
 from relloc.models.motion import VelocityNoise
 from relloc.observability.pcrlb import pcrlb_ratio, relative_pair_pcrlb
 from relloc.pipeline.evaluation import SeriesEvaluation, accuracy_and_consistency
-from relloc.pipeline.montecarlo import run_monte_carlo
+from relloc.pipeline.export import ExportRequest, export_estimates
+from relloc.pipeline.montecarlo import run_monte_carlo, spawn_seeds
 from relloc.pipeline.output import (
     figure_md,
     fmt,
@@ -126,6 +128,12 @@ PAPER_TABLE3: dict[str, dict[str, tuple[float, float]]] = {
 PAPER_TABLE4: dict[str, float] = {"case1": 0.0625, "case2": 2.9375, "case3": 4.6875, "case4": 9.25}
 #: Seed 000 §5 / §8: positional and orientational accuracy.
 PAPER_ACCURACY = {"position_rmse_m": (0.05, 0.10), "yaw_rmse_rad": (0.075, 0.1)}
+
+#: What ``--mcap``/``--tum`` write (:func:`relloc.experiments.registry.exported_run`).
+EXPORTED_RUN = (
+    "the accuracy PLKF of every observed robot by the observer, beliefs at its measurement "
+    "times (the MRCLAM replay and Table-1 filters are not exported)"
+)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -185,6 +193,7 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
         seed=args.seed,
         executor=args.executor,
         quiet=args.quiet,
+        export=args.export,
     )
 
 
@@ -200,8 +209,10 @@ def run_reproduction(
     seed: int,
     executor: str | None = None,
     quiet: bool = False,
+    export: ExportRequest | None = None,
 ) -> dict[str, Any]:
-    """Run everything, write summary.json, report.md and figures; return the summary."""
+    """Run everything, write summary.json, report.md and figures; return the summary (and,
+    with ``export``, the :data:`EXPORTED_RUN` as MCAP/TUM files)."""
     started = time.perf_counter()
     out = prepare_out_dir(out_dir)
     data = prepare_replay(config.replay)  # fail early on a bad --dataset
@@ -271,6 +282,15 @@ def run_reproduction(
     summary["replay"] = replay_info(config, data)
     ratios, bounds = pcrlb_summary(config, acc_series)
     summary["pcrlb_ratio"] = ratios
+    if export is not None:
+        estimates, recording = accuracy_run(spawn_seeds(seed, config.runs)[0], config.sim)
+        summary["export"] = export_estimates(
+            export,
+            estimates,
+            recording,
+            run=f"team draw 0 of {config.runs} (seed {seed}): {EXPORTED_RUN}",
+            settle_s=config.steady_state_s,
+        )
     figures = make_figures(
         out, config, team, acc_series, rmse_curves, thresholds, replay_series, bounds, summary
     )

@@ -16,6 +16,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from relloc.core.estimates import Estimates
 from relloc.core.recording import Recording
 from relloc.estimators.relative_batch import RelativeFilterBatch, TrackSpec
 from relloc.estimators.yaw_bank import YawBankSettings
@@ -34,6 +35,23 @@ def run_filters(
 ) -> dict[tuple[str, str], SeriesEvaluation]:
     """Run ``specs`` of ``observer`` over ``recording`` from ``start`` to ``end`` (default: its
     span); the evaluation of each filter at its updates, keyed by ``(subject, label)``."""
+    estimates = filter_estimates(
+        recording, specs, observer=observer, bank=bank, start=start, end=end
+    )
+    return {(e.subject, e.track): e for e in evaluate(estimates, recording, at_updates=True)}
+
+
+def filter_estimates(
+    recording: Recording,
+    specs: Sequence[TrackSpec],
+    *,
+    observer: str,
+    bank: YawBankSettings,
+    start: float | None = None,
+    end: float | None = None,
+) -> Estimates:
+    """The estimates of :func:`run_filters`: every filter's belief at the observer's
+    measurement times, after that time's updates."""
     batch = RelativeFilterBatch(
         specs,
         owner=observer,
@@ -47,5 +65,4 @@ def run_filters(
         times = times[times >= start]
     if end is not None:
         times = times[times <= end]
-    estimates = replay(recording, [batch], record_times=times, start=start, end=end)
-    return {(e.subject, e.track): e for e in evaluate(estimates, recording, at_updates=True)}
+    return replay(recording, [batch], record_times=times, start=start, end=end)

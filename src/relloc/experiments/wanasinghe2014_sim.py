@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.core.estimates import Estimates
 from relloc.core.recording import Recording, relative_pose
 from relloc.errors import ConfigError
 from relloc.estimators.initialisation import (
@@ -43,7 +44,7 @@ from relloc.estimators.initialisation import (
 )
 from relloc.estimators.relative_batch import TrackSpec
 from relloc.estimators.yaw_bank import YawBankSettings
-from relloc.experiments.wanasinghe2014_filters import run_filters
+from relloc.experiments.wanasinghe2014_filters import filter_estimates, run_filters
 from relloc.pipeline.evaluation import SeriesEvaluation
 from relloc.sim.scenario import OdometryNoise, Scenario, SensorSpec, default_scenario
 from relloc.sim.simulate import propagation_grid, simulate
@@ -247,6 +248,19 @@ def team_task(
     if settings.table1:
         out["table1"] = _table1_errors(scored, settings)
     return out
+
+
+def accuracy_run(
+    seed: np.random.SeedSequence, settings: SimSettings
+) -> tuple[Estimates, Recording]:
+    """The accuracy PLKFs of the team draw of ``seed``, as estimates, with its recording
+    (``--mcap``/``--tum``): the recording and priors of :func:`team_task` for that seed, which
+    draws the Table-1 guesses only after them; the Table-1 filters are not run."""
+    rng = np.random.default_rng(seed)
+    recording = simulated_recording(settings, rng)
+    specs = _accuracy_specs(recording, settings, rng)
+    estimates = filter_estimates(recording, specs, observer=settings.observer, bank=settings.bank)
+    return estimates, recording
 
 
 def _table1_errors(

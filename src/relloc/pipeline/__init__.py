@@ -9,5 +9,7 @@ the record of :mod:`relloc.core.estimates`:
 - :mod:`relloc.pipeline.montecarlo` — independent runs on any executor;
 - :mod:`relloc.pipeline.output` — ``summary.json``, ``report.md`` and figures;
 - :mod:`relloc.pipeline.team_report` — the relative-localisation team report (``relloc run``,
-  ``relloc team up``).
+  ``relloc team up``);
+- :mod:`relloc.pipeline.export` — estimates as an MCAP file (Foxglove, ``ros2 bag play``) and
+  TUM files (evo): ``--mcap`` / ``--tum``.
 """

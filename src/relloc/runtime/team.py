@@ -36,6 +36,7 @@ import numpy as np
 from relloc.core.estimates import Estimates
 from relloc.estimators.initialisation import InitPolicy
 from relloc.estimators.track_manager import TrackManagerSettings
+from relloc.pipeline.export import ExportRequest, export_estimates
 from relloc.pipeline.output import fmt, markdown_table, prepare_out_dir, write_report
 from relloc.pipeline.team_report import (
     RECORD_RATE_HZ,
@@ -60,8 +61,10 @@ AGREEMENT_TOLERANCE = 1e-6
 in-process beliefs at common times that counts as agreement on a perfect network."""
 
 
-def run_team(settings: TeamSettings) -> dict[str, Any]:
-    """Run the team of ``settings`` and write its outputs; returns the summary."""
+def run_team(settings: TeamSettings, *, export: ExportRequest | None = None) -> dict[str, Any]:
+    """Run the team of ``settings`` and write its outputs; returns the summary. ``export``
+    (``--mcap``/``--tum``) also writes the distributed estimates for ROS tools and evo
+    (the summary's ``export`` section, :mod:`relloc.pipeline.export`)."""
     out = prepare_out_dir(settings.out_dir)
     team = load_team(settings.scenario, settings.seed)
     recording = team.recording
@@ -113,6 +116,14 @@ def run_team(settings: TeamSettings) -> dict[str, Any]:
         "fault_outcomes": fault_outcomes(settings.faults, results[0], distributed, recording),
         "clock": clock,
     }
+    if export is not None:
+        summary["export"] = export_estimates(
+            export,
+            distributed,
+            recording,
+            run=f"the distributed run (seed {settings.seed}): every robot's shipped estimates",
+            settle_s=SETTLE_S,
+        )
     write_team_report(
         out,
         summary,
