@@ -24,6 +24,7 @@ SUBCOMMAND_MODULES = (
     "relloc.cli.bench",
     "relloc.cli.node",
     "relloc.cli.team",
+    "relloc.cli.bag",
 )
 
 

@@ -1,4 +1,7 @@
-"""``relloc reproduce NAME --out DIR [--runs N] [--seed S] [--dataset PATH] [--executor E]``."""
+"""``relloc reproduce NAME --out DIR [--runs N] [--seed S] [--dataset PATH] [--executor E]``
+
+plus ``--bag BAG --map MAP.toml --calibrate-on BAG`` for the experiments on ROS 2 bags.
+"""
 
 from __future__ import annotations
 
@@ -26,6 +29,11 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         default=None,
         help="'process' (default, all cores), 'serial', or 'dask://HOST:PORT'",
     )
+    p.add_argument("--bag", type=Path, default=None, help="a ROS 2 bag (tiers-uwb)")
+    p.add_argument("--map", type=Path, default=None, help="the bag's topic mapping TOML")
+    p.add_argument(
+        "--calibrate-on", type=Path, default=None, help="another bag of the same hardware to calibrate on"
+    )
     p.add_argument("--quiet", action="store_true", help="no progress display")
     p.set_defaults(func=run)
 
@@ -40,6 +48,9 @@ def run(args: argparse.Namespace) -> int:
             dataset=args.dataset,
             executor=args.executor,
             quiet=args.quiet,
+            bag=args.bag,
+            map=args.map,
+            calibrate_on=args.calibrate_on,
         )
     )
     if not args.quiet:
