@@ -49,6 +49,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
@@ -74,6 +75,8 @@ from relloc.estimators.uwb_range import (
 from relloc.experiments.registry import ReproduceArgs
 from relloc.geometry.multilateration import classical_mds, multilaterate, rigid_alignment
 from relloc.models.motion import VelocityNoise
+from relloc.models.symbolic import relative_nonlinear
+from relloc.observability.analysis import InputRankEvaluator, analyse
 from relloc.pipeline.evaluation import SeriesEvaluation, convergence_time, evaluate
 from relloc.pipeline.output import markdown_table, prepare_out_dir, write_report, write_summary
 from relloc.pipeline.replay import record_grid, replay
@@ -459,6 +462,37 @@ def score_positions(
     return out
 
 
+def mirrored(track: Array, line: Array) -> Array:
+    """Positions ``(K, n, 2)`` reflected across the line through the two points ``line (2, 2)``."""
+    p, q = line
+    d = (q - p) / np.linalg.norm(q - p)
+    rel = track - p
+    along = rel @ d
+    return np.asarray(p + 2 * along[..., None] * d - rel)
+
+
+def _best_mirror(
+    rec: Recording, track: TeamTrack, anchors: list[int], scored: list[int], t0: float
+) -> tuple[TeamTrack, bool]:
+    """With exactly two anchors ranges fix the free robots only up to the mirror image in the
+    anchors' line: the image closer to motion capture is scored (as the aligned case allows a
+    reflection); returns the track and whether the mirror image was taken."""
+    if len(anchors) != 2:
+        return track, False
+    line = _anchor_positions(rec, anchors, t0)
+    flip = mirrored(track.mean, line)
+    truth = truth_xy(rec, track.t)
+
+    def sq(m: Array) -> float:
+        return float(np.nanmean(np.sum((m[:, scored] - truth[:, scored]) ** 2, axis=-1)))
+
+    if sq(flip) >= sq(track.mean):
+        return track, False
+    d = (line[1] - line[0]) / np.linalg.norm(line[1] - line[0])
+    M = 2 * np.outer(d, d) - np.eye(2)
+    return TeamTrack(track.t, flip, M @ track.cov @ M.T), True
+
+
 def team_case(
     rec: Recording,
     raw: Recording,
@@ -480,7 +514,7 @@ def team_case(
     scored = list(range(n)) if every_anchor or not anchored else [
         i for i in range(n) if i not in anchors
     ]
-    track = runner(rec, t0, t1, use, settings)
+    track, flipped = _best_mirror(rec, runner(rec, t0, t1, use, settings), use, scored, t0)
     truth = truth_xy(rec, track.t)
     out = score_positions(track.t, track.mean, track.cov, truth, scored, align=not anchored)
     out["per_robot"] = {
@@ -493,8 +527,12 @@ def team_case(
     }
     if not anchored:
         out.pop("per_robot")
-    uncal = runner(raw, t0, t1, use, settings)
-    lat = multilateration(raw, track.t[:: max(1, int(RECORD_HZ // 2))], use if anchored else [])
+    uncal, _ = _best_mirror(rec, runner(raw, t0, t1, use, settings), use, scored, t0)
+    every = max(1, int(RECORD_HZ // 2))
+    lat_t = track.t[::every]
+    no_cov = np.full((lat_t.size, n, 2, 2), np.nan)
+    lat_track = TeamTrack(lat_t, multilateration(raw, lat_t, use), no_cov)
+    lat = _best_mirror(rec, lat_track, use, scored, t0)[0].mean
     out["baselines"] = {
         "uncalibrated": {
             "pos_rmse_m": score_positions(
@@ -503,16 +541,18 @@ def team_case(
         },
         "multilateration": {
             "pos_rmse_m": score_positions(
-                track.t[:: max(1, int(RECORD_HZ // 2))],
+                track.t[::every],
                 lat,
                 None,
-                truth[:: max(1, int(RECORD_HZ // 2))],
+                truth[::every],
                 scored,
                 align=not anchored,
             )["pos_rmse_m"]
         },
     }
     out["anchors"] = [rec.robots[i] for i in use]
+    out["mirror_ambiguous"] = len(use) == 2
+    out["mirror_image_scored"] = flipped
     out["mode"] = "leave-one-out" if every_anchor else ("anchors" if anchored else "aligned")
     return out
 
@@ -545,11 +585,8 @@ def moving_pairs(rec: Recording) -> list[tuple[int, int]]:
 
 def observability(rec: Recording, i: int, j: int, t0: float, t1: float) -> dict[str, Any]:
     """Rank of the range-only seed-000 model along the recorded relative states and inputs."""
-    from relloc.models.symbolic import relative_nonlinear
-    from relloc.observability.analysis import InputRankEvaluator
-
-    model = relative_nonlinear(("range",))
-    evaluator = InputRankEvaluator.build(model)
+    evaluator = _range_pair_rank()
+    model = evaluator.model
     t = np.linspace(t0, t1, OBSERVABILITY_SAMPLES)
     states = rec.relative_truth(i, j, t)
     u = np.hstack([rec.odometry[i].held_at(t), rec.odometry[j].held_at(t)])
@@ -572,20 +609,17 @@ def observability(rec: Recording, i: int, j: int, t0: float, t1: float) -> dict[
     }
 
 
-_GENERIC: dict[str, str] = {}
+@lru_cache(maxsize=1)
+def _range_pair_rank() -> InputRankEvaluator:
+    """The rank evaluator of the range-only seed-000 pair (built once per process)."""
+    return InputRankEvaluator.build(relative_nonlinear(("range",)))
 
 
+@lru_cache(maxsize=1)
 def _generic_conditions() -> str:
-    """The generic input conditions of the range-only pair (computed once per process)."""
-    if "text" not in _GENERIC:
-        from relloc.models.symbolic import relative_nonlinear
-        from relloc.observability.analysis import analyse
-
-        result = analyse(relative_nonlinear(("range",)), order=3, samples=3, directions="none")
-        _GENERIC["text"] = (
-            f"generic rank {result.rank} of {result.state_dim}; {result.conditions_text()}"
-        )
-    return _GENERIC["text"]
+    """The generic rank and input conditions of the range-only pair (once per process)."""
+    result = analyse(relative_nonlinear(("range",)), order=3, samples=3, directions="none")
+    return f"generic rank {result.rank} of {result.state_dim}; {result.conditions_text()}"
 
 
 def _pair_score(ev: SeriesEvaluation) -> dict[str, Any]:
