@@ -78,11 +78,16 @@ def _range_template(topics: Sequence[str]) -> tuple[str, list[str]] | None:
     return "/".join(parts), names
 
 
-def _robot_name(topic: str) -> str:
-    """A robot name guessed from a topic: its longest path segment that is not a message word."""
+def _robot_name(topic: str, taken: set[str]) -> str:
+    """A robot name guessed from a topic (its last path segment that is not a message word),
+    made unique among ``taken`` (which it joins)."""
     words = [w for w in topic.split("/") if w and w not in ("odom", "pose", "vrpn_client_node")]
-    name = max(words, key=len) if words else "robot"
-    return re.sub(r"[^A-Za-z0-9_.\-]", "_", name)
+    base = re.sub(r"[^A-Za-z0-9_.\-]", "_", words[-1] if words else "robot")
+    name, k = base, 2
+    while name in taken:
+        name, k = f"{base}_{k}", k + 1
+    taken.add(name)
+    return name
 
 
 def mapping_skeleton(infos: Sequence[TopicInfo], *, name: str) -> str:
@@ -98,10 +103,11 @@ def mapping_skeleton(infos: Sequence[TopicInfo], *, name: str) -> str:
         f'name = "{name}"',
         'stamp = "header"',
     ]
+    taken: set[str] = set()
     for topic in odometry:
-        out += ["", "[[robots]]", f'name = "{_robot_name(topic)}"', f'odometry = "{topic}"']
+        out += ["", "[[robots]]", f'name = "{_robot_name(topic, taken)}"', f'odometry = "{topic}"']
     for topic in truth:
-        out += ["", "[[robots]]", f'name = "{_robot_name(topic)}"', f'truth = "{topic}"']
+        out += ["", "[[robots]]", f'name = "{_robot_name(topic, taken)}"', f'truth = "{topic}"']
     found = _range_template(ranges)
     if found is not None:
         template, radios = found
