@@ -10,7 +10,11 @@ from rosbags.typesys import Stores, get_typestore
 
 STORE = get_typestore(Stores.ROS2_HUMBLE)
 T = STORE.types
-ODOM, POSE, RANGE = "nav_msgs/msg/Odometry", "geometry_msgs/msg/PoseStamped", "sensor_msgs/msg/Range"
+ODOM, POSE, RANGE = (
+    "nav_msgs/msg/Odometry",
+    "geometry_msgs/msg/PoseStamped",
+    "sensor_msgs/msg/Range",
+)
 STRING = "std_msgs/msg/String"
 
 
@@ -41,7 +45,9 @@ def odometry(ns: int, v: float, w: float, p: Any = None) -> Any:
     import numpy as np
 
     V3 = T["geometry_msgs/msg/Vector3"]
-    twist = T["geometry_msgs/msg/Twist"](linear=V3(x=v, y=0.0, z=0.0), angular=V3(x=0.0, y=0.0, z=w))
+    twist = T["geometry_msgs/msg/Twist"](
+        linear=V3(x=v, y=0.0, z=0.0), angular=V3(x=0.0, y=0.0, z=w)
+    )
     return T[ODOM](
         header=header(ns, "odom"),
         child_frame_id="base_link",

@@ -27,7 +27,7 @@ from relloc.datasets.rosbag import (
 from relloc.errors import ConfigError, DataError
 
 sys.path.insert(0, str(Path(__file__).parent))
-from bag_samples import (  # noqa: E402
+from bag_samples import (
     ODOM,
     POSE,
     RANGE,
@@ -165,7 +165,7 @@ def test_a_missing_or_wrong_topic_names_the_key(tmp_path):
     with pytest.raises(DataError, match="no such bag"):
         load_bag(tmp_path / "absent", parse_mapping(MAPPING, "m.toml"))
     (tmp_path / "junk.mcap").write_bytes(b"not a bag")
-    with pytest.raises(DataError, match="junk.mcap"):
+    with pytest.raises(DataError, match=r"junk\.mcap"):
         load_bag(tmp_path / "junk.mcap", parse_mapping(MAPPING, "m.toml"))
 
 
@@ -178,7 +178,7 @@ def test_a_missing_or_wrong_topic_names_the_key(tmp_path):
         (('topics = "/u/{a}/{b}/d"', 'topics = "/u/{a}/d"'), r"uwb\.topics: must contain \{b\}"),
         (("sigma = 0.1", "sigma = -1"), r"uwb\.sigma: must be > 0"),
         (('name = "n_4"', 'name = "n_3"'), r"uwb\.nodes\[3\]\.name: 'n_3' is named twice"),
-        (('position = [0.0, 5.0, 0.0]', "position = [0.0, 5.0]"), r"uwb\.nodes\[2\]\.position"),
+        (("position = [0.0, 5.0, 0.0]", "position = [0.0, 5.0]"), r"uwb\.nodes\[2\]\.position"),
         (('name = "sample"', 'name = "sample"\nstamp = "gps"'), r"stamp: must be one of"),
     ],
 )
@@ -223,7 +223,7 @@ def test_tiers_cooperative_bag():
     assert "/turtle01/color/yolov4_Spatial_detections" in unknown
     # robot–robot links only (the static radios' positions are unknown): 6 links
     m = rec.measurements
-    assert len({(min(a, b), max(a, b)) for a, b in zip(m.observer, m.target)}) == 6
+    assert len({(min(a, b), max(a, b)) for a, b in zip(m.observer, m.target, strict=True)}) == 6
 
 
 @needs_tiers
@@ -252,14 +252,32 @@ _leaf = st.one_of(
 )
 _value = st.recursive(
     _leaf,
-    lambda inner: st.lists(inner, max_size=4)
-    | st.dictionaries(
-        st.sampled_from(
-            ["name", "robot", "robots", "uwb", "nodes", "topics", "odometry", "truth", "position",
-             "offset", "sigma", "anchors", "platform", "odometry_sigma", "stamp", "x"]
-        ),
-        inner,
-        max_size=5,
+    lambda inner: (
+        st.lists(inner, max_size=4)
+        | st.dictionaries(
+            st.sampled_from(
+                [
+                    "name",
+                    "robot",
+                    "robots",
+                    "uwb",
+                    "nodes",
+                    "topics",
+                    "odometry",
+                    "truth",
+                    "position",
+                    "offset",
+                    "sigma",
+                    "anchors",
+                    "platform",
+                    "odometry_sigma",
+                    "stamp",
+                    "x",
+                ]
+            ),
+            inner,
+            max_size=5,
+        )
     ),
     max_leaves=20,
 )
@@ -289,7 +307,12 @@ def test_a_fuzzed_key_of_a_valid_mapping_parses_or_names_the_key(key, value):
         assert str(exc).startswith((key, "uwb.nodes")), str(exc)
 
 
-_num = st.one_of(st.floats(allow_nan=True, allow_infinity=True), st.integers(-3, 3), st.none(), st.text(max_size=3))
+_num = st.one_of(
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.integers(-3, 3),
+    st.none(),
+    st.text(max_size=3),
+)
 
 
 def _ns(**kw: object) -> SimpleNamespace:

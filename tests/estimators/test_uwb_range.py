@@ -103,9 +103,7 @@ def _static_team(rng: np.random.Generator) -> tuple[Recording, np.ndarray]:
     from relloc.core.recording import Measurements
 
     rows = Measurements.concatenate(parts)
-    truth = tuple(
-        GroundTruth(t=t, pose=np.tile([p[0], p[1], 0.0, 0.0], (t.size, 1))) for p in xy
-    )
+    truth = tuple(GroundTruth(t=t, pose=np.tile([p[0], p[1], 0.0, 0.0], (t.size, 1))) for p in xy)
     still = Odometry(t=np.zeros(0), velocity=np.zeros((0, 4)), sigma=(0, 0, 0, 0))
     rec = Recording(
         robots=tuple("abcde"),

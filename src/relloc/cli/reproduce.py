@@ -32,7 +32,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     p.add_argument("--bag", type=Path, default=None, help="a ROS 2 bag (tiers-uwb)")
     p.add_argument("--map", type=Path, default=None, help="the bag's topic mapping TOML")
     p.add_argument(
-        "--calibrate-on", type=Path, default=None, help="another bag of the same hardware to calibrate on"
+        "--calibrate-on",
+        type=Path,
+        default=None,
+        help="another bag of the same hardware to calibrate on",
     )
     p.add_argument("--quiet", action="store_true", help="no progress display")
     p.set_defaults(func=run)

@@ -294,7 +294,8 @@ def mapping_from_dict(data: Mapping[str, Any], source: str = "") -> BagMapping:
     anchors = None
     if "anchors" in t:
         anchors = tuple(
-            _string(a, f"anchors[{k}]", name=True) for k, a in enumerate(_list(t["anchors"], "anchors"))
+            _string(a, f"anchors[{k}]", name=True)
+            for k, a in enumerate(_list(t["anchors"], "anchors"))
         )
         for k, a in enumerate(anchors):
             if a not in names:

@@ -240,7 +240,10 @@ class _Bag:
             try:
                 msg = self.reader.deserialize(raw, con.msgtype)
             except Exception as exc:  # a corrupt payload: counted, never fatal
-                yield con.topic, BadMessage("cannot deserialise", f"message {index[con.topic]}: {exc}")
+                yield (
+                    con.topic,
+                    BadMessage("cannot deserialise", f"message {index[con.topic]}: {exc}"),
+                )
                 continue
             yield con.topic, _Message(index[con.topic], int(t), msg)
 
@@ -268,9 +271,8 @@ class UwbRanges:
         return ((self.node_a == a) & (self.node_b == b)) | ((self.node_a == b) & (self.node_b == a))
 
     def links(self) -> list[tuple[int, int]]:
-        return sorted(
-            {(min(a, b), max(a, b)) for a, b in zip(self.node_a.tolist(), self.node_b.tolist())}
-        )
+        ends = zip(self.node_a.tolist(), self.node_b.tolist(), strict=True)
+        return sorted({(min(a, b), max(a, b)) for a, b in ends})
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -529,19 +531,22 @@ def _assemble(
     def seconds(times: list[int]) -> Array:
         return (np.asarray(times, dtype=np.int64) - origin) / 1e9
 
-    odometry, poses, truths = [], {}, []
+    odometry: list[Odometry] = []
+    poses: dict[str, tuple[Array, Array]] = {}
+    truths: list[GroundTruth | None] = []
     for r in mapping.robots:
         where = f"{path}:{r.odometry}"
         if r.odometry is not None and timed[r.odometry][0]:
             times, payloads = timed[r.odometry]
             vel = np.array([p[0] for p in payloads], dtype=float)
             t = seconds(times)
-            odometry.append(Odometry(t=t, velocity=vel, sigma=r.odometry_sigma, where=where))
+            sigma = np.array(r.odometry_sigma)
+            odometry.append(Odometry(t=t, velocity=vel, sigma=sigma, where=where))
             if r.odometry_pose:
                 poses[r.name] = (t, np.array([p[1] for p in payloads], dtype=float))
         else:
             odometry.append(
-                Odometry(t=np.zeros(0), velocity=np.zeros((0, 4)), sigma=r.odometry_sigma)
+                Odometry(t=np.zeros(0), velocity=np.zeros((0, 4)), sigma=np.array(r.odometry_sigma))
             )
         if r.truth is not None and len(timed[r.truth][0]) >= 2:
             times, payloads = timed[r.truth]

@@ -263,7 +263,9 @@ class RangeTeamFilter(Silent):
         self.robots = tuple(robots)
         initial = np.asarray(initial, dtype=float)
         if initial.shape != (len(self.robots), 2) or not np.isfinite(initial).all():
-            raise ConfigError(f"RangeTeamFilter: initial positions must be finite ({len(robots)}, 2)")
+            raise ConfigError(
+                f"RangeTeamFilter: initial positions must be finite ({len(robots)}, 2)"
+            )
         self.settings = settings
         self.anchors = tuple(sorted(set(int(a) for a in anchors)))
         self.free = [i for i in range(len(self.robots)) if i not in self.anchors]
@@ -276,9 +278,7 @@ class RangeTeamFilter(Silent):
         for k, r in enumerate(self.free):
             self.x[4 * k : 4 * k + 2] = initial[r]
             P[4 * k : 4 * k + 2, 4 * k : 4 * k + 2] = np.eye(2) * settings.sigma_position**2
-            P[4 * k + 2 : 4 * k + 4, 4 * k + 2 : 4 * k + 4] = (
-                np.eye(2) * settings.sigma_velocity**2
-            )
+            P[4 * k + 2 : 4 * k + 4, 4 * k + 2 : 4 * k + 4] = np.eye(2) * settings.sigma_velocity**2
         self.P = P
         self.t = start
         self.started = start
@@ -312,6 +312,7 @@ class RangeTeamFilter(Silent):
         return self.landmarks[landmark], None
 
     def measure(self, batch: Measurements) -> None:
+        assert batch.landmark is not None
         for q in range(batch.size):
             if batch.kind[q] != RANGE:
                 self.counts.other += 1
@@ -343,7 +344,9 @@ class RangeTeamFilter(Silent):
                 continue
             self.x, self.P = x, P
             self.counts.used += 1
-            subject = self.robots[int(batch.observer[q]) if ki is not None else int(batch.target[q])]
+            subject = self.robots[
+                int(batch.observer[q]) if ki is not None else int(batch.target[q])
+            ]
             self._updates.append(
                 UpdateRecord(
                     t=float(batch.t[q]),

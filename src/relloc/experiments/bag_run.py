@@ -68,9 +68,16 @@ def run_bag(
     bag = load_bag(path, mapping)
     rec = bag.recording
     rec.require_truth(f"relloc run on {path} (scoring against motion capture)")
-    sigma = DEFAULT_RANGE_SIGMA if mapping.uwb is None or mapping.uwb.sigma is None else mapping.uwb.sigma
+    sigma = (
+        DEFAULT_RANGE_SIGMA
+        if mapping.uwb is None or mapping.uwb.sigma is None
+        else mapping.uwb.sigma
+    )
     rng = np.random.default_rng(settings.seed)
-    estimators: list[Any] = [*managers_for(rec, settings.tracker, rng=rng), *range_pairs(rec, sigma)]
+    estimators: list[Any] = [
+        *managers_for(rec, settings.tracker, rng=rng),
+        *range_pairs(rec, sigma),
+    ]
     if not estimators:
         raise DataError(
             f"{path}: nothing to track: no robot measures another with range_bearing_elevation "

@@ -193,7 +193,7 @@ def row_links(bag: BagRecording) -> list[tuple[str, str] | None]:
     """The radio-name link of each ``range`` row of the recording (``None`` if the target
     robot carries several radios, so the row does not say which)."""
     m, mapping = bag.recording.measurements, bag.mapping
-    assert mapping.uwb is not None
+    assert mapping.uwb is not None and m.sensor is not None and m.landmark is not None
     nodes = mapping.uwb.nodes
     on_robot: dict[int, list[int]] = {}
     for k, n in enumerate(nodes):
@@ -260,6 +260,7 @@ def latest_ranges(rec: Recording, t: float, window: float) -> dict[tuple[int, in
     """Per robot pair (or robot–landmark, the landmark as ``n + l``), the latest range in
     ``[t − window, t]``."""
     m = rec.measurements
+    assert m.landmark is not None
     lo, hi = np.searchsorted(m.t, [t - window, t + 1e-9])
     n = rec.n_robots
     out: dict[tuple[int, int], float] = {}
@@ -343,9 +344,7 @@ def leave_one_out(
     rec: Recording, t0: float, t1: float, anchors: list[int], settings: RangeTeamSettings
 ) -> TeamTrack:
     """Each robot estimated with every other robot as an anchor, the tracks put together."""
-    tracks = [
-        run_team(rec, t0, t1, [a for a in anchors if a != i], settings) for i in anchors
-    ]
+    tracks = [run_team(rec, t0, t1, [a for a in anchors if a != i], settings) for i in anchors]
     out = tracks[0]
     mean, cov = np.array(out.mean), np.array(out.cov)
     for i, tr in zip(anchors, tracks, strict=True):
@@ -353,8 +352,9 @@ def leave_one_out(
     return TeamTrack(out.t, mean, cov)
 
 
-def _latest_start(rec: Recording, ranges: dict[tuple[int, int], float], t: float,
-                  fixed_ids: list[int]) -> Array:
+def _latest_start(
+    rec: Recording, ranges: dict[tuple[int, int], float], t: float, fixed_ids: list[int]
+) -> Array:
     """Classical MDS of the latest robot–robot ranges, moved onto ``fixed_ids`` (≥ 2)."""
     n = rec.n_robots
     D = np.full((n, n), np.nan)
@@ -511,16 +511,18 @@ def team_case(
         return {"skipped": f"needs ≥ 2 anchors, the bag has {len(anchors)}"}
     every_anchor = anchored and len(anchors) == n
     runner = leave_one_out if every_anchor else run_team
-    scored = list(range(n)) if every_anchor or not anchored else [
-        i for i in range(n) if i not in anchors
-    ]
+    scored = (
+        list(range(n))
+        if every_anchor or not anchored
+        else [i for i in range(n) if i not in anchors]
+    )
     track, flipped = _best_mirror(rec, runner(rec, t0, t1, use, settings), use, scored, t0)
     truth = truth_xy(rec, track.t)
     out = score_positions(track.t, track.mean, track.cov, truth, scored, align=not anchored)
     out["per_robot"] = {
-        rec.robots[i]: score_positions(
-            track.t, track.mean, track.cov, truth, [i], align=False
-        )["pos_rmse_m"]
+        rec.robots[i]: score_positions(track.t, track.mean, track.cov, truth, [i], align=False)[
+            "pos_rmse_m"
+        ]
         if anchored
         else None
         for i in scored
@@ -576,7 +578,9 @@ def moving_pairs(rec: Recording) -> list[tuple[int, int]]:
     for i in range(rec.n_robots):
         for j in range(i + 1, rec.n_robots):
             linked = bool(
-                (((m.observer == i) & (m.target == j)) | ((m.observer == j) & (m.target == i))).any()
+                (
+                    ((m.observer == i) & (m.target == j)) | ((m.observer == j) & (m.target == i))
+                ).any()
             )
             if has_odo[i] and has_odo[j] and linked and max(path[i], path[j]) > MOVING_M:
                 out.append((i, j))
@@ -654,9 +658,7 @@ def pair_case(
     dead = RelativeDeadReckoning(i, j, rec.robots, noise, (t0, truth0, np.eye(4) * 1e-4))
     out["baselines"] = {
         "uncalibrated": {
-            "pos_rmse_m": score(raw, RangePairBank(i, j, rec.robots, noise, settings))[
-                "pos_rmse_m"
-            ]
+            "pos_rmse_m": score(raw, RangePairBank(i, j, rec.robots, noise, settings))["pos_rmse_m"]
         },
         "odometry_alone": {"pos_rmse_m": score(rec, dead)["pos_rmse_m"]},
     }
@@ -752,8 +754,9 @@ def report(summary: dict[str, Any]) -> str:
         lines += [
             f"## {name}",
             "",
-            f"Calibrated on {cal['source']} `{w['source']}` [{w['start_s']:.1f}, {w['end_s']:.1f}] s: "
-            f"bias {fit['bias_m']:.3f} m, spread {fit['spread_m']:.3f} m, link-bias std "
+            f"Calibrated on {cal['source']} `{w['source']}` "
+            f"[{w['start_s']:.1f}, {w['end_s']:.1f}] s: bias {fit['bias_m']:.3f} m, "
+            f"spread {fit['spread_m']:.3f} m, link-bias std "
             f"{fit['link_bias_std_m']:.3f} m, outliers {100 * fit['outlier_rate']:.1f} %. "
             f"Scored on [{b['scored_window_s'][0]:.1f}, {b['scored_window_s'][1]:.1f}] s.",
             "",

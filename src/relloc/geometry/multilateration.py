@@ -89,4 +89,8 @@ def multilaterate(
 
     if n == 0 or ij.shape[0] == 0:
         return x0
-    return np.asarray(least_squares(residual, x0.ravel(), method="lm" if d.size >= x0.size else "trf").x.reshape(n, -1))
+    return np.asarray(
+        least_squares(residual, x0.ravel(), method="lm" if d.size >= x0.size else "trf").x.reshape(
+            n, -1
+        )
+    )
