@@ -114,3 +114,13 @@ def test_bag_inspect_on_a_real_bag(capsys):
     assert main(["bag", "inspect", str(TIERS / "cooperative_shortbag")]) == 0
     out = capsys.readouterr().out
     assert "/uwb/tof/n_1/n_2/distance" in out and 'topics = "/uwb/tof/{a}/{b}/distance"' in out
+
+
+def test_calibrating_on_the_scored_bag_is_refused(tmp_path):
+    from relloc.cli import main
+
+    bag = str(TIERS / "relative_case4_test1")
+    argv = ["reproduce", "tiers-uwb", "--out", str(tmp_path), "--bag", bag, "--map",
+            "tiers_relative", "--calibrate-on", bag, "--quiet"]  # fmt: skip
+    assert main(argv) == 2
+    assert main(["reproduce", "tiers-uwb", "--out", str(tmp_path), "--bag", bag]) == 2  # no --map

@@ -19,8 +19,8 @@ A :class:`~relloc.datasets.bag_mapping.BagMapping` says which topic is what:
 Time
 ----
 Each message's time is its header stamp; a message whose stamp is zero (an unset header) takes
-its bag receive time minus the bag's median offset ``receive − header`` (counted per topic as
-``stamp from receive time``). ``stamp = "receive"`` in the mapping uses receive times
+its bag receive time minus the bag's median offset ``receive − header`` (counted per topic in
+:attr:`BagRecording.stamps_from_receive`). ``stamp = "receive"`` in the mapping uses receive times
 throughout. The offset per topic and for the bag is reported (:attr:`BagRecording.stamp_offset_s`).
 Times are seconds from :attr:`BagRecording.time_origin_ns` (the earliest time read).
 
@@ -349,7 +349,7 @@ class _Stream:
     rows: list[tuple[int, int, int, Any]] = field(default_factory=list)
 
 
-def _check_topics(mapping: BagMapping, connections: dict[str, Any]) -> None:
+def _check_topics(path: Path, mapping: BagMapping, connections: dict[str, Any]) -> None:
     for i, r in enumerate(mapping.robots):
         for key, topic, msgtype in (
             ("odometry", r.odometry, ODOMETRY_TYPE),
@@ -359,7 +359,7 @@ def _check_topics(mapping: BagMapping, connections: dict[str, Any]) -> None:
                 continue
             where = f"{mapping.source or 'mapping'}: robots[{i}].{key}"
             if topic not in connections:
-                raise ConfigError(f"{where}: topic {topic!r} is not in the bag")
+                raise ConfigError(f"{where}: topic {topic!r} is not in the bag {path}")
             if connections[topic].msgtype != msgtype:
                 raise ConfigError(
                     f"{where}: topic {topic!r} carries {connections[topic].msgtype}, "
@@ -416,7 +416,7 @@ def load_bag(path: Path | str, mapping: BagMapping) -> BagRecording:
     bag = _Bag(path)
     try:
         connections = bag.connections()
-        _check_topics(mapping, connections)
+        _check_topics(path, mapping, connections)
         logs: dict[str, _TopicLog] = {}
         for r in mapping.robots:
             for topic in (r.odometry, r.truth):
@@ -489,16 +489,18 @@ def _timed(
     payloads: list[Any] = []
     from_receive = 0
     for index, rec, hdr, payload in stream.rows:
-        if receive_only or hdr == 0:
-            t = rec - (0 if receive_only else offset_ns)
-            from_receive += 0 if receive_only else 1
+        if receive_only:
+            t = rec
+        elif hdr == 0:
+            t = rec - offset_ns
+            from_receive += 1
         else:
             t = hdr
         if times and t <= times[-1]:
             log.skip(
                 index,
                 "stamp not after the previous message",
-                f"message {index}: stamp {t} ns after {times[-1]} ns",
+                f"message {index}: stamp {t} ns is not after {times[-1]} ns",
             )
             continue
         times.append(t)

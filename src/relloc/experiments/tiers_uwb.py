@@ -733,6 +733,12 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
     for path, mapping in bags:
         calibration_bag = None
         if args.calibrate_on is not None:
+            if args.calibrate_on.resolve() == path.resolve():
+                raise ConfigError(
+                    f"--calibrate-on {args.calibrate_on}: that is the bag being scored; a fit "
+                    "must be scored on data it was not fitted on (leave --calibrate-on out to "
+                    f"fit on the first {CALIBRATION_FRACTION:.0%} of the bag)"
+                )
             calibration_bag = load_bag(args.calibrate_on, mapping)
         summary["bags"][path.name] = analyse_bag(load_bag(path, mapping), calibration_bag)
     write_summary(out_dir, summary)
