@@ -56,7 +56,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from relloc.calibration.uwb import UwbNoiseFit, fit_uwb_noise
+from relloc.calibration.inflation import gauss_markov_inflation
+from relloc.calibration.uwb import UwbNoiseFit, fit_uwb_noise, link_masks
 from relloc.calibration.window import CalibrationWindow, leading_fraction, spanning
 from relloc.core.kalman import chi2_threshold
 from relloc.core.recording import FileSkips, Measurements, Recording
@@ -144,24 +145,55 @@ def _names(bag: BagRecording, a: int, b: int) -> tuple[str, str]:
 
 @dataclass(frozen=True)
 class Calibration:
-    """The fit, the bag it came from, and the bias per radio-name link."""
+    """The fit, the bag it came from, the bias per radio-name link, how much a link's bias
+    moves within the window (``bias_drift``, m) and the σ the filters give one range."""
 
     fit: UwbNoiseFit
     source: str
     link_bias: dict[tuple[str, str], float]
+    bias_drift: float
+    range_sigma: float
 
     def bias(self, link: tuple[str, str]) -> float:
         return self.link_bias.get(link, self.fit.model.bias)
 
 
+def bias_drift(rec: UwbRecording, window: CalibrationWindow) -> float:
+    """How far a link's bias moves within ``window``: the RMS over the fitted links of the
+    difference between the median errors of the window's two halves, divided by √2 (the σ of
+    one half's median about the bias, if both halves are alike)."""
+    mid = 0.5 * (window.start_s + window.end_s)
+    diffs = []
+    for mask in link_masks(rec, window).values():
+        first, second = mask & (rec.t <= mid), mask & (rec.t > mid)
+        if first.any() and second.any():
+            diffs.append(float(np.median(rec.error[first]) - np.median(rec.error[second])))
+    return float(np.sqrt(np.mean(np.square(diffs)) / 2.0)) if diffs else 0.0
+
+
 def calibrate(bag: BagRecording, window: CalibrationWindow) -> Calibration:
-    """Fit the UWB error model on ``bag`` inside ``window``."""
-    fit = fit_uwb_noise(as_uwb_recording(bag), window)
+    """Fit the UWB error model on ``bag`` inside ``window``, and the σ of one corrected range
+    for the filters: ``σ² = f·spread² + drift²`` with ``f`` the Gauss–Markov variance
+    inflation of the fitted correlation time at the fitted sampling period
+    (:func:`~relloc.calibration.inflation.gauss_markov_inflation`: consecutive errors are far
+    from independent) and ``drift`` the bias drift within the window (:func:`bias_drift`)."""
+    rec = as_uwb_recording(bag)
+    fit = fit_uwb_noise(rec, window)
     links: dict[tuple[str, str], float] = {}
     for key, value in fit.link_biases.items():
         a, b = (int(v) for v in key.split("-"))
         links[_names(bag, a, b)] = value
-    return Calibration(fit=fit, source=str(bag.path), link_bias=links)
+    m = fit.model
+    inflation = (
+        gauss_markov_inflation(fit.sample_period, m.correlation_time)
+        if fit.sample_period > 0
+        else 1.0
+    )
+    drift = bias_drift(rec, window)
+    sigma = max(math.sqrt(inflation * m.spread**2 + drift**2), 1e-3)
+    return Calibration(
+        fit=fit, source=str(bag.path), link_bias=links, bias_drift=drift, range_sigma=sigma
+    )
 
 
 def heldout_errors(bag: BagRecording, cal: Calibration, t0: float, t1: float) -> dict[str, Any]:
@@ -688,7 +720,9 @@ def analyse_bag(bag: BagRecording, calibration_bag: BagRecording | None) -> dict
     cal_info["fit"] = cal.fit.to_dict()
     cal_info["link_bias_m"] = {f"{a}-{b}": v for (a, b), v in sorted(cal.link_bias.items())}
     cal_info["heldout"] = heldout_errors(bag, cal, t0, span1)
-    sigma = max(cal.fit.model.spread, 1e-3)
+    cal_info["bias_drift_m"] = cal.bias_drift
+    cal_info["range_sigma_m"] = cal.range_sigma
+    sigma = cal.range_sigma
     fixed = corrected(bag, cal, sigma)
     raw = corrected(bag, None, sigma)
     team_settings = RangeTeamSettings(sigma_range=sigma)
@@ -763,7 +797,10 @@ def report(summary: dict[str, Any]) -> str:
             f"Calibrated on {cal['source']} `{w['source']}` "
             f"[{w['start_s']:.1f}, {w['end_s']:.1f}] s: bias {fit['bias_m']:.3f} m, "
             f"spread {fit['spread_m']:.3f} m, link-bias std "
-            f"{fit['link_bias_std_m']:.3f} m, outliers {100 * fit['outlier_rate']:.1f} %. "
+            f"{fit['link_bias_std_m']:.3f} m, outliers {100 * fit['outlier_rate']:.1f} %, "
+            f"correlation time {fit['correlation_time_s']:.2f} s, bias drift "
+            f"{cal['bias_drift_m']:.3f} m → σ of one range in the filters "
+            f"{cal['range_sigma_m']:.3f} m. "
             f"Scored on [{b['scored_window_s'][0]:.1f}, {b['scored_window_s'][1]:.1f}] s.",
             "",
         ]
