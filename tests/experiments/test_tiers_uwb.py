@@ -4,6 +4,7 @@ bags, cut with rosbags into new bags (the checks a bag of the same layout gets).
 from __future__ import annotations
 
 import json
+import sys
 from pathlib import Path
 
 import pytest
@@ -124,3 +125,28 @@ def test_calibrating_on_the_scored_bag_is_refused(tmp_path):
             "tiers_relative", "--calibrate-on", bag, "--quiet"]  # fmt: skip
     assert main(argv) == 2
     assert main(["reproduce", "tiers-uwb", "--out", str(tmp_path), "--bag", bag]) == 2  # no --map
+
+
+def test_a_bag_of_the_layout_with_moving_robots(tmp_path):
+    """The acceptance shape: another bag of the relative layout, robots moving, calibrated on
+    the real relative_case4_test1; two robots stand, so they are the anchors and the free
+    robots' mirror image in their line is the ambiguity ranges leave."""
+    sys.path.insert(0, str(Path(__file__).parent))
+    from tiers_synthetic import synth
+
+    from relloc.cli import main
+
+    bag = synth(tmp_path / "moving", duration=12.0)
+    out = tmp_path / "out"
+    real = str(TIERS / "relative_case4_test1")
+    argv = ["reproduce", "tiers-uwb", "--out", str(out), "--bag", str(bag), "--map",
+            "tiers_relative", "--calibrate-on", real, "--quiet"]  # fmt: skip
+    assert main(argv) == 0
+    b = json.loads((out / "summary.json").read_text())["bags"]["moving"]
+    anchored = b["team"]["anchored"]
+    assert anchored["anchors"] == ["turtlebot5", "turtlebot7"] and anchored["mirror_ambiguous"]
+    assert anchored["mode"] == "anchors"
+    for case in ("aligned", "anchored"):
+        team = b["team"][case]
+        assert team["pos_rmse_m"] < team["baselines"]["uncalibrated"]["pos_rmse_m"]
+        assert team["pos_rmse_m"] < 0.5
