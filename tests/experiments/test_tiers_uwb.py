@@ -80,7 +80,7 @@ def test_calibrated_on_one_stretch_scored_on_another(tmp_path):
 def test_pairs_with_odometry_get_an_observability_verdict(tmp_path):
     from relloc.datasets.bag_mapping import load_mapping
     from relloc.datasets.rosbag import load_bag
-    from relloc.experiments.tiers_uwb import moving_pairs, observability
+    from relloc.experiments.tiers_uwb_pairs import moving_pairs, observability
 
     bag = load_bag(
         cut(TIERS / "cooperative_shortbag", tmp_path / "c", 0.0, 6.0),
