@@ -79,6 +79,12 @@ SHIPPED = (
 def analyse_bag(bag: BagRecording, calibration_bag: BagRecording | None) -> dict[str, Any]:
     """Everything of the module docstring on one bag."""
     rec = bag.recording
+    if rec.truth is None:
+        missing = ", ".join(rec.meta.get("robots_without_truth", [])) or "some robots"
+        raise DataError(
+            f"{bag.path}: tiers-uwb scores against motion capture, and {missing} have none "
+            "(no truth topic, or fewer than two usable messages): leave them out of the mapping"
+        )
     span0, span1 = rec.span
     if calibration_bag is None:
         window = leading_fraction(span0, span1, CALIBRATION_FRACTION, str(bag.path))
