@@ -93,6 +93,8 @@ def _messages() -> list[tuple[str, str, int, object]]:
     add("/u/n_1/n_3/d", RANGE, T0 + 3, uwb(T0 + 3, 5.0, 0.1, 10.0))
     add("/u/n_1/n_3/d", RANGE, T0 + 4 + S, uwb(T0 + 4 + S // 10, 11.0, 0.1, 10.0))
     add("/u/n_1/n_4/d", RANGE, T0 + 5, uwb(T0 + 5, 4.0))
+    for k in range(2):  # the other direction of n_1–n_4 has more messages: it is the one read
+        add("/u/n_4/n_1/d", RANGE, T0 + 7 + k, uwb(T0 + 7 + k, 4.1))
     add("/u/n_1/n_9/d", RANGE, T0 + 6, uwb(T0 + 6, 4.0))
     add("/chatter", STRING, T0, T[STRING](data="hello"))
     out.sort(key=lambda m: m[2])
@@ -122,8 +124,10 @@ def test_a_written_bag_reads_back_with_every_bad_message_counted(tmp_path, stora
     assert [t.topic for t in bag.unknown_topics] == ["/chatter"]
     assert rec.truth is not None
     np.testing.assert_allclose(rec.truth[1].pose[0], [3.0, 2.0, 0.1, -0.5], atol=1e-12)
-    # radio level: n_1–n_2 (2), n_1–n_3 (1), n_1–n_4 (1); the recording has no unsurveyed radio
-    assert bag.ranges.t.size == 4
+    assert skips["/u/n_1/n_4/d"] == {"folded: other direction": 1}
+    # radio level: n_1–n_2 (2), n_1–n_3 (1), n_4–n_1 (2); the recording has no unsurveyed radio
+    assert bag.ranges.t.size == 5
+    np.testing.assert_allclose(bag.ranges.value[bag.ranges.link_mask(0, 3)], [4.1, 4.1], rtol=1e-6)
     m = rec.measurements
     assert m.size == 3 and set(m.kind.tolist()) == {kind_code("range")}
     np.testing.assert_allclose(rec.landmarks, [[0.0, 5.0, 0.0]])

@@ -31,9 +31,10 @@ the topic is the ``line`` of the :class:`~relloc.core.recording.SkippedRow`): it
 deserialised; a value is not finite; a quaternion of zero norm; a range ≤ 0 or outside the
 message's own ``[min_range, max_range]`` (when ``max_range > 0``); a time not after the
 previous kept message of the topic (unsorted or duplicate stamps). Readings of a link published
-in both directions are read from one direction when ``fold_directions`` is set (the other
-direction's messages counted as ``folded: other direction``). Topics the mapping does not name
-are listed in :attr:`BagRecording.unknown_topics`; a UWB topic naming a radio the mapping lacks
+in both directions are read from one direction when ``fold_directions`` is set — the one with more messages, the
+first topic in sorted order on a tie — and the other direction's messages are counted as
+``folded: other direction``. Topics the mapping does not name are listed in
+:attr:`BagRecording.unknown_topics`; a UWB topic naming a radio the mapping lacks
 is counted as skipped (``unknown node``). A topic the mapping names that is missing from the bag
 or has another message type is a :class:`~relloc.errors.ConfigError` naming the key; a bag that
 cannot be opened is a :class:`~relloc.errors.DataError` naming the path.
@@ -387,15 +388,17 @@ def _uwb_topics(
         a, b = uwb.node_index(link[0]), uwb.node_index(link[1])
         out[topic] = None if a is None or b is None or a == b else (a, b)
         logs[topic] = _TopicLog()
-    if uwb.fold_directions:
-        seen: set[tuple[int, int]] = set()
-        for topic, ab in out.items():
+    if uwb.fold_directions:  # per link, the direction with the most messages is read
+        kept: dict[tuple[int, int], str] = {}
+        for topic in sorted(out, key=lambda tp: (-int(connections[tp].msgcount), tp)):
+            ab = out[topic]
             if ab is None:
                 continue
             key = (min(ab), max(ab))
-            if key in seen:
+            if key in kept:
                 out[topic] = None
-            seen.add(key)
+            else:
+                kept[key] = topic
     return out
 
 
