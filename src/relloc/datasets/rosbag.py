@@ -30,10 +30,10 @@ Per topic, in receive order, a message is skipped and counted by reason (its 1-b
 the topic is the ``line`` of the :class:`~relloc.core.recording.SkippedRow`): it cannot be
 deserialised; a value is not finite; a quaternion of zero norm; a range ≤ 0 or outside the
 message's own ``[min_range, max_range]`` (when ``max_range > 0``); a time not after the
-previous kept message of the topic (unsorted or duplicate stamps). Readings of a link published
-in both directions are read from one direction when ``fold_directions`` is set — the one with more messages, the
-first topic in sorted order on a tie — and the other direction's messages are counted as
-``folded: other direction``. Topics the mapping does not name are listed in
+previous kept message of the topic (unsorted or duplicate stamps). A link published in both
+directions is read from one direction when ``fold_directions`` is set — the one with more
+messages, the first topic in sorted order on a tie — and the other direction's messages are
+counted as ``folded: other direction``. Topics the mapping does not name are listed in
 :attr:`BagRecording.unknown_topics`; a UWB topic naming a radio the mapping lacks
 is counted as skipped (``unknown node``). A topic the mapping names that is missing from the bag
 or has another message type is a :class:`~relloc.errors.ConfigError` naming the key; a bag that
