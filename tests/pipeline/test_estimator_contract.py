@@ -243,6 +243,75 @@ def _cooperative_case(kind: str, *, use_range: bool) -> Case:
     )
 
 
+def _range_only_recording() -> Recording:
+    """Three unicycles for 3 s (odometry at 20 Hz, σ 1 cm/s) with UWB ranges (σ 5 cm) at 10 Hz
+    between every pair."""
+    from relloc.core.recording import GroundTruth, Measurements, Odometry, measurement_rows
+
+    rng = np.random.default_rng(5)
+    t = np.arange(0.0, 3.0, 0.05)
+    starts = np.array([[0.0, 0.0, 0.0], [3.0, 1.0, 2.0], [1.0, 4.0, -1.0]])
+    u = np.array([[0.3, 0.2], [0.2, -0.1], [0.0, 0.0]])
+    truth, odometry = [], []
+    for k in range(3):
+        yaw = starts[k, 2] + u[k, 1] * t
+        # chord of the arc driven so far: v t sin(ωt/2)/(ωt/2), along the mean heading
+        arc = u[k, 0] * t * np.sinc(u[k, 1] * t / (2 * np.pi))
+        mid = starts[k, 2] + 0.5 * u[k, 1] * t
+        xy = starts[k, :2] + np.column_stack([arc * np.cos(mid), arc * np.sin(mid)])
+        truth.append(GroundTruth(t=t, pose=np.column_stack([xy, np.zeros(t.size), yaw])))
+        vel = np.tile([u[k, 0], 0.0, 0.0, u[k, 1]], (t.size, 1))
+        odometry.append(Odometry(t=t, velocity=vel, sigma=(0.01, 0.0, 0.0, 0.01)))
+    tr = t[::2] + 0.01
+    parts = []
+    for i, j in ((0, 1), (0, 2), (1, 2)):
+        d = np.linalg.norm(truth[i].at(tr)[:, :3] - truth[j].at(tr)[:, :3], axis=1)
+        value = d + rng.normal(0.0, 0.05, d.size)
+        parts.append(
+            measurement_rows("range", t=tr, observer=i, target=j, value=value, sigma=[0.05])
+        )
+    return Recording(
+        robots=("a", "b", "c"),
+        platforms=("ground",) * 3,
+        odometry=tuple(odometry),
+        measurements=Measurements.concatenate(parts),
+        truth=tuple(truth),
+    )
+
+
+def _range_only_case(name: str) -> Case:
+    """UWB ranges only: the relative pair bank (range + both odometries), the constant-velocity
+    team filter (robot c an anchor) and the odometry-alone pair baseline."""
+    from relloc.estimators.uwb_range import (
+        RangePairBank,
+        RangePairSettings,
+        RangeTeamFilter,
+        RangeTeamSettings,
+        RelativeDeadReckoning,
+    )
+    from relloc.models.motion import VelocityNoise
+
+    rec = _range_only_recording()
+    noise = VelocityNoise(observer=(0.01, 0.0, 0.0, 0.01), observed=(0.01, 0.0, 0.0, 0.01))
+    truth0 = np.array([g.at(0.0)[0, :2] for g in rec.require_truth("case")])
+
+    def build(r: Recording) -> list[Estimator]:
+        if name == "pair":
+            return [RangePairBank(0, 1, r.robots, noise, RangePairSettings(sigma_range=0.05))]
+        if name == "team":
+            start = truth0 + np.array([[0.3, -0.2], [-0.2, 0.3], [0.0, 0.0]])
+            return [RangeTeamFilter(r.robots, start, RangeTeamSettings(), anchors=(2,))]
+        start = (0.0, r.relative_truth(0, 1, 0.0)[0], np.eye(4) * 1e-4)
+        return [RelativeDeadReckoning(0, 1, r.robots, noise, start)]
+
+    return Case(
+        recording=rec,
+        build=build,
+        kinds=("range",),
+        dofs=frozenset() if name == "odometry_alone" else frozenset({1}),
+    )
+
+
 CASES: dict[str, Callable[[], Case]] = {
     **{
         f"track_manager-{f}{'-yaw_bank' if bank else ''}": partial(
@@ -261,6 +330,7 @@ CASES: dict[str, Callable[[], Case]] = {
     "switching_ekf-two_drones": lambda: _switching_ekf_case("two_drones"),
     "cooperative-eif-bearings": lambda: _cooperative_case("eif", use_range=False),
     "cooperative-ekf-range_bearing": lambda: _cooperative_case("ekf", use_range=True),
+    **{f"uwb_range-{n}": partial(_range_only_case, n) for n in ("pair", "team", "odometry_alone")},
 }
 
 

@@ -25,6 +25,7 @@ SUBCOMMAND_MODULES = (
     "relloc.cli.node",
     "relloc.cli.team",
     "relloc.cli.certs",
+    "relloc.cli.bag",
 )
 
 

@@ -1,6 +1,10 @@
 """``relloc reproduce NAME --out DIR [--runs N] [--seed S] [--dataset PATH] [--executor E]
-[--mcap FILE] [--tum DIR]`` (the last two: one representative run's estimates, where the
-experiment states one — :func:`relloc.experiments.registry.exported_run`)."""
+[--bag BAG --map MAP.toml --calibrate-on BAG] [--mcap FILE] [--tum DIR]``.
+
+``--bag``, ``--map`` and ``--calibrate-on`` are for the experiments on ROS 2 bags; ``--mcap`` and
+``--tum`` write one representative run's estimates, where the experiment states one
+(:func:`relloc.experiments.registry.exported_run`).
+"""
 
 from __future__ import annotations
 
@@ -29,6 +33,14 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         default=None,
         help="'process' (default, all cores), 'serial', or 'dask://HOST:PORT'",
     )
+    p.add_argument("--bag", type=Path, default=None, help="a ROS 2 bag (tiers-uwb)")
+    p.add_argument("--map", type=Path, default=None, help="the bag's topic mapping TOML")
+    p.add_argument(
+        "--calibrate-on",
+        type=Path,
+        default=None,
+        help="another bag of the same hardware to calibrate on",
+    )
     p.add_argument("--quiet", action="store_true", help="no progress display")
     add_export_arguments(p, "one representative run's estimates (where the experiment has any)")
     p.set_defaults(func=run)
@@ -54,6 +66,9 @@ def run(args: argparse.Namespace) -> int:
             executor=args.executor,
             quiet=args.quiet,
             export=export,
+            bag=args.bag,
+            map=args.map,
+            calibrate_on=args.calibrate_on,
         )
     )
     if not args.quiet:

@@ -34,13 +34,17 @@ EXPERIMENTS: dict[str, str] = {
     "desilva2015": "relloc.experiments.desilva2015",
     "mrclam-association": "relloc.experiments.mrclam_association",
     "guler2023": "relloc.experiments.guler2023",
+    "tiers-uwb": "relloc.experiments.tiers_uwb",
 }
 
 
 @dataclass(frozen=True, kw_only=True)
 class ReproduceArgs:
     """What every reproduction receives. ``runs=None`` means the paper's run count;
-    ``export`` the ``--mcap``/``--tum`` request (module docstring), ``None`` when not asked."""
+    ``export`` the ``--mcap``/``--tum`` request (module docstring), ``None`` when not asked.
+
+    ``bag``, ``map`` and ``calibrate_on`` are read by the experiments on ROS 2 bags (a bag, its
+    topic mapping, and another bag of the same hardware to calibrate on)."""
 
     out_dir: Path
     runs: int | None = None
@@ -49,6 +53,9 @@ class ReproduceArgs:
     executor: str | None = None
     quiet: bool = False
     export: ExportRequest | None = None
+    bag: Path | None = None
+    map: Path | None = None
+    calibrate_on: Path | None = None
 
     def __post_init__(self) -> None:
         if self.runs is not None and self.runs < 1:

@@ -6,6 +6,8 @@ true state of ``subject`` as ``owner`` would estimate it, at the record times:
 - ``relative_pose4`` — ``(x, y, z, φ)`` of the subject in the owner's body frame (seed 000
   Eq. 1; seed 002's relative pose): ``⊖ pose_owner ⊕ pose_subject``;
 - ``world_pose2`` — ``(x, y, θ)`` of the subject in the world frame (seed 001's team state);
+- ``world_position2`` — ``(x, y)`` of the subject in the world frame (a range-only team,
+  :mod:`relloc.estimators.uwb_range`);
 - ``airground_follower`` — ``(r_x, r_y, θ_i, θ_0)`` of seed 003 (:mod:`relloc.models.airground`):
   ``r = p_subject − p_owner`` (the leader seen from the follower) in the common frame whose x
   axis is at ``recording.meta["common_frame_yaw"]`` (default 0), and both headings.
@@ -54,6 +56,11 @@ def _world_pose2(rec: Recording, owner: str, subject: str, t: Array) -> Array:
     return np.asarray(pose[:, [0, 1, 3]])
 
 
+def _world_position2(rec: Recording, owner: str, subject: str, t: Array) -> Array:
+    pose = rec.require_truth("world_position2 truth")[rec.index(subject)].at(t)
+    return np.asarray(pose[:, :2])
+
+
 def _airground_follower(rec: Recording, owner: str, subject: str, t: Array) -> Array:
     truth = rec.require_truth("airground_follower truth")
     follower = truth[rec.index(owner)].at(t)
@@ -76,6 +83,7 @@ FRAMES: Mapping[str, Frame] = MappingProxyType(
         for f in (
             Frame("relative_pose4", ("x", "y", "z", "phi"), (3,), (0, 1, 2), 3, _relative_pose4),
             Frame("world_pose2", ("x", "y", "theta"), (2,), (0, 1), 2, _world_pose2),
+            Frame("world_position2", ("x", "y"), (), (0, 1), None, _world_position2),
             Frame(
                 "airground_follower",
                 ("r_x", "r_y", "theta_i", "theta_0"),

@@ -1,0 +1,163 @@
+"""``relloc reproduce tiers-uwb`` and ``relloc run BAG --map`` on stretches of the real TIERS
+bags, cut with rosbags into new bags (the checks a bag of the same layout gets)."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from relloc.datasets.paths import shared_data_dir
+
+TIERS = shared_data_dir() / "tiers"
+pytestmark = pytest.mark.skipif(
+    not TIERS.is_dir(), reason=f"TIERS bags not found at {TIERS} (outside the workspace)"
+)
+
+
+def cut(src: Path, dst: Path, start_s: float, end_s: float) -> Path:
+    """The messages of ``src`` received in ``[start_s, end_s]`` from its start, as a new bag
+    (topics of types the standard typestore lacks are left out)."""
+    from rosbags.highlevel import AnyReader
+    from rosbags.rosbag2 import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    store = get_typestore(Stores.ROS2_HUMBLE)
+    with AnyReader([src], default_typestore=store) as reader, Writer(dst, version=8) as writer:
+        t0 = reader.start_time
+        cons = {}
+        for c in reader.connections:
+            if c.msgtype in store.types:
+                cons[c.id] = writer.add_connection(c.topic, c.msgtype, typestore=store)
+        lo, hi = t0 + int(start_s * 1e9), t0 + int(end_s * 1e9)
+        for c, t, raw in reader.messages(start=lo, stop=hi):
+            if c.id in cons:
+                writer.write(cons[c.id], t, raw)
+    return dst
+
+
+def test_calibrated_on_one_stretch_scored_on_another(tmp_path):
+    from relloc.cli import main
+
+    src = TIERS / "relative_case4_test1"
+    calibration = cut(src, tmp_path / "first", 0.0, 8.0)
+    other = cut(src, tmp_path / "second", 20.0, 26.0)
+    out = tmp_path / "out"
+    code = main(
+        [
+            "reproduce",
+            "tiers-uwb",
+            "--out",
+            str(out),
+            "--bag",
+            str(other),
+            "--map",
+            "tiers_relative",
+            "--calibrate-on",
+            str(calibration),
+            "--quiet",
+        ]
+    )
+    assert code == 0
+    summary = json.loads((out / "summary.json").read_text())
+    b = summary["bags"]["second"]
+    assert b["calibration"]["source"] == "bag"
+    assert b["calibration"]["bag"] == str(calibration)
+    assert b["scored_window_s"][0] == pytest.approx(0.0, abs=0.1)
+    held = b["calibration"]["heldout"]
+    assert held["calibrated"]["rmse_m"] < held["raw"]["rmse_m"]
+    for case in ("aligned", "anchored"):
+        team = b["team"][case]
+        assert team["pos_rmse_m"] < team["baselines"]["uncalibrated"]["pos_rmse_m"]
+        assert {"nees_pct_beyond", "converged_after_s"} <= set(team)
+    assert b["team"]["anchored"]["mode"] == "leave-one-out"  # every robot stands
+    assert b["pairs"] == {}  # no odometry in this layout
+    assert "| team aligned" in (out / "report.md").read_text()
+
+
+def test_pairs_with_odometry_get_an_observability_verdict(tmp_path):
+    from relloc.datasets.bag_mapping import load_mapping
+    from relloc.datasets.rosbag import load_bag
+    from relloc.experiments.tiers_uwb_pairs import moving_pairs, observability
+
+    bag = load_bag(
+        cut(TIERS / "cooperative_shortbag", tmp_path / "c", 0.0, 6.0),
+        load_mapping("tiers_cooperative"),
+    )
+    rec = bag.recording
+    pairs = [(rec.robots[i], rec.robots[j]) for i, j in moving_pairs(rec)]
+    assert ("turtlebot1", "turtlebot3") in pairs
+    i, j = rec.index("turtlebot1"), rec.index("turtlebot5")
+    verdict = observability(rec, i, j, 1.0, 5.0)
+    # turtlebot5 stands (zero twist): range-only needs both robots to move (seed 000 model)
+    assert verdict["max_rank"] < 4 and verdict["verdict"].startswith("unobservable")
+    assert "v_l ≠ 0 and v_c ≠ 0" in verdict["generic_conditions"]
+
+
+def test_relloc_run_on_a_bag(tmp_path, capsys):
+    from relloc.cli import main
+
+    bag = cut(TIERS / "cooperative_shortbag", tmp_path / "c", 0.0, 6.0)
+    out = tmp_path / "run"
+    tum = tmp_path / "tum"
+    argv = ["run", str(bag), "--map", "tiers_cooperative", "--out", str(out),
+            "--mcap", str(tmp_path / "bag.mcap"), "--tum", str(tum)]  # fmt: skip
+    assert main(argv) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert "turtlebot1->turtlebot3" in summary["pairs"]
+    # the bag's estimates exported: the TUM files give back the export's RMSE of the pair
+    assert (tmp_path / "bag.mcap").stat().st_size > 0
+    est = np.loadtxt(tum / "turtlebot1" / "turtlebot3.tum")
+    truth = np.loadtxt(tum / "turtlebot1" / "turtlebot3.truth.tum")
+    rmse = np.sqrt(np.mean(np.sum((est[:, 1:4] - truth[:, 1:4]) ** 2, axis=1)))
+    exported = summary["export"]["series"]["turtlebot1->turtlebot3"]["position_rmse_m"]
+    assert rmse == pytest.approx(exported, rel=1e-9)
+    # /cali/turtle05 has unset header stamps: placed by their receive time, and said so
+    assert set(summary["loader"]["stamps_from_receive"]) == {"/cali/turtle05/odom"}
+    assert "turtlebot1->turtlebot3" in capsys.readouterr().out
+
+
+def test_bag_inspect_on_a_real_bag(capsys):
+    from relloc.cli import main
+
+    assert main(["bag", "inspect", str(TIERS / "cooperative_shortbag")]) == 0
+    out = capsys.readouterr().out
+    assert "/uwb/tof/n_1/n_2/distance" in out and 'topics = "/uwb/tof/{a}/{b}/distance"' in out
+
+
+def test_calibrating_on_the_scored_bag_is_refused(tmp_path):
+    from relloc.cli import main
+
+    bag = str(TIERS / "relative_case4_test1")
+    argv = ["reproduce", "tiers-uwb", "--out", str(tmp_path), "--bag", bag, "--map",
+            "tiers_relative", "--calibrate-on", bag, "--quiet"]  # fmt: skip
+    assert main(argv) == 2
+    assert main(["reproduce", "tiers-uwb", "--out", str(tmp_path), "--bag", bag]) == 2  # no --map
+
+
+def test_a_bag_of_the_layout_with_moving_robots(tmp_path):
+    """The acceptance shape: another bag of the relative layout, robots moving, calibrated on
+    the real relative_case4_test1; two robots stand, so they are the anchors and the free
+    robots' mirror image in their line is the ambiguity ranges leave."""
+    sys.path.insert(0, str(Path(__file__).parent))
+    from tiers_synthetic import synth
+
+    from relloc.cli import main
+
+    bag = synth(tmp_path / "moving", duration=12.0)
+    out = tmp_path / "out"
+    real = str(TIERS / "relative_case4_test1")
+    argv = ["reproduce", "tiers-uwb", "--out", str(out), "--bag", str(bag), "--map",
+            "tiers_relative", "--calibrate-on", real, "--quiet"]  # fmt: skip
+    assert main(argv) == 0
+    b = json.loads((out / "summary.json").read_text())["bags"]["moving"]
+    anchored = b["team"]["anchored"]
+    assert anchored["anchors"] == ["turtlebot5", "turtlebot7"] and anchored["mirror_ambiguous"]
+    assert anchored["mode"] == "anchors"
+    for case in ("aligned", "anchored"):
+        team = b["team"][case]
+        assert team["pos_rmse_m"] < team["baselines"]["uncalibrated"]["pos_rmse_m"]
+        assert team["pos_rmse_m"] < 0.5
