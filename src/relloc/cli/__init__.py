@@ -2,8 +2,11 @@
 
 Each subcommand lives in its own module ``relloc.cli.<name>`` exposing
 ``add_parser(subparsers)``, which registers the subparser and sets ``func=run(args) -> int``.
-Heavy imports happen inside ``run`` so ``relloc --help`` stays fast. Known errors
-(:class:`relloc.errors.RellocError`) become a one-line message and the class's exit code.
+Heavy imports happen inside ``run`` so ``relloc --help`` stays fast. Before a command runs,
+:func:`relloc.cli.extras.check_command` checks the optional extras it needs (exit 5 with the
+install line). Known errors (:class:`relloc.errors.RellocError`) become a one-line message and
+the class's exit code: configuration 2, data 3, model 4, missing extra 5. A misspelt option is
+reported with the usage of the subcommand it was given to.
 """
 
 from __future__ import annotations
@@ -40,13 +43,28 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _subparser(parser: argparse.ArgumentParser, args: argparse.Namespace) -> argparse.ArgumentParser:
+    """The innermost (sub)parser the parsed command went through, for its usage line."""
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            chosen = getattr(args, action.dest or "", None)
+            if chosen in action.choices:
+                return _subparser(action.choices[chosen], args)
+    return parser
+
+
 def main(argv: Sequence[str] | None = None) -> int:
+    from relloc.cli.extras import check_command
+
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args, unknown = parser.parse_known_args(argv)
+    if unknown:  # exits 2 with the subcommand's usage, not the top-level one
+        _subparser(parser, args).error(f"unrecognized arguments: {' '.join(unknown)}")
     if not getattr(args, "func", None):
         parser.print_help()
         return 2
     try:
+        check_command(args)
         return int(args.func(args) or 0)
     except RellocError as exc:
         print(f"relloc: error: {exc}", file=sys.stderr)

@@ -21,10 +21,17 @@ over all runs on the *steady-state* samples (track age ≥ ``settle_s``):
   nees_band_check`;
 - ``anis`` (NIS/3, ideal 1) and ``nis_percent_beyond`` ``χ²(3, 0.95)``;
 - ``max_condition_log10`` of ``P``, ``R`` and ``S`` (seed 000 §7.3; > 6 is ill-conditioned);
-- ``track_events``: created / deleted / re-created counts over all runs.
+- ``track_events``: created / deleted / re-created counts over all runs;
+- ``position_rmse_over_runs``, ``yaw_rmse_over_runs``: the spread of the per-run steady-state
+  RMSE — ``runs``, ``mean``, ``std`` (ddof 1) and ``interval95`` (the 2.5 and 97.5 percentiles
+  of the per-run values, linear interpolation), :func:`rmse_over_runs`;
+- ``convergence``: from the track's first record (the unknown start), the time and the number
+  of updates until every state's error stays below :data:`CONVERGENCE_THRESHOLDS` for good
+  (:func:`relloc.pipeline.evaluation.convergence_time`): ``median_time_s``, ``max_time_s``,
+  ``median_updates`` over the runs that converged, ``runs_converged`` of ``runs``.
 
 ``team`` holds the same accuracy and consistency numbers pooled over every pair
-(:func:`relloc.pipeline.evaluation.accuracy_and_consistency`); ``rows_not_used`` (present only
+(:func:`relloc.pipeline.evaluation.accuracy_and_consistency`) and their spread over runs; ``rows_not_used`` (present only
 when some were) counts the readings the trackers could not use, by reason.
 """
 
@@ -48,6 +55,7 @@ from relloc.metrics.conditioning import ILL_CONDITIONED_LOG10
 from relloc.pipeline.evaluation import (
     SeriesEvaluation,
     accuracy_and_consistency,
+    convergence_time,
     evaluate,
     nees_band_check,
     run_averaged_nees,
@@ -72,6 +80,8 @@ SETTLE_S = 5.0
 """Default track age (s) after which samples count as steady state."""
 RECORD_RATE_HZ = 10.0
 """Default rate (Hz) at which beliefs are recorded."""
+CONVERGENCE_THRESHOLDS = (0.1, 0.1, 0.1, 0.1)
+"""|error| bounds (x, y, z in m; φ in rad) a track must stay inside to count as converged."""
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -155,7 +165,56 @@ def _pair_summary(
     }
     kinds = [e.kind for e in events if (e.owner, e.subject) == (first.owner, first.subject)]
     out["track_events"] = {k: kinds.count(k) for k in ("created", "deleted", "recreated")}
+    out["position_rmse_over_runs"] = rmse_over_runs(runs, "position_rmse_m", settle_s=settle_s)
+    out["yaw_rmse_over_runs"] = rmse_over_runs(runs, "yaw_rmse_rad", settle_s=settle_s)
+    out["convergence"] = convergence_summary(runs)
     return out
+
+
+def rmse_over_runs(
+    runs: Sequence[SeriesEvaluation], key: str, *, settle_s: float
+) -> dict[str, Any]:
+    """Spread of one steady-state RMSE (``position_rmse_m`` or ``yaw_rmse_rad`` of
+    :func:`accuracy_and_consistency`) over runs: ``runs`` (with steady-state samples),
+    ``mean``, ``std`` (ddof 1, NaN for one run) and ``interval95``, the 2.5–97.5 percentiles
+    of the per-run values."""
+    return _spread([accuracy_and_consistency([r], settle_s=settle_s)[key] for r in runs])
+
+
+def _spread(per_run: Sequence[float]) -> dict[str, Any]:
+    values = np.asarray(per_run, dtype=float)
+    values = values[np.isfinite(values)]
+    nan = float("nan")
+    if values.size == 0:
+        return {"runs": 0, "mean": nan, "std": nan, "interval95": [nan, nan]}
+    return {
+        "runs": int(values.size),
+        "mean": float(np.mean(values)),
+        "std": float(np.std(values, ddof=1)) if values.size >= 2 else nan,
+        "interval95": [float(v) for v in np.percentile(values, [2.5, 97.5])],
+    }
+
+
+def convergence_summary(
+    runs: Sequence[SeriesEvaluation], thresholds: Sequence[float] = CONVERGENCE_THRESHOLDS
+) -> dict[str, Any]:
+    """Time and updates from each run's first record until the error stays inside
+    ``thresholds`` for good, summarised over the runs that converged (module docstring)."""
+    times, updates = [], []
+    for r in runs:
+        ct = convergence_time(r, thresholds)
+        if ct is not None:
+            times.append(ct)
+            updates.append(int(np.sum(r.update_t <= r.t[0] + ct)))
+    nan = float("nan")
+    return {
+        "thresholds": list(thresholds),
+        "runs": len(runs),
+        "runs_converged": len(times),
+        "median_time_s": float(np.median(times)) if times else nan,
+        "max_time_s": float(np.max(times)) if times else nan,
+        "median_updates": float(np.median(updates)) if updates else nan,
+    }
 
 
 def summarise(
@@ -187,7 +246,10 @@ def summarise(
         "settle_s": settle_s,
         "record_rate_hz": record_rate_hz,
         "pairs": pairs,
-        "team": accuracy_and_consistency(everything, settle_s=settle_s),
+        "team": {
+            **accuracy_and_consistency(everything, settle_s=settle_s),
+            **_team_spread(results, settle_s=settle_s),
+        },
         "events_run0": [
             {"t": e.t, "observer": e.owner, "observed": e.subject, "kind": e.kind}
             for e in results[0].events
@@ -200,6 +262,17 @@ def summarise(
     if any(not_used.values()):
         summary["rows_not_used"] = not_used
     return summary
+
+
+def _team_spread(results: Sequence[RunResult], *, settle_s: float) -> dict[str, Any]:
+    """The per-run spread of the team's RMSE (every pair of a run pooled)."""
+    tracked = [r.evaluations for r in results if r.evaluations]
+    return {
+        f"{name}_over_runs": _spread(
+            [accuracy_and_consistency(e, settle_s=settle_s)[key] for e in tracked]
+        )
+        for name, key in (("position_rmse", "position_rmse_m"), ("yaw_rmse", "yaw_rmse_rad"))
+    }
 
 
 def build_summary(
@@ -442,18 +515,27 @@ def write_team_report(
     title: str = "relloc run",
     arena: tuple[tuple[float, float], tuple[float, float]] | None = None,
     notes: Sequence[str] = (),
-) -> None:
-    """Write ``summary.json``, the figures and ``report.md`` into ``out_dir``."""
+    plots: bool = True,
+) -> list[Path]:
+    """Write ``summary.json``, the figures (unless ``plots`` is false) and ``report.md`` into
+    ``out_dir``; returns every file written, in that order."""
     out = prepare_out_dir(out_dir)
-    write_summary(out, summary)
-    figures = write_figures(
-        out,
-        results,
-        settle_s=float(summary["settle_s"]),
-        record_rate_hz=float(summary["record_rate_hz"]),
-        arena=arena,
+    written = [write_summary(out, summary)]
+    figures = (
+        write_figures(
+            out,
+            results,
+            settle_s=float(summary["settle_s"]),
+            record_rate_hz=float(summary["record_rate_hz"]),
+            arena=arena,
+        )
+        if plots
+        else []
     )
-    write_report(out, report_markdown(summary, figures, title=title, notes=notes))
+    if not plots:
+        notes = [*notes, "Figures were not drawn (--no-plots, or matplotlib is not installed)."]
+    written.append(write_report(out, report_markdown(summary, figures, title=title, notes=notes)))
+    return [*written, *(out / name for name, _ in figures)]
 
 
 def scenario_meta(
