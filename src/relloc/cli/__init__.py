@@ -14,10 +14,13 @@ from __future__ import annotations
 import argparse
 import importlib
 import importlib.util
+import os
 import sys
 from collections.abc import Sequence
+from pathlib import Path
 
 from relloc import __version__
+from relloc.datasets.paths import DATA_ENV
 from relloc.errors import RellocError
 
 SUBCOMMAND_MODULES = (
@@ -40,10 +43,28 @@ def build_parser() -> argparse.ArgumentParser:
     for name in SUBCOMMAND_MODULES:
         if importlib.util.find_spec(name) is not None:
             importlib.import_module(name).add_parser(subparsers)
+    for leaf in _leaf_parsers(parser):
+        leaf.add_argument(
+            "--data-dir",
+            type=Path,
+            default=None,
+            metavar="DIR",
+            help="the data folder holding mrclam/ and uwb/ (sets RELLOC_SHARED_DATA)",
+        )
     return parser
 
 
-def _subparser(parser: argparse.ArgumentParser, args: argparse.Namespace) -> argparse.ArgumentParser:
+def _leaf_parsers(parser: argparse.ArgumentParser) -> list[argparse.ArgumentParser]:
+    """The parsers that run a command (no subcommands of their own)."""
+    subs = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+    if not subs:
+        return [parser]
+    return [leaf for a in subs for p in a.choices.values() for leaf in _leaf_parsers(p)]
+
+
+def _subparser(
+    parser: argparse.ArgumentParser, args: argparse.Namespace
+) -> argparse.ArgumentParser:
     """The innermost (sub)parser the parsed command went through, for its usage line."""
     for action in parser._actions:
         if isinstance(action, argparse._SubParsersAction):
@@ -63,6 +84,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     if not getattr(args, "func", None):
         parser.print_help()
         return 2
+    if getattr(args, "data_dir", None) is not None:  # children (workers, nodes) inherit it
+        os.environ[DATA_ENV] = str(args.data_dir)
     try:
         check_command(args)
         return int(args.func(args) or 0)

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 import shutil
 import textwrap
 from collections.abc import Mapping, Sequence
@@ -118,3 +119,15 @@ def _milli(value: Any, spread: Mapping[str, Any] | None) -> str:
     if isinstance(std, float) and math.isfinite(std):
         text += f"±{fmt(1000.0 * std, 2)}"
     return text
+
+
+_ROLE = re.compile(r":(?:mod|func|class|meth|data|attr|obj|exc):`~?([^`]+)`")
+
+
+def plain_text(doc: str | None) -> str:
+    """A reST docstring as plain help text: roles and ````literals```` lose their markup and a
+    literal-block ``::`` becomes ``:`` (for ``argparse`` with ``RawDescriptionHelpFormatter``)."""
+    text = _ROLE.sub(r"\1", doc or "")
+    text = text.replace("``", "")
+    text = re.sub(r"(\S)::$", r"\1:", text, flags=re.MULTILINE)
+    return text.strip()

@@ -1,10 +1,13 @@
-"""``relloc reproduce NAME --out DIR [--runs N] [--seed S] [--dataset PATH] [--executor E]``."""
+"""``relloc reproduce NAME --out DIR [--runs N] [--seed S] [--dataset PATH] [--executor E]``.
+
+Prints the seed and run counts, the report's ours-vs-paper tables laid out for the terminal
+(:mod:`relloc.cli.comparison`) and every file written.
+"""
 
 from __future__ import annotations
 
 import argparse
 import json
-import sys
 from pathlib import Path
 
 from relloc.experiments import registry
@@ -43,9 +46,9 @@ def run(args: argparse.Namespace) -> int:
         )
     )
     if not args.quiet:
-        keys = ", ".join(k for k in summary if k not in ("experiment", "seed", "runs"))
-        print(f"{args.name}: wrote {args.out}/summary.json and report.md (keys: {keys})")
-        print(
-            json.dumps({"seed": summary.get("seed"), "runs": summary.get("runs")}), file=sys.stdout
-        )
+        from relloc.cli.comparison import comparison_text
+        from relloc.cli.console import terminal_width
+
+        print(f"{args.name}: seed {summary.get('seed')}, runs {json.dumps(summary.get('runs'))}")
+        print(comparison_text(args.name, args.out, width=terminal_width()))
     return 0

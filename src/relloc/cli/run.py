@@ -56,7 +56,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         "--seed", type=int, default=defaults.seed, help=f"master seed (default {defaults.seed})"
     )
     p.add_argument(
-        "--runs", type=int, default=defaults.runs, help=f"Monte-Carlo runs (default {defaults.runs})"
+        "--runs",
+        type=int,
+        default=defaults.runs,
+        help=f"Monte-Carlo runs (default {defaults.runs})",
     )
     p.add_argument(
         "--filter",
