@@ -12,7 +12,6 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-
 DATA_ENV = "RELLOC_SHARED_DATA"
 DATA_HINT = (
     "point relloc at the data folder (the one holding mrclam/ and uwb/) with --data-dir DIR "

@@ -34,7 +34,6 @@ from relloc.pipeline.team_report import (
 from relloc.sim.scenario import Scenario
 from relloc.sim.simulate import simulate
 
-
 DEFAULT_YAW_BANK = 12
 """Yaw hypotheses a track with unknown initial yaw starts with in ``relloc run`` (0 = one
 filter, as in seed 000). :class:`TrackManagerSettings` alone defaults to one filter."""
@@ -51,7 +50,8 @@ class TeamRunSettings:
     """How ``relloc run`` runs a scenario.
 
     ``runs`` Monte-Carlo runs from master ``seed``; ``tracker`` the filter, initialisation,
-    yaw bank and keep window (:func:`default_tracker`; the CLI's defaults are these); ``settle_s`` the track age after which samples count as steady state;
+    yaw bank and keep window (:func:`default_tracker`; the CLI's defaults are these);
+    ``settle_s`` the track age after which samples count as steady state;
     ``record_rate_hz`` how often beliefs are recorded; ``executor`` as in
     :func:`relloc.pipeline.montecarlo.run_monte_carlo`.
     """

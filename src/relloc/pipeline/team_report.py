@@ -31,8 +31,9 @@ over all runs on the *steady-state* samples (track age ≥ ``settle_s``):
   ``median_updates`` over the runs that converged, ``runs_converged`` of ``runs``.
 
 ``team`` holds the same accuracy and consistency numbers pooled over every pair
-(:func:`relloc.pipeline.evaluation.accuracy_and_consistency`) and their spread over runs; ``rows_not_used`` (present only
-when some were) counts the readings the trackers could not use, by reason.
+(:func:`relloc.pipeline.evaluation.accuracy_and_consistency`) and their spread over runs;
+``rows_not_used`` (present only when some were) counts the readings the trackers could not
+use, by reason.
 """
 
 from __future__ import annotations
