@@ -133,4 +133,17 @@ def write_run_report(
         arena=(scenario.arena.x, scenario.arena.y),
         notes=[scenario.description] if scenario.description else (),
         plots=plots,
+        views=sensor_views(scenario),
     )
+
+
+def sensor_views(scenario: Scenario) -> dict[str, tuple[float, float]]:
+    """Observer → (field of view in degrees, range in m) for the trajectory figure; an
+    unlimited range is drawn to the arena's diagonal."""
+    a = scenario.arena
+    diagonal = float(np.hypot(a.x[1] - a.x[0], a.y[1] - a.y[0]))
+    return {
+        r.name: (r.sensor.fov_deg, min(r.sensor.max_range, diagonal))
+        for r in scenario.robots
+        if r.sensor is not None
+    }

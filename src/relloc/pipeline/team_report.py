@@ -64,6 +64,7 @@ from relloc.pipeline.evaluation import (
 from relloc.pipeline.frames import frame
 from relloc.pipeline.output import (
     figure_md,
+    fmt,
     markdown_table,
     prepare_out_dir,
     save_figure,
@@ -88,13 +89,14 @@ CONVERGENCE_THRESHOLDS = (0.1, 0.1, 0.1, 0.1)
 @dataclass(frozen=True, kw_only=True)
 class RunResult:
     """One run scored: an evaluation per (observer, observed) series, the track events, the
-    rows the trackers did not use (by reason) and — run 0 only — the true planar paths
-    ``name -> (K, 4)`` for the trajectory figure."""
+    rows the trackers did not use (by reason) and — run 0 only — the true paths
+    ``name -> (K, 4)`` (x, y, z, ψ) at times ``path_t`` for the trajectory figure."""
 
     evaluations: tuple[SeriesEvaluation, ...]
     events: tuple[TrackEvent, ...]
     rows_not_used: Mapping[str, int] = field(default_factory=dict)
     paths: dict[str, Array] | None = None
+    path_t: Array | None = None
 
 
 def track_team(
@@ -115,7 +117,7 @@ def track_team(
 
 def score_run(estimates: Estimates, recording: Recording, *, keep_paths: bool = False) -> RunResult:
     """Score every series of one run; ``keep_paths`` adds the true paths (10 Hz) for figures."""
-    paths = None
+    paths, grid = None, None
     if keep_paths:
         truth = recording.require_truth("the trajectory figure")
         t0, t1 = recording.span
@@ -126,6 +128,7 @@ def score_run(estimates: Estimates, recording: Recording, *, keep_paths: bool = 
         events=estimates.events,
         rows_not_used=dict(estimates.counts),
         paths=paths,
+        path_t=grid,
     )
 
 
@@ -337,6 +340,41 @@ def summary_rows(summary: Mapping[str, Any]) -> tuple[list[str], list[list[Any]]
     return headers, rows
 
 
+def spread_rows(summary: Mapping[str, Any]) -> tuple[list[str], list[list[Any]]]:
+    """Headers and rows of the report's spread-and-convergence table."""
+    headers = [
+        "pair",
+        "pos RMSE m, mean ± std",
+        "95 % of runs",
+        "yaw RMSE rad, mean ± std",
+        "95 % of runs",
+        "converged runs",
+        "median (max) time s",
+        "median updates",
+    ]
+    rows = []
+    for label, s in [*summary["pairs"].items(), ("team (all pairs)", summary["team"])]:
+        row: list[Any] = [label]
+        for key in ("position_rmse_over_runs", "yaw_rmse_over_runs"):
+            sp = s.get(key, {})
+            lo, hi = sp.get("interval95", [None, None])
+            row += [
+                f"{fmt(sp.get('mean'), 3)} ± {fmt(sp.get('std'), 2)}",
+                f"{fmt(lo, 3)}–{fmt(hi, 3)}",
+            ]
+        conv = s.get("convergence")
+        if conv:
+            row += [
+                f"{conv['runs_converged']}/{conv['runs']}",
+                f"{fmt(conv['median_time_s'], 3)} ({fmt(conv['max_time_s'], 3)})",
+                conv["median_updates"],
+            ]
+        else:
+            row += ["", "", ""]
+        rows.append(row)
+    return headers, rows
+
+
 def write_figures(
     out_dir: Path,
     results: Sequence[RunResult],
@@ -344,107 +382,222 @@ def write_figures(
     settle_s: float,
     record_rate_hz: float,
     arena: tuple[tuple[float, float], tuple[float, float]] | None = None,
+    views: Mapping[str, tuple[float, float]] | None = None,
 ) -> list[tuple[str, str]]:
-    """Write the figures of a team run; returns ``(file, caption)`` pairs in report order."""
-    from relloc.metrics.errors import rmse
-    from relloc.plotting.consistency import plot_chi2_series, plot_conditioning
-    from relloc.plotting.errors import (
-        plot_pose_errors_with_bounds,
-        plot_robot_errors,
-        plot_trajectories,
-    )
+    """Write the figures of a team run; returns ``(file, caption)`` pairs in report order.
+
+    ``views``: observer → ``(fov_deg, max_range_m)`` for the trajectory figure.
+    """
     from relloc.plotting.setup import pyplot
 
     plt = pyplot()
-    figures: list[tuple[str, str]] = []
     run0 = results[0]
-    n_runs = len(results)
+    return [
+        *_error_bound_figures(plt, out_dir, run0, settle_s=settle_s),
+        _rmse_figure(plt, out_dir, results, settle_s=settle_s, rate=record_rate_hz),
+        _nees_nis_figure(plt, out_dir, results, settle_s=settle_s, rate=record_rate_hz),
+        _conditioning_figure(plt, out_dir, run0),
+        _convergence_figure(plt, out_dir, results),
+        *_trajectory_figure(plt, out_dir, run0, arena=arena, views=views),
+    ]
+
+
+def _error_bound_figures(
+    plt: Any, out_dir: Path, run0: RunResult, *, settle_s: float
+) -> list[tuple[str, str]]:
+    from relloc.plotting.errors import plot_pose_errors_with_bounds
+    from relloc.plotting.team import legend_outside, shade_gaps, track_gaps
+
+    figures = []
     for p in run0.evaluations:
-        fig, axes = plt.subplots(4, 1, figsize=(7, 7), sharex=True)
+        fig, axes = plt.subplots(4, 1, figsize=(8, 7), sharex=True)
         plot_pose_errors_with_bounds(axes, p.t, p.error, p.sigma)
+        gaps = track_gaps(run0.events, p.owner, p.subject, float(p.t[-1]) if p.t.size else 0.0)
         steady = p.age >= settle_s
-        if steady.any():  # scale to the steady state; the start-up transient is clipped
-            for i, ax in enumerate(axes):
+        for i, ax in enumerate(axes):
+            shade_gaps(ax, gaps)
+            if steady.any():  # scale to the steady state; the start-up transient is clipped
                 half = 1.3 * float(
                     np.max(np.maximum(3 * p.sigma[steady, i], np.abs(p.error[steady, i])))
                 )
                 ax.set_ylim(-half, half)
+        legend_outside(axes[0])
         axes[0].set_title(f"{p.label} ({p.platform}): error and ±3σ, run 0")
         name = save_figure(fig, out_dir, f"error_bounds_{p.subject}")
         figures.append(
             (
                 name,
                 f"Error of {p.label} with the filter's ±3σ bounds (run 0); axes scaled to the "
-                "steady state, so the start-up transient is clipped.",
+                f"steady state (track age ≥ {settle_s:g} s), so the start-up transient is "
+                "clipped; shaded: no track (deleted, not yet re-created).",
             )
         )
+    return figures
+
+
+def _rmse_figure(
+    plt: Any, out_dir: Path, results: Sequence[RunResult], *, settle_s: float, rate: float
+) -> tuple[str, str]:
+    from relloc.metrics.errors import rmse
+    from relloc.plotting.errors import plot_robot_errors
+    from relloc.plotting.team import legend_outside, steady_limits
 
     series = {}
-    labels = [p.label for p in run0.evaluations]
-    subjects = [p.subject for p in run0.evaluations]
-    for lab, subject in zip(labels, subjects, strict=True):
-        runs = _runs_of(results, lab)
+    t_first = float("inf")
+    for p in results[0].evaluations:
+        runs = _runs_of(results, p.label)
         t0 = min(float(r.t[0]) for r in runs if r.t.size)
-        n = max(int(_grid_index(r.t, t0, record_rate_hz).max()) + 1 for r in runs if r.t.size)
+        t_first = min(t_first, t0)
+        n = max(int(_grid_index(r.t, t0, rate).max()) + 1 for r in runs if r.t.size)
         table = np.full((len(runs), n, 4), np.nan)
         for k, r in enumerate(runs):
-            table[k, _grid_index(r.t, t0, record_rate_hz)] = r.error
-        series[subject] = (t0 + np.arange(n) / record_rate_hz, rmse(table, axis=0))
-    fig, axes = plt.subplots(4, 1, figsize=(7, 7), sharex=True)
+            table[k, _grid_index(r.t, t0, rate)] = r.error
+        series[p.subject] = (t0 + np.arange(n) / rate, rmse(table, axis=0))
+    fig, axes = plt.subplots(4, 1, figsize=(8, 7), sharex=True)
     plot_robot_errors(axes, series)
+    for i, ax in enumerate(axes):
+        t_all = np.concatenate([t for t, _ in series.values()])
+        v_all = np.concatenate([v[:, i] for _, v in series.values()])
+        steady_limits(ax, t_all, v_all, t_first + settle_s)
+        ax.set_ylim(bottom=0.0)
+    legend_outside(axes[0])
+    n_runs = len(results)
     axes[0].set_title(f"RMSE over {n_runs} run(s), every observed robot")
-    figures.append(
-        (
-            save_figure(fig, out_dir, "errors_all"),
-            f"RMSE over {n_runs} Monte-Carlo run(s) of every observed robot.",
-        )
+    return (
+        save_figure(fig, out_dir, "errors_all"),
+        f"RMSE over {n_runs} Monte-Carlo run(s) of every observed robot; y axes scaled to the "
+        f"values from {settle_s:g} s after the first track started (the start-up spike is "
+        "clipped).",
     )
 
-    fig, axes = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
-    for i, (lab, subject) in enumerate(zip(labels, subjects, strict=True)):
-        runs = _runs_of(results, lab)
+
+def _nees_nis_figure(
+    plt: Any, out_dir: Path, results: Sequence[RunResult], *, settle_s: float, rate: float
+) -> tuple[str, str]:
+    from relloc.plotting.consistency import plot_chi2_series
+    from relloc.plotting.team import legend_outside, plain_log_ticks
+
+    n_runs = len(results)
+    fig, axes = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
+    for i, p in enumerate(results[0].evaluations):
+        runs = _runs_of(results, p.label)
         if n_runs >= 2:
-            t, avg, n = run_averaged_nees(runs, rate_hz=record_rate_hz, settle_s=settle_s)
+            t, avg, n = run_averaged_nees(runs, rate_hz=rate, settle_s=settle_s)
         else:
             keep = runs[0].age >= settle_s
             t, avg, n = runs[0].t[keep], runs[0].nees[keep], 1
-        plot_chi2_series(axes[0], t, avg, NEES_DOF, n_runs=n, label=subject, show_bound=i == 0)
-    p0 = run0.evaluations[0]
-    plot_chi2_series(axes[1], p0.update_t, p0.nis, NIS_DOF, label=f"NIS {p0.subject}")
-    axes[0].set_ylabel("NEES" + (" (run average)" if n_runs >= 2 else ""))
-    axes[1].set_ylabel("NIS (run 0)")
+        plot_chi2_series(
+            axes[0], t, avg, NEES_DOF, n_runs=n, label=p.subject, show_bound=i == 0, normalise=True
+        )
+        keep = p.update_age >= settle_s
+        plot_chi2_series(
+            axes[1],
+            p.update_t[keep],
+            p.nis[keep],
+            NIS_DOF,
+            label=p.subject,
+            show_bound=i == 0,
+            normalise=True,
+        )
+    axes[0].set_ylabel(f"NEES/{NEES_DOF}" + (f" ({n_runs}-run average)" if n_runs >= 2 else ""))
+    axes[1].set_ylabel(f"NIS/{NIS_DOF} (run 0)")
     axes[1].set_xlabel("time (s)")
-    figures.append(
-        (
-            save_figure(fig, out_dir, "nees_nis"),
-            "NEES (steady state) with its 95 % χ² region, and the NIS of one pair with "
-            "χ²(3, 0.95).",
-        )
+    axes[0].set_title(f"Normalised NEES and NIS, steady state (track age ≥ {settle_s:g} s)")
+    for ax in axes:
+        plain_log_ticks(ax)
+        legend_outside(ax)
+    return (
+        save_figure(fig, out_dir, "nees_nis"),
+        f"Normalised NEES (NEES/{NEES_DOF}, the table's ANEES, ideal 1) with its 95 % region, "
+        f"and every pair's NIS/{NIS_DOF} in run 0 with χ²({NIS_DOF}, 0.95)/{NIS_DOF}; steady "
+        "state only.",
     )
 
-    fig, ax = plt.subplots(figsize=(7, 3.5))
-    plot_conditioning(
-        ax,
-        {
-            f"P {p0.subject}": (p0.t, p0.cond_p),
-            f"R {p0.subject}": (p0.update_t, p0.cond_r),
-            f"S {p0.subject}": (p0.update_t, p0.cond_s),
-        },
-        threshold=ILL_CONDITIONED_LOG10,
-    )
-    figures.append(
-        (
-            save_figure(fig, out_dir, "conditioning"),
-            f"Conditioning log10(λmax/λmin) of P, R and S for {p0.label} (run 0).",
+
+def _conditioning_figure(plt: Any, out_dir: Path, run0: RunResult) -> tuple[str, str]:
+    from relloc.plotting.consistency import plot_conditioning
+    from relloc.plotting.team import legend_outside
+
+    pairs = run0.evaluations
+    fig, axes = plt.subplots(len(pairs), 1, figsize=(8, 1.2 + 1.8 * len(pairs)), sharex=True)
+    axes = np.atleast_1d(axes)
+    for ax, p in zip(axes, pairs, strict=True):
+        plot_conditioning(
+            ax,
+            {"P": (p.t, p.cond_p), "R": (p.update_t, p.cond_r), "S": (p.update_t, p.cond_s)},
+            threshold=ILL_CONDITIONED_LOG10,
         )
+        ax.set_title(p.label, fontsize="small", loc="left")
+        ax.set_ylabel("log10 κ")
+        if ax is not axes[-1]:
+            ax.set_xlabel("")
+        legend_outside(ax)
+    fig.suptitle("Conditioning of P, R and S, run 0")
+    return (
+        save_figure(fig, out_dir, "conditioning"),
+        "Conditioning log10(λmax/λmin) of P, R and S for every pair (run 0); dashed: the "
+        f"ill-conditioning threshold 10^{ILL_CONDITIONED_LOG10:g}.",
     )
 
-    if run0.paths:
-        fig, ax = plt.subplots(figsize=(5, 8))
-        plot_trajectories(ax, run0.paths, arena=arena)
-        ax.set_title("true paths (run 0)")
-        figures.append((save_figure(fig, out_dir, "trajectories"), "True paths of the team."))
-    return figures
+
+def _convergence_figure(plt: Any, out_dir: Path, results: Sequence[RunResult]) -> tuple[str, str]:
+    from relloc.plotting.team import plot_convergence
+
+    times = {
+        p.label: [convergence_time(r, CONVERGENCE_THRESHOLDS) for r in _runs_of(results, p.label)]
+        for p in results[0].evaluations
+    }
+    fig, ax = plt.subplots(figsize=(8, 3.5))
+    plot_convergence(ax, times)
+    th = CONVERGENCE_THRESHOLDS
+    ax.set_title(
+        f"Convergence from the unknown start: |x|,|y|,|z| < {th[0]:g} m, |φ| < {th[3]:g} rad"
+    )
+    return (
+        save_figure(fig, out_dir, "convergence"),
+        "Share of runs whose error has entered, and stays inside, the convergence bounds, by "
+        "time since the track first started (per pair, all runs); a track deleted and "
+        "re-created starts again from an unknown pose, so its time includes the second start.",
+    )
+
+
+def _trajectory_figure(
+    plt: Any,
+    out_dir: Path,
+    run0: RunResult,
+    *,
+    arena: tuple[tuple[float, float], tuple[float, float]] | None,
+    views: Mapping[str, tuple[float, float]] | None,
+) -> list[tuple[str, str]]:
+    from relloc.plotting.team import estimated_world_path, plot_team_paths
+
+    if not run0.paths or run0.path_t is None:
+        return []
+    estimates = {
+        p.label: (
+            p.t,
+            estimated_world_path(
+                run0.path_t, run0.paths[p.owner], run0.paths[p.subject], p.t, p.error
+            ),
+            p.subject,
+        )
+        for p in run0.evaluations
+        if p.owner in run0.paths and p.subject in run0.paths
+    }
+    fig = plt.figure(figsize=(9, 9))
+    grid = fig.add_gridspec(2, 1, height_ratios=(3, 1))
+    ax_xy, ax_z = fig.add_subplot(grid[0]), fig.add_subplot(grid[1])
+    plot_team_paths(ax_xy, ax_z, run0.path_t, run0.paths, estimates, views=views, arena=arena)
+    ax_xy.set_title("Team paths, run 0: true (solid) and estimated by the observer (dashed)")
+    ax_z.set_title("Heights", fontsize="small", loc="left")
+    return [
+        (
+            save_figure(fig, out_dir, "trajectories"),
+            "True paths (solid, start marked) and each observer's estimates of its teammates "
+            "drawn in the world frame (dashed), with the observers' field of view at the start; "
+            "below, the heights over time.",
+        )
+    ]
 
 
 def report_markdown(
@@ -487,6 +640,16 @@ def report_markdown(
         "NEES inside the 95 % band about 95 % of the time. Samples of one run are correlated "
         "in time, so these shares fluctuate more than independent draws would.",
         "",
+        "## Spread over runs and convergence from the unknown start",
+        "",
+        markdown_table(*spread_rows(summary)),
+        "",
+        "RMSE per run (steady state): mean ± std (ddof 1) over the runs and the interval "
+        "holding the middle 95 % of the per-run values (2.5–97.5 percentiles). Convergence: "
+        "time and updates from a track's first record until every state's error stays "
+        f"inside ({', '.join(f'{v:g}' for v in CONVERGENCE_THRESHOLDS)}) (x, y, z in m, φ in "
+        "rad) for good, median and maximum over the runs that converged.",
+        "",
         "## Track events (run 0)",
         "",
     ]
@@ -517,6 +680,7 @@ def write_team_report(
     arena: tuple[tuple[float, float], tuple[float, float]] | None = None,
     notes: Sequence[str] = (),
     plots: bool = True,
+    views: Mapping[str, tuple[float, float]] | None = None,
 ) -> list[Path]:
     """Write ``summary.json``, the figures (unless ``plots`` is false) and ``report.md`` into
     ``out_dir``; returns every file written, in that order."""
@@ -529,6 +693,7 @@ def write_team_report(
             settle_s=float(summary["settle_s"]),
             record_rate_hz=float(summary["record_rate_hz"]),
             arena=arena,
+            views=views,
         )
         if plots
         else []
