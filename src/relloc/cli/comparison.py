@@ -2,7 +2,8 @@
 
 Every reproduction writes ``report.md`` with its headline comparisons as markdown tables that
 have a ``paper`` column (:func:`relloc.pipeline.output.markdown_table`); those tables are the
-ones each experiment chose to set beside the paper. :func:`paper_tables` reads them back and
+ones each experiment chose to set beside the paper (a report without one shows its first
+table, its headline, instead). :func:`paper_tables` reads them back and
 :func:`comparison_text` lays them out for the terminal (:func:`relloc.cli.console.compact_table`),
 followed by the list of files written (``summary.json``, ``report.md`` and every figure the
 report shows).
@@ -79,12 +80,12 @@ def comparison_text(name: str, out_dir: Path, *, width: int = 80) -> str:
     except OSError as exc:
         raise DataError(f"{report}: cannot read the report ({exc.strerror or exc})") from None
     parts = []
-    found = paper_tables(markdown)
-    if not found:
-        parts.append(f"{name}: the report sets no table beside the paper; see {report}")
+    found, what = paper_tables(markdown), "ours vs paper"
+    if not found:  # the paper gives no numbers to set beside: show the report's first table
+        found, what = tables(markdown)[:1], "headline (no paper numbers to compare with)"
     for t in found:
         rows = [r + [""] * (len(t.headers) - len(r)) for r in t.rows]
-        parts.append(wrap_line(f"{name} — {t.section}: ours vs paper", width))
+        parts.append(wrap_line(f"{name} — {t.section}: {what}", width))
         parts.append(compact_table(t.headers, [r[: len(t.headers)] for r in rows], width=width))
         parts.append("")
     files = [out_dir / "summary.json", report] + [out_dir / f for f in figures(markdown)]

@@ -20,6 +20,7 @@ from typing import Any
 from relloc.pipeline.output import fmt
 
 GAP = "  "
+NBSP = "\u00a0"
 
 
 def terminal_width(default: int = 80) -> int:
@@ -46,9 +47,13 @@ def compact_table(
         return "\n".join(lines)
     lines = []
     for r in cells:
-        lines.append(r[0])
-        pairs = ", ".join(f"{h} {v}" for h, v in zip(headers[1:], r[1:], strict=True))
-        lines += textwrap.wrap(pairs, width, initial_indent="  ", subsequent_indent="  ")
+        lines += textwrap.wrap(r[0], width) or [""]  # a label wider than the line wraps
+        # a header and its value stay on one line: join them with no-break spaces
+        pairs = ", ".join(
+            f"{h} {v}".replace(" ", NBSP) for h, v in zip(headers[1:], r[1:], strict=True)
+        )
+        wrapped = textwrap.wrap(pairs, width, initial_indent="  ", subsequent_indent="  ")
+        lines += [w.replace(NBSP, " ") for w in wrapped]
     return "\n".join(lines)
 
 
