@@ -3,6 +3,7 @@
 import json
 import re
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -18,7 +19,8 @@ def test_mrclam_cl_cli_on_a_synthetic_mrclam_folder(
     synthetic_mrclam, tmp_path, capsys, monkeypatch
 ):
     monkeypatch.setenv("COLUMNS", "80")
-    out = tmp_path / "out"
+    monkeypatch.chdir(tmp_path)  # a short --out, as typed (a path is never split)
+    out = Path("out")
     code = main(
         [
             "reproduce",

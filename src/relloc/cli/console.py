@@ -103,7 +103,7 @@ def team_summary_table(summary: Mapping[str, Any], *, width: int = 80) -> str:
         conv = s.get("convergence", {})
         rows.append(
             [
-                label.replace("->", "→"),
+                label,
                 _milli(s["position_rmse_m"], s.get("position_rmse_over_runs")),
                 _milli(s["yaw_rmse_rad"], s.get("yaw_rmse_over_runs")),
                 s["anees"],

@@ -168,7 +168,7 @@ def run(args: argparse.Namespace) -> int:
     if summary["team"]["samples"] == 0:
         print(
             f"relloc: note: no steady-state results: no track reached the settle time "
-            f"({settings.settle_s:g} s, --settle) in the {scenario.duration_s:g} s run, so "
+            f"({settings.settle_s:g} s) in the {scenario.duration_s:g} s run, so "
             "accuracy and consistency are NaN; run longer or lower --settle",
             file=sys.stderr,
         )
