@@ -406,7 +406,8 @@ def _error_bound_figures(
     plt: Any, out_dir: Path, run0: RunResult, *, settle_s: float
 ) -> list[tuple[str, str]]:
     from relloc.plotting.errors import plot_pose_errors_with_bounds
-    from relloc.plotting.team import legend_outside, shade_gaps, track_gaps
+    from relloc.plotting.style import legend_outside
+    from relloc.plotting.team import shade_gaps, track_gaps
 
     figures = []
     for p in run0.evaluations:
@@ -440,7 +441,8 @@ def _rmse_figure(
 ) -> tuple[str, str]:
     from relloc.metrics.errors import rmse
     from relloc.plotting.errors import plot_robot_errors
-    from relloc.plotting.team import legend_outside, steady_limits
+    from relloc.plotting.style import legend_outside
+    from relloc.plotting.team import steady_limits
 
     series = {}
     t_first = float("inf")
@@ -475,7 +477,7 @@ def _nees_nis_figure(
     plt: Any, out_dir: Path, results: Sequence[RunResult], *, settle_s: float, rate: float
 ) -> tuple[str, str]:
     from relloc.plotting.consistency import plot_chi2_series
-    from relloc.plotting.team import legend_outside, plain_log_ticks
+    from relloc.plotting.style import legend_outside, plain_log_ticks
 
     n_runs = len(results)
     fig, axes = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
@@ -516,7 +518,7 @@ def _nees_nis_figure(
 
 def _conditioning_figure(plt: Any, out_dir: Path, run0: RunResult) -> tuple[str, str]:
     from relloc.plotting.consistency import plot_conditioning
-    from relloc.plotting.team import legend_outside
+    from relloc.plotting.style import legend_outside
 
     pairs = run0.evaluations
     fig, axes = plt.subplots(len(pairs), 1, figsize=(8, 1.2 + 1.8 * len(pairs)), sharex=True)

@@ -122,14 +122,14 @@ def plot_sweep(
 ) -> None:
     """Lines of a parameter sweep; an optional horizontal bound (the paper's); ``integer_x``
     for a count (ticks only at integers). The legend sits below the axes."""
-    from matplotlib.ticker import MaxNLocator
+    from relloc.plotting.style import integer_ticks
 
     for name, ys in series.items():
         ax.plot(xs, ys, "o-", label=name)
     if bound is not None:
         ax.axhline(bound, color="r", ls=":", label=f"paper bound {bound} m")
     if integer_x:
-        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+        integer_ticks(ax.xaxis)
     ax.set_xlabel(xlabel)
     ax.set_ylabel("RMSE [m]")
     ax.set_ylim(bottom=0.0)

@@ -1,8 +1,8 @@
 """Figures of a team run (``relloc run``, ``relloc team up``): paths, gaps, convergence.
 
 Every function draws into the ``Axes`` it is given. Conventions shared by the team figures:
-legends sit outside the data (:func:`legend_outside`), logarithmic axes carry plain numbers
-(:func:`plain_log_ticks`), intervals in which a pair had no track are shaded
+legends sit outside the data and logarithmic axes carry plain numbers
+(:mod:`relloc.plotting.style`), intervals in which a pair had no track are shaded
 (:func:`shade_gaps`).
 
 The estimated path of a teammate in the world frame (:func:`estimated_world_path`) is the
@@ -21,39 +21,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from relloc.plotting.errors import break_gaps
+from relloc.plotting.style import legend_outside
 
 Array = NDArray[np.float64]
-
-
-def legend_outside(ax: Any, **kwargs: Any) -> None:
-    """The axes' legend to the right of it, outside the data."""
-    handles, labels = ax.get_legend_handles_labels()
-    if handles:
-        ax.legend(
-            handles,
-            labels,
-            loc="upper left",
-            bbox_to_anchor=(1.01, 1.0),
-            borderaxespad=0.0,
-            fontsize="small",
-            **kwargs,
-        )
-
-
-def plain_log_ticks(ax: Any) -> None:
-    """Ticks of a logarithmic y axis at 1, 2, 5 × 10^k written as plain numbers (0.5, 2, 10)."""
-    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
-
-    ax.yaxis.set_major_locator(LogLocator(base=10.0, subs=(1.0, 2.0, 5.0)))
-    ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
-    ax.yaxis.set_minor_formatter(NullFormatter())
-
-
-def integer_ticks(axis: Any) -> None:
-    """Only integer ticks on an axis of counts (``ax.xaxis`` or ``ax.yaxis``)."""
-    from matplotlib.ticker import MaxNLocator
-
-    axis.set_major_locator(MaxNLocator(integer=True))
 
 
 def track_gaps(
