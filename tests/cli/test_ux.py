@@ -189,7 +189,9 @@ def test_node_and_team_help_are_plain_text(capsys):
     assert plain_text("See :mod:`relloc.x` and ``y``::") == "See relloc.x and y:"
 
 
-def test_data_not_found_names_the_option_and_the_variable(tmp_path, capsys):
+def test_data_not_found_names_the_option_and_the_variable(tmp_path, capsys, monkeypatch):
+    # --data-dir sets RELLOC_SHARED_DATA for the process; monkeypatch restores it afterwards
+    monkeypatch.setenv("RELLOC_SHARED_DATA", os.environ.get("RELLOC_SHARED_DATA", ""))
     missing = str(tmp_path / "nowhere")
     argv = ["reproduce", "mrclam-cl", "--out", str(tmp_path / "o"), "--data-dir", missing]
     assert main([*argv, "--quiet"]) == 3
