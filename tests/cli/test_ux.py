@@ -212,3 +212,21 @@ def test_reproduce_prints_the_ours_vs_paper_tables(tmp_path):
     text = comparison_text("x", tmp_path)
     assert "Headline: ours vs paper" in text and "rmse (m)" in text and "0.2" in text
     assert "summary.json, report.md, fig.png" in text
+
+
+def test_the_extras_of_a_parsed_command():
+    import argparse
+
+    from relloc.cli.extras import needed_extras
+
+    def ns(**kw):
+        return argparse.Namespace(**kw)
+
+    assert needed_extras(ns(command="run")) == ()
+    assert needed_extras(ns(command="run", mcap="x.mcap")) == ("ros",)
+    assert needed_extras(ns(command="reproduce", name="x", executor="dask://h:1")) == (
+        "plot",
+        "cluster",
+    )
+    assert needed_extras(ns(command="team", team_command="clock")) == ("runtime",)
+    assert needed_extras(ns(command="bench", name="filters")) == ("bench",)

@@ -72,6 +72,8 @@ def needed_extras(args: argparse.Namespace) -> tuple[str, ...]:
         extras.append("runtime")
     elif command == "bench":
         extras.extend(BENCH_EXTRAS.get(getattr(args, "name", ""), ()))
+    if getattr(args, "mcap", None):  # an MCAP export (--mcap FILE) is written with mcap
+        extras.append("ros")
     executor = getattr(args, "executor", None)
     if isinstance(executor, str) and executor.startswith("dask://"):
         extras.append("cluster")
