@@ -117,9 +117,15 @@ def test_no_plots_writes_summary_and_report_only(tmp_path, capsys):
     assert "Figures were not drawn" in (out / "report.md").read_text()
 
 
+#: Every module an extra provides (pyproject.toml): a core install has none of them.
+ALL_EXTRAS = (
+    "matplotlib,zenoh,msgpack,cryptography,rosbags,mcap,mcap_ros2,distributed,dask,filterpy,evo"
+)
+
+
 def test_core_install_run_writes_summary_and_report_without_figures(tmp_path):
     out = tmp_path / "out"
-    done = _blocked("matplotlib", "run", "--out", str(out), *QUICK, cwd=tmp_path)
+    done = _blocked(ALL_EXTRAS, "run", "--out", str(out), *QUICK, cwd=tmp_path)
     assert done.returncode == 0, done.stderr
     assert "matplotlib is not installed" in done.stderr
     assert (out / "summary.json").is_file() and (out / "report.md").is_file()
@@ -130,10 +136,10 @@ def test_core_install_run_writes_summary_and_report_without_figures(tmp_path):
 @pytest.mark.parametrize(
     ("blocked", "argv", "extra"),
     [
-        ("matplotlib", ["reproduce", "guler2023"], "plot"),
+        (ALL_EXTRAS, ["reproduce", "guler2023"], "plot"),
         ("matplotlib", ["reproduce", "sharma2013"], "plot"),
         ("matplotlib", ["reproduce", "wanasinghe-observability"], "plot"),
-        ("msgpack", ["team", "up", "default"], "runtime"),
+        (ALL_EXTRAS, ["team", "up", "default"], "runtime"),
         ("zenoh", ["node", "--robot", "observer"], "runtime"),
     ],
 )
