@@ -1,7 +1,9 @@
 """MRCLAM loader + cooperative localization smoke tests, and CLI smoke tests."""
 
 import json
+import re
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,8 +15,12 @@ MODES = ("dead_reckoning", "bearing", "range_bearing")
 ANCHORS = ("none", "2_landmarks", "all_landmarks", "gps_robot1")
 
 
-def test_mrclam_cl_cli_on_a_synthetic_mrclam_folder(synthetic_mrclam, tmp_path):
-    out = tmp_path / "out"
+def test_mrclam_cl_cli_on_a_synthetic_mrclam_folder(
+    synthetic_mrclam, tmp_path, capsys, monkeypatch
+):
+    monkeypatch.setenv("COLUMNS", "80")
+    monkeypatch.chdir(tmp_path)  # a short --out, as typed (a path is never split)
+    out = Path("out")
     code = main(
         [
             "reproduce",
@@ -25,10 +31,18 @@ def test_mrclam_cl_cli_on_a_synthetic_mrclam_folder(synthetic_mrclam, tmp_path):
             str(synthetic_mrclam),
             "--executor",
             "serial",
-            "--quiet",
         ]
     )
     assert code == 0
+    # every figure the report shows is rendered (non-empty) and listed on the console
+    printed = capsys.readouterr().out
+    assert max(len(line) for line in printed.splitlines()) <= 80
+    figures = re.findall(r"!\[[^\]]*\]\(([^)]+\.png)\)", (out / "report.md").read_text())
+    assert len(figures) >= 4
+    for name in figures:
+        assert (out / name).stat().st_size > 1000
+        assert name in printed
+    assert "pos RMSE" in printed  # the headline table, laid out for the terminal
     summary = json.loads((out / "summary.json").read_text())
     assert {"experiment", "seed", "runs", "cases", "fit", "targets"} <= set(summary)
     assert set(summary["cases"]) == {f"{m}/{a}" for m in MODES for a in ANCHORS}

@@ -35,7 +35,13 @@ def test_two_runs_pool_into_the_summary_layout():
     assert pair["track_events"]["created"] == 2  # one per run
     assert len(pair["nees_run_average_band"]) == 2 and 0 <= pair["nees_run_average_in_band_percent"]
     everything = [e for r in results for e in r.evaluations]
-    assert summary["team"] == accuracy_and_consistency(everything, settle_s=2.0)
+    pooled = accuracy_and_consistency(everything, settle_s=2.0)
+    assert {k: summary["team"][k] for k in pooled} == pooled
+    for s in (summary["team"], pair):  # the spread of the per-run RMSE over the two runs
+        spread = s["position_rmse_over_runs"]
+        assert spread["runs"] == 2 and spread["std"] >= 0.0
+        assert spread["interval95"][0] <= spread["mean"] <= spread["interval95"][1]
+    assert pair["convergence"]["runs"] == 2
     assert summary["runs"] == 2 and "rows_not_used" not in summary
     assert results[0].paths is not None and results[1].paths is None
     first = summary["events_run0"][0]

@@ -2,8 +2,11 @@
 
 Each subcommand lives in its own module ``relloc.cli.<name>`` exposing
 ``add_parser(subparsers)``, which registers the subparser and sets ``func=run(args) -> int``.
-Heavy imports happen inside ``run`` so ``relloc --help`` stays fast. Known errors
-(:class:`relloc.errors.RellocError`) become a one-line message and the class's exit code.
+Heavy imports happen inside ``run`` so ``relloc --help`` stays fast. Before a command runs,
+:func:`relloc.cli.extras.check_command` checks the optional extras it needs (exit 5 with the
+install line). Known errors (:class:`relloc.errors.RellocError`) become a one-line message and
+the class's exit code: configuration 2, data 3, model 4, missing extra 5. A misspelt option is
+reported with the usage of the subcommand it was given to.
 """
 
 from __future__ import annotations
@@ -11,10 +14,13 @@ from __future__ import annotations
 import argparse
 import importlib
 import importlib.util
+import os
 import sys
 from collections.abc import Sequence
+from pathlib import Path
 
 from relloc import __version__
+from relloc.datasets.paths import DATA_ENV
 from relloc.errors import RellocError
 
 SUBCOMMAND_MODULES = (
@@ -39,16 +45,51 @@ def build_parser() -> argparse.ArgumentParser:
     for name in SUBCOMMAND_MODULES:
         if importlib.util.find_spec(name) is not None:
             importlib.import_module(name).add_parser(subparsers)
+    for leaf in _leaf_parsers(parser):
+        leaf.add_argument(
+            "--data-dir",
+            type=Path,
+            default=None,
+            metavar="DIR",
+            help="the data folder holding mrclam/ and uwb/ (sets RELLOC_SHARED_DATA)",
+        )
+    return parser
+
+
+def _leaf_parsers(parser: argparse.ArgumentParser) -> list[argparse.ArgumentParser]:
+    """The parsers that run a command (no subcommands of their own)."""
+    subs = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+    if not subs:
+        return [parser]
+    return [leaf for a in subs for p in a.choices.values() for leaf in _leaf_parsers(p)]
+
+
+def _subparser(
+    parser: argparse.ArgumentParser, args: argparse.Namespace
+) -> argparse.ArgumentParser:
+    """The innermost (sub)parser the parsed command went through, for its usage line."""
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            chosen = getattr(args, action.dest or "", None)
+            if chosen in action.choices:
+                return _subparser(action.choices[chosen], args)
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    from relloc.cli.extras import check_command
+
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args, unknown = parser.parse_known_args(argv)
+    if unknown:  # exits 2 with the subcommand's usage, not the top-level one
+        _subparser(parser, args).error(f"unrecognized arguments: {' '.join(unknown)}")
     if not getattr(args, "func", None):
         parser.print_help()
         return 2
+    if getattr(args, "data_dir", None) is not None:  # children (workers, nodes) inherit it
+        os.environ[DATA_ENV] = str(args.data_dir)
     try:
+        check_command(args)
         return int(args.func(args) or 0)
     except RellocError as exc:
         print(f"relloc: error: {exc}", file=sys.stderr)

@@ -1,4 +1,4 @@
-"""``relloc node --robot ID --scenario FILE|default | --dataset DIR`` — one robot as a process.
+r"""``relloc node --robot ID --scenario FILE|default | --dataset DIR`` — one robot as a process.
 
 The robot simulates the (seeded) scenario — or replays the recorded team of a dataset folder in
 MRCLAM layout (:mod:`relloc.runtime.dataset`) — keeps only its own sensor slice, joins the team over
@@ -15,6 +15,8 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+
+from relloc.cli.console import plain_text
 
 
 def add_network_fault_arguments(p: argparse.ArgumentParser) -> argparse._ArgumentGroup:
@@ -88,7 +90,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     p = subparsers.add_parser(
         "node",
         help="run one robot as its own process over Zenoh",
-        description=__doc__,
+        description=plain_text(__doc__),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument("--robot", required=True, help="this robot's name in the scenario")

@@ -1,16 +1,15 @@
 """``relloc reproduce NAME --out DIR [--runs N] [--seed S] [--dataset PATH] [--executor E]
-[--bag BAG --map MAP.toml --calibrate-on BAG] [--mcap FILE] [--tum DIR]``.
+[--mcap FILE] [--tum DIR]`` (the last two: one representative run's estimates, where the
+experiment states one — :func:`relloc.experiments.registry.exported_run`).
 
-``--bag``, ``--map`` and ``--calibrate-on`` are for the experiments on ROS 2 bags; ``--mcap`` and
-``--tum`` write one representative run's estimates, where the experiment states one
-(:func:`relloc.experiments.registry.exported_run`).
+Prints the seed and run counts, the report's ours-vs-paper tables laid out for the terminal
+(:mod:`relloc.cli.comparison`) and every file written.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import sys
 from pathlib import Path
 
 from relloc.cli.export_args import add_export_arguments, export_request, print_export
@@ -72,10 +71,10 @@ def run(args: argparse.Namespace) -> int:
         )
     )
     if not args.quiet:
-        keys = ", ".join(k for k in summary if k not in ("experiment", "seed", "runs"))
-        print(f"{args.name}: wrote {args.out}/summary.json and report.md (keys: {keys})")
-        print(
-            json.dumps({"seed": summary.get("seed"), "runs": summary.get("runs")}), file=sys.stdout
-        )
+        from relloc.cli.comparison import comparison_text
+        from relloc.cli.console import terminal_width
+
+        print(f"{args.name}: seed {summary.get('seed')}, runs {json.dumps(summary.get('runs'))}")
+        print(comparison_text(args.name, args.out, width=terminal_width()))
         print_export(summary.get("export"))
     return 0

@@ -1,13 +1,17 @@
 """``relloc run [SCENARIO.toml] --out DIR [--seed S] [--runs N] [--filter plkf|tekf|bcplkf]``
 
 plus ``--init`` (track initialisation policy), ``--yaw-bank K`` (yaw hypotheses for an unknown
-initial yaw), ``--keep-window`` (seconds a track survives
-without measurements), ``--duration`` (shorten the scenario), ``--executor`` and
-``--mcap FILE`` / ``--tum DIR`` (run 0's estimates for ROS tools and evo).
+initial yaw), ``--keep-window`` (seconds a track survives without measurements), ``--settle``
+(track age from which samples count as steady state), ``--duration`` (shorten the scenario),
+``--executor``, ``--no-plots`` and ``--mcap FILE`` / ``--tum DIR`` (run 0's estimates for ROS
+tools and evo). The defaults are the library's
+(:func:`relloc.experiments.team_run.default_tracker`, :class:`TeamRunSettings`).
 
-Runs a team scenario (default: the built-in seed-000 air-ground team), prints per-robot
-accuracy and consistency as a table and writes ``DIR/summary.json``, ``DIR/report.md`` and
-figures. A bad scenario file is a configuration error (exit code 2) naming the field.
+Runs a team scenario (default: the built-in seed-000 air-ground team), prints the key figures
+per pair in a table that fits the terminal (:mod:`relloc.cli.console`; the full table is in
+``report.md``), writes ``DIR/summary.json``, ``DIR/report.md`` and figures, and lists every
+file written. Without matplotlib (a core install) it writes no figures and says so. A bad
+scenario file is a configuration error (exit code 2) naming the field.
 """
 
 from __future__ import annotations
@@ -30,6 +34,10 @@ DEFAULT_OUT = Path("out/run")
 def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     from relloc.estimators.initialisation import POLICY_NAMES
     from relloc.estimators.relative import UPDATE_KINDS
+    from relloc.experiments.team_run import DEFAULT_YAW_BANK, TeamRunSettings
+
+    defaults = TeamRunSettings()
+    tracker = defaults.tracker
 
     p = subparsers.add_parser(
         "run",
@@ -51,25 +59,35 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         "--map", type=Path, default=None, help="the bag's topic mapping TOML (SCENARIO is a bag)"
     )
     p.add_argument("--out", type=Path, default=DEFAULT_OUT, help=f"output folder ({DEFAULT_OUT})")
-    p.add_argument("--seed", type=int, default=2026, help="master seed (default 2026)")
-    p.add_argument("--runs", type=int, default=10, help="Monte-Carlo runs (default 10)")
     p.add_argument(
-        "--filter", choices=UPDATE_KINDS, default="plkf", help="relative filter (default plkf)"
+        "--seed", type=int, default=defaults.seed, help=f"master seed (default {defaults.seed})"
+    )
+    p.add_argument(
+        "--runs",
+        type=int,
+        default=defaults.runs,
+        help=f"Monte-Carlo runs (default {defaults.runs})",
+    )
+    p.add_argument(
+        "--filter",
+        choices=UPDATE_KINDS,
+        default=tracker.filter,
+        help=f"relative filter (default {tracker.filter})",
     )
     p.add_argument(
         "--init",
         choices=POLICY_NAMES,
-        default="measurement",
+        default=tracker.init.name,
         help="track initialisation (default: from the first measurement, yaw unknown)",
     )
     p.add_argument(
         "--yaw-bank",
         type=int,
-        default=12,
+        default=DEFAULT_YAW_BANK,
         metavar="K",
         help=(
             "start tracks whose yaw is unknown as a bank of K yaw hypotheses "
-            "(default 12; 0 = a single filter, as in seed 000)"
+            f"(default {DEFAULT_YAW_BANK}; 0 = a single filter, as in seed 000)"
         ),
     )
     p.add_argument(
@@ -81,8 +99,27 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     p.add_argument(
         "--keep-window",
         type=float,
-        default=2.0,
-        help="seconds a track is predicted without measurements before deletion (default 2)",
+        default=tracker.keep_window_s,
+        metavar="S",
+        help=(
+            "seconds a track is predicted without measurements before deletion "
+            f"(default {tracker.keep_window_s:g})"
+        ),
+    )
+    p.add_argument(
+        "--settle",
+        type=float,
+        default=defaults.settle_s,
+        metavar="S",
+        help=(
+            "track age in seconds from which samples count as steady state for RMSE, NEES, NIS "
+            f"(default {defaults.settle_s:g})"
+        ),
+    )
+    p.add_argument(
+        "--no-plots",
+        action="store_true",
+        help="write summary.json and report.md only (the default when matplotlib is missing)",
     )
     p.add_argument(
         "--executor",
@@ -97,11 +134,13 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
 def run(args: argparse.Namespace) -> int:
     import dataclasses
 
+    from relloc.cli import console
+    from relloc.cli.extras import available
+    from relloc.cli.flags import flag_errors
     from relloc.errors import ConfigError
     from relloc.estimators.initialisation import InitPolicy
     from relloc.estimators.track_manager import TrackManagerSettings
-    from relloc.experiments.team_run import TeamRunSettings, run_scenario
-    from relloc.pipeline.team_report import summary_rows
+    from relloc.experiments.team_run import TeamRunSettings, run_scenario, write_run_report
     from relloc.sim.scenario import default_scenario, load_scenario
 
     if args.map is not None:
@@ -113,48 +152,54 @@ def run(args: argparse.Namespace) -> int:
         except ConfigError as exc:
             raise ConfigError(f"--duration: {exc}") from None
     fov = _guess_view(scenario)
-    settings = TeamRunSettings(
-        runs=args.runs,
-        seed=args.seed,
-        tracker=TrackManagerSettings(
-            filter=args.filter,
-            keep_window_s=args.keep_window,
-            init=InitPolicy(name=args.init, fov=fov),
-            yaw_bank=_yaw_bank(args.yaw_bank),
-        ),
-        executor=args.executor,
-        quiet=args.quiet,
-    )
-    summary, _ = run_scenario(scenario, settings, args.out, export=export_request(args))
+    with flag_errors():
+        settings = TeamRunSettings(
+            runs=args.runs,
+            seed=args.seed,
+            tracker=TrackManagerSettings(
+                filter=args.filter,
+                keep_window_s=args.keep_window,
+                init=InitPolicy(name=args.init, fov=fov),
+                yaw_bank=_yaw_bank(args.yaw_bank),
+            ),
+            settle_s=args.settle,
+            executor=args.executor,
+            quiet=args.quiet,
+        )
+    plots = not args.no_plots and available("plot")
+    if not args.no_plots and not plots:
+        print(
+            "relloc: note: matplotlib is not installed, so no figures are drawn "
+            "(pip install 'relloc[plot]' for them)",
+            file=sys.stderr,
+        )
+    summary, results = run_scenario(scenario, settings, export=export_request(args))
+    files = write_run_report(scenario, summary, results, args.out, plots=plots)
     if summary["team"]["samples"] == 0:
         print(
             f"relloc: note: no steady-state results: no track reached the settle time "
-            f"({settings.settle_s:g} s) in the {scenario.duration_s:g} s run, so accuracy and "
-            "consistency are NaN; run longer",
+            f"({settings.settle_s:g} s) in the {scenario.duration_s:g} s run, so "
+            "accuracy and consistency are NaN; run longer or lower --settle",
             file=sys.stderr,
         )
     if not args.quiet:
-        from rich.console import Console
-        from rich.table import Table
-
-        from relloc.pipeline.output import fmt
-
-        headers, rows = summary_rows(summary)
-        table = Table(
-            title=(
-                f"{scenario.name}: {args.filter.upper()}, {settings.runs} run(s), "
-                f"seed {settings.seed}, init {args.init}, yaw bank {args.yaw_bank or 'off'}"
+        width = console.terminal_width()
+        title = (
+            f"{scenario.name}: {args.filter.upper()}, {settings.runs} run(s), seed "
+            f"{settings.seed}, init {args.init}, yaw bank {args.yaw_bank or 'off'}, steady "
+            f"state from track age {settings.settle_s:g} s (--settle)"
+        )
+        print(console.wrap_line(title, width))
+        print(console.team_summary_table(summary, width=width))
+        print(
+            console.wrap_line(
+                "pos/yaw: steady-state RMSE (± std over runs); ANEES, ANIS: ideal 1; in band: "
+                "share of times the run-averaged NEES is in its 95 % band; conv: median time "
+                "to converge from the unknown start. Full table: report.md",
+                width,
             )
         )
-        for h in headers:
-            table.add_column(h, justify="left" if h in ("pair", "kind") else "right")
-        for row in rows:
-            table.add_row(*(fmt(c, 3) for c in row))
-        console = Console()
-        if not console.is_terminal:
-            console = Console(width=max(console.width, 150))
-        console.print(table)
-        console.print(f"wrote {args.out / 'summary.json'} and {args.out / 'report.md'}")
+        print(console.wrote_line(files, width))
         print_export(summary.get("export"))
     return 0
 
@@ -192,41 +237,41 @@ def _yaw_bank(n_components: int) -> YawBankSettings | None:
     try:
         return YawBankSettings(n_components=n_components)
     except ConfigError as exc:
-        raise ConfigError(f"--yaw-bank: 0 (off) or {exc}") from None
+        reason = str(exc).partition(":")[2].strip()
+        raise ConfigError(f"--yaw-bank: 0 (off) or {reason}") from None
 
 
 def _run_bag(args: argparse.Namespace) -> int:
     """``relloc run BAG --map MAP.toml``: one replay of a recorded bag (no Monte Carlo)."""
+    from relloc.cli import console
+    from relloc.cli.flags import flag_errors
     from relloc.datasets.bag_mapping import load_mapping
     from relloc.errors import ConfigError
     from relloc.estimators.initialisation import InitPolicy
     from relloc.estimators.track_manager import TrackManagerSettings
     from relloc.experiments.bag_run import run_bag
     from relloc.experiments.team_run import TeamRunSettings
-    from relloc.pipeline.output import fmt
-    from relloc.pipeline.team_report import summary_rows
 
     if args.scenario is None:
         raise ConfigError("--map: give the bag to run as SCENARIO (relloc run BAG --map MAP)")
-    settings = TeamRunSettings(
-        runs=1,
-        seed=args.seed,
-        tracker=TrackManagerSettings(
-            filter=args.filter,
-            keep_window_s=args.keep_window,
-            init=InitPolicy(name=args.init),
-            yaw_bank=_yaw_bank(args.yaw_bank),
-        ),
-        quiet=args.quiet,
-    )
+    with flag_errors():
+        settings = TeamRunSettings(
+            runs=1,
+            seed=args.seed,
+            tracker=TrackManagerSettings(
+                filter=args.filter,
+                keep_window_s=args.keep_window,
+                init=InitPolicy(name=args.init),
+                yaw_bank=_yaw_bank(args.yaw_bank),
+            ),
+            settle_s=args.settle,
+            quiet=args.quiet,
+        )
     summary, _ = run_bag(
         args.scenario, load_mapping(args.map), settings, args.out, export=export_request(args)
     )
     if not args.quiet:
-        headers, rows = summary_rows(summary)
-        print(" | ".join(headers))
-        for row in rows:
-            print(" | ".join(fmt(c, 3) for c in row))
+        print(console.team_summary_table(summary, width=console.terminal_width()))
         print(f"wrote {args.out / 'summary.json'} and {args.out / 'report.md'}")
         print_export(summary.get("export"))
     return 0

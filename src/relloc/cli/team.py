@@ -1,4 +1,4 @@
-"""``relloc team up SCENARIO|default|DATASET_DIR --out DIR`` — the whole team as processes.
+r"""``relloc team up SCENARIO|default|DATASET_DIR --out DIR`` — the whole team as processes.
 
 Every robot runs as its own ``relloc node`` process and a ``relloc team clock`` process drives
 simulated time (faster than real time unless ``--realtime``); the launcher collects every
@@ -20,6 +20,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from relloc.cli.console import plain_text
 from relloc.cli.export_args import add_export_arguments, export_request, print_export
 from relloc.cli.node import (
     add_network_fault_arguments,
@@ -33,7 +34,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     p = subparsers.add_parser(
         "team",
         help="run a whole team as separate processes over Zenoh",
-        description=__doc__,
+        description=plain_text(__doc__),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     actions = p.add_subparsers(dest="team_command", metavar="ACTION", required=True)

@@ -83,6 +83,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from relloc.core import recording as rec
 from relloc.core.angles import circular_interp
+from relloc.datasets.paths import DATA_HINT
 from relloc.errors import ConfigError, DataError
 
 FloatArray = NDArray[np.float64]
@@ -705,7 +706,10 @@ def _load_landmarks(folder: Path, report: LoadReport, options: MrclamOptions) ->
 def _discover_robots(folder: Path, options: MrclamOptions) -> list[int]:
     """Subjects to load (found ``RobotN_*`` names or ``options.robots``), each with all 3 files."""
     if not folder.is_dir():
-        raise DataError(f"{folder}: not a folder (expected an MRCLAM dataset folder)")
+        raise DataError(
+            f"{folder}: not a folder (expected an MRCLAM dataset folder: give one with "
+            f"--dataset DIR, or {DATA_HINT})"
+        )
     found: dict[int, set[str]] = {}
     try:
         names = [p.name for p in folder.iterdir()]

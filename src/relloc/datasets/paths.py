@@ -1,7 +1,10 @@
 """Where the shared recorded data lives.
 
-Looked up in order: the ``RELLOC_SHARED_DATA`` environment variable, ``../shared/data`` beside
-the repository checkout, then ``../shared/data`` from the current folder.
+One way to point relloc at it: the data folder (the one holding ``mrclam/`` and ``uwb/``) is
+the ``RELLOC_SHARED_DATA`` environment variable, which every subcommand's ``--data-dir DIR``
+sets. Without it: ``../shared/data`` beside the repository checkout, then ``../shared/data``
+from the current folder. Every "not found" message of the default data ends with
+:data:`DATA_HINT`.
 """
 
 from __future__ import annotations
@@ -9,10 +12,16 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+DATA_ENV = "RELLOC_SHARED_DATA"
+DATA_HINT = (
+    "point relloc at the data folder (the one holding mrclam/ and uwb/) with --data-dir DIR "
+    f"or the {DATA_ENV} environment variable"
+)
+
 
 def shared_data_dir() -> Path:
     """The folder holding ``mrclam/`` and ``uwb/`` (may not exist outside the workspace)."""
-    env = os.environ.get("RELLOC_SHARED_DATA")
+    env = os.environ.get(DATA_ENV)
     if env:
         return Path(env)
     beside_checkout = Path(__file__).resolve().parents[3].parent / "shared" / "data"

@@ -64,6 +64,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from relloc.core.recording import FileSkips, SkippedRow
+from relloc.datasets.paths import DATA_HINT
 from relloc.errors import DataError
 
 REQUIRED_COLUMNS = ("timestamp", "node1", "node2", "uwb_range", "mocap_range")
@@ -83,10 +84,6 @@ TIME_WINDOW = 3
 MAX_SKIP_EXAMPLES = 5
 
 _BOM = b"\xef\xbb\xbf"
-_DATA_HINT = (
-    "point relloc at the shared data folder (the one holding uwb/tiers/) with the "
-    "RELLOC_SHARED_DATA environment variable"
-)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -244,9 +241,9 @@ def _read_lines(path: Path) -> list[bytes]:
     try:
         data = path.read_bytes()
     except FileNotFoundError:
-        raise DataError(f"{path}: UWB csv not found; {_DATA_HINT}") from None
+        raise DataError(f"{path}: UWB csv not found; {DATA_HINT}") from None
     except IsADirectoryError:
-        raise DataError(f"{path}: is a directory, expected a UWB csv file; {_DATA_HINT}") from None
+        raise DataError(f"{path}: is a directory, expected a UWB csv file; {DATA_HINT}") from None
     except (OSError, ValueError) as exc:
         raise DataError(f"{path}: cannot read UWB csv: {exc}") from exc
     lines = data.removeprefix(_BOM).split(b"\n")

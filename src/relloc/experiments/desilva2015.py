@@ -531,6 +531,7 @@ def _figures(
             ylabel="fraction",
             logx=logx,
         )
+        ax.set_title(f"success and wrong associations against the {xlabel.split(' (')[0]}")
     files["sweeps"] = save_figure(fig, out, "sweeps")
     return files
 

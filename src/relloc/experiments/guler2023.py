@@ -586,13 +586,24 @@ def _figures(
                 )
         for c in range(3):
             axes[-1, c].set_xlabel("t [s]")
-        fig.legend(handles=detection_legend_handles(n), loc="upper center", ncol=n + 2, fontsize=7)
+        fig.legend(
+            handles=detection_legend_handles(n, lines=True),
+            loc="lower center",
+            bbox_to_anchor=(0.5, 0.94),
+            ncol=n + 4,
+            fontsize=7,
+        )
+        fig.suptitle(
+            f"{name}: each follower's estimate of the leader (run 0), shaded by the pair "
+            "the drones detect",
+            y=1.0,
+        )
         fig.subplots_adjust(left=0.06, right=0.99, bottom=0.08, top=0.93, wspace=0.3, hspace=0.25)
         files[f"estimates_{name}"] = save_figure(fig, out, f"estimates_{name}")
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.6))
-    for ax, key, xl in (
-        (axes[0], "sweep_dwell_time", "dwell time t_m [s]"),
-        (axes[1], "sweep_drones", "number of drones M"),
+    for ax, key, xl, counts in (
+        (axes[0], "sweep_dwell_time", "dwell time t_m [s]", False),
+        (axes[1], "sweep_drones", "number of drones M", True),
     ):
         pts = summary[key]["points"]
         lab = summary[key]["parameter"]
@@ -605,13 +616,16 @@ def _figures(
             },
             xl,
             bound=PAPER["two_drones_rmse_bound_m"],
+            integer_x=counts,
         )
+        ax.set_title(f"two_drones: RMSE against the {xl.split(' [')[0]}", fontsize="medium")
     files["sweeps"] = save_figure(fig, out, "sweeps")
     fig, ax = plt.subplots(figsize=(6, 3.6))
     m = fit.model
     plot_uwb_errors(
         ax, within_link_residuals(rec, fit.calibration_window), m.spread, m.outlier_k * m.spread
     )
+    ax.set_title("UWB range residuals in the calibration window")
     files["uwb_noise"] = save_figure(fig, out, "uwb_noise")
     return files
 

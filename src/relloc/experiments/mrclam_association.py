@@ -428,4 +428,5 @@ def _figure(out: Path, scores: list[LeaderScores], t0: float, names: list[str]) 
         pe = np.linalg.norm(sc.error[..., :2], axis=-1)
         series = {names[j]: np.maximum(pe[:, j], 1e-3) for j in range(len(names)) if j != i}
         plot_series(ax, sc.t - t0, series, ylabel=f"{names[i]}: error (m)", log10=True)
+    np.atleast_1d(axes)[0].set_title("Position error of each leader's dominant teammate tracks")
     return save_figure(fig, out, "mrclam_association_errors")

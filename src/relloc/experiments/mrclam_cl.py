@@ -484,6 +484,7 @@ def _figures(
         reference=TARGET_POS_RMSE_M,
         reference_label="target 0.13 m",
     )
+    ax.set_title("Mean position RMSE by measurement mode and anchors")
     figs.append((save_figure(fig, out, "pos_rmse"), "Mean position RMSE by mode and anchors"))
     fig, ax = plt.subplots(figsize=(8, 4))
     plot_grouped_bars(
@@ -495,6 +496,7 @@ def _figures(
         reference_label="target 10 %",
         log=False,
     )
+    ax.set_title("Consistency: share of NEES beyond χ²₃(0.95)")
     figs.append((save_figure(fig, out, "nees_beyond"), "Consistency: NEES beyond the χ² bound"))
     rid = ds.robot_ids[1]
     q = ds.robot(rid).groundtruth.at(prepared.out_t)

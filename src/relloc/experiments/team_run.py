@@ -23,6 +23,7 @@ from relloc.core.estimates import Estimates
 from relloc.core.recording import Recording
 from relloc.errors import ConfigError
 from relloc.estimators.track_manager import TrackManagerSettings
+from relloc.estimators.yaw_bank import YawBankSettings
 from relloc.pipeline.export import ExportRequest, export_estimates
 from relloc.pipeline.montecarlo import run_monte_carlo, spawn_seeds
 from relloc.pipeline.team_report import (
@@ -38,20 +39,31 @@ from relloc.pipeline.team_report import (
 from relloc.sim.scenario import Scenario
 from relloc.sim.simulate import simulate
 
+DEFAULT_YAW_BANK = 12
+"""Yaw hypotheses a track with unknown initial yaw starts with in ``relloc run`` (0 = one
+filter, as in seed 000). :class:`TrackManagerSettings` alone defaults to one filter."""
+
+
+def default_tracker() -> TrackManagerSettings:
+    """The tracker of ``relloc run`` and of ``TeamRunSettings()``: the PLKF from the first
+    measurement with :data:`DEFAULT_YAW_BANK` yaw hypotheses, keep window 2 s."""
+    return TrackManagerSettings(yaw_bank=YawBankSettings(n_components=DEFAULT_YAW_BANK))
+
 
 @dataclass(frozen=True, kw_only=True)
 class TeamRunSettings:
     """How ``relloc run`` runs a scenario.
 
-    ``runs`` Monte-Carlo runs from master ``seed``; ``tracker`` the filter, initialisation and
-    keep window; ``settle_s`` the track age after which samples count as steady state;
+    ``runs`` Monte-Carlo runs from master ``seed``; ``tracker`` the filter, initialisation,
+    yaw bank and keep window (:func:`default_tracker`; the CLI's defaults are these);
+    ``settle_s`` the track age after which samples count as steady state;
     ``record_rate_hz`` how often beliefs are recorded; ``executor`` as in
     :func:`relloc.pipeline.montecarlo.run_monte_carlo`.
     """
 
     runs: int = 10
     seed: int = 2026
-    tracker: TrackManagerSettings = field(default_factory=TrackManagerSettings)
+    tracker: TrackManagerSettings = field(default_factory=default_tracker)
     settle_s: float = SETTLE_S
     record_rate_hz: float = RECORD_RATE_HZ
     executor: str | None = None
@@ -63,7 +75,7 @@ class TeamRunSettings:
         if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
             raise ConfigError(f"--seed: must be an integer ≥ 0, got {self.seed!r}")
         if not (np.isfinite(self.settle_s) and self.settle_s >= 0):
-            raise ConfigError(f"settle_s: must be ≥ 0, got {self.settle_s!r}")
+            raise ConfigError(f"settle_s: must be a finite number ≥ 0, got {self.settle_s!r}")
         if not (np.isfinite(self.record_rate_hz) and self.record_rate_hz > 0):
             raise ConfigError(f"record_rate_hz: must be > 0, got {self.record_rate_hz!r}")
 
@@ -141,13 +153,39 @@ def run_scenario(
     if export is not None and export.wanted:
         summary["export"] = export_run0(scenario, settings, export)
     if out_dir is not None:
-        arena = (scenario.arena.x, scenario.arena.y)
-        write_team_report(
-            Path(out_dir),
-            summary,
-            results,
-            title=f"relloc run — {scenario.name}",
-            arena=arena,
-            notes=[scenario.description] if scenario.description else (),
-        )
+        write_run_report(scenario, summary, results, Path(out_dir))
     return summary, results
+
+
+def write_run_report(
+    scenario: Scenario,
+    summary: dict[str, Any],
+    results: list[RunResult],
+    out_dir: Path,
+    *,
+    plots: bool = True,
+) -> list[Path]:
+    """Write ``summary.json``, ``report.md`` and (if ``plots``) the figures of a scenario's
+    runs; returns the files written."""
+    return write_team_report(
+        out_dir,
+        summary,
+        results,
+        title=f"relloc run — {scenario.name}",
+        arena=(scenario.arena.x, scenario.arena.y),
+        notes=[scenario.description] if scenario.description else (),
+        plots=plots,
+        views=sensor_views(scenario),
+    )
+
+
+def sensor_views(scenario: Scenario) -> dict[str, tuple[float, float]]:
+    """Observer → (field of view in degrees, range in m) for the trajectory figure; an
+    unlimited range is drawn to the arena's diagonal."""
+    a = scenario.arena
+    diagonal = float(np.hypot(a.x[1] - a.x[0], a.y[1] - a.y[0]))
+    return {
+        r.name: (r.sensor.fov_deg, min(r.sensor.max_range, diagonal))
+        for r in scenario.robots
+        if r.sensor is not None
+    }

@@ -739,6 +739,7 @@ def make_figures(
         {r: [row["position_rmse_m"][r] for row in sweep] for r in targets},
         paper_band=PAPER_ACCURACY["position_rmse_m"],
     )
+    ax.set_title("Position RMSE against the odometry noise σ_v")
     files["sweep"] = save_figure(fig, out, "odometry_noise_sweep")
 
     # radial bias of PLKF / BC-PLKF / TEKF on the replay
@@ -751,6 +752,7 @@ def make_figures(
         },
         ylabel="radial bias (m)",
     )
+    ax.set_title("Radial bias of PLKF, BC-PLKF and TEKF on the replay")
     files["bias"] = save_figure(fig, out, "radial_bias")
     return files
 

@@ -73,8 +73,19 @@ def _load_entry_point(spec: str) -> list[S.SymbolicModel]:
     return models
 
 
-def _measurements(opts: ModelOptions, default: Sequence[str]) -> tuple[str, ...]:
-    return tuple(opts.measurements) if opts.measurements else tuple(default)
+def _measurements(
+    opts: ModelOptions, default: Sequence[str], allowed: Sequence[str] | None = None
+) -> tuple[str, ...]:
+    """The measured outputs asked for (``--measurements``), checked against ``allowed``."""
+    if not opts.measurements:
+        return tuple(default)
+    unknown = [m for m in opts.measurements if m not in (allowed or default)]
+    if unknown:
+        raise ConfigError(
+            f"--measurements: unknown {', '.join(map(repr, unknown))}; "
+            f"choose from {', '.join(allowed or default)}"
+        )
+    return tuple(opts.measurements)
 
 
 def resolve_models(name: str, opts: ModelOptions) -> list[S.SymbolicModel]:
@@ -84,7 +95,8 @@ def resolve_models(name: str, opts: ModelOptions) -> list[S.SymbolicModel]:
     elif name == "relative-nonlinear":
         models = [S.relative_nonlinear(_measurements(opts, S.RELATIVE_MEASUREMENTS))]
     elif name == "unicycle-landmarks":
-        models = [S.unicycle_landmarks(max(1, opts.landmarks), _measurements(opts, ("bearing",)))]
+        measured = _measurements(opts, ("bearing",), allowed=("bearing", "range"))
+        models = [S.unicycle_landmarks(max(1, opts.landmarks), measured)]
     elif name == "unicycle-team":
         n = opts.robots
         models = [

@@ -1,4 +1,4 @@
-"""Writing the machine-checkable outputs every experiment produces (DESIGN.md §4).
+"""Writing the machine-checkable outputs every experiment produces.
 
 ``summary.json`` (numbers, each beside the paper's value where there is one), ``report.md``
 (the same as tables, figures inline) and ``*.png`` figures, all inside one output folder.

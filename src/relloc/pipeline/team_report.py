@@ -21,11 +21,19 @@ over all runs on the *steady-state* samples (track age ≥ ``settle_s``):
   nees_band_check`;
 - ``anis`` (NIS/3, ideal 1) and ``nis_percent_beyond`` ``χ²(3, 0.95)``;
 - ``max_condition_log10`` of ``P``, ``R`` and ``S`` (seed 000 §7.3; > 6 is ill-conditioned);
-- ``track_events``: created / deleted / re-created counts over all runs.
+- ``track_events``: created / deleted / re-created counts over all runs;
+- ``position_rmse_over_runs``, ``yaw_rmse_over_runs``: the spread of the per-run steady-state
+  RMSE — ``runs``, ``mean``, ``std`` (ddof 1) and ``interval95`` (the 2.5 and 97.5 percentiles
+  of the per-run values, linear interpolation), :func:`rmse_over_runs`;
+- ``convergence``: from the track's first record (the unknown start), the time and the number
+  of updates until every state's error stays below :data:`CONVERGENCE_THRESHOLDS` for good
+  (:func:`relloc.pipeline.evaluation.convergence_time`): ``median_time_s``, ``max_time_s``,
+  ``median_updates`` over the runs that converged, ``runs_converged`` of ``runs``.
 
 ``team`` holds the same accuracy and consistency numbers pooled over every pair
-(:func:`relloc.pipeline.evaluation.accuracy_and_consistency`); ``rows_not_used`` (present only
-when some were) counts the readings the trackers could not use, by reason.
+(:func:`relloc.pipeline.evaluation.accuracy_and_consistency`) and their spread over runs;
+``rows_not_used`` (present only when some were) counts the readings the trackers could not
+use, by reason.
 """
 
 from __future__ import annotations
@@ -48,6 +56,7 @@ from relloc.metrics.conditioning import ILL_CONDITIONED_LOG10
 from relloc.pipeline.evaluation import (
     SeriesEvaluation,
     accuracy_and_consistency,
+    convergence_time,
     evaluate,
     nees_band_check,
     run_averaged_nees,
@@ -55,6 +64,7 @@ from relloc.pipeline.evaluation import (
 from relloc.pipeline.frames import frame
 from relloc.pipeline.output import (
     figure_md,
+    fmt,
     markdown_table,
     prepare_out_dir,
     save_figure,
@@ -72,18 +82,21 @@ SETTLE_S = 5.0
 """Default track age (s) after which samples count as steady state."""
 RECORD_RATE_HZ = 10.0
 """Default rate (Hz) at which beliefs are recorded."""
+CONVERGENCE_THRESHOLDS = (0.1, 0.1, 0.1, 0.1)
+"""|error| bounds (x, y, z in m; φ in rad) a track must stay inside to count as converged."""
 
 
 @dataclass(frozen=True, kw_only=True)
 class RunResult:
     """One run scored: an evaluation per (observer, observed) series, the track events, the
-    rows the trackers did not use (by reason) and — run 0 only — the true planar paths
-    ``name -> (K, 4)`` for the trajectory figure."""
+    rows the trackers did not use (by reason) and — run 0 only — the true paths
+    ``name -> (K, 4)`` (x, y, z, ψ) at times ``path_t`` for the trajectory figure."""
 
     evaluations: tuple[SeriesEvaluation, ...]
     events: tuple[TrackEvent, ...]
     rows_not_used: Mapping[str, int] = field(default_factory=dict)
     paths: dict[str, Array] | None = None
+    path_t: Array | None = None
 
 
 def track_team(
@@ -104,7 +117,7 @@ def track_team(
 
 def score_run(estimates: Estimates, recording: Recording, *, keep_paths: bool = False) -> RunResult:
     """Score every series of one run; ``keep_paths`` adds the true paths (10 Hz) for figures."""
-    paths = None
+    paths, grid = None, None
     if keep_paths:
         truth = recording.require_truth("the trajectory figure")
         t0, t1 = recording.span
@@ -115,6 +128,7 @@ def score_run(estimates: Estimates, recording: Recording, *, keep_paths: bool = 
         events=estimates.events,
         rows_not_used=dict(estimates.counts),
         paths=paths,
+        path_t=grid,
     )
 
 
@@ -155,7 +169,56 @@ def _pair_summary(
     }
     kinds = [e.kind for e in events if (e.owner, e.subject) == (first.owner, first.subject)]
     out["track_events"] = {k: kinds.count(k) for k in ("created", "deleted", "recreated")}
+    out["position_rmse_over_runs"] = rmse_over_runs(runs, "position_rmse_m", settle_s=settle_s)
+    out["yaw_rmse_over_runs"] = rmse_over_runs(runs, "yaw_rmse_rad", settle_s=settle_s)
+    out["convergence"] = convergence_summary(runs)
     return out
+
+
+def rmse_over_runs(
+    runs: Sequence[SeriesEvaluation], key: str, *, settle_s: float
+) -> dict[str, Any]:
+    """Spread of one steady-state RMSE (``position_rmse_m`` or ``yaw_rmse_rad`` of
+    :func:`accuracy_and_consistency`) over runs: ``runs`` (with steady-state samples),
+    ``mean``, ``std`` (ddof 1, NaN for one run) and ``interval95``, the 2.5–97.5 percentiles
+    of the per-run values."""
+    return _spread([accuracy_and_consistency([r], settle_s=settle_s)[key] for r in runs])
+
+
+def _spread(per_run: Sequence[float]) -> dict[str, Any]:
+    values = np.asarray(per_run, dtype=float)
+    values = values[np.isfinite(values)]
+    nan = float("nan")
+    if values.size == 0:
+        return {"runs": 0, "mean": nan, "std": nan, "interval95": [nan, nan]}
+    return {
+        "runs": int(values.size),
+        "mean": float(np.mean(values)),
+        "std": float(np.std(values, ddof=1)) if values.size >= 2 else nan,
+        "interval95": [float(v) for v in np.percentile(values, [2.5, 97.5])],
+    }
+
+
+def convergence_summary(
+    runs: Sequence[SeriesEvaluation], thresholds: Sequence[float] = CONVERGENCE_THRESHOLDS
+) -> dict[str, Any]:
+    """Time and updates from each run's first record until the error stays inside
+    ``thresholds`` for good, summarised over the runs that converged (module docstring)."""
+    times, updates = [], []
+    for r in runs:
+        ct = convergence_time(r, thresholds)
+        if ct is not None:
+            times.append(ct)
+            updates.append(int(np.sum(r.update_t <= r.t[0] + ct)))
+    nan = float("nan")
+    return {
+        "thresholds": list(thresholds),
+        "runs": len(runs),
+        "runs_converged": len(times),
+        "median_time_s": float(np.median(times)) if times else nan,
+        "max_time_s": float(np.max(times)) if times else nan,
+        "median_updates": float(np.median(updates)) if updates else nan,
+    }
 
 
 def summarise(
@@ -187,7 +250,10 @@ def summarise(
         "settle_s": settle_s,
         "record_rate_hz": record_rate_hz,
         "pairs": pairs,
-        "team": accuracy_and_consistency(everything, settle_s=settle_s),
+        "team": {
+            **accuracy_and_consistency(everything, settle_s=settle_s),
+            **_team_spread(results, settle_s=settle_s),
+        },
         "events_run0": [
             {"t": e.t, "observer": e.owner, "observed": e.subject, "kind": e.kind}
             for e in results[0].events
@@ -200,6 +266,17 @@ def summarise(
     if any(not_used.values()):
         summary["rows_not_used"] = not_used
     return summary
+
+
+def _team_spread(results: Sequence[RunResult], *, settle_s: float) -> dict[str, Any]:
+    """The per-run spread of the team's RMSE (every pair of a run pooled)."""
+    tracked = [r.evaluations for r in results if r.evaluations]
+    return {
+        f"{name}_over_runs": _spread(
+            [accuracy_and_consistency(e, settle_s=settle_s)[key] for e in tracked]
+        )
+        for name, key in (("position_rmse", "position_rmse_m"), ("yaw_rmse", "yaw_rmse_rad"))
+    }
 
 
 def build_summary(
@@ -263,6 +340,41 @@ def summary_rows(summary: Mapping[str, Any]) -> tuple[list[str], list[list[Any]]
     return headers, rows
 
 
+def spread_rows(summary: Mapping[str, Any]) -> tuple[list[str], list[list[Any]]]:
+    """Headers and rows of the report's spread-and-convergence table."""
+    headers = [
+        "pair",
+        "pos RMSE m, mean ± std",
+        "95 % of runs",
+        "yaw RMSE rad, mean ± std",
+        "95 % of runs",
+        "converged runs",
+        "median (max) time s",
+        "median updates",
+    ]
+    rows = []
+    for label, s in [*summary["pairs"].items(), ("team (all pairs)", summary["team"])]:
+        row: list[Any] = [label]
+        for key in ("position_rmse_over_runs", "yaw_rmse_over_runs"):
+            sp = s.get(key, {})
+            lo, hi = sp.get("interval95", [None, None])
+            row += [
+                f"{fmt(sp.get('mean'), 3)} ± {fmt(sp.get('std'), 2)}",
+                f"{fmt(lo, 3)}–{fmt(hi, 3)}",
+            ]
+        conv = s.get("convergence")
+        if conv:
+            row += [
+                f"{conv['runs_converged']}/{conv['runs']}",
+                f"{fmt(conv['median_time_s'], 3)} ({fmt(conv['max_time_s'], 3)})",
+                conv["median_updates"],
+            ]
+        else:
+            row += ["", "", ""]
+        rows.append(row)
+    return headers, rows
+
+
 def write_figures(
     out_dir: Path,
     results: Sequence[RunResult],
@@ -270,107 +382,224 @@ def write_figures(
     settle_s: float,
     record_rate_hz: float,
     arena: tuple[tuple[float, float], tuple[float, float]] | None = None,
+    views: Mapping[str, tuple[float, float]] | None = None,
 ) -> list[tuple[str, str]]:
-    """Write the figures of a team run; returns ``(file, caption)`` pairs in report order."""
-    from relloc.metrics.errors import rmse
-    from relloc.plotting.consistency import plot_chi2_series, plot_conditioning
-    from relloc.plotting.errors import (
-        plot_pose_errors_with_bounds,
-        plot_robot_errors,
-        plot_trajectories,
-    )
+    """Write the figures of a team run; returns ``(file, caption)`` pairs in report order.
+
+    ``views``: observer → ``(fov_deg, max_range_m)`` for the trajectory figure.
+    """
     from relloc.plotting.setup import pyplot
 
     plt = pyplot()
-    figures: list[tuple[str, str]] = []
     run0 = results[0]
-    n_runs = len(results)
+    return [
+        *_error_bound_figures(plt, out_dir, run0, settle_s=settle_s),
+        _rmse_figure(plt, out_dir, results, settle_s=settle_s, rate=record_rate_hz),
+        _nees_nis_figure(plt, out_dir, results, settle_s=settle_s, rate=record_rate_hz),
+        _conditioning_figure(plt, out_dir, run0),
+        _convergence_figure(plt, out_dir, results),
+        *_trajectory_figure(plt, out_dir, run0, arena=arena, views=views),
+    ]
+
+
+def _error_bound_figures(
+    plt: Any, out_dir: Path, run0: RunResult, *, settle_s: float
+) -> list[tuple[str, str]]:
+    from relloc.plotting.errors import plot_pose_errors_with_bounds
+    from relloc.plotting.style import legend_outside
+    from relloc.plotting.team import shade_gaps, track_gaps
+
+    figures = []
     for p in run0.evaluations:
-        fig, axes = plt.subplots(4, 1, figsize=(7, 7), sharex=True)
+        fig, axes = plt.subplots(4, 1, figsize=(8, 7), sharex=True)
         plot_pose_errors_with_bounds(axes, p.t, p.error, p.sigma)
+        gaps = track_gaps(run0.events, p.owner, p.subject, float(p.t[-1]) if p.t.size else 0.0)
         steady = p.age >= settle_s
-        if steady.any():  # scale to the steady state; the start-up transient is clipped
-            for i, ax in enumerate(axes):
+        for i, ax in enumerate(axes):
+            shade_gaps(ax, gaps)
+            if steady.any():  # scale to the steady state; the start-up transient is clipped
                 half = 1.3 * float(
                     np.max(np.maximum(3 * p.sigma[steady, i], np.abs(p.error[steady, i])))
                 )
                 ax.set_ylim(-half, half)
+        legend_outside(axes[0])
         axes[0].set_title(f"{p.label} ({p.platform}): error and ±3σ, run 0")
         name = save_figure(fig, out_dir, f"error_bounds_{p.subject}")
         figures.append(
             (
                 name,
                 f"Error of {p.label} with the filter's ±3σ bounds (run 0); axes scaled to the "
-                "steady state, so the start-up transient is clipped.",
+                f"steady state (track age ≥ {settle_s:g} s), so the start-up transient is "
+                "clipped; shaded: no track (deleted, not yet re-created).",
             )
         )
+    return figures
+
+
+def _rmse_figure(
+    plt: Any, out_dir: Path, results: Sequence[RunResult], *, settle_s: float, rate: float
+) -> tuple[str, str]:
+    from relloc.metrics.errors import rmse
+    from relloc.plotting.errors import plot_robot_errors
+    from relloc.plotting.style import legend_outside
+    from relloc.plotting.team import steady_limits
 
     series = {}
-    labels = [p.label for p in run0.evaluations]
-    subjects = [p.subject for p in run0.evaluations]
-    for lab, subject in zip(labels, subjects, strict=True):
-        runs = _runs_of(results, lab)
+    t_first = float("inf")
+    for p in results[0].evaluations:
+        runs = _runs_of(results, p.label)
         t0 = min(float(r.t[0]) for r in runs if r.t.size)
-        n = max(int(_grid_index(r.t, t0, record_rate_hz).max()) + 1 for r in runs if r.t.size)
+        t_first = min(t_first, t0)
+        n = max(int(_grid_index(r.t, t0, rate).max()) + 1 for r in runs if r.t.size)
         table = np.full((len(runs), n, 4), np.nan)
         for k, r in enumerate(runs):
-            table[k, _grid_index(r.t, t0, record_rate_hz)] = r.error
-        series[subject] = (t0 + np.arange(n) / record_rate_hz, rmse(table, axis=0))
-    fig, axes = plt.subplots(4, 1, figsize=(7, 7), sharex=True)
+            table[k, _grid_index(r.t, t0, rate)] = r.error
+        series[p.subject] = (t0 + np.arange(n) / rate, rmse(table, axis=0))
+    fig, axes = plt.subplots(4, 1, figsize=(8, 7), sharex=True)
     plot_robot_errors(axes, series)
+    for i, ax in enumerate(axes):
+        t_all = np.concatenate([t for t, _ in series.values()])
+        v_all = np.concatenate([v[:, i] for _, v in series.values()])
+        steady_limits(ax, t_all, v_all, t_first + settle_s)
+        ax.set_ylim(bottom=0.0)
+    legend_outside(axes[0])
+    n_runs = len(results)
     axes[0].set_title(f"RMSE over {n_runs} run(s), every observed robot")
-    figures.append(
-        (
-            save_figure(fig, out_dir, "errors_all"),
-            f"RMSE over {n_runs} Monte-Carlo run(s) of every observed robot.",
-        )
+    return (
+        save_figure(fig, out_dir, "errors_all"),
+        f"RMSE over {n_runs} Monte-Carlo run(s) of every observed robot; y axes scaled to the "
+        f"values from {settle_s:g} s after the first track started (the start-up spike is "
+        "clipped).",
     )
 
-    fig, axes = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
-    for i, (lab, subject) in enumerate(zip(labels, subjects, strict=True)):
-        runs = _runs_of(results, lab)
+
+def _nees_nis_figure(
+    plt: Any, out_dir: Path, results: Sequence[RunResult], *, settle_s: float, rate: float
+) -> tuple[str, str]:
+    from relloc.plotting.consistency import plot_chi2_series
+    from relloc.plotting.style import legend_outside, plain_log_ticks
+
+    n_runs = len(results)
+    fig, axes = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
+    for i, p in enumerate(results[0].evaluations):
+        runs = _runs_of(results, p.label)
         if n_runs >= 2:
-            t, avg, n = run_averaged_nees(runs, rate_hz=record_rate_hz, settle_s=settle_s)
+            t, avg, n = run_averaged_nees(runs, rate_hz=rate, settle_s=settle_s)
         else:
             keep = runs[0].age >= settle_s
             t, avg, n = runs[0].t[keep], runs[0].nees[keep], 1
-        plot_chi2_series(axes[0], t, avg, NEES_DOF, n_runs=n, label=subject, show_bound=i == 0)
-    p0 = run0.evaluations[0]
-    plot_chi2_series(axes[1], p0.update_t, p0.nis, NIS_DOF, label=f"NIS {p0.subject}")
-    axes[0].set_ylabel("NEES" + (" (run average)" if n_runs >= 2 else ""))
-    axes[1].set_ylabel("NIS (run 0)")
+        plot_chi2_series(
+            axes[0], t, avg, NEES_DOF, n_runs=n, label=p.subject, show_bound=i == 0, normalise=True
+        )
+        keep = p.update_age >= settle_s
+        plot_chi2_series(
+            axes[1],
+            p.update_t[keep],
+            p.nis[keep],
+            NIS_DOF,
+            label=p.subject,
+            show_bound=i == 0,
+            normalise=True,
+        )
+    axes[0].set_ylabel(f"NEES/{NEES_DOF}" + (f" ({n_runs}-run average)" if n_runs >= 2 else ""))
+    axes[1].set_ylabel(f"NIS/{NIS_DOF} (run 0)")
     axes[1].set_xlabel("time (s)")
-    figures.append(
-        (
-            save_figure(fig, out_dir, "nees_nis"),
-            "NEES (steady state) with its 95 % χ² region, and the NIS of one pair with "
-            "χ²(3, 0.95).",
-        )
+    axes[0].set_title(f"Normalised NEES and NIS, steady state (track age ≥ {settle_s:g} s)")
+    for ax in axes:
+        plain_log_ticks(ax)
+        legend_outside(ax)
+    return (
+        save_figure(fig, out_dir, "nees_nis"),
+        f"Normalised NEES (NEES/{NEES_DOF}, the table's ANEES, ideal 1) with its 95 % region, "
+        f"and every pair's NIS/{NIS_DOF} in run 0 with χ²({NIS_DOF}, 0.95)/{NIS_DOF}; steady "
+        "state only.",
     )
 
-    fig, ax = plt.subplots(figsize=(7, 3.5))
-    plot_conditioning(
-        ax,
-        {
-            f"P {p0.subject}": (p0.t, p0.cond_p),
-            f"R {p0.subject}": (p0.update_t, p0.cond_r),
-            f"S {p0.subject}": (p0.update_t, p0.cond_s),
-        },
-        threshold=ILL_CONDITIONED_LOG10,
-    )
-    figures.append(
-        (
-            save_figure(fig, out_dir, "conditioning"),
-            f"Conditioning log10(λmax/λmin) of P, R and S for {p0.label} (run 0).",
+
+def _conditioning_figure(plt: Any, out_dir: Path, run0: RunResult) -> tuple[str, str]:
+    from relloc.plotting.consistency import plot_conditioning
+    from relloc.plotting.style import legend_outside
+
+    pairs = run0.evaluations
+    fig, axes = plt.subplots(len(pairs), 1, figsize=(8, 1.2 + 1.8 * len(pairs)), sharex=True)
+    axes = np.atleast_1d(axes)
+    for ax, p in zip(axes, pairs, strict=True):
+        plot_conditioning(
+            ax,
+            {"P": (p.t, p.cond_p), "R": (p.update_t, p.cond_r), "S": (p.update_t, p.cond_s)},
+            threshold=ILL_CONDITIONED_LOG10,
         )
+        ax.set_title(p.label, fontsize="small", loc="left")
+        ax.set_ylabel("log10 κ")
+        if ax is not axes[-1]:
+            ax.set_xlabel("")
+        legend_outside(ax)
+    fig.suptitle("Conditioning of P, R and S, run 0")
+    return (
+        save_figure(fig, out_dir, "conditioning"),
+        "Conditioning log10(λmax/λmin) of P, R and S for every pair (run 0); dashed: the "
+        f"ill-conditioning threshold 10^{ILL_CONDITIONED_LOG10:g}.",
     )
 
-    if run0.paths:
-        fig, ax = plt.subplots(figsize=(5, 8))
-        plot_trajectories(ax, run0.paths, arena=arena)
-        ax.set_title("true paths (run 0)")
-        figures.append((save_figure(fig, out_dir, "trajectories"), "True paths of the team."))
-    return figures
+
+def _convergence_figure(plt: Any, out_dir: Path, results: Sequence[RunResult]) -> tuple[str, str]:
+    from relloc.plotting.team import plot_convergence
+
+    times = {
+        p.label: [convergence_time(r, CONVERGENCE_THRESHOLDS) for r in _runs_of(results, p.label)]
+        for p in results[0].evaluations
+    }
+    fig, ax = plt.subplots(figsize=(8, 3.5))
+    plot_convergence(ax, times)
+    th = CONVERGENCE_THRESHOLDS
+    ax.set_title(
+        f"Convergence from the unknown start: |x|,|y|,|z| < {th[0]:g} m, |φ| < {th[3]:g} rad"
+    )
+    return (
+        save_figure(fig, out_dir, "convergence"),
+        "Share of runs whose error has entered, and stays inside, the convergence bounds, by "
+        "time since the track first started (per pair, all runs); a track deleted and "
+        "re-created starts again from an unknown pose, so its time includes the second start.",
+    )
+
+
+def _trajectory_figure(
+    plt: Any,
+    out_dir: Path,
+    run0: RunResult,
+    *,
+    arena: tuple[tuple[float, float], tuple[float, float]] | None,
+    views: Mapping[str, tuple[float, float]] | None,
+) -> list[tuple[str, str]]:
+    from relloc.plotting.team import estimated_world_path, plot_team_paths
+
+    if not run0.paths or run0.path_t is None:
+        return []
+    estimates = {
+        p.label: (
+            p.t,
+            estimated_world_path(
+                run0.path_t, run0.paths[p.owner], run0.paths[p.subject], p.t, p.error
+            ),
+            p.subject,
+        )
+        for p in run0.evaluations
+        if p.owner in run0.paths and p.subject in run0.paths
+    }
+    fig = plt.figure(figsize=(9, 9))
+    grid = fig.add_gridspec(2, 1, height_ratios=(3, 1))
+    ax_xy, ax_z = fig.add_subplot(grid[0]), fig.add_subplot(grid[1])
+    plot_team_paths(ax_xy, ax_z, run0.path_t, run0.paths, estimates, views=views, arena=arena)
+    ax_xy.set_title("Team paths, run 0: true (solid) and estimated by the observer (dashed)")
+    ax_z.set_title("Heights", fontsize="small", loc="left")
+    return [
+        (
+            save_figure(fig, out_dir, "trajectories"),
+            "True paths (solid, start marked) and each observer's estimates of its teammates "
+            "drawn in the world frame (dashed), with the observers' field of view at the start; "
+            "below, the heights over time.",
+        )
+    ]
 
 
 def report_markdown(
@@ -413,6 +642,16 @@ def report_markdown(
         "NEES inside the 95 % band about 95 % of the time. Samples of one run are correlated "
         "in time, so these shares fluctuate more than independent draws would.",
         "",
+        "## Spread over runs and convergence from the unknown start",
+        "",
+        markdown_table(*spread_rows(summary)),
+        "",
+        "RMSE per run (steady state): mean ± std (ddof 1) over the runs and the interval "
+        "holding the middle 95 % of the per-run values (2.5–97.5 percentiles). Convergence: "
+        "time and updates from a track's first record until every state's error stays "
+        f"inside ({', '.join(f'{v:g}' for v in CONVERGENCE_THRESHOLDS)}) (x, y, z in m, φ in "
+        "rad) for good, median and maximum over the runs that converged.",
+        "",
         "## Track events (run 0)",
         "",
     ]
@@ -442,18 +681,29 @@ def write_team_report(
     title: str = "relloc run",
     arena: tuple[tuple[float, float], tuple[float, float]] | None = None,
     notes: Sequence[str] = (),
-) -> None:
-    """Write ``summary.json``, the figures and ``report.md`` into ``out_dir``."""
+    plots: bool = True,
+    views: Mapping[str, tuple[float, float]] | None = None,
+) -> list[Path]:
+    """Write ``summary.json``, the figures (unless ``plots`` is false) and ``report.md`` into
+    ``out_dir``; returns every file written, in that order."""
     out = prepare_out_dir(out_dir)
-    write_summary(out, summary)
-    figures = write_figures(
-        out,
-        results,
-        settle_s=float(summary["settle_s"]),
-        record_rate_hz=float(summary["record_rate_hz"]),
-        arena=arena,
+    written = [write_summary(out, summary)]
+    figures = (
+        write_figures(
+            out,
+            results,
+            settle_s=float(summary["settle_s"]),
+            record_rate_hz=float(summary["record_rate_hz"]),
+            arena=arena,
+            views=views,
+        )
+        if plots
+        else []
     )
-    write_report(out, report_markdown(summary, figures, title=title, notes=notes))
+    if not plots:
+        notes = [*notes, "Figures were not drawn (--no-plots, or matplotlib is not installed)."]
+    written.append(write_report(out, report_markdown(summary, figures, title=title, notes=notes)))
+    return [*written, *(out / name for name, _ in figures)]
 
 
 def scenario_meta(

@@ -55,11 +55,19 @@ def plot_detection_background(ax: Any, t: Array, detected: NDArray[np.bool_]) ->
             )
 
 
-def detection_legend_handles(n_followers: int) -> list[Any]:
-    """Legend patches for :func:`plot_detection_background`."""
+def detection_legend_handles(n_followers: int, *, lines: bool = False) -> list[Any]:
+    """Legend patches for :func:`plot_detection_background`; ``lines`` adds the true (dashed)
+    and estimated (solid) line styles of :func:`plot_component`."""
+    from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
-    handles = [
+    handles: list[Any] = []
+    if lines:
+        handles += [
+            Line2D([], [], color="k", ls="--", lw=1.0, label="true"),
+            Line2D([], [], color="tab:blue", lw=1.2, label="estimate"),
+        ]
+    handles += [
         Patch(color=PAIR_COLOURS[i % len(PAIR_COLOURS)], alpha=0.35, label=f"{{R0,R{i + 1}}}")
         for i in range(n_followers)
     ]
@@ -84,7 +92,7 @@ def plot_traces(ax: Any, recording: Recording) -> None:
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
-    ax.legend(fontsize=7, loc="best")
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
 
 
 def plot_component(
@@ -98,7 +106,7 @@ def plot_component(
     """One state component, estimate (solid) against truth (dashed), over the detection shading."""
     plot_detection_background(ax, t, detected)
     ax.plot(t, truth, "k--", lw=1.0, label=f"{label} true")
-    ax.plot(t, estimate, lw=1.2, label=f"{label} est.")
+    ax.plot(t, estimate, color="tab:blue", lw=1.2, label=f"{label} est.")
     ax.set_ylabel(label)
     ax.margins(x=0)
 
@@ -109,15 +117,23 @@ def plot_sweep(
     series: dict[str, Sequence[float]],
     xlabel: str,
     bound: float | None = None,
+    *,
+    integer_x: bool = False,
 ) -> None:
-    """Lines of a parameter sweep; an optional horizontal bound (the paper's)."""
+    """Lines of a parameter sweep; an optional horizontal bound (the paper's); ``integer_x``
+    for a count (ticks only at integers). The legend sits below the axes."""
+    from relloc.plotting.style import integer_ticks
+
     for name, ys in series.items():
         ax.plot(xs, ys, "o-", label=name)
     if bound is not None:
         ax.axhline(bound, color="r", ls=":", label=f"paper bound {bound} m")
+    if integer_x:
+        integer_ticks(ax.xaxis)
     ax.set_xlabel(xlabel)
     ax.set_ylabel("RMSE [m]")
-    ax.legend(fontsize=7)
+    ax.set_ylim(bottom=0.0)
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=3)
     ax.grid(alpha=0.3)
 
 
@@ -132,8 +148,9 @@ def plot_uwb_errors(ax: Any, residuals: Array, spread: float, threshold: float) 
         lw=1.2,
         label=f"fitted core σ = {spread:.3f} m",
     )
-    for s in (-threshold, threshold):
-        ax.axvline(s, color="r", ls=":", lw=1)
+    for k, s in enumerate((-threshold, threshold)):
+        label = f"outlier gate ±{threshold:.3f} m" if k == 0 else None
+        ax.axvline(s, color="r", ls=":", lw=1, label=label)
     ax.set_xlabel("range residual [m]")
-    ax.set_ylabel("density")
-    ax.legend(fontsize=7)
+    ax.set_ylabel("density [1/m]")
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)

@@ -29,23 +29,31 @@ def plot_chi2_series(
     label: str = "NEES",
     color: str | None = None,
     show_bound: bool = True,
+    normalise: bool = False,
 ) -> None:
     """NEES/NIS over time with its χ² acceptance region.
 
     ``n_runs = 1``: ``values`` are single-run values and the line is ``χ²_dof(p)``.
     ``n_runs > 1``: ``values`` are averages over ``n_runs`` runs and the band is the two-sided
     ``p`` region of such an average. Several series can share one axes: pass
-    ``show_bound=False`` for all but one.
+    ``show_bound=False`` for all but one. ``normalise`` divides values and bounds by ``dof``
+    (ANEES / ANIS, ideal 1), as the report tables print them.
     """
     t = np.asarray(t, dtype=float)
-    v = np.asarray(values, dtype=float)
+    scale = 1.0 / dof if normalise else 1.0
+    v = np.asarray(values, dtype=float) * scale
     ax.plot(t, v, color=color, lw=0.9, label=label)
     if show_bound and n_runs <= 1:
-        ax.axhline(chi2_upper(dof, p), color="k", lw=1.0, label=f"χ²({dof}, {p:g})")
+        bound = chi2_upper(dof, p) * scale
+        ax.axhline(
+            bound, color="k", lw=1.0, label=f"χ²({dof}, {p:g}){'/' + str(dof) if normalise else ''}"
+        )
     elif show_bound:
         lo, hi = mean_chi2_band(dof, n_runs, p)
-        ax.axhspan(lo, hi, color="0.85", zorder=0, label=f"{p:.0%} band, {n_runs} runs")
-        ax.axhline(dof, color="0.5", lw=0.6, ls="--")
+        ax.axhspan(
+            lo * scale, hi * scale, color="0.85", zorder=0, label=f"{p:.0%} band, {n_runs} runs"
+        )
+        ax.axhline(dof * scale, color="0.5", lw=0.6, ls="--")
     ax.set_yscale("log")
     ax.grid(True, alpha=0.3, which="both")
     ax.legend(loc="upper right", fontsize="small")

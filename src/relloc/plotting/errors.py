@@ -102,12 +102,16 @@ def plot_trajectories(
     arena: tuple[tuple[float, float], tuple[float, float]] | None = None,
     markers: Mapping[str, str] | None = None,
 ) -> None:
-    """Planar paths ``(K, ≥2)`` of several robots, with start markers and the arena outline."""
-    for name, path in paths.items():
+    """Planar paths ``(K, ≥2)`` of several robots, with start markers (in the legend) and the
+    arena outline; the legend sits outside the data."""
+    from relloc.plotting.style import legend_outside
+
+    for k, (name, path) in enumerate(paths.items()):
         p = np.asarray(path, dtype=float)
         (line,) = ax.plot(p[:, 0], p[:, 1], lw=1.2, label=name)
         marker = (markers or {}).get(name, "o")
-        ax.plot(p[0, 0], p[0, 1], marker=marker, color=line.get_color(), ms=6)
+        start = "start" if k == 0 and not markers else None
+        ax.plot(p[0, 0], p[0, 1], marker=marker, color=line.get_color(), ms=6, ls="", label=start)
     if arena is not None:
         (x0, x1), (y0, y1) = arena
         ax.plot([x0, x1, x1, x0, x0], [y0, y0, y1, y1, y0], color="0.3", lw=1.0)
@@ -115,4 +119,4 @@ def plot_trajectories(
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
     ax.grid(True, alpha=0.3)
-    ax.legend(loc="best", fontsize="small")
+    legend_outside(ax)
