@@ -247,8 +247,10 @@ def _tracked_at_end(result, window: float = 4.0) -> np.ndarray:  # type: ignore[
     return result.tracked[:, final, :].mean(axis=1)
 
 
-#: independent seeded runs (not hand-picked: the first children of one root seed)
-SHORT_RUN_SEEDS = spawn_seeds(2026, 4)
+#: independent seeded runs (not hand-picked: the first children of one root seed). The root
+#: 48611 was not used while developing the Gaussian-sum fuser (its fixes were developed on the
+#: children of 2026, the experiments' default seed), so these runs test it out of sample.
+SHORT_RUN_SEEDS = spawn_seeds(48611, 4)
 
 
 @pytest.mark.slow
