@@ -54,7 +54,7 @@ quarter by less than 20 %.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Literal
 
 import networkx as nx
 import numpy as np
@@ -95,7 +95,10 @@ CASE_LABELS = {
     "gps_robot1": "GPS on robot 1",
 }
 #: summary.json block → the EIF's linearisation (``CooperativeSettings.linearisation``).
-FILTERS = {"cases": "latest", "cases_first_estimates": "first_estimates"}
+FILTERS: dict[str, Literal["latest", "first_estimates"]] = {
+    "cases": "latest",
+    "cases_first_estimates": "first_estimates",
+}
 FILTER_LABELS = {
     "cases": "plain EIF (seed 001)",
     "cases_first_estimates": "FEJ EIF (observability-aware)",
