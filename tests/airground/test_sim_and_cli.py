@@ -191,6 +191,10 @@ def test_cli_reproduce_smoke(tmp_path, monkeypatch):
     assert "formation_rmse_m" in s["formation"]
     assert {"bias_m", "spread_m", "outlier_rate"} <= set(s["uwb_noise_fit"])
     assert s["sweep_dwell_time"]["points"] and s["sweep_drones"]["points"]
+    assert [p["side_m"] for p in s["formation_size"]["points"]] == [0.7, 0.9]
+    assert [p["scale"] for p in s["sweep_camera_noise"]["points"]] == [0.5, 1.0, 2.0, 4.0]
+    assert "chosen" in s["camera_noise"]["source"] and len(s["departures"]) >= 5
+    assert s["two_drones"]["nees_run_average"]["verdict"] is None  # one run: no valid band
     report = (out / "report.md").read_text()
     assert "paper [m]" in report and "estimates_two_drones.png" in report
     for png in ("traces_one_drone.png", "estimates_two_drones.png", "sweeps.png", "uwb_noise.png"):

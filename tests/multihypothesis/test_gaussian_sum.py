@@ -247,7 +247,11 @@ def _tracked_at_end(result, window: float = 4.0) -> np.ndarray:  # type: ignore[
     return result.tracked[:, final, :].mean(axis=1)
 
 
-#: independent seeded runs (not hand-picked: the first children of one root seed)
+#: independent seeded runs (not hand-picked: the first children of one root seed). These are
+#: the children of 2026, the root the Gaussian-sum fuser's fixes were developed on: on the
+#: fresh root 48611 the kidnapped robot is re-found too late in runs 1 and 2 (mutual fusion
+#: after a kidnap locks onto a wrong yaw), a defect being fixed; until then these runs are
+#: in-sample.
 SHORT_RUN_SEEDS = spawn_seeds(2026, 4)
 
 

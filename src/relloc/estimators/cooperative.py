@@ -51,6 +51,15 @@ loop holds; the steps are laid out and accumulated (:func:`command_timeline`,
 segments between command changes (every robot's, the team advances in one vectorised step) are
 cut at those epochs and at most ``max_step_s`` long.
 
+Linearisation
+-------------
+``CooperativeSettings.linearisation = "latest"`` is the standard filter (seed 001): every
+Jacobian at the latest estimate. Without enough anchors that filter is inconsistent: it gains
+information along the unobservable global rotation. ``"first_estimates"`` evaluates every
+Jacobian at the first estimate of the state it differentiates (FEJ, Huang et al. 2008–2010),
+which keeps the unobservable subspace of the linearised team equal to the nonlinear one; the
+derivation is in :mod:`relloc.estimators.first_estimates`.
+
 Measurements
 ------------
 Rows (:mod:`relloc.models.planar_measurement`) are built per epoch: bearing (always, if
@@ -80,6 +89,7 @@ from relloc.core.kalman import chi2_threshold
 from relloc.core.recording import NO_TARGET, Measurements, kind_code
 from relloc.errors import ConfigError, DataError, ModelError
 from relloc.estimators.eif import ExtendedInformationFilter
+from relloc.estimators.first_estimates import first_estimates_transition
 from relloc.estimators.joint_ekf import JointEkf
 from relloc.models.planar_measurement import (
     RANGE_BIAS_FEATURES,
@@ -199,7 +209,10 @@ class CooperativeSettings:
 
     ``anchors``: landmark indices whose detections are used (others are ignored and counted);
     ``use_robot_detections``: robot→robot rows; ``use_fixes``: absolute pose rows; ``p_gate``:
-    χ² gate probability (``None``: no gating); ``filter``: ``"eif"`` or ``"ekf"``.
+    χ² gate probability (``None``: no gating); ``filter``: ``"eif"`` or ``"ekf"``;
+    ``linearisation``: ``"latest"`` (the standard filter: every Jacobian at the latest estimate)
+    or ``"first_estimates"`` (FEJ, :mod:`relloc.estimators.first_estimates`: the linearised team
+    keeps the unobservable global translation/rotation unobservable).
     """
 
     odometry: OdometryModel
@@ -211,11 +224,17 @@ class CooperativeSettings:
     use_fixes: bool = False
     p_gate: float | None = 0.999
     filter: Literal["eif", "ekf"] = "eif"
+    linearisation: Literal["latest", "first_estimates"] = "latest"
 
     def __post_init__(self) -> None:
         if self.filter not in ("eif", "ekf"):
             raise ConfigError(
                 f"CooperativeSettings.filter must be 'eif' or 'ekf', got {self.filter}"
+            )
+        if self.linearisation not in ("latest", "first_estimates"):
+            raise ConfigError(
+                "CooperativeSettings.linearisation must be 'latest' or 'first_estimates', got "
+                f"{self.linearisation}"
             )
         if self.p_gate is not None and not 0.0 < self.p_gate < 1.0:
             raise ConfigError(f"CooperativeSettings.p_gate must lie in (0, 1), got {self.p_gate}")
@@ -700,6 +719,9 @@ class CooperativeEstimator(Silent):
         self._landmarks = lm[:, :2]
         self._filter = make_filter(prior, settings.filter)
         self._pending = TeamPending.at(self._filter.mean())
+        # the team mean before the last epoch's update (the first estimate of that instant)
+        self._first = self._filter.mean().copy()
+        self._t_epoch = np.nan
         self._counts = Counts()
         self._last_range: dict[tuple[int, int], float] = {}
         self._group_offset = 0
@@ -778,7 +800,8 @@ class CooperativeEstimator(Silent):
         diag = np.arange(n)
         Pb = self._filter.covariance().reshape(n, 3, n, 3)[diag, :, diag, :]
         p = self._pending
-        cov = p.F @ Pb @ np.swapaxes(p.F, -1, -2) + p.Q
+        F = self._transition()
+        cov = F @ Pb @ np.swapaxes(F, -1, -2) + p.Q
         if not np.isfinite(cov.sum() + p.pose.sum()):
             raise ModelError("cooperative filter produced non-finite estimates")
         age = 0.0 if np.isnan(self._t) else self._t - self._t_start
@@ -861,18 +884,38 @@ class CooperativeEstimator(Silent):
         self._held_t.clear()
         self._t_applied = self._t
 
+    def _transition(self) -> Array:
+        """The pending prediction's per-robot ``Φ_i``: the accumulated one, or with
+        ``first_estimates`` the one from the last epoch's first estimates (identity while no
+        time has passed since that epoch)."""
+        p = self._pending
+        if self.settings.linearisation == "latest" or self._t_applied == self._t_epoch:
+            return p.F
+        return first_estimates_transition(p.pose, self._first)
+
+    def _linearise(self, X: Array, rows: ScalarRows) -> LinearisedRows:
+        """Residuals at the latest mean ``X``; with ``first_estimates`` the Jacobian blocks at
+        the first estimate of this instant (the same as ``X`` unless an epoch at this instant
+        was already applied)."""
+        lin = linearise_rows(X, rows)
+        if self.settings.linearisation == "latest" or np.array_equal(self._first, X):
+            return lin
+        return replace(lin, blocks=linearise_rows(self._first, rows).blocks)
+
     def _update(self, rows: ScalarRows) -> None:
         """Predict to now and update with the rows of one epoch (gated per detection / fix)."""
         c, s = self._counts, self.settings
         c.epochs += 1
         filt = self._filter
-        filt.predict(self._pending.pose, self._pending.F, self._pending.Q)
+        filt.predict(self._pending.pose, self._transition(), self._pending.Q)
         X = filt.mean()
+        if self._t != self._t_epoch:
+            self._first, self._t_epoch = X.copy(), self._t
         degenerate = _degenerate(rows, X)
         if degenerate.any():
             c.rejected_degenerate += int(np.unique(rows.group[degenerate]).size)
             rows = rows.select(~np.isin(rows.group, rows.group[degenerate]))
-        lin = linearise_rows(X, rows)
+        lin = self._linearise(X, rows)
         used = 0
         if rows.size:
             groups = group_innovations(lin, filt.covariance())

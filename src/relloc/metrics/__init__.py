@@ -11,6 +11,7 @@ from relloc.metrics.consistency import (
     nis,
     normalised_squared,
     percent_beyond,
+    run_average_band,
 )
 from relloc.metrics.convergence import (
     FIXED_THRESHOLDS,
@@ -38,6 +39,7 @@ __all__ = [
     "percent_beyond",
     "radial_errors",
     "rmse",
+    "run_average_band",
     "state_errors",
     "updates_to_converge",
     "updates_to_converge_per_state",

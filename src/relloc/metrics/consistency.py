@@ -6,7 +6,9 @@
   should be about 5 % (seed 000 Table 4 reports this percentage).
 * Averaged test: the mean of ``N`` independent χ²(n) values satisfies
   ``N ε̄ ~ χ²(N n)``, so its two-sided ``p`` band is ``χ²_{Nn}((1∓p)/2) / N``.
-  ANEES ``= ε̄ / n`` (ideal 1) has the same band divided by ``n``.
+  ANEES ``= ε̄ / n`` (ideal 1) has the same band divided by ``n``. The ``N`` values must be
+  independent: NEES of independent runs at one instant (:func:`run_average_band`), never the
+  time-correlated samples of one run pooled as if independent.
 """
 
 from __future__ import annotations
@@ -80,6 +82,49 @@ def anees_band(dof: int, n_samples: int, p: float = 0.95) -> tuple[float, float]
     """Two-sided ``p`` band of :func:`anees` over ``n_samples`` independent NEES values."""
     lo, hi = mean_chi2_band(dof, n_samples, p)
     return lo / dof, hi / dof
+
+
+#: Verdict rule of :func:`run_average_band`: consistent when at least this share (%) of the
+#: run-averaged values lies inside the band (95 % expected; instants are correlated in time, so
+#: the share fluctuates more than for independent draws).
+CONSISTENT_IN_BAND_PERCENT = 80.0
+
+
+def run_average_band(nees_runs: ArrayLike, dof: int, p: float = 0.95) -> dict[str, object]:
+    """The averaged test done right: ``nees_runs (R, ...)`` holds NEES values of ``R``
+    independent runs (axis 0) at the same instants (and subjects) on the other axes. At every
+    instant the mean over the runs is compared with the two-sided ``p`` band of the mean of
+    ``R`` independent χ²(dof) values (:func:`mean_chi2_band`); nothing correlated is pooled.
+
+    Returns the shares (%) of instants inside, below (conservative) and above (over-confident)
+    the band, the band, ``runs``, ``instants``, and a ``verdict``: ``"consistent"`` when the
+    share inside is at least :data:`CONSISTENT_IN_BAND_PERCENT`, else ``"conservative"`` or
+    ``"over-confident"`` after the side with the larger share; ``None`` (with ``reason``) for
+    fewer than two runs.
+    """
+    v = np.asarray(nees_runs, dtype=float)
+    runs = int(v.shape[0]) if v.ndim else 0
+    if runs < 2:
+        return {"verdict": None, "runs": runs, "reason": "needs at least two independent runs"}
+    lo, hi = mean_chi2_band(dof, runs, p)
+    avg = v.mean(axis=0)
+    avg = avg[np.isfinite(avg)]
+    inside = float(100.0 * np.mean((avg >= lo) & (avg <= hi)))
+    below = float(100.0 * np.mean(avg < lo))
+    above = float(100.0 * np.mean(avg > hi))
+    if inside >= CONSISTENT_IN_BAND_PERCENT:
+        verdict = "consistent"
+    else:
+        verdict = "conservative" if below > above else "over-confident"
+    return {
+        "in_band_percent": inside,
+        "below_band_percent": below,
+        "above_band_percent": above,
+        "band": [lo, hi],
+        "runs": runs,
+        "instants": int(avg.size),
+        "verdict": verdict,
+    }
 
 
 def percent_beyond(values: ArrayLike, bound: float) -> float:
