@@ -15,6 +15,23 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from relloc.runtime.estimation import WindowDriver
+    from relloc.runtime.sources import SensorSource
+
+
+@dataclass(frozen=True)
+class NodeParts:
+    """What a robot process runs: the team roster, its own sensors, its estimator's driver and
+    the robots whose estimators talk to one another."""
+
+    roster: tuple[str, ...]
+    source: SensorSource
+    driver: WindowDriver
+    talkers: tuple[str, ...] = ()
 
 
 def add_network_fault_arguments(p: argparse.ArgumentParser) -> argparse._ArgumentGroup:
@@ -100,6 +117,15 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         "--dataset", default=None, metavar="DIR", help="replay the team of an MRCLAM-layout folder"
     )
     p.add_argument("--seed", type=int, default=0, help="simulation seed (same for the team)")
+    p.add_argument(
+        "--run", type=int, default=0, help="Monte-Carlo run of a reproduction's team (desilva2015)"
+    )
+    p.add_argument(
+        "--duration",
+        type=float,
+        default=None,
+        help="simulated seconds of a reproduction's team (default: the paper's)",
+    )
     p.add_argument("--filter", default="plkf", help="plkf | tekf | bcplkf")
     p.add_argument("--init", default="measurement", help="track initialisation policy")
     p.add_argument("--eqm-period", type=float, default=1.0, help="equivalent-measurement period, s")
@@ -113,30 +139,53 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
 
 
 def run(args: argparse.Namespace) -> int:
-    import numpy as np
-
-    from relloc.errors import ConfigError
-    from relloc.estimators.initialisation import InitPolicy
-    from relloc.estimators.track_manager import TrackManagerSettings, track_manager_of
-    from relloc.runtime.estimation import TrackManagerEstimator
     from relloc.runtime.node import NodeSettings, RobotNode
-    from relloc.runtime.scenario import load_team
-    from relloc.runtime.sources import RecordingSource
 
-    recording = load_team(args.dataset or args.scenario, args.seed).recording
-    if args.robot not in recording.robots:
-        raise ConfigError(f"--robot: {args.robot!r} is not in the scenario {recording.robots}")
+    parts = node_parts(args)
     settings = NodeSettings(
         team=args.team,
         robot=args.robot,
-        roster=recording.robots,
+        roster=parts.roster,
         transport=transport_from_args(args),
         faults=network_faults_from_args(args),
         fault_seed=args.seed,
         eqm_period_s=args.eqm_period,
         max_bytes=args.max_bytes,
         clock_timeout_s=args.clock_timeout,
+        talkers=parts.talkers,
     )
+    counters = RobotNode(settings, parts.source, parts.driver).run()
+    json.dump({"robot": args.robot, "counters": counters}, sys.stdout, sort_keys=True)
+    sys.stdout.write("\n")
+    return 0
+
+
+def node_parts(args: argparse.Namespace) -> NodeParts:
+    """The robot's sensor source and estimator for the team source the arguments name."""
+    from relloc.experiments.team_sources import named_node_parts, team_names
+
+    if args.dataset is None and args.scenario in team_names():
+        return named_node_parts(args.scenario, args.robot, args.seed, args.run, args.duration)
+    return track_manager_parts(args)
+
+
+def track_manager_parts(args: argparse.Namespace) -> NodeParts:
+    """Seed 000: the robot's own TrackManager (its relative filters of every teammate) on the
+    10 Hz recording grid, on a scenario or a recorded team."""
+    import numpy as np
+
+    from relloc.errors import ConfigError
+    from relloc.estimators.initialisation import InitPolicy
+    from relloc.estimators.track_manager import TrackManagerSettings, track_manager_of
+    from relloc.pipeline.team_report import RECORD_RATE_HZ
+    from relloc.runtime.estimation import WindowDriver, grid_record_times
+    from relloc.runtime.node import NodeParts
+    from relloc.runtime.scenario import load_team
+    from relloc.runtime.sources import RecordingSource
+
+    recording = load_team(args.dataset or args.scenario, args.seed).recording
+    if args.robot not in recording.robots:
+        raise ConfigError(f"--robot: {args.robot!r} is not in the scenario {recording.robots}")
     index = recording.index(args.robot)
     manager = track_manager_of(
         recording,
@@ -144,9 +193,10 @@ def run(args: argparse.Namespace) -> int:
         TrackManagerSettings(filter=args.filter, init=InitPolicy(name=args.init)),
         rng=np.random.default_rng(np.random.SeedSequence([args.seed, index])),
     )
-    estimator = TrackManagerEstimator(manager, record_origin=recording.span[0])
-    source = RecordingSource(recording, args.robot)
-    counters = RobotNode(settings, source, estimator).run()
-    json.dump({"robot": args.robot, "counters": counters}, sys.stdout, sort_keys=True)
-    sys.stdout.write("\n")
-    return 0
+    driver = WindowDriver(
+        manager,
+        recording.robots,
+        args.robot,
+        record_times=grid_record_times(RECORD_RATE_HZ, recording.span[0]),
+    )
+    return NodeParts(recording.robots, RecordingSource(recording, args.robot), driver)

@@ -12,12 +12,20 @@ Per clock tick ``k`` (simulated time ``t_k``; see :mod:`relloc.runtime.clock`) a
    recognised by sequence number, late samples counted);
 2. publishes its own odometry and measurements of the window ``[t_{k−1}, t_k)`` — one ``odom``
    and one ``meas`` batch per tick: the configured publication rate is the tick rate;
-3. filters every pending window whose inputs are in: a window ``[a, b)`` is filtered once every
-   present teammate has published odometry up to ``b`` (normally at the next tick) or once it is
-   ``max_lag_ticks`` overdue (then the missing velocities are held, and the window is counted);
+3. filters every pending window whose inputs are in, through its estimator's
+   :class:`~relloc.runtime.estimation.WindowDriver` (any estimator of the contract): a window
+   ``[a, b)`` is started once every present teammate has published odometry up to ``b``
+   (normally at the next tick) or once it is ``max_lag_ticks`` overdue (then the missing
+   velocities are held, and the window is counted). Where the estimators talk (the
+   ``talkers``: seed 002's leaders), what the estimator sends leaves as ``mail`` stamped with
+   its event, together with the node's progress, and the node processes an event only once
+   every present talking teammate's progress has reached it (see
+   :mod:`relloc.runtime.estimation`); mail is handled as it arrives, between ticks;
 4. every ``eqm_period_s`` broadcasts its belief of each teammate as an equivalent measurement
-   (seed 002: 1 Hz); every ``report_period_s`` ships its new estimates (``est``), track events
+   (monitoring, 1 Hz); every ``report_period_s`` ships its new estimates (``est``), track events
    (``evt``) and counters (``stats``) to the collector; finally it acknowledges ``k``.
+
+The last tick's window is ``[t_{n−1}, t_n]``: it holds the run's last instant.
 
 Teammates appear and disappear through Zenoh liveliness. Measurements of a teammate that is gone
 are not fused (its motion cannot be predicted without its odometry), so its track expires after
@@ -36,10 +44,11 @@ from typing import Any
 
 import numpy as np
 
+from relloc.core.recording import Measurements
 from relloc.errors import ConfigError
 from relloc.estimators.relative import FRAME
 from relloc.runtime import keys
-from relloc.runtime.estimation import TrackManagerEstimator
+from relloc.runtime.estimation import WindowDriver
 from relloc.runtime.faults import FAULTED_KINDS, FaultSettings, LinkEmulator
 from relloc.runtime.messages import (
     DEFAULT_MAX_BYTES,
@@ -49,7 +58,8 @@ from relloc.runtime.messages import (
     encode,
     est_bodies,
 )
-from relloc.runtime.sources import MeasurementBatch, SensorSource
+from relloc.runtime.mail import mail_body, mail_items
+from relloc.runtime.sources import SensorSource, batch_rows
 from relloc.runtime.teammates import ReceivedOdometry, SeenSequences, Teammate
 from relloc.runtime.transport import (
     Inbox,
@@ -80,6 +90,8 @@ class NodeSettings:
     max_lag_ticks: int = 5
     max_bytes: int = DEFAULT_MAX_BYTES
     clock_timeout_s: float = 60.0
+    talkers: tuple[str, ...] = ()
+    """Robots whose estimators exchange messages (``outbox``/``receive``) with one another."""
 
     def __post_init__(self) -> None:
         keys.check_id(self.team, "node.team")
@@ -90,6 +102,8 @@ class NodeSettings:
             raise ConfigError(f"node.robot: {self.robot!r} is not on the roster {self.roster}")
         if len(set(self.roster)) != len(self.roster):
             raise ConfigError(f"node.roster: duplicate robot ids in {self.roster}")
+        if not set(self.talkers) <= set(self.roster):
+            raise ConfigError(f"node.talkers: {self.talkers} are not all on the roster")
         for name in ("eqm_period_s", "report_period_s", "clock_timeout_s"):
             if not getattr(self, name) > 0:
                 raise ConfigError(f"node.{name}: {getattr(self, name)} must be > 0")
@@ -99,22 +113,37 @@ class NodeSettings:
             raise ConfigError(f"node.max_bytes: {self.max_bytes} outside [256, 16 MiB]")
 
 
+@dataclass(frozen=True)
+class NodeParts:
+    """What a robot process runs: the team roster, its own sensors, its estimator's driver and
+    the robots whose estimators talk to one another (:attr:`NodeSettings.talkers`)."""
+
+    roster: tuple[str, ...]
+    source: SensorSource
+    driver: WindowDriver
+    talkers: tuple[str, ...] = ()
+
+
 @dataclass
 class _Window:
     start: float
     end: float
-    measurements: list[MeasurementBatch]
+    rows: list[Measurements]
+    final: bool = False
+    started: bool = False
 
 
 class RobotNode:
     """The robot process (see module docstring). ``run()`` returns the final counters."""
 
     def __init__(
-        self, settings: NodeSettings, source: SensorSource, estimator: TrackManagerEstimator
+        self, settings: NodeSettings, source: SensorSource, estimator: WindowDriver
     ) -> None:
         self.s = settings
         self.source = source
         self.estimator = estimator
+        self.talks = settings.robot in settings.talkers
+        self._mail_progress = -np.inf
         self.counters: Counter[str] = Counter()
         self.teammates = {r: Teammate(r) for r in settings.roster if r != settings.robot}
         self.own_odometry = ReceivedOdometry()
@@ -144,7 +173,7 @@ class RobotNode:
         self._session = session = open_session(s.transport)
         inbox = Inbox()
         try:
-            for kind in ("odom", "meas", "eqm"):
+            for kind in ("odom", "meas", "eqm", "mail"):
                 inbox.subscribe(session, keys.robot_wildcard(s.team, kind))
             inbox.subscribe(session, keys.clock_key(s.team, "tick"))
             inbox.subscribe(session, keys.clock_key(s.team, "ctl"))
@@ -154,8 +183,11 @@ class RobotNode:
             self._tokens.append(session.liveliness().declare_token(keys.alive_key(s.team, s.robot)))
             while not self._done:
                 if self._end_deadline is not None:
+                    # what teammates sent before their last ack is due now: file it and filter
+                    self._deliver(self.link.release(self._t))
+                    self._filter_ready(force=False)
                     wait = self._end_deadline - time.monotonic()
-                    if wait <= 0 or all(self._inputs_in(w) for w in self._pending):
+                    if wait <= 0 or not self._pending:
                         self._finish()
                         break
                     item = inbox.get(timeout=min(wait, 0.05))
@@ -208,6 +240,9 @@ class RobotNode:
             if len(self._latency_us) < LATENCY_SAMPLES:
                 self._latency_us.append((item.recv_wall_ns - msg.wall_ns) / 1e3)
             self.link.admit(msg, msg.sender, self._t)
+            if msg.kind == "mail":  # a teammate's progress: go on at once, not at the next tick
+                self._deliver(self.link.release(self._t))
+                self._filter_ready(force=False)
         else:
             self.counters[f"ignored.{msg.kind}"] += 1
 
@@ -256,8 +291,11 @@ class RobotNode:
             self._window_start = self._filtered_until = t - self._dt
             self._next_eqm_s = self._next_report_s = t
         self._deliver(self.link.release(t))
-        batch = self._publish_own_sensors(self._window_start, t)
-        self._pending.append(_Window(self._window_start, t, [batch]))
+        rows = self._publish_own_sensors(self._window_start, t)
+        window = _Window(self._window_start, t, [rows], final=self._last_tick_seen)
+        if window.final:  # the run's last instant belongs to the last window
+            window.rows.append(self._own_rows(t, t, inclusive=True))
+        self._pending.append(window)
         self._window_start = t
         self._filter_ready(force=False)
         if t + TIME_TOL >= self._next_eqm_s:
@@ -273,9 +311,11 @@ class RobotNode:
         if self._done:
             return
         self._deliver(self.link.release(np.inf))
-        if self._pending:  # the run's last instant belongs to the last window (filtered here,
-            last = self._pending[-1]  # not published: teammates are already finishing)
-            last.measurements.append(self.source.measurements(last.end, last.end, inclusive=True))
+        last = self._pending[-1] if self._pending else None
+        if last is not None and not (last.final or last.started):
+            # the clock left before its last tick: the last instant we have ends the run
+            last.final = True
+            last.rows.append(self._own_rows(last.end, last.end, inclusive=True))
         self._filter_ready(force=True)
         self.counters["final"] = 1
         self._done = True
@@ -293,8 +333,26 @@ class RobotNode:
             if msg.kind == "odom":
                 mate.odometry.add(msg.body["stamps"], msg.body["u"])
                 mate.heard_until_s = max(mate.heard_until_s or -np.inf, msg.t)
+            elif msg.kind == "mail":
+                try:
+                    parcels = mail_items(msg.body, self.s.roster, msg.sender)
+                except MessageRejected as exc:
+                    self.counters[f"rejected.{exc.reason}"] += 1
+                    self.counters["rejected"] += 1
+                    continue
+                mate.progress = max(mate.progress, float(msg.body["progress"]))
+                for stamp, items in parcels:
+                    self.estimator.deliver(stamp, msg.sender, items)
 
-    def _publish_own_sensors(self, t0: float, t1: float) -> MeasurementBatch:
+    def _own_rows(self, t0: float, t1: float, *, inclusive: bool = False) -> Measurements:
+        """This robot's readings of a window as measurement rows."""
+        rows = getattr(self.source, "rows", None)
+        if rows is not None:
+            return rows(t0, t1, inclusive=inclusive)  # type: ignore[no-any-return]
+        batch = self.source.measurements(t0, t1, inclusive=inclusive)
+        return batch_rows(batch, self.s.roster, self.s.robot)
+
+    def _publish_own_sensors(self, t0: float, t1: float) -> Measurements:
         stamps, u = self.source.odometry(t0, t1)
         self.own_odometry.add(stamps, u)
         self._send("odom", {"stamps": stamps, "u": u})
@@ -309,7 +367,9 @@ class RobotNode:
                     "sigma": batch.sigma,
                 },
             )
-        return batch
+        if hasattr(self.source, "rows"):
+            return self._own_rows(t0, t1)
+        return batch_rows(batch, self.s.roster, self.s.robot)
 
     def _inputs_in(self, window: _Window) -> bool:
         return all(
@@ -319,28 +379,61 @@ class RobotNode:
         )
 
     def _filter_ready(self, *, force: bool) -> None:
+        """Filter what can be filtered (module docstring, step 3), then ship the progress."""
         while self._pending:
             w = self._pending[0]
             overdue = self._t >= w.end + self.s.max_lag_ticks * self._dt - TIME_TOL
-            if not (force or overdue or self._inputs_in(w)):
-                return
-            if overdue and not force and not self._inputs_in(w):
-                self.counters["overdue_windows"] += 1
+            if not w.started:
+                ready = self._inputs_in(w)
+                if not (force or overdue or ready):
+                    break
+                if overdue and not (force or ready):
+                    self.counters["overdue_windows"] += 1
+                self.estimator.start_window(
+                    w.start,
+                    w.end,
+                    streams=[
+                        self.own_odometry if r == self.s.robot else self.teammates[r].odometry
+                        for r in self.s.roster
+                    ],
+                    rows=Measurements.concatenate(w.rows),
+                    present={r for r, m in self.teammates.items() if m.present},
+                    inclusive=w.final,
+                )
+                w.started = True
+            until = None if force or overdue else self._talk_progress()
+            if not self.estimator.run(until):
+                if overdue:
+                    self.counters["overdue_windows.waiting_for_mail"] += 1
+                break
             self._pending.popleft()
-            last = force and not self._pending
-            self.estimator.advance(
-                w.start,
-                w.end,
-                own=self.own_odometry,
-                teammates={r: m.odometry for r, m in self.teammates.items()},
-                measurements=w.measurements,
-                present={r for r, m in self.teammates.items() if m.present},
-                inclusive=last,
-            )
             for mate in self.teammates.values():
                 mate.odometry.consume_until(w.end)
             self.own_odometry.consume_until(w.end)
             self._filtered_until = w.end
+        self._send_mail()
+
+    def _talk_progress(self) -> float | None:
+        """How far every present talking teammate has got (None: nobody to wait for)."""
+        if not self.talks:
+            return None
+        mates = [m.progress for r, m in self.teammates.items() if r in self.s.talkers and m.present]
+        return min(mates) if mates else None
+
+    def _send_mail(self) -> None:
+        """Publish what the estimator sent and this node's progress, if either is new."""
+        if not self.talks or not self._pubs:
+            return
+        sent = self.estimator.take_sent()
+        progress = self.estimator.progress
+        if not sent and not progress > self._mail_progress:
+            return
+        if not np.isfinite(progress):  # nothing processed yet; the messages wait for it
+            self.estimator.sent[:0] = sent
+            return
+        self._mail_progress = progress
+        for body in mail_body(progress, sent, self.s.roster, self.s.max_bytes):
+            self._send("mail", body)
 
     def _broadcast_beliefs(self) -> None:
         for belief in self.estimator.beliefs():

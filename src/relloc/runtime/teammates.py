@@ -98,6 +98,9 @@ class Teammate:
     odometry: ReceivedOdometry = field(default_factory=ReceivedOdometry)
     heard_until_s: float | None = None
     """End of the latest odometry window received (the header time of its ``odom``)."""
+    progress: float = -np.inf
+    """The teammate's estimator has processed every event before this time (its latest
+    ``mail``; see :mod:`relloc.runtime.estimation`)."""
 
 
 class SeenSequences:
