@@ -15,23 +15,10 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from relloc.runtime.estimation import WindowDriver
-    from relloc.runtime.sources import SensorSource
-
-
-@dataclass(frozen=True)
-class NodeParts:
-    """What a robot process runs: the team roster, its own sensors, its estimator's driver and
-    the robots whose estimators talk to one another."""
-
-    roster: tuple[str, ...]
-    source: SensorSource
-    driver: WindowDriver
-    talkers: tuple[str, ...] = ()
+    from relloc.runtime.node import NodeParts
 
 
 def add_network_fault_arguments(p: argparse.ArgumentParser) -> argparse._ArgumentGroup:

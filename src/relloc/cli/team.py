@@ -1,4 +1,5 @@
-"""``relloc team up SCENARIO|default|DATASET_DIR --out DIR`` — the whole team as processes.
+"""``relloc team up SCENARIO|default|DATASET_DIR|REPRODUCTION --out DIR`` — the whole team as
+processes.
 
 Every robot runs as its own ``relloc node`` process and a ``relloc team clock`` process drives
 simulated time (faster than real time unless ``--realtime``); the launcher collects every
@@ -7,6 +8,11 @@ robot's estimates and writes ``summary.json`` and ``report.md`` (see
 
     --drop P  --delay MS  --jitter MS  --duplicate P  --reorder P
     --kill ROBOT@SECONDS  --restart ROBOT@SECONDS  --partition A,B@T1-T2
+
+A reproduction's team (``desilva2015``, ``desilva2015-kidnapped``: seed 002's leaders and pods,
+see :mod:`relloc.experiments.desilva2015_team`) runs ``--runs N`` Monte-Carlo runs of
+``--duration S`` simulated seconds each and is scored beside the in-process reproduction on the
+same seeds.
 
 ``relloc team clock`` runs only the clock/simulator process (for robots started by hand).
 """
@@ -36,7 +42,12 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     up = actions.add_parser("up", help="launch a team, collect its estimates, write a report")
     up.add_argument(
         "scenario",
-        help="scenario TOML file, 'default' (built-in team), or an MRCLAM-layout dataset folder",
+        help="scenario TOML file, 'default' (built-in team), an MRCLAM-layout dataset folder, "
+        "or a reproduction: desilva2015, desilva2015-kidnapped",
+    )
+    up.add_argument("--runs", type=int, default=1, help="a reproduction's Monte-Carlo runs")
+    up.add_argument(
+        "--duration", type=float, default=None, help="a reproduction's simulated seconds per run"
     )
     up.add_argument("--out", type=Path, required=True, help="output folder")
     up.add_argument("--seed", type=int, default=0, help="simulation and fault seed")
@@ -81,6 +92,10 @@ def _robot_events(args: argparse.Namespace) -> dict[str, tuple[object, ...]]:
 
 
 def run_up(args: argparse.Namespace) -> int:
+    from relloc.runtime.scenario import REPRODUCTIONS
+
+    if args.scenario in REPRODUCTIONS:
+        return run_reproduction(args)
     from relloc.runtime.launcher import TeamSettings
     from relloc.runtime.team import run_team
 
@@ -120,4 +135,35 @@ def run_clock(args: argparse.Namespace) -> int:
         restarts=events["restarts"],  # type: ignore[arg-type]
     )
     run_clock(settings, args.report)
+    return 0
+
+
+def run_reproduction(args: argparse.Namespace) -> int:
+    """``team up desilva2015``: the runs, scored beside the in-process reproduction."""
+    from relloc.errors import ConfigError
+    from relloc.experiments.desilva2015_team import DeSilvaTeamSettings, run_desilva_team
+    from relloc.pipeline.output import fmt
+
+    if args.runs < 1:
+        raise ConfigError(f"--runs: {args.runs} must be ≥ 1")
+    summary = run_desilva_team(
+        DeSilvaTeamSettings(
+            name=args.scenario,
+            out_dir=args.out,
+            seed=args.seed,
+            runs=args.runs,
+            duration_s=args.duration,
+            tick_s=args.tick,
+            faults=network_faults_from_args(args, **_robot_events(args)),
+            team=args.team,
+            wall_timeout_s=args.timeout,
+        )
+    )
+    if not args.quiet:
+        d, r = summary["distributed"], summary["in_process"]
+        print(
+            f"{summary['experiment']}: success rate {fmt(d['success_rate'])} (in-process "
+            f"{fmt(r['success_rate'])}), position RMSE {fmt(d['pos_rmse_m'])} m (in-process "
+            f"{fmt(r['pos_rmse_m'])} m); max |Δ belief| {fmt(summary['agreement']['max_abs_diff'])}"
+        )
     return 0

@@ -9,7 +9,8 @@ very estimator the in-process reproduction gives that robot:
   :class:`~relloc.fusion.gaussian_sum_estimator.GaussianSumEstimator` (the settings of
   :func:`relloc.experiments.desilva2015.filter_settings`, equivalent measurements every
   second) and record their dominant tracks at their scan times; pods P1–P3 only share their
-  odometry. ``desilva2015-kidnapped``: the same with the kidnapped-robot scenario. Run ``i`` of
+  odometry. ``desilva2015-kidnapped``: the same with the kidnapped-robot scenario
+  (:func:`kidnap_of`). Run ``i`` of
   seed ``S`` is run ``i`` of ``relloc reproduce desilva2015 --seed S`` (the Monte-Carlo
   task's seed sequence ``SeedSequence(S).spawn(n)[i]``), shortened to ``duration`` seconds.
 """
@@ -25,15 +26,16 @@ from relloc.fusion.gaussian_sum_estimator import GaussianSumEstimator
 from relloc.pipeline.montecarlo import spawn_seeds
 from relloc.runtime.estimation import OdometryOnly, WindowDriver, scan_record_times
 from relloc.runtime.node import NodeParts
+from relloc.runtime.scenario import REPRODUCTIONS
 from relloc.runtime.sources import RecordingSource
 from relloc.sim.multihypothesis import DeSilvaScenario, simulate
 
-KIDNAPPED = {"desilva2015": False, "desilva2015-kidnapped": True}
+KIDNAPPED = {name: name.endswith("-kidnapped") for name in REPRODUCTIONS}
 
 
 def team_names() -> tuple[str, ...]:
     """The reproductions ``relloc team up`` runs as processes."""
-    return tuple(KIDNAPPED)
+    return REPRODUCTIONS
 
 
 def desilva_scenario(name: str, duration_s: float | None) -> DeSilvaScenario:
@@ -41,7 +43,16 @@ def desilva_scenario(name: str, duration_s: float | None) -> DeSilvaScenario:
     if name not in KIDNAPPED:
         raise ConfigError(f"team source: {name!r} is not one of {team_names()}")
     duration = DURATION_S if duration_s is None else float(duration_s)
-    return DeSilvaScenario(duration=duration, kidnap=KIDNAP if KIDNAPPED[name] else None)
+    return DeSilvaScenario(
+        duration=duration, kidnap=kidnap_of(duration) if KIDNAPPED[name] else None
+    )
+
+
+def kidnap_of(duration_s: float) -> tuple[int, float, float, float, float]:
+    """The reproduction's kidnap (:data:`relloc.experiments.desilva2015.KIDNAP`: P2 moved at
+    15 s of 30), at half the run when the run is shorter than 30 s."""
+    robot, when, dx, dy, dyaw = KIDNAP
+    return (robot, min(when, duration_s / 2.0), dx, dy, dyaw)
 
 
 def run_seed(seed: int, run: int) -> np.random.SeedSequence:

@@ -59,6 +59,9 @@ from relloc.runtime.teammates import ReceivedOdometry
 
 Array = NDArray[np.float64]
 
+QUIET_HORIZON_S = 3600.0
+"""How far ahead of its processed events a driver promises silence (keeps progress finite)."""
+
 RecordTimes = Callable[[float, float, bool, Measurements], Array]
 """``(t0, t1, inclusive, rows) -> record times`` of a window (``rows``: the window's rows)."""
 
@@ -197,11 +200,19 @@ class WindowDriver:
 
     @property
     def progress(self) -> float:
-        """Every event of this driver before this time is processed (module docstring)."""
+        """Every message this estimator will send stamped before this time has been sent: its
+        events before it are processed (module docstring) — or, for an estimator that says
+        when it sends next (optional ``quiet_until() -> float``), up to that time. Capped at
+        the end of the planned window plus :data:`QUIET_HORIZON_S` so that it stays finite."""
         if self.busy:
             assert self._plan is not None
-            return float(self._plan.times[self._plan.next])
-        return self._window_end
+            done = float(self._plan.times[self._plan.next])
+        else:
+            done = self._window_end
+        quiet = getattr(self.estimator, "quiet_until", None)
+        if quiet is not None and np.isfinite(done):
+            done = max(done, min(float(quiet()), done + QUIET_HORIZON_S))
+        return done
 
     def start_window(
         self,

@@ -61,6 +61,8 @@ class TeamSettings:
     port: int | None = None
     wall_timeout_s: float = 300.0
     filter_kind: str = "plkf"
+    node_args: tuple[str, ...] = ()
+    """Extra ``relloc node`` arguments of every robot (a reproduction's run and duration)."""
 
     def __post_init__(self) -> None:
         keys.check_id(self.team, "--team")
@@ -122,7 +124,7 @@ def node_command(settings: TeamSettings, robot: str, endpoint: str) -> list[str]
     ]
     for p in f.partitions:
         cmd += ["--partition", f"{','.join(p.side)}@{p.start_s!r}-{p.end_s!r}"]
-    return cmd
+    return cmd + list(settings.node_args)
 
 
 def clock_command(
@@ -170,6 +172,7 @@ PRELOAD = [
     "relloc.runtime.scenario",
     "relloc.runtime.estimation",
     "relloc.runtime.team",
+    "relloc.experiments.team_sources",
 ]
 """Modules the fork server imports once, so robot processes start in milliseconds instead of
 each paying numpy/scipy imports (zenoh is imported by each child: its runtime must not be

@@ -50,6 +50,7 @@ from relloc.estimators.relative import FRAME
 from relloc.runtime import keys
 from relloc.runtime.estimation import WindowDriver
 from relloc.runtime.faults import FAULTED_KINDS, FaultSettings, LinkEmulator
+from relloc.runtime.mail import mail_body, mail_items
 from relloc.runtime.messages import (
     DEFAULT_MAX_BYTES,
     Message,
@@ -58,7 +59,6 @@ from relloc.runtime.messages import (
     encode,
     est_bodies,
 )
-from relloc.runtime.mail import mail_body, mail_items
 from relloc.runtime.sources import SensorSource, batch_rows
 from relloc.runtime.teammates import ReceivedOdometry, SeenSequences, Teammate
 from relloc.runtime.transport import (
@@ -143,6 +143,7 @@ class RobotNode:
         self.source = source
         self.estimator = estimator
         self.talks = settings.robot in settings.talkers
+        self._acks_due: deque[tuple[int, float]] = deque()
         self._mail_progress = -np.inf
         self.counters: Counter[str] = Counter()
         self.teammates = {r: Teammate(r) for r in settings.roster if r != settings.robot}
@@ -304,7 +305,10 @@ class RobotNode:
         if t + TIME_TOL >= self._next_report_s:
             self._report()
             self._next_report_s += self.s.report_period_s
-        self._send("ack", {"k": msg.body["k"]})
+        if self.estimator.busy:  # waiting for a teammate: repeat our progress, in case the
+            self._send_mail(repeat=True)  # teammate waits for it and the last one was lost
+        self._acks_due.append((int(msg.body["k"]), t - self._dt))
+        self._send_due_acks()
 
     def _finish(self) -> None:
         """End of run: filter everything left (teammates published it before their last ack)."""
@@ -333,7 +337,7 @@ class RobotNode:
             if msg.kind == "odom":
                 mate.odometry.add(msg.body["stamps"], msg.body["u"])
                 mate.heard_until_s = max(mate.heard_until_s or -np.inf, msg.t)
-            elif msg.kind == "mail":
+            elif msg.kind == "mail" and self.talks:
                 try:
                     parcels = mail_items(msg.body, self.s.roster, msg.sender)
                 except MessageRejected as exc:
@@ -412,6 +416,21 @@ class RobotNode:
             self.own_odometry.consume_until(w.end)
             self._filtered_until = w.end
         self._send_mail()
+        self._send_due_acks()
+
+    def _send_due_acks(self) -> None:
+        """Acknowledge the ticks that are done. A node whose estimator talks acknowledges tick
+        ``k`` only once every window up to ``max_lag_ticks − 1`` ticks before ``t_{k−1}`` is
+        filtered: its teammates' progress comes between ticks, and the clock must not run so
+        far ahead of the filters that a window waiting for it is overdue; any other node at
+        once."""
+        slack = (self.s.max_lag_ticks - 1) * self._dt
+        while self._acks_due:
+            k, due = self._acks_due[0]
+            if self.talks and self._pending and self._pending[0].end <= due - slack + TIME_TOL:
+                return
+            self._acks_due.popleft()
+            self._send("ack", {"k": k})
 
     def _talk_progress(self) -> float | None:
         """How far every present talking teammate has got (None: nobody to wait for)."""
@@ -420,13 +439,14 @@ class RobotNode:
         mates = [m.progress for r, m in self.teammates.items() if r in self.s.talkers and m.present]
         return min(mates) if mates else None
 
-    def _send_mail(self) -> None:
-        """Publish what the estimator sent and this node's progress, if either is new."""
+    def _send_mail(self, *, repeat: bool = False) -> None:
+        """Publish what the estimator sent and this node's progress, if either is new (or to
+        ``repeat`` the progress)."""
         if not self.talks or not self._pubs:
             return
         sent = self.estimator.take_sent()
         progress = self.estimator.progress
-        if not sent and not progress > self._mail_progress:
+        if not sent and not progress > self._mail_progress and not repeat:
             return
         if not np.isfinite(progress):  # nothing processed yet; the messages wait for it
             self.estimator.sent[:0] = sent

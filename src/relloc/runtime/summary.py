@@ -21,7 +21,7 @@ from relloc.errors import ConfigError
 from relloc.runtime.launcher import Collected
 from relloc.runtime.messages import estimates_from_bodies
 
-DATA_KINDS = ("odom", "meas", "eqm")
+DATA_KINDS = ("odom", "meas", "eqm", "mail")
 
 
 def assemble_estimates(collected: Collected, roster: Sequence[str], estimator: str) -> Estimates:
