@@ -1,5 +1,6 @@
 """Any contract estimator in a robot node: the window driver's message rule, the ``mail``
-codec, and seed 002's leaders as processes (``relloc team up desilva2015-kidnapped``).
+codec, re-filtering late readings from a checkpoint, seed 002's leaders as processes (``relloc team
+up desilva2015-kidnapped``) and seed 001's agents as processes (``relloc team up sharma2013``).
 
 The driver tests run two seed-002 leaders' drivers in one process, window by window, handing
 each other only what the node protocol hands over (stamped messages and progress): they must
@@ -15,11 +16,20 @@ import numpy as np
 import pytest
 
 from relloc.cli import main
+from relloc.core.recording import Measurements
 from relloc.experiments.desilva2015 import RunConfig, leader_estimates
-from relloc.experiments.team_sources import desilva_recording, desilva_scenario, named_node_parts
+from relloc.experiments.sharma2013_team import in_process
+from relloc.experiments.team_sources import (
+    desilva_recording,
+    desilva_scenario,
+    named_node_parts,
+    sharma_node_parts,
+    sharma_sim,
+)
 from relloc.fusion.messages import EquivalentMeasurement
 from relloc.runtime.mail import mail_body, mail_items
-from relloc.runtime.messages import decode, encode
+from relloc.runtime.messages import decode, encode, est_bodies, estimates_from_bodies
+from relloc.runtime.summary import latest_of_each_time
 from relloc.runtime.teammates import ReceivedOdometry
 
 ROSTER = ("L1", "L2", "P1", "P2", "P3")
@@ -148,3 +158,71 @@ def test_desilva_leaders_as_processes_match_in_process_and_refind_the_kidnapped_
         )
         assert sent - 1 <= got <= sent
     assert (out / "report.md").read_text().startswith("# relloc team up — desilva2015-kidnapped")
+
+
+def test_an_agent_refilters_late_readings_from_a_checkpoint_and_matches_the_in_process_eif():
+    """Seed 001's team EIF in one agent's driver, window by window; a third of its teammates'
+    readings arrive two windows late and are re-filtered from the checkpoints: the beliefs
+    equal the in-process EIF's (the readings are fused at their own time stamps)."""
+    scenario, sim = sharma_sim(2, 0, 3.0)
+    recording = sim.recording
+    parts = sharma_node_parts("1", 2, 0, 3.0, "two_landmarks")
+    driver = parts.driver
+    streams = []
+    for od in recording.odometry:
+        s = ReceivedOdometry()
+        s.add(od.t, od.velocity)
+        streams.append(s)
+    m = recording.measurements
+    rng = np.random.default_rng(11)  # which readings are late (seed not used elsewhere)
+    late = (m.observer != 0) & (rng.random(m.size) < 0.33)
+    edges = np.round(np.arange(0, 31) * 0.1, 12)
+    held_back: list[tuple[int, Measurements]] = []
+    for k in range(30):
+        last = k == 29
+        inside = (m.t >= edges[k]) & ((m.t <= edges[k + 1]) if last else (m.t < edges[k + 1]))
+        driver.start_window(
+            edges[k],
+            edges[k + 1],
+            streams=streams,
+            rows=m.select(inside & ~late),
+            present=set(recording.robots[1:]),
+            inclusive=last,
+        )
+        assert driver.run()
+        held_back.append((k + 2, m.select(inside & late)))
+        due = [h for h in held_back if h[0] == k or last]
+        held_back = [h for h in held_back if not (h[0] == k or last)]
+        for _, rows in due:
+            assert driver.refilter(rows) == 0
+    counters = driver.counters()
+    assert counters["rows_refiltered"] == int(late.sum()) > 0
+    assert counters["rows_late_lost"] == 0
+    reference = in_process(recording, sim, scenario, "two_landmarks")
+    got = latest_of_each_time(
+        estimates_from_bodies(
+            "eif", [("1", b) for b in est_bodies(driver.take_new(), frame="world_pose2")]
+        )
+    )
+    for ref in reference.beliefs:
+        g = got.series("1", ref.subject)
+        np.testing.assert_array_equal(np.round(g.t, 9), np.round(ref.t, 9))
+        np.testing.assert_allclose(g.mean, ref.mean, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(g.cov, ref.cov, rtol=0, atol=1e-9)
+
+
+@pytest.mark.slow
+def test_sharma_agents_as_processes_each_equal_the_in_process_eif(tmp_path):
+    out = tmp_path / "out"
+    assert main(["team", "up", "sharma2013", "--out", str(out), "--duration", "3", "--quiet"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    agree = summary["agreement"]
+    assert agree["perfect_network"] and agree["within_tolerance"], agree
+    run = summary["per_run"][0]
+    assert set(run["agents"]) == {"1", "2", "3", "4", "5"}
+    for robot, a in run["agents"].items():
+        assert a["pos_rmse_m"] == pytest.approx(run["in_process"]["pos_rmse_m"], abs=1e-9), robot
+        assert a["readings_late"] == 0 and a["records_missing"] == 0
+        m = run["messages"][robot]
+        assert m["sent"]["rows"] == m["sent"]["odom"] == 30 and m["rejected"] == 0
+        assert m["received_delivered"]["rows"] == 4 * 30  # every teammate's, every tick

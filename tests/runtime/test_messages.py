@@ -147,8 +147,8 @@ def test_spoofed_sender_and_inconsistent_batches():
 @pytest.mark.parametrize(
     ("overrides", "match"),
     [
-        ({"frame": "world_pose2"}, "not a 4-state frame"),
-        ({"frame": "nowhere"}, "not a 4-state frame"),
+        ({"frame": "world_pose2"}, "states are not those of"),  # 4 states, a 3-state frame
+        ({"frame": "nowhere"}, "is not a frame"),
         ({"update_dofs": [0]}, "update_dofs must be integers"),
         ({"update_dofs": [2.5]}, "update_dofs must be integers"),
         ({"update_dofs": [3, 3]}, "update batch lengths differ"),

@@ -108,6 +108,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         "--run", type=int, default=0, help="Monte-Carlo run of a reproduction's team (desilva2015)"
     )
     p.add_argument(
+        "--case", default="two_landmarks", help="sharma2013's case (its reproduction's cases)"
+    )
+    p.add_argument(
         "--duration",
         type=float,
         default=None,
@@ -140,6 +143,7 @@ def run(args: argparse.Namespace) -> int:
         max_bytes=args.max_bytes,
         clock_timeout_s=args.clock_timeout,
         talkers=parts.talkers,
+        share_rows=parts.share_rows,
     )
     counters = RobotNode(settings, parts.source, parts.driver).run()
     json.dump({"robot": args.robot, "counters": counters}, sys.stdout, sort_keys=True)
@@ -152,7 +156,9 @@ def node_parts(args: argparse.Namespace) -> NodeParts:
     from relloc.experiments.team_sources import named_node_parts, team_names
 
     if args.dataset is None and args.scenario in team_names():
-        return named_node_parts(args.scenario, args.robot, args.seed, args.run, args.duration)
+        return named_node_parts(
+            args.scenario, args.robot, args.seed, args.run, args.duration, args.case
+        )
     return track_manager_parts(args)
 
 

@@ -43,9 +43,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     up.add_argument(
         "scenario",
         help="scenario TOML file, 'default' (built-in team), an MRCLAM-layout dataset folder, "
-        "or a reproduction: desilva2015, desilva2015-kidnapped",
+        "or a reproduction: desilva2015, desilva2015-kidnapped, sharma2013",
     )
     up.add_argument("--runs", type=int, default=1, help="a reproduction's Monte-Carlo runs")
+    up.add_argument("--case", default="two_landmarks", help="sharma2013's case")
     up.add_argument(
         "--duration", type=float, default=None, help="a reproduction's simulated seconds per run"
     )
@@ -139,13 +140,16 @@ def run_clock(args: argparse.Namespace) -> int:
 
 
 def run_reproduction(args: argparse.Namespace) -> int:
-    """``team up desilva2015``: the runs, scored beside the in-process reproduction."""
+    """``team up desilva2015`` / ``sharma2013``: the runs, scored beside the in-process
+    reproduction."""
     from relloc.errors import ConfigError
     from relloc.experiments.desilva2015_team import DeSilvaTeamSettings, run_desilva_team
     from relloc.pipeline.output import fmt
 
     if args.runs < 1:
         raise ConfigError(f"--runs: {args.runs} must be ≥ 1")
+    if args.scenario == "sharma2013":
+        return run_sharma(args)
     summary = run_desilva_team(
         DeSilvaTeamSettings(
             name=args.scenario,
@@ -166,4 +170,33 @@ def run_reproduction(args: argparse.Namespace) -> int:
             f"{fmt(r['success_rate'])}), position RMSE {fmt(d['pos_rmse_m'])} m (in-process "
             f"{fmt(r['pos_rmse_m'])} m); max |Δ belief| {fmt(summary['agreement']['max_abs_diff'])}"
         )
+    return 0
+
+
+def run_sharma(args: argparse.Namespace) -> int:
+    """``team up sharma2013``: every agent's team EIF beside the in-process one."""
+    from relloc.experiments.sharma2013_team import SharmaTeamSettings, run_sharma_team
+    from relloc.pipeline.output import fmt
+
+    summary = run_sharma_team(
+        SharmaTeamSettings(
+            out_dir=args.out,
+            seed=args.seed,
+            runs=args.runs,
+            duration_s=args.duration,
+            case=args.case,
+            tick_s=args.tick,
+            faults=network_faults_from_args(args, **_robot_events(args)),
+            team=args.team,
+            wall_timeout_s=args.timeout,
+        )
+    )
+    if not args.quiet:
+        for run in summary["per_run"]:
+            ref = run["in_process"]["pos_rmse_m"]
+            for robot, a in run["agents"].items():
+                print(
+                    f"run {run['run']} agent {robot}: position RMSE {fmt(a['pos_rmse_m'])} m "
+                    f"(in-process {fmt(ref)} m), max |Δ| {fmt(a['max_abs_mean_diff'])}"
+                )
     return 0

@@ -85,10 +85,19 @@ PAPER_BOUNDED = {
 }
 
 
-def _scenario():  # type: ignore[no-untyped-def]
+def _scenario(duration_s: float = DURATION_S):  # type: ignore[no-untyped-def]
     from relloc.sim.cooperative import sharma2013_scenario
 
-    return sharma2013_scenario(gps_robots=(0,), duration=DURATION_S)
+    return sharma2013_scenario(gps_robots=(0,), duration=duration_s)
+
+
+def case_settings(scenario: Any, case: str) -> CooperativeSettings:
+    """The team EIF's settings of one case (:data:`CASES`) on the scenario's noise."""
+    from relloc.estimators.cooperative import CooperativeSettings, OdometryModel, SensorModel
+
+    odometry = OdometryModel.from_discrete(scenario.sigma_v, scenario.sigma_w, scenario.dt)
+    sensor = SensorModel(sigma_bearing=scenario.sigma_bearing)
+    return CooperativeSettings(odometry=odometry, sensor=sensor, filter="eif", **CASES[case])
 
 
 def _detections(recording: Recording) -> Measurements:
@@ -157,7 +166,6 @@ def run_case(sim: CooperativeSim, settings: CooperativeSettings, out_t: Array) -
 
 def run_once(seed_sequence: np.random.SeedSequence, run_index: int) -> dict[str, Any]:
     """One Monte-Carlo run: simulate, then the EIF on every case (picklable task)."""
-    from relloc.estimators.cooperative import CooperativeSettings, OdometryModel, SensorModel
     from relloc.sim.cooperative import simulate
 
     scenario = _scenario()
@@ -167,12 +175,9 @@ def run_once(seed_sequence: np.random.SeedSequence, run_index: int) -> dict[str,
     t = rec.require_truth("sharma2013")[0].t
     step = round(OUTPUT_EVERY_S / scenario.dt)
     out_t = t[::step]
-    odometry = OdometryModel.from_discrete(scenario.sigma_v, scenario.sigma_w, scenario.dt)
-    sensor = SensorModel(sigma_bearing=scenario.sigma_bearing)
     result: dict[str, Any] = {"t": out_t, "truth": _poses(rec, step), "cases": {}}
-    for case, options in CASES.items():
-        settings = CooperativeSettings(odometry=odometry, sensor=sensor, filter="eif", **options)
-        run = run_case(sim, settings, out_t)
+    for case in CASES:
+        run = run_case(sim, case_settings(scenario, case), out_t)
         if run_index != 0:
             run["mean"] = None
         result["cases"][case] = run

@@ -36,6 +36,8 @@ node that is killed mid-run has already shipped everything up to its last report
 
 from __future__ import annotations
 
+import copy
+from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -92,6 +94,18 @@ def scan_record_times(observer: int) -> RecordTimes:
 
 
 @dataclass
+class _Checkpoint:
+    """The estimator before a window (``state``, its time ``t`` and the end of the window before)
+    and the window's plan."""
+
+    t0: float
+    t: float | None
+    window_end: float
+    state: Any
+    plan: _Plan
+
+
+@dataclass
 class _Plan:
     """The events of one window and how far the driver got through them."""
 
@@ -107,6 +121,25 @@ class _Plan:
     @property
     def done(self) -> bool:
         return self.next >= self.times.size
+
+
+def _with_rows(plan: _Plan, extra: Measurements) -> _Plan:
+    """``plan`` with readings added (their stamps become events: the velocity held over the
+    step they split is the step's, as no odometry stamp lies inside a step)."""
+    rows = Measurements.concatenate([plan.rows, extra])
+    order = np.lexsort((rows.observer, rows.t))
+    rows = rows.select(order) if np.any(np.diff(order) < 0) else rows
+    times = merge_times(plan.times, extra.t)
+    step = np.searchsorted(plan.times, times - TIME_TOL)  # the planned step each event ends
+    step = np.minimum(step, plan.times.size - 1)
+    return _Plan(
+        t1=plan.t1,
+        times=times,
+        held=plan.held[step],
+        stamps=plan.stamps[step],
+        rows=rows,
+        record=plan.record,
+    )
 
 
 class _Wired:
@@ -158,7 +191,11 @@ class WindowDriver:
     """Window-by-window driver of one robot's contract estimator (module docstring).
 
     ``roster`` names the robots in the estimator's index order (the recording's); ``robot`` is
-    this node's; ``record_times`` gives each window's record times.
+    this node's; ``record_times`` gives each window's record times. Beliefs are recorded as
+    ``robot``'s, whatever the estimator's ``owner`` (a team filter, ``"team"`` in-process, runs
+    in every agent of seed 001). With ``checkpoint_windows > 0`` the state before each of the
+    last that many windows is kept, so that late readings can be re-filtered
+    (:meth:`refilter`).
     """
 
     def __init__(
@@ -168,6 +205,7 @@ class WindowDriver:
         robot: str,
         *,
         record_times: RecordTimes,
+        checkpoint_windows: int = 0,
     ) -> None:
         self.estimator = estimator
         self.roster = tuple(roster)
@@ -177,6 +215,7 @@ class WindowDriver:
         self.sent: list[tuple[float, Any]] = []
         """What the estimator sent and the node has not published yet: ``(stamp, message)``."""
         self._wired = _Wired(estimator, self)
+        self._wired.owner = robot
         self._recorder = Recorder(estimator.name)
         self._inbox: list[tuple[float, int, int, Any]] = []
         self._arrivals = 0
@@ -189,8 +228,17 @@ class WindowDriver:
             "recreated": 0,
             "skipped_absent": 0,
             "messages_late": 0,
+            "rows_refiltered": 0,
+            "rows_late_lost": 0,
         }
         self._rows_not_used: dict[str, int] = {}
+        self.checkpoint_windows = checkpoint_windows
+        self._checkpoints: deque[_Checkpoint] = deque()
+        self._talks = False
+
+    def mark_talking(self) -> None:
+        """The estimator's messages go to teammates (no re-filtering: what it sent is out)."""
+        self._talks = True
 
     # ------------------------------------------------------------------ windows
     @property
@@ -242,6 +290,7 @@ class WindowDriver:
         held = np.stack([s.held_at(before) for s in streams], axis=1)
         stamps = np.stack([s.stamp_at(before) for s in streams], axis=1)
         self._plan = _Plan(t1=t1, times=times, held=held, stamps=stamps, rows=live, record=record)
+        self._checkpoint(t0)
         if not times.size:
             self._window_end = t1
 
@@ -267,6 +316,55 @@ class WindowDriver:
         if plan.done:
             self._window_end = plan.t1
         return plan.done
+
+    # ------------------------------------------------------------------ late readings
+    def _checkpoint(self, t0: float) -> None:
+        """Keep the estimator's state before the window just planned, with the plan (the last
+        :attr:`checkpoint_windows` windows), for :meth:`refilter`."""
+        if self.checkpoint_windows == 0:
+            return
+        assert self._plan is not None
+        state = copy.deepcopy(self.estimator)
+        self._checkpoints.append(_Checkpoint(t0, self._t, self._window_end, state, self._plan))
+        while len(self._checkpoints) > self.checkpoint_windows:
+            self._checkpoints.popleft()
+
+    def refilter(self, late: Measurements) -> int:
+        """Fuse readings that arrived after their window was filtered at their own time stamps:
+        go back to the checkpoint of the earliest window they belong to and filter every window
+        since again, with them (re-recording the beliefs of those windows: the collector keeps
+        the latest belief of each time). Returns the readings that could not be fused (older
+        than every checkpoint, or the estimator talks to teammates: what it sent is out); they
+        are counted (``rows_late_lost``), the fused ones too (``rows_refiltered``)."""
+        if late.size == 0:
+            return 0
+        fits = [k for k, c in enumerate(self._checkpoints) if c.t0 <= late.t.min() + TIME_TOL]
+        if self.busy or self.sent or self._talks or not fits:
+            self._counts["rows_late_lost"] += late.size
+            return late.size
+        first = fits[-1]
+        again = list(self._checkpoints)[first:]
+        while len(self._checkpoints) > first:
+            self._checkpoints.pop()
+        start = again[0]
+        self.estimator = self._wired.inner = copy.deepcopy(start.state)
+        self._t, self._window_end = start.t, start.window_end
+        for i, c in enumerate(again):
+            t_next = again[i + 1].t0 if i + 1 < len(again) else np.inf
+            mine = late.select((late.t >= c.t0 - TIME_TOL) & (late.t < t_next - TIME_TOL))
+            plan = _with_rows(c.plan, mine) if mine.size else c.plan
+            self._plan = _Plan(
+                t1=plan.t1,
+                times=plan.times,
+                held=plan.held,
+                stamps=plan.stamps,
+                rows=plan.rows,
+                record=plan.record,
+            )
+            self._checkpoint(c.t0)
+            self.run()
+        self._counts["rows_refiltered"] += late.size
+        return 0
 
     def _live_rows(self, rows: Measurements, present: set[str]) -> Measurements:
         """``rows`` without those of (or about) a teammate that is not present."""

@@ -173,6 +173,8 @@ PRELOAD = [
     "relloc.runtime.estimation",
     "relloc.runtime.team",
     "relloc.experiments.team_sources",
+    "relloc.experiments.sharma2013",
+    "relloc.estimators.cooperative",
 ]
 """Modules the fork server imports once, so robot processes start in milliseconds instead of
 each paying numpy/scipy imports (zenoh is imported by each child: its runtime must not be

@@ -53,12 +53,14 @@ from relloc.runtime.faults import FAULTED_KINDS, FaultSettings, LinkEmulator
 from relloc.runtime.mail import mail_body, mail_items
 from relloc.runtime.messages import (
     DEFAULT_MAX_BYTES,
+    STATE_DIM,
     Message,
     MessageRejected,
     decode,
     encode,
     est_bodies,
 )
+from relloc.runtime.shared_rows import rows_body, rows_from_body
 from relloc.runtime.sources import SensorSource, batch_rows
 from relloc.runtime.teammates import ReceivedOdometry, SeenSequences, Teammate
 from relloc.runtime.transport import (
@@ -92,6 +94,9 @@ class NodeSettings:
     clock_timeout_s: float = 60.0
     talkers: tuple[str, ...] = ()
     """Robots whose estimators exchange messages (``outbox``/``receive``) with one another."""
+    share_rows: bool = False
+    """Every robot shares its readings (``rows``) and every estimator fuses the team's (seed
+    001)."""
 
     def __post_init__(self) -> None:
         keys.check_id(self.team, "node.team")
@@ -122,6 +127,7 @@ class NodeParts:
     source: SensorSource
     driver: WindowDriver
     talkers: tuple[str, ...] = ()
+    share_rows: bool = False
 
 
 @dataclass
@@ -143,6 +149,8 @@ class RobotNode:
         self.source = source
         self.estimator = estimator
         self.talks = settings.robot in settings.talkers
+        if self.talks:
+            estimator.mark_talking()
         self._acks_due: deque[tuple[int, float]] = deque()
         self._mail_progress = -np.inf
         self.counters: Counter[str] = Counter()
@@ -174,7 +182,7 @@ class RobotNode:
         self._session = session = open_session(s.transport)
         inbox = Inbox()
         try:
-            for kind in ("odom", "meas", "eqm", "mail"):
+            for kind in ("odom", "meas", "rows", "eqm", "mail"):
                 inbox.subscribe(session, keys.robot_wildcard(s.team, kind))
             inbox.subscribe(session, keys.clock_key(s.team, "tick"))
             inbox.subscribe(session, keys.clock_key(s.team, "ctl"))
@@ -292,11 +300,10 @@ class RobotNode:
             self._window_start = self._filtered_until = t - self._dt
             self._next_eqm_s = self._next_report_s = t
         self._deliver(self.link.release(t))
-        rows = self._publish_own_sensors(self._window_start, t)
-        window = _Window(self._window_start, t, [rows], final=self._last_tick_seen)
-        if window.final:  # the run's last instant belongs to the last window
-            window.rows.append(self._own_rows(t, t, inclusive=True))
-        self._pending.append(window)
+        # the run's last instant belongs to the last window
+        final = self._last_tick_seen
+        rows = self._publish_own_sensors(self._window_start, t, final=final)
+        self._pending.append(_Window(self._window_start, t, [rows], final=final))
         self._window_start = t
         self._filter_ready(force=False)
         if t + TIME_TOL >= self._next_eqm_s:
@@ -337,6 +344,20 @@ class RobotNode:
             if msg.kind == "odom":
                 mate.odometry.add(msg.body["stamps"], msg.body["u"])
                 mate.heard_until_s = max(mate.heard_until_s or -np.inf, msg.t)
+            elif msg.kind == "rows" and self.s.share_rows:
+                try:
+                    rows = rows_from_body(msg.body, self.s.roster, msg.sender)
+                except MessageRejected as exc:
+                    self.counters[f"rejected.{exc.reason}"] += 1
+                    self.counters["rejected"] += 1
+                    continue
+                mate.rows_until = max(mate.rows_until, msg.t)
+                late = rows.t < self._unstarted_from() - TIME_TOL
+                if late.any():  # its window is filtered: fuse it at its time stamp anyway
+                    self.counters["rows_late"] += int(late.sum())
+                    self.estimator.refilter(rows.select(late))
+                    rows = rows.select(~late)
+                mate.rows.append(rows)
             elif msg.kind == "mail" and self.talks:
                 try:
                     parcels = mail_items(msg.body, self.s.roster, msg.sender)
@@ -348,6 +369,13 @@ class RobotNode:
                 for stamp, items in parcels:
                     self.estimator.deliver(stamp, msg.sender, items)
 
+    def _unstarted_from(self) -> float:
+        """Where the windows not yet started begin (readings before it are late)."""
+        for w in self._pending:
+            if not w.started:
+                return w.start
+        return -np.inf if self._window_start is None else self._window_start
+
     def _own_rows(self, t0: float, t1: float, *, inclusive: bool = False) -> Measurements:
         """This robot's readings of a window as measurement rows."""
         rows = getattr(self.source, "rows", None)
@@ -356,11 +384,13 @@ class RobotNode:
         batch = self.source.measurements(t0, t1, inclusive=inclusive)
         return batch_rows(batch, self.s.roster, self.s.robot)
 
-    def _publish_own_sensors(self, t0: float, t1: float) -> Measurements:
+    def _publish_own_sensors(self, t0: float, t1: float, *, final: bool) -> Measurements:
+        """Publish the window's odometry, its readings (``meas``; and ``rows`` where the team
+        shares them) and return the readings as rows (``[t0, t1]`` for the ``final`` window)."""
         stamps, u = self.source.odometry(t0, t1)
         self.own_odometry.add(stamps, u)
         self._send("odom", {"stamps": stamps, "u": u})
-        batch = self.source.measurements(t0, t1)
+        batch = self.source.measurements(t0, t1, inclusive=final)
         if batch.size:
             self._send(
                 "meas",
@@ -372,15 +402,36 @@ class RobotNode:
                 },
             )
         if hasattr(self.source, "rows"):
-            return self._own_rows(t0, t1)
-        return batch_rows(batch, self.s.roster, self.s.robot)
+            rows = self._own_rows(t0, t1, inclusive=final)
+        else:
+            rows = batch_rows(batch, self.s.roster, self.s.robot)
+        if self.s.share_rows:
+            self._send("rows", rows_body(rows, self.s.roster))
+        return rows
 
     def _inputs_in(self, window: _Window) -> bool:
+        """Every present teammate's odometry (and shared readings) up to the window's end is
+        in."""
         return all(
             (m.heard_until_s or -np.inf) >= window.end - TIME_TOL
+            and (not self.s.share_rows or m.rows_until >= window.end - TIME_TOL)
             for m in self.teammates.values()
             if m.present
         )
+
+    def _window_rows(self, w: _Window) -> Measurements:
+        """The window's readings: this robot's and, where the team shares them, its
+        teammates', in time order and, at one time, in robot order."""
+        parts = list(w.rows)
+        if self.s.share_rows:
+            for mate in self.teammates.values():
+                parts += mate.take_rows(w.start, w.end, inclusive=w.final)
+        rows = Measurements.concatenate(parts)
+        if len(parts) > 1 and rows.size:
+            order = np.lexsort((rows.observer, rows.t))
+            if np.any(np.diff(order) < 0):
+                rows = rows.select(order)
+        return rows
 
     def _filter_ready(self, *, force: bool) -> None:
         """Filter what can be filtered (module docstring, step 3), then ship the progress."""
@@ -400,7 +451,7 @@ class RobotNode:
                         self.own_odometry if r == self.s.robot else self.teammates[r].odometry
                         for r in self.s.roster
                     ],
-                    rows=Measurements.concatenate(w.rows),
+                    rows=self._window_rows(w),
                     present={r for r, m in self.teammates.items() if m.present},
                     inclusive=w.final,
                 )
@@ -456,7 +507,11 @@ class RobotNode:
             self._send("mail", body)
 
     def _broadcast_beliefs(self) -> None:
+        """Every relative-pose belief as an ``eqm`` (monitoring; a team filter's world poses
+        are not relative poses and are not sent)."""
         for belief in self.estimator.beliefs():
+            if belief.mean.size != STATE_DIM:
+                continue
             self._send("eqm", {"target": belief.subject, "mean": belief.mean, "cov": belief.cov})
 
     def _report(self) -> None:
@@ -495,6 +550,7 @@ class RobotNode:
         """Counters, the link emulator's fault tallies, estimator track counts and latencies."""
         out = dict(self.counters)
         out["late_samples"] = sum(m.odometry.late for m in self.teammates.values())
+        out["late_rows"] = sum(m.late_rows for m in self.teammates.values())
         out["cpu_ms"] = int(time.process_time() * 1000)
         for name, value in self.link.counters.as_dict().items():
             out[f"fault.{name}"] = value

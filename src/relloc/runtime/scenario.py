@@ -39,7 +39,7 @@ class Team:
     scenario: Scenario | None
 
 
-REPRODUCTIONS = ("desilva2015", "desilva2015-kidnapped")
+REPRODUCTIONS = ("desilva2015", "desilva2015-kidnapped", "sharma2013")
 """Reproductions whose teams run as processes (:mod:`relloc.experiments.team_sources`)."""
 
 

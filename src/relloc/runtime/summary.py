@@ -10,6 +10,7 @@ distributed beliefs with the in-process ones.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -21,14 +22,14 @@ from relloc.errors import ConfigError
 from relloc.runtime.launcher import Collected
 from relloc.runtime.messages import estimates_from_bodies
 
-DATA_KINDS = ("odom", "meas", "eqm", "mail")
+DATA_KINDS = ("odom", "meas", "rows", "eqm", "mail")
 
 
 def assemble_estimates(collected: Collected, roster: Sequence[str], estimator: str) -> Estimates:
     """Every robot's shipped estimates as one record (series sorted by time: a restarted
     observer's second life follows its first); events sorted by time, then roster order."""
     order = {r: i for i, r in enumerate(roster)}
-    estimates = estimates_from_bodies(estimator, collected.estimates)
+    estimates = latest_of_each_time(estimates_from_bodies(estimator, collected.estimates))
     events = sorted(collected.events, key=lambda e: (e[0], order[e[1]], order[e[2]]))
     return Estimates(
         estimator=estimator,
@@ -36,6 +37,29 @@ def assemble_estimates(collected: Collected, roster: Sequence[str], estimator: s
         updates=estimates.updates,
         events=tuple(TrackEvent(t=t, owner=o, subject=d, kind=k) for t, o, d, k in events),  # type: ignore[arg-type]
     )
+
+
+def latest_of_each_time(estimates: Estimates) -> Estimates:
+    """Each series with one belief per record time: the last one shipped (a node that
+    re-filtered late readings ships the beliefs of those times again; series are sorted by
+    time, stable, so the last of equal times is the latest)."""
+    beliefs = []
+    for s in estimates.beliefs:
+        if s.t.size < 2 or np.all(np.diff(s.t) > 0):
+            beliefs.append(s)
+            continue
+        last = np.append(np.diff(s.t) > 0, True)
+        beliefs.append(
+            dataclasses.replace(
+                s,
+                t=s.t[last],
+                mean=s.mean[last],
+                cov=s.cov[last],
+                age=s.age[last],
+                info={k: v[last] for k, v in s.info.items()},
+            )
+        )
+    return dataclasses.replace(estimates, beliefs=tuple(beliefs))
 
 
 def _sum_counters(incarnations: Sequence[Mapping[str, int]]) -> dict[str, int]:
