@@ -8,6 +8,14 @@ Zenoh on the given endpoints, and runs until the clock process ends the run (see
     relloc team clock --team demo --roster observer,aerial1 --duration 20 \
         --listen tcp/127.0.0.1:7447
     relloc node --robot observer --scenario team.toml --team demo --connect tcp/127.0.0.1:7447
+
+Live operation (``--realtime``, :mod:`relloc.runtime.realtime`): the node ticks on wall time,
+its sensors replayed in real time through the live sensor API
+(:class:`relloc.runtime.sources.LiveSource`), its teammates' odometry replayed from the same
+recording (``--teammates replay``) or taken from their processes (``--teammates network``);
+it prints measurement-to-estimate latency and missed deadlines::
+
+    relloc node --realtime --robot robot1 --dataset MRCLAM_Dataset6 --duration 3
 """
 
 from __future__ import annotations
@@ -18,7 +26,7 @@ import sys
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from relloc.runtime.node import NodeParts
+    from relloc.runtime.node import NodeParts, NodeSettings
 
 
 def add_network_fault_arguments(p: argparse.ArgumentParser) -> argparse._ArgumentGroup:
@@ -114,10 +122,25 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         "--duration",
         type=float,
         default=None,
-        help="simulated seconds of a reproduction's team (default: the paper's)",
+        help="simulated seconds of a reproduction's team (default: the paper's); with "
+        "--realtime, wall seconds to run (default: the whole recording)",
     )
     p.add_argument("--filter", default="plkf", help="plkf | tekf | bcplkf")
     p.add_argument("--init", default="measurement", help="track initialisation policy")
+    p.add_argument(
+        "--realtime",
+        action="store_true",
+        help="run on wall time (the dataset/scenario replayed in real time through the live "
+        "sensor API) instead of the clock process' ticks; reports latency and deadlines",
+    )
+    p.add_argument("--tick", type=float, default=0.1, help="--realtime: wall seconds per tick")
+    p.add_argument(
+        "--teammates",
+        choices=("replay", "network"),
+        default="replay",
+        help="--realtime: teammates' odometry replayed from the recording, or from their "
+        "processes on the network",
+    )
     p.add_argument("--eqm-period", type=float, default=1.0, help="equivalent-measurement period, s")
     p.add_argument("--max-bytes", type=int, default=65_536, help="message size limit")
     p.add_argument(
@@ -129,10 +152,23 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
 
 
 def run(args: argparse.Namespace) -> int:
-    from relloc.runtime.node import NodeSettings, RobotNode
+    from relloc.runtime.node import RobotNode
 
     parts = node_parts(args)
-    settings = NodeSettings(
+    if args.realtime:
+        return run_realtime(args, parts)
+    settings = node_settings(args, parts)
+    counters = RobotNode(settings, parts.source, parts.driver).run()
+    json.dump({"robot": args.robot, "counters": counters}, sys.stdout, sort_keys=True)
+    sys.stdout.write("\n")
+    return 0
+
+
+def node_settings(args: argparse.Namespace, parts: NodeParts) -> NodeSettings:
+    """The node's settings from its arguments and parts."""
+    from relloc.runtime.node import NodeSettings
+
+    return NodeSettings(
         team=args.team,
         robot=args.robot,
         roster=parts.roster,
@@ -145,7 +181,38 @@ def run(args: argparse.Namespace) -> int:
         talkers=parts.talkers,
         share_rows=parts.share_rows,
     )
-    counters = RobotNode(settings, parts.source, parts.driver).run()
+
+
+def run_realtime(args: argparse.Namespace, parts: NodeParts) -> int:
+    """``--realtime``: the robot on wall time, its recorded sensors replayed through the live
+    sensor API (:mod:`relloc.runtime.realtime`); prints its counters and timing as JSON."""
+    from relloc.errors import ConfigError
+    from relloc.runtime.realtime import WallClockNode, WallClockSettings
+    from relloc.runtime.sources import LiveSource, RecordingSource, ReplayFeeder
+
+    recording = parts.recording
+    if recording is None:
+        raise ConfigError("--realtime: this team source has no recording to replay")
+    t0, t1 = recording.span
+    live = LiveSource(args.robot, odometry_sigma=parts.source.odometry_sigma.tolist())
+    teammates = (
+        {r: RecordingSource(recording, r, all_readings=True) for r in parts.roster}
+        if args.teammates == "replay"
+        else {}
+    )
+    teammates.pop(args.robot, None)
+    wall = WallClockSettings(
+        duration_s=min(args.duration or (t1 - t0), t1 - t0), t0=t0, tick_s=args.tick
+    )
+    node = WallClockNode(
+        node_settings(args, parts),
+        live,
+        parts.driver,
+        wall,
+        feeder=ReplayFeeder(recording, args.robot, live, t0=t0),
+        teammates=teammates,
+    )
+    counters = node.run()
     json.dump({"robot": args.robot, "counters": counters}, sys.stdout, sort_keys=True)
     sys.stdout.write("\n")
     return 0
@@ -192,4 +259,6 @@ def track_manager_parts(args: argparse.Namespace) -> NodeParts:
         args.robot,
         record_times=grid_record_times(RECORD_RATE_HZ, recording.span[0]),
     )
-    return NodeParts(recording.robots, RecordingSource(recording, args.robot), driver)
+    return NodeParts(
+        recording.robots, RecordingSource(recording, args.robot), driver, recording=recording
+    )

@@ -44,7 +44,7 @@ from typing import Any
 
 import numpy as np
 
-from relloc.core.recording import Measurements
+from relloc.core.recording import Measurements, Recording
 from relloc.errors import ConfigError
 from relloc.estimators.relative import FRAME
 from relloc.runtime import keys
@@ -128,6 +128,8 @@ class NodeParts:
     driver: WindowDriver
     talkers: tuple[str, ...] = ()
     share_rows: bool = False
+    recording: Recording | None = None
+    """The recording the source reads (a replay), if any."""
 
 
 @dataclass
@@ -190,24 +192,7 @@ class RobotNode:
             for kind in keys.ROBOT_KINDS:
                 self._pubs[kind] = declare_publisher(session, keys.robot_key(s.team, s.robot, kind))
             self._tokens.append(session.liveliness().declare_token(keys.alive_key(s.team, s.robot)))
-            while not self._done:
-                if self._end_deadline is not None:
-                    # what teammates sent before their last ack is due now: file it and filter
-                    self._deliver(self.link.release(self._t))
-                    self._filter_ready(force=False)
-                    wait = self._end_deadline - time.monotonic()
-                    if wait <= 0 or not self._pending:
-                        self._finish()
-                        break
-                    item = inbox.get(timeout=min(wait, 0.05))
-                else:
-                    item = inbox.get(timeout=s.clock_timeout_s)
-                    if item is None:
-                        self.counters["exit.clock_silent"] += 1
-                        self._finish()
-                        break
-                if item is not None:
-                    self._on_incoming(item)
+            self._loop(inbox)
             self.counters["inbox_overflow"] = inbox.overflow
             self._report()
         finally:
@@ -216,6 +201,28 @@ class RobotNode:
             inbox.close()
             session.close()
         return self.final_counters()
+
+    def _loop(self, inbox: Inbox) -> None:
+        """Handle what arrives until the run ends (clock ticks drive the node)."""
+        s = self.s
+        while not self._done:
+            if self._end_deadline is not None:
+                # what teammates sent before their last ack is due now: file it and filter
+                self._deliver(self.link.release(self._t))
+                self._filter_ready(force=False)
+                wait = self._end_deadline - time.monotonic()
+                if wait <= 0 or not self._pending:
+                    self._finish()
+                    break
+                item = inbox.get(timeout=min(wait, 0.05))
+            else:
+                item = inbox.get(timeout=s.clock_timeout_s)
+                if item is None:
+                    self.counters["exit.clock_silent"] += 1
+                    self._finish()
+                    break
+            if item is not None:
+                self._on_incoming(item)
 
     def _on_incoming(self, item: Incoming) -> None:
         if item.presence != "data":
@@ -292,10 +299,14 @@ class RobotNode:
 
     # ------------------------------------------------------------------ one clock tick
     def _on_tick(self, msg: Message) -> None:
-        t, self._dt = msg.t, float(msg.body["dt"])
+        self._tick(int(msg.body["k"]), int(msg.body["n"]), msg.t, float(msg.body["dt"]))
+
+    def _tick(self, k: int, n: int, t: float, dt: float) -> None:
+        """Tick ``k`` of ``n`` at robot time ``t`` (module docstring)."""
+        self._dt = dt
         self._t = t
         self.counters["ticks"] += 1
-        self._last_tick_seen = int(msg.body["k"]) >= int(msg.body["n"])
+        self._last_tick_seen = k >= n
         if self._window_start is None:  # first tick heard (a restarted node joins mid-run)
             self._window_start = self._filtered_until = t - self._dt
             self._next_eqm_s = self._next_report_s = t
@@ -314,7 +325,7 @@ class RobotNode:
             self._next_report_s += self.s.report_period_s
         if self.estimator.busy:  # waiting for a teammate: repeat our progress, in case the
             self._send_mail(repeat=True)  # teammate waits for it and the last one was lost
-        self._acks_due.append((int(msg.body["k"]), t - self._dt))
+        self._acks_due.append((k, t - self._dt))
         self._send_due_acks()
 
     def _finish(self) -> None:
@@ -462,6 +473,7 @@ class RobotNode:
                     self.counters["overdue_windows.waiting_for_mail"] += 1
                 break
             self._pending.popleft()
+            self._window_done(w)
             for mate in self.teammates.values():
                 mate.odometry.consume_until(w.end)
             self.own_odometry.consume_until(w.end)
@@ -482,6 +494,9 @@ class RobotNode:
                 return
             self._acks_due.popleft()
             self._send("ack", {"k": k})
+
+    def _window_done(self, window: _Window) -> None:
+        """A window was filtered (a wall-clock node times it)."""
 
     def _talk_progress(self) -> float | None:
         """How far every present talking teammate has got (None: nobody to wait for)."""

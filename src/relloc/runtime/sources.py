@@ -30,6 +30,7 @@ Example (a live robot)::
 from __future__ import annotations
 
 import threading
+import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Protocol
@@ -216,3 +217,55 @@ class LiveSource:
             np.stack([m[2] for m in take]),
             np.stack([m[3] for m in take]),
         )
+
+
+class ReplayFeeder:
+    """Plays one robot's recorded samples into a :class:`LiveSource` at the wall time they were
+    recorded (a dataset replayed in real time through the live API): a thread pushes each
+    odometry sample and reading at ``start + (t − t0)`` on the monotonic clock."""
+
+    def __init__(self, recording: Recording, robot: str, live: LiveSource, *, t0: float) -> None:
+        index = recording.index(robot)
+        odo = recording.odometry[index]
+        self._odo = [(float(t), u) for t, u in zip(odo.t, odo.velocity, strict=True)]
+        m = recording.measurements
+        mine = np.flatnonzero(
+            (m.observer == index)
+            & (m.kind == kind_code("range_bearing_elevation"))
+            & (m.target >= 0)
+        )
+        self._meas = [
+            (float(m.t[i]), recording.robots[int(m.target[i])], m.value[i], m.sigma[i])
+            for i in mine
+        ]
+        self.live = live
+        self.t0 = float(t0)
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+
+    def start(self, start_wall: float) -> None:
+        """Start pushing, with robot time ``t0`` at monotonic wall time ``start_wall``."""
+        self._thread = threading.Thread(target=self._play, args=(start_wall,), daemon=True)
+        self._thread.start()
+
+    def stop(self) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout=5.0)
+
+    def _play(self, start_wall: float) -> None:
+        events = sorted(
+            [(t, 0, k) for k, (t, _) in enumerate(self._odo) if t >= self.t0]
+            + [(t, 1, k) for k, (t, *_) in enumerate(self._meas) if t >= self.t0]
+        )
+        for t, which, k in events:
+            wait = start_wall + (t - self.t0) - time.monotonic()
+            if wait > 0 and self._stop.wait(wait):
+                return
+            if self._stop.is_set():
+                return
+            if which == 0:
+                self.live.push_odometry(t, self._odo[k][1])
+            else:
+                _, target, z, sigma = self._meas[k]
+                self.live.push_measurement(t, target, z, sigma)
