@@ -17,6 +17,7 @@ import pytest
 
 from relloc.cli import main
 from relloc.core.recording import Measurements
+from relloc.errors import DataError
 from relloc.experiments.desilva2015 import RunConfig, leader_estimates
 from relloc.experiments.sharma2013_team import in_process
 from relloc.experiments.team_sources import (
@@ -226,3 +227,74 @@ def test_sharma_agents_as_processes_each_equal_the_in_process_eif(tmp_path):
         m = run["messages"][robot]
         assert m["sent"]["rows"] == m["sent"]["odom"] == 30 and m["rejected"] == 0
         assert m["received_delivered"]["rows"] == 4 * 30  # every teammate's, every tick
+
+
+def _handmade_fit(folder: str):
+    """Error models for the runtime test (round values, not fitted: the test is of the runtime,
+    the fit has its own tests and takes half a minute)."""
+    from relloc.calibration.camera import CameraFit
+    from relloc.calibration.odometry import OdometryModelFit
+    from relloc.calibration.window import CalibrationWindow
+    from relloc.experiments.mrclam_cl import FittedModels
+
+    window = CalibrationWindow(start_s=0.0, end_s=400.0, source=folder)
+    return FittedModels(
+        odometry=OdometryModelFit(
+            calibration_window=window,
+            latency_s=0.1,
+            scale_v=(0.9,) * 5,
+            scale_w=(0.8,) * 5,
+            q_v0=1e-6,
+            k_v=0.01,
+            q_w0=1e-6,
+            k_w=0.04,
+            k_wv=0.0,
+            odometry_window_s=5.0,
+        ),
+        camera=CameraFit(
+            calibration_window=window,
+            bearing_offset=(0.0,) * 5,
+            sigma_bearing_raw=0.007,
+            bearing_inflation=25.0,
+            sigma_bearing=0.035,
+            range_bias_coeffs=(0.06, 0.0, 0.0, 0.0, 0.0),
+            sigma_range_raw=0.04,
+            range_inflation=15.0,
+            sigma_range=0.17,
+            range_interval_s=1.0,
+            correlation={"range": {"1s": 0.8}},
+            n_residuals=100,
+        ),
+    )
+
+
+def test_fitted_models_round_trip_through_fit_json(tmp_path):
+    from relloc.experiments.mrclam_team import load_fit, save_fit
+
+    fit = _handmade_fit("somewhere")
+    save_fit(fit, tmp_path / "fit.json")
+    assert load_fit(tmp_path / "fit.json") == fit
+    (tmp_path / "bad.json").write_text('{"odometry": {}}')
+    with pytest.raises(DataError, match=r"bad\.json: not the fitted models"):
+        load_fit(tmp_path / "bad.json")
+
+
+@pytest.mark.slow
+def test_mrclam_agents_as_processes_each_equal_the_in_process_eif(tmp_path):
+    from relloc.datasets.paths import default_mrclam_dataset
+    from relloc.experiments.mrclam_team import save_fit
+
+    folder = default_mrclam_dataset()
+    if not folder.is_dir():
+        pytest.skip(f"{folder} is not here")
+    save_fit(_handmade_fit(str(folder)), tmp_path / "fit.json")
+    out = tmp_path / "out"
+    argv = ["team", "up", str(folder), "--estimator", "cooperative", "--out", str(out)]
+    assert main([*argv, "--fit", str(tmp_path / "fit.json"), "--duration", "2", "--quiet"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["agreement"]["within_tolerance"], summary["agreement"]
+    run = summary["per_run"][0]
+    assert set(run["agents"]) == {"1", "2", "3", "4", "5"}
+    for robot, a in run["agents"].items():
+        assert a["records_missing"] == 0 and a["readings_late"] == 0, robot
+        assert run["messages"][robot]["sent"]["rows"] > 0

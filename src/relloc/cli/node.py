@@ -116,7 +116,19 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         "--run", type=int, default=0, help="Monte-Carlo run of a reproduction's team (desilva2015)"
     )
     p.add_argument(
-        "--case", default="two_landmarks", help="sharma2013's case (its reproduction's cases)"
+        "--case",
+        default=None,
+        help="the team EIF's case: sharma2013's (default two_landmarks), or MODE/ANCHORS of "
+        "mrclam-cl with --estimator cooperative (default range_bearing/2_landmarks)",
+    )
+    p.add_argument(
+        "--estimator",
+        choices=("track", "cooperative"),
+        default="track",
+        help="with --dataset: seed 000's track manager, or seed 001's team EIF (mrclam-cl)",
+    )
+    p.add_argument(
+        "--fit", default=None, metavar="FILE", help="--estimator cooperative: fitted models"
     )
     p.add_argument(
         "--duration",
@@ -224,7 +236,28 @@ def node_parts(args: argparse.Namespace) -> NodeParts:
 
     if args.dataset is None and args.scenario in team_names():
         return named_node_parts(
-            args.scenario, args.robot, args.seed, args.run, args.duration, args.case
+            args.scenario,
+            args.robot,
+            args.seed,
+            args.run,
+            args.duration,
+            args.case or "two_landmarks",
+        )
+    if args.dataset is not None and args.estimator == "cooperative":
+        from pathlib import Path
+
+        from relloc.errors import ConfigError
+        from relloc.experiments.mrclam_team import DEFAULT_CASE, cooperative_node_parts
+
+        if args.fit is None:
+            raise ConfigError("--estimator cooperative: --fit FILE (written by relloc team up)")
+        return cooperative_node_parts(
+            args.dataset,
+            args.robot,
+            args.seed,
+            Path(args.fit),
+            args.duration,
+            args.case or DEFAULT_CASE,
         )
     return track_manager_parts(args)
 

@@ -47,7 +47,7 @@ from relloc.pipeline.evaluation import evaluate
 from relloc.pipeline.output import fmt, markdown_table, prepare_out_dir, write_report, write_summary
 from relloc.pipeline.replay import replay
 from relloc.runtime.faults import FaultSettings
-from relloc.runtime.launcher import TeamLauncher, TeamSettings
+from relloc.runtime.launcher import Collected, TeamLauncher, TeamSettings
 from relloc.runtime.summary import agreement, assemble_estimates, robot_messages
 
 AGREEMENT_TOLERANCE = 1e-9
@@ -101,6 +101,24 @@ def _of_owner(estimates: Estimates, owner: str, as_owner: str | None = None) -> 
     return Estimates(estimator=estimates.estimator, beliefs=beliefs)
 
 
+def compare_agents(
+    got: Estimates, ref: Estimates, recording: Recording, collected: Collected
+) -> dict[str, Any]:
+    """Per agent: its accuracy, its largest difference from the in-process team filter
+    (``ref``, owner ``"team"``), the records it lacks and its late readings."""
+    agents: dict[str, Any] = {}
+    for robot in recording.robots:
+        mine = _of_owner(got, robot)
+        agree = agreement(mine, _of_owner(ref, "team", robot))
+        agents[robot] = accuracy(mine, recording) | {
+            "max_abs_mean_diff": agree["max_abs_mean_diff"],
+            "max_abs_cov_diff": agree["max_abs_cov_diff"],
+            "records_missing": sum(p.get("only_in_process", 0) for p in agree["pairs"].values()),
+            **_late_counts(collected.stats.get(robot, [{}])[-1]),
+        }
+    return agents
+
+
 def run_sharma_team(s: SharmaTeamSettings) -> dict[str, Any]:
     """Run every run's team, compare every agent with the in-process EIF, write the outputs."""
     out = prepare_out_dir(s.out_dir)
@@ -123,19 +141,8 @@ def run_sharma_team(s: SharmaTeamSettings) -> dict[str, Any]:
         collected = TeamLauncher(settings, recording.robots, span).run()
         got = assemble_estimates(collected, recording.robots, "eif")
         ref = in_process(recording, sim, scenario, s.case)
+        agents = compare_agents(got, ref, recording, collected)
         messages = robot_messages(collected, recording.robots)
-        agents: dict[str, Any] = {}
-        for robot in recording.robots:
-            mine = _of_owner(got, robot)
-            agree = agreement(mine, _of_owner(ref, "team", robot))
-            agents[robot] = accuracy(mine, recording) | {
-                "max_abs_mean_diff": agree["max_abs_mean_diff"],
-                "max_abs_cov_diff": agree["max_abs_cov_diff"],
-                "records_missing": sum(
-                    p.get("only_in_process", 0) for p in agree["pairs"].values()
-                ),
-                **_late_counts(collected.stats.get(robot, [{}])[-1]),
-            }
         runs.append(
             {
                 "run": i,
@@ -165,24 +172,30 @@ def _late_counts(counters: Mapping[str, int]) -> dict[str, int]:
 
 
 def _summary(s: SharmaTeamSettings, runs: list[dict[str, Any]]) -> dict[str, Any]:
+    return agents_summary(runs, s.faults) | {
+        "experiment": "sharma2013",
+        "case": s.case,
+        "seed": s.seed,
+        "runs": s.runs,
+    }
+
+
+def agents_summary(runs: list[dict[str, Any]], faults: FaultSettings) -> dict[str, Any]:
+    """The agreement of every agent of every run, and the cost of what was lost."""
     worst = max(
         max(a["max_abs_mean_diff"], a["max_abs_cov_diff"])
         for r in runs
         for a in r["agents"].values()
     )
     missing = sum(a["records_missing"] for r in runs for a in r["agents"].values())
-    perfect = not s.faults.network_faulty and not s.faults.kills
+    perfect = not faults.network_faulty and not faults.kills
     cost = {
         f"run{r['run']}:{robot}": _diff(a["pos_rmse_m"], r["in_process"]["pos_rmse_m"])
         for r in runs
         for robot, a in r["agents"].items()
     }
     return {
-        "experiment": "sharma2013",
-        "case": s.case,
-        "seed": s.seed,
-        "runs": s.runs,
-        "faults": s.faults.to_dict(),
+        "faults": faults.to_dict(),
         "tolerance": AGREEMENT_TOLERANCE,
         "agreement": {
             "max_abs_diff": worst,
@@ -221,8 +234,8 @@ def report_markdown(summary: Mapping[str, Any]) -> str:
     agree = summary["agreement"]
     return "\n".join(
         [
-            f"# relloc team up — sharma2013, case {summary['case']} ({summary['runs']} run(s), "
-            f"seed {summary['seed']})",
+            f"# relloc team up — {summary['experiment']}, case {summary['case']} "
+            f"({summary['runs']} run(s), seed {summary['seed']})",
             "",
             "Every robot shares its odometry and readings and runs the team EIF on what it "
             "received.",

@@ -195,7 +195,9 @@ class WindowDriver:
     ``robot``'s, whatever the estimator's ``owner`` (a team filter, ``"team"`` in-process, runs
     in every agent of seed 001). With ``checkpoint_windows > 0`` the state before each of the
     last that many windows is kept, so that late readings can be re-filtered
-    (:meth:`refilter`).
+    (:meth:`refilter`). Nothing before ``start`` is filtered (the in-process run's window
+    start, as :func:`relloc.pipeline.replay.replay`'s ``start``); readings before it are
+    counted (``rows_before_start``).
     """
 
     def __init__(
@@ -206,6 +208,7 @@ class WindowDriver:
         *,
         record_times: RecordTimes,
         checkpoint_windows: int = 0,
+        start: float = -np.inf,
     ) -> None:
         self.estimator = estimator
         self.roster = tuple(roster)
@@ -230,9 +233,11 @@ class WindowDriver:
             "messages_late": 0,
             "rows_refiltered": 0,
             "rows_late_lost": 0,
+            "rows_before_start": 0,
         }
         self._rows_not_used: dict[str, int] = {}
         self.checkpoint_windows = checkpoint_windows
+        self.start = float(start)
         self._checkpoints: deque[_Checkpoint] = deque()
         self._talks = False
 
@@ -277,9 +282,15 @@ class WindowDriver:
         rows of a teammate that is not ``present`` are dropped and counted."""
         assert not self.busy, "start_window: the previous window is not finished"
         live = self._live_rows(rows, present)
+        early = live.t < self.start - TIME_TOL
+        if early.any():
+            self._counts["rows_before_start"] += int(early.sum())
+            live = live.select(~early)
         record = self.record_times(t0, t1, inclusive, live)
         pieces = [record, live.t] + [s.stamps_between(t0, t1, inclusive) for s in streams]
         times = merge_times(*pieces)
+        times = times[times >= self.start - TIME_TOL]
+        record = record[record >= self.start - TIME_TOL]
         if self._t is not None:  # (a window edge within TIME_TOL of the last event is that
             times = times[times >= self._t - TIME_TOL]  # event again: it is recorded there)
             record = record[record >= self._t - TIME_TOL]

@@ -175,6 +175,7 @@ PRELOAD = [
     "relloc.experiments.team_sources",
     "relloc.experiments.sharma2013",
     "relloc.estimators.cooperative",
+    "relloc.experiments.mrclam_team",
 ]
 """Modules the fork server imports once, so robot processes start in milliseconds instead of
 each paying numpy/scipy imports (zenoh is imported by each child: its runtime must not be
