@@ -153,6 +153,12 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         help="--realtime: teammates' odometry replayed from the recording, or from their "
         "processes on the network",
     )
+    p.add_argument(
+        "--only-needed-streams",
+        action="store_true",
+        help="subscribe to teammates' data only if this robot uses it (it makes readings, "
+        "talks or shares readings): large teams of robots that only move",
+    )
     p.add_argument("--eqm-period", type=float, default=1.0, help="equivalent-measurement period, s")
     p.add_argument("--max-bytes", type=int, default=65_536, help="message size limit")
     p.add_argument(
@@ -192,6 +198,7 @@ def node_settings(args: argparse.Namespace, parts: NodeParts) -> NodeSettings:
         clock_timeout_s=args.clock_timeout,
         talkers=parts.talkers,
         share_rows=parts.share_rows,
+        only_needed_streams=args.only_needed_streams,
     )
 
 

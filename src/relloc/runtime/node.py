@@ -97,6 +97,11 @@ class NodeSettings:
     share_rows: bool = False
     """Every robot shares its readings (``rows``) and every estimator fuses the team's (seed
     001)."""
+    only_needed_streams: bool = False
+    """Subscribe to teammates' data only if this robot uses it: it makes readings (seed 000's
+    relative filters need the observed robots' odometry), talks or shares readings. A robot
+    that only moves then decodes nothing of its teammates' (each robot decoding every
+    teammate's stream is what grows as n² with the team)."""
 
     def __post_init__(self) -> None:
         keys.check_id(self.team, "node.team")
@@ -151,6 +156,11 @@ class RobotNode:
         self.source = source
         self.estimator = estimator
         self.talks = settings.robot in settings.talkers
+        readings = getattr(source, "rows", None)
+        makes_readings = readings is None or readings(-np.inf, np.inf, inclusive=True).size > 0
+        self.listens = not settings.only_needed_streams or (
+            self.talks or settings.share_rows or makes_readings
+        )
         if self.talks:
             estimator.mark_talking()
         self._acks_due: deque[tuple[int, float]] = deque()
@@ -184,8 +194,9 @@ class RobotNode:
         self._session = session = open_session(s.transport)
         inbox = Inbox()
         try:
-            for kind in ("odom", "meas", "rows", "eqm", "mail"):
-                inbox.subscribe(session, keys.robot_wildcard(s.team, kind))
+            if self.listens:
+                for kind in ("odom", "meas", "rows", "eqm", "mail"):
+                    inbox.subscribe(session, keys.robot_wildcard(s.team, kind))
             inbox.subscribe(session, keys.clock_key(s.team, "tick"))
             inbox.subscribe(session, keys.clock_key(s.team, "ctl"))
             inbox.watch_presence(session, keys.alive_wildcard(s.team))
@@ -422,8 +433,8 @@ class RobotNode:
 
     def _inputs_in(self, window: _Window) -> bool:
         """Every present teammate's odometry (and shared readings) up to the window's end is
-        in."""
-        return all(
+        in (a node that does not listen needs none)."""
+        return not self.listens or all(
             (m.heard_until_s or -np.inf) >= window.end - TIME_TOL
             and (not self.s.share_rows or m.rows_until >= window.end - TIME_TOL)
             for m in self.teammates.values()
@@ -566,6 +577,7 @@ class RobotNode:
         out = dict(self.counters)
         out["late_samples"] = sum(m.odometry.late for m in self.teammates.values())
         out["late_rows"] = sum(m.late_rows for m in self.teammates.values())
+        out["listens"] = int(self.listens)
         out["cpu_ms"] = int(time.process_time() * 1000)
         for name, value in self.link.counters.as_dict().items():
             out[f"fault.{name}"] = value

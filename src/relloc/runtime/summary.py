@@ -96,6 +96,7 @@ def robot_messages(collected: Collected, roster: Sequence[str]) -> dict[str, dic
             "faults": {k.split(".", 1)[1]: v for k, v in c.items() if k.startswith("fault.")},
             "tracks": {k.split(".", 1)[1]: v for k, v in c.items() if k.startswith("tracks.")},
             "ticks": c.get("ticks", 0),
+            "listens": bool(last.get("listens", 1)),
             "cpu_s": c.get("cpu_ms", 0) / 1000.0,
             "teammate_departures_seen": c.get("teammate.departures", 0),
             "teammate_joins_seen": c.get("teammate.joins", 0),
@@ -112,14 +113,17 @@ def team_message_totals(
     per_robot: Mapping[str, Mapping[str, Any]], *, killed: bool = False
 ) -> dict[str, Any]:
     """Team totals and the transport loss rate ``1 − received / expected`` of the data streams,
-    where each data message is expected once at every other robot (emulated faults act after
-    reception, so this is what the transport itself lost). With a killed robot the expectation
-    is undefined (a dead robot receives nothing) and the rate is None."""
-    n = len(per_robot)
+    where each data message is expected once at every other robot that listens to its
+    teammates (all of them, unless robots subscribe only to what they use; emulated faults act
+    after reception, so this is what the transport itself lost). With a killed robot the
+    expectation is undefined (a dead robot receives nothing) and the rate is None."""
+    listeners = {r for r, m in per_robot.items() if m.get("listens", True)}
     sent = sum(sum(r["sent"][k] for k in DATA_KINDS) for r in per_robot.values())
     wire = sum(sum(r["received_wire"].values()) for r in per_robot.values())
     delivered = sum(sum(r["received_delivered"].values()) for r in per_robot.values())
-    expected = sent * (n - 1)
+    expected = sum(
+        sum(m["sent"][k] for k in DATA_KINDS) * len(listeners - {r}) for r, m in per_robot.items()
+    )
     return {
         "data_messages_sent": sent,
         "data_messages_expected": expected,
