@@ -181,6 +181,7 @@ def run_reproduction(args: argparse.Namespace) -> int:
             faults=network_faults_from_args(args, **_robot_events(args)),
             team=args.team,
             wall_timeout_s=args.timeout,
+            realtime_factor=args.realtime,
         )
     )
     if not args.quiet:
@@ -209,6 +210,7 @@ def run_sharma(args: argparse.Namespace) -> int:
             faults=network_faults_from_args(args, **_robot_events(args)),
             team=args.team,
             wall_timeout_s=args.timeout,
+            realtime_factor=args.realtime,
         )
     )
     if not args.quiet:
@@ -244,6 +246,7 @@ def run_mrclam(args: argparse.Namespace) -> int:
             faults=network_faults_from_args(args, **_robot_events(args)),
             team=args.team,
             wall_timeout_s=args.timeout,
+            realtime_factor=args.realtime,
             fit_path=Path(args.fit) if args.fit else None,
         )
     )

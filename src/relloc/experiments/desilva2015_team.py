@@ -71,6 +71,8 @@ class DeSilvaTeamSettings:
     faults: FaultSettings = field(default_factory=FaultSettings)
     team: str = "team"
     wall_timeout_s: float = 300.0
+    realtime_factor: float = 0.0
+    """Pace the clock at this multiple of real time (0: as fast as the team goes)."""
 
 
 def run_desilva_team(s: DeSilvaTeamSettings) -> dict[str, Any]:
@@ -92,6 +94,7 @@ def run_desilva_team(s: DeSilvaTeamSettings) -> dict[str, Any]:
             tick_s=s.tick_s,
             faults=s.faults,
             wall_timeout_s=s.wall_timeout_s,
+            realtime_factor=s.realtime_factor,
             node_args=("--run", str(i), "--duration", repr(scenario.duration)),
         )
         span = recording.span[1] - recording.span[0]

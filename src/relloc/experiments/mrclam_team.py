@@ -170,6 +170,8 @@ class MrclamTeamSettings:
     faults: FaultSettings = field(default_factory=FaultSettings)
     team: str = "team"
     wall_timeout_s: float = 600.0
+    realtime_factor: float = 0.0
+    """Pace the clock at this multiple of real time (0: as fast as the team goes)."""
     fit_path: Path | None = None
     """Models fitted before (a ``fit.json`` of an earlier run): used instead of fitting."""
 
@@ -197,6 +199,7 @@ def run_mrclam_team(s: MrclamTeamSettings) -> dict[str, Any]:
         tick_s=s.tick_s,
         faults=s.faults,
         wall_timeout_s=s.wall_timeout_s,
+        realtime_factor=s.realtime_factor,
         node_args=("--estimator", "cooperative", "--fit", str(out / FIT_FILE), "--case", s.case),
     )
     # the clock's last tick at or after the last record time (nodes filter whole ticks)

@@ -68,6 +68,8 @@ class SharmaTeamSettings:
     faults: FaultSettings = field(default_factory=FaultSettings)
     team: str = "team"
     wall_timeout_s: float = 300.0
+    realtime_factor: float = 0.0
+    """Pace the clock at this multiple of real time (0: as fast as the team goes)."""
 
 
 def in_process(recording: Recording, sim: Any, scenario: Any, case: str) -> Estimates:
@@ -135,6 +137,7 @@ def run_sharma_team(s: SharmaTeamSettings) -> dict[str, Any]:
             tick_s=s.tick_s,
             faults=s.faults,
             wall_timeout_s=s.wall_timeout_s,
+            realtime_factor=s.realtime_factor,
             node_args=("--run", str(i), "--duration", repr(scenario.duration), "--case", s.case),
         )
         span = recording.span[1] - recording.span[0]
