@@ -124,8 +124,10 @@ class _Plan:
 
 
 def _with_rows(plan: _Plan, extra: Measurements) -> _Plan:
-    """``plan`` with readings added (their stamps become events: the velocity held over the
-    step they split is the step's, as no odometry stamp lies inside a step)."""
+    """``plan`` with readings added: their stamps become events, and the velocity held over a
+    step they split is that step's (no odometry stamp lies inside a planned step). A reading
+    stamped after the window's last planned event holds the last step's velocity — the one
+    reported at that event is not in the plan: an approximation, for that reading only."""
     rows = Measurements.concatenate([plan.rows, extra])
     order = np.lexsort((rows.observer, rows.t))
     rows = rows.select(order) if np.any(np.diff(order) < 0) else rows
