@@ -16,7 +16,9 @@ and the same runs are replayed in-process
 ``agreement`` (largest |Δ| of any belief mean / covariance entry at common record times, per
 run); for the kidnapped team ``kidnapped`` (``refound_rate``, ``time_to_refind_s`` and
 ``tracked_last_second``, distributed and in-process);
-``messages`` per robot and per run (sent, received, rejected by reason); ``wall_s``.
+``messages`` per robot and per run (sent, received, rejected by reason); per run
+``fault_outcomes`` (accuracy before / during / after each fault, tracks kept, deleted and
+re-found: :mod:`relloc.runtime.outcomes`); ``wall_s``.
 
 Tolerance. On a perfect network every leader processes the in-process event sequence and fuses
 each equivalent measurement at the event the in-process loop does (see
@@ -48,6 +50,7 @@ from relloc.experiments.team_sources import desilva_recording, desilva_scenario
 from relloc.pipeline.output import fmt, markdown_table, prepare_out_dir, write_report, write_summary
 from relloc.runtime.faults import FaultSettings
 from relloc.runtime.launcher import TeamLauncher, TeamSettings
+from relloc.runtime.outcomes import outcomes_of
 from relloc.runtime.summary import agreement, assemble_estimates, robot_messages
 
 AGREEMENT_TOLERANCE = 1e-6
@@ -107,6 +110,7 @@ def run_desilva_team(s: DeSilvaTeamSettings) -> dict[str, Any]:
         runs.append(
             {
                 "run": i,
+                "fault_outcomes": outcomes_of(s.faults, got, recording),
                 "wall_s": collected.wall_s,
                 "agreement": {k: agree[k] for k in ("max_abs_mean_diff", "max_abs_cov_diff")},
                 "messages": robot_messages(collected, recording.robots),

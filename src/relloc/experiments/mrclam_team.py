@@ -54,6 +54,7 @@ from relloc.runtime.estimation import WindowDriver, grid_record_times
 from relloc.runtime.faults import FaultSettings
 from relloc.runtime.launcher import TeamLauncher, TeamSettings
 from relloc.runtime.node import NodeParts
+from relloc.runtime.outcomes import outcomes_of
 from relloc.runtime.sources import RecordingSource
 from relloc.runtime.summary import assemble_estimates, robot_messages
 
@@ -209,6 +210,7 @@ def run_mrclam_team(s: MrclamTeamSettings) -> dict[str, Any]:
     ref = in_process(prepared, settings, end)
     run = {
         "run": 0,
+        "fault_outcomes": outcomes_of(s.faults, got, rec),
         "wall_s": collected.wall_s,
         "window_s": [prepared.t_start, end],
         "in_process": accuracy(ref, rec),

@@ -25,7 +25,8 @@ times), ``agents.<robot>`` (the same of that agent's estimates, its ``max_abs_me
 ``max_abs_cov_diff`` against the in-process EIF, its late readings — re-filtered from a
 checkpoint or lost — and overdue windows), ``agreement``
 (worst over agents, ``within_tolerance``), ``cost_of_loss`` (per agent, RMSE − in-process
-RMSE), ``messages`` per run and robot.
+RMSE), ``messages`` per run and robot, per run ``fault_outcomes`` (accuracy before / during /
+after each fault: :mod:`relloc.runtime.outcomes`).
 """
 
 from __future__ import annotations
@@ -48,6 +49,7 @@ from relloc.pipeline.output import fmt, markdown_table, prepare_out_dir, write_r
 from relloc.pipeline.replay import replay
 from relloc.runtime.faults import FaultSettings
 from relloc.runtime.launcher import Collected, TeamLauncher, TeamSettings
+from relloc.runtime.outcomes import outcomes_of
 from relloc.runtime.summary import agreement, assemble_estimates, robot_messages
 
 AGREEMENT_TOLERANCE = 1e-9
@@ -149,6 +151,7 @@ def run_sharma_team(s: SharmaTeamSettings) -> dict[str, Any]:
         runs.append(
             {
                 "run": i,
+                "fault_outcomes": outcomes_of(s.faults, got, recording),
                 "wall_s": collected.wall_s,
                 "in_process": accuracy(ref, recording),
                 "agents": agents,
