@@ -159,6 +159,14 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         help="subscribe to teammates' data only if this robot uses it (it makes readings, "
         "talks or shares readings): large teams of robots that only move",
     )
+    p.add_argument(
+        "--paced",
+        type=float,
+        default=0.0,
+        metavar="FACTOR",
+        help="the clock paces its ticks at FACTOR x real time (team up --realtime): report "
+        "measurement-to-estimate latency and missed deadlines",
+    )
     p.add_argument("--eqm-period", type=float, default=1.0, help="equivalent-measurement period, s")
     p.add_argument("--max-bytes", type=int, default=65_536, help="message size limit")
     p.add_argument(
@@ -199,6 +207,7 @@ def node_settings(args: argparse.Namespace, parts: NodeParts) -> NodeSettings:
         talkers=parts.talkers,
         share_rows=parts.share_rows,
         only_needed_streams=args.only_needed_streams,
+        paced_factor=args.paced,
     )
 
 

@@ -124,6 +124,8 @@ def node_command(settings: TeamSettings, robot: str, endpoint: str) -> list[str]
     ]
     for p in f.partitions:
         cmd += ["--partition", f"{','.join(p.side)}@{p.start_s!r}-{p.end_s!r}"]
+    if settings.realtime_factor > 0:
+        cmd += ["--paced", repr(settings.realtime_factor)]
     return cmd + list(settings.node_args)
 
 

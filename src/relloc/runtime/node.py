@@ -20,7 +20,8 @@ Per clock tick ``k`` (simulated time ``t_k``; see :mod:`relloc.runtime.clock`) a
    ``talkers``: seed 002's leaders), what the estimator sends leaves as ``mail`` stamped with
    its event, together with the node's progress, and the node processes an event only once
    every present talking teammate's progress has reached it (see
-   :mod:`relloc.runtime.estimation`); mail is handled as it arrives, between ticks;
+   :mod:`relloc.runtime.estimation`); what arrives between ticks is filed at once and a window
+   whose inputs are in is filtered then, not at the next tick;
 4. every ``eqm_period_s`` broadcasts its belief of each teammate as an equivalent measurement
    (monitoring, 1 Hz); every ``report_period_s`` ships its new estimates (``est``), track events
    (``evt``) and counters (``stats``) to the collector; finally it acknowledges ``k``.
@@ -63,6 +64,7 @@ from relloc.runtime.messages import (
 from relloc.runtime.shared_rows import rows_body, rows_from_body
 from relloc.runtime.sources import SensorSource, batch_rows
 from relloc.runtime.teammates import ReceivedOdometry, SeenSequences, Teammate
+from relloc.runtime.timing import EstimateTiming
 from relloc.runtime.transport import (
     Inbox,
     Incoming,
@@ -97,6 +99,10 @@ class NodeSettings:
     share_rows: bool = False
     """Every robot shares its readings (``rows``) and every estimator fuses the team's (seed
     001)."""
+    paced_factor: float = 0.0
+    """The clock paces its ticks at this multiple of real time (``team up --realtime``; 0: as
+    fast as the team goes). When paced, the node reports measurement-to-estimate latency and
+    missed deadlines (:mod:`relloc.runtime.timing`, deadline: one tick of wall time)."""
     only_needed_streams: bool = False
     """Subscribe to teammates' data only if this robot uses it: it makes readings (seed 000's
     relative filters need the observed robots' odometry), talks or shares readings. A robot
@@ -164,6 +170,10 @@ class RobotNode:
         if self.talks:
             estimator.mark_talking()
         self._acks_due: deque[tuple[int, float]] = deque()
+        self._tick_wall: dict[float, float] = {}
+        self.paced = (
+            EstimateTiming(1.0 / settings.paced_factor) if settings.paced_factor > 0 else None
+        )
         self._mail_progress = -np.inf
         self.counters: Counter[str] = Counter()
         self.teammates = {r: Teammate(r) for r in settings.roster if r != settings.robot}
@@ -267,9 +277,10 @@ class RobotNode:
             if len(self._latency_us) < LATENCY_SAMPLES:
                 self._latency_us.append((item.recv_wall_ns - msg.wall_ns) / 1e3)
             self.link.admit(msg, msg.sender, self._t)
-            if msg.kind == "mail":  # a teammate's progress: go on at once, not at the next tick
-                self._deliver(self.link.release(self._t))
-                self._filter_ready(force=False)
+            # what is due now (all of it on a perfect network) is filed at once, and a window
+            # whose inputs are in is filtered between ticks, not at the next one
+            self._deliver(self.link.release(self._t))
+            self._filter_ready(force=False)
         else:
             self.counters[f"ignored.{msg.kind}"] += 1
 
@@ -310,6 +321,8 @@ class RobotNode:
 
     # ------------------------------------------------------------------ one clock tick
     def _on_tick(self, msg: Message) -> None:
+        if self.paced is not None:  # when the clock sent t_k: its wall time on a paced clock
+            self._tick_wall[msg.t] = msg.wall_ns / 1e9
         self._tick(int(msg.body["k"]), int(msg.body["n"]), msg.t, float(msg.body["dt"]))
 
     def _tick(self, k: int, n: int, t: float, dt: float) -> None:
@@ -507,7 +520,15 @@ class RobotNode:
             self._send("ack", {"k": k})
 
     def _window_done(self, window: _Window) -> None:
-        """A window was filtered (a wall-clock node times it)."""
+        """A window was filtered: on a paced clock, time it (module :mod:`~relloc.runtime.timing`;
+        a reading at ``t`` was taken ``(t_k − t) / factor`` before the clock sent ``t_k``)."""
+        end_wall = self._tick_wall.pop(window.end, None)
+        if self.paced is None or end_wall is None:
+            return
+        factor = self.s.paced_factor
+        taken = end_wall - (window.end - window.rows[0].t) / factor
+        self.paced.deadline_s = self._dt / factor
+        self.paced.window_done(taken, end_wall, time.time())
 
     def _talk_progress(self) -> float | None:
         """How far every present talking teammate has got (None: nobody to wait for)."""
@@ -578,6 +599,8 @@ class RobotNode:
         out["late_samples"] = sum(m.odometry.late for m in self.teammates.values())
         out["late_rows"] = sum(m.late_rows for m in self.teammates.values())
         out["listens"] = int(self.listens)
+        if self.paced is not None:
+            out |= self.paced.counters()
         out["cpu_ms"] = int(time.process_time() * 1000)
         for name, value in self.link.counters.as_dict().items():
             out[f"fault.{name}"] = value

@@ -31,9 +31,8 @@ from relloc.errors import ConfigError
 from relloc.runtime.estimation import WindowDriver
 from relloc.runtime.node import NodeSettings, RobotNode, _Window
 from relloc.runtime.sources import LiveSource, RecordingSource, ReplayFeeder
+from relloc.runtime.timing import EstimateTiming
 from relloc.runtime.transport import Inbox
-
-LATENCY_SAMPLES = 200_000
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -74,7 +73,7 @@ class WallClockNode(RobotNode):
         self.feeder = feeder
         self.replayed = dict(teammates or {})
         self._start = 0.0
-        self._latency_ms: list[float] = []
+        self.timing = EstimateTiming(wall.deadline_s)
 
     def _wall_of(self, t: float) -> float:
         """The wall time (monotonic) at which robot time ``t`` happens."""
@@ -88,8 +87,7 @@ class WallClockNode(RobotNode):
             self._on_presence(robot, joined=True)
         if self.feeder is not None:
             self.feeder.start(self._start)
-        for name in ("deadline.windows", "deadline.missed", "deadline.late_ticks"):
-            self.counters[name] += 0
+        self.counters["deadline.late_ticks"] += 0
         previous = w.t0
         try:
             for k in range(1, n + 1):
@@ -116,23 +114,13 @@ class WallClockNode(RobotNode):
         self.counters["wall_ms"] = int((time.monotonic() - self._start) * 1000)
 
     def _window_done(self, window: _Window) -> None:
-        now = time.monotonic()
-        self.counters["deadline.windows"] += 1
-        if now - self._wall_of(window.end) > self.wall.deadline_s:
-            self.counters["deadline.missed"] += 1
         own = window.rows[0]
-        if own.size and len(self._latency_ms) < LATENCY_SAMPLES:
-            taken = self._start + (own.t - self.wall.t0)
-            self._latency_ms.extend(((now - taken) * 1000).tolist())
+        taken = self._start + (own.t - self.wall.t0)
+        self.timing.window_done(taken, self._wall_of(window.end), time.monotonic())
 
     def final_counters(self) -> dict[str, int]:
         out = super().final_counters()
         src = self.source
         if isinstance(src, LiveSource):
             out["source.late"] = src.late
-        if self._latency_ms:
-            p50, p99 = np.percentile(self._latency_ms, [50, 99])
-            out["latency_ms.p50"] = int(np.rint(p50))
-            out["latency_ms.p99"] = int(np.rint(p99))
-            out["latency_ms.samples"] = len(self._latency_ms)
-        return out
+        return out | self.timing.counters()

@@ -66,7 +66,7 @@ def _sum_counters(incarnations: Sequence[Mapping[str, int]]) -> dict[str, int]:
     total: dict[str, int] = {}
     for counters in incarnations:
         for key, value in counters.items():
-            if key.startswith("latency_us."):
+            if key.startswith(("latency_us.", "latency_ms.")):
                 continue
             total[key] = total.get(key, 0) + int(value)
     return total
@@ -104,6 +104,15 @@ def robot_messages(collected: Collected, roster: Sequence[str]) -> dict[str, dic
                 "p50": last.get("latency_us.p50"),
                 "p99": last.get("latency_us.p99"),
                 "samples": last.get("latency_us.samples", 0),
+            },
+            "estimate_latency_ms": {
+                "p50": last.get("latency_ms.p50"),
+                "p99": last.get("latency_ms.p99"),
+                "samples": last.get("latency_ms.samples", 0),
+            },
+            "deadlines": {
+                "windows": c.get("deadline.windows", 0),
+                "missed": c.get("deadline.missed", 0),
             },
         }
     return out
