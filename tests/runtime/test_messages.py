@@ -42,6 +42,8 @@ def _est(**overrides):
         "update_dofs": [3],
         "cond_r": [3.0],
         "cond_s": [2.0],
+        "info_names": ["weight"],
+        "info": [0.9, 0.8],
     }
     return body | overrides
 
@@ -62,15 +64,26 @@ def test_round_trip_every_kind():
         "tick": {"k": 5, "n": 40, "dt": 0.1},
         "ack": {"k": 5},
         "ctl": {"action": "kill", "robot": "air1"},
+        "mail": {
+            "progress": 1.5,
+            "stamps": [1.0],
+            "subjects": ["gnd1"],
+            "sizes": [2],
+            "means": np.zeros((2, 4)),
+            "covs": np.stack([COV, COV]),
+            "prior_means": np.zeros((2, 4)),
+            "prior_covs": np.stack([COV, COV]),
+            "weights": [0.5, 0.5],
+        },
     }
-    assert SCHEMA_VERSION == 2
+    assert SCHEMA_VERSION == 3
     for kind, body in bodies.items():
         sender = "clock" if kind in ("tick", "ctl") else "obs"
         msg = decode(encode(kind, sender, 7, 1.5, body), roster=ROSTER, key_sender=sender)
         assert (msg.kind, msg.sender, msg.seq, msg.t) == (kind, sender, 7, 1.5)
     msg = decode(encode("odom", "obs", 0, 0.0, _odom(4)), roster=ROSTER)
     np.testing.assert_array_equal(msg.body["u"], np.tile([0.3, 0.0, 0.0, 0.1], (4, 1)))
-    empty = _est(target="gnd1", stamps=[], means=[], covs=[], ages=[])
+    empty = _est(target="gnd1", stamps=[], means=[], covs=[], ages=[], info=[])
     assert decode(encode("est", "obs", 1, 0.0, empty), roster=ROSTER).body["means"].shape == (0, 4)
 
 
@@ -134,8 +147,8 @@ def test_spoofed_sender_and_inconsistent_batches():
 @pytest.mark.parametrize(
     ("overrides", "match"),
     [
-        ({"frame": "world_pose2"}, "not a 4-state frame"),
-        ({"frame": "nowhere"}, "not a 4-state frame"),
+        ({"frame": "world_pose2"}, "states are not those of"),  # 4 states, a 3-state frame
+        ({"frame": "nowhere"}, "is not a frame"),
         ({"update_dofs": [0]}, "update_dofs must be integers"),
         ({"update_dofs": [2.5]}, "update_dofs must be integers"),
         ({"update_dofs": [3, 3]}, "update batch lengths differ"),

@@ -82,8 +82,11 @@ def team_toml(n: int, duration_s: float) -> str:
     return "\n".join(lines) + "\n"
 
 
-def run_team_size(n: int, work: Path, *, duration_s: float = DURATION_S) -> dict[str, Any]:
-    """One real-time team of ``n`` robot processes; its rates, loss, latency and CPU."""
+def run_team_size(
+    n: int, work: Path, *, duration_s: float = DURATION_S, node_args: tuple[str, ...] = ()
+) -> dict[str, Any]:
+    """One real-time team of ``n`` robot processes; its rates, loss, latency and CPU
+    (``node_args``: extra ``relloc node`` arguments of every robot)."""
     import json
 
     from relloc.runtime.launcher import TeamLauncher, TeamSettings
@@ -92,7 +95,9 @@ def run_team_size(n: int, work: Path, *, duration_s: float = DURATION_S) -> dict
     scenario = work / f"team{n}.toml"
     scenario.write_text(team_toml(n, duration_s))
     out = work / f"team{n}"
-    settings = TeamSettings(scenario=str(scenario), out_dir=out, realtime_factor=1.0)
+    settings = TeamSettings(
+        scenario=str(scenario), out_dir=out, realtime_factor=1.0, node_args=node_args
+    )
     roster = ("observer", *(f"r{i}" for i in range(1, n)))
     collected = TeamLauncher(settings, roster, duration_s).run()
     per_robot = robot_messages(collected, roster)

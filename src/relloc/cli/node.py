@@ -8,6 +8,14 @@ Zenoh on the given endpoints, and runs until the clock process ends the run (see
     relloc team clock --team demo --roster observer,aerial1 --duration 20 \
         --listen tcp/127.0.0.1:7447
     relloc node --robot observer --scenario team.toml --team demo --connect tcp/127.0.0.1:7447
+
+Live operation (``--realtime``, :mod:`relloc.runtime.realtime`): the node ticks on wall time,
+its sensors replayed in real time through the live sensor API
+(:class:`relloc.runtime.sources.LiveSource`), its teammates' odometry replayed from the same
+recording (``--teammates replay``) or taken from their processes (``--teammates network``);
+it prints measurement-to-estimate latency and missed deadlines::
+
+    relloc node --realtime --robot robot1 --dataset MRCLAM_Dataset6 --duration 3
 """
 
 from __future__ import annotations
@@ -15,6 +23,10 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from relloc.runtime.node import NodeParts, NodeSettings
 
 from relloc.cli.console import plain_text
 
@@ -102,8 +114,61 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         "--dataset", default=None, metavar="DIR", help="replay the team of an MRCLAM-layout folder"
     )
     p.add_argument("--seed", type=int, default=0, help="simulation seed (same for the team)")
+    p.add_argument(
+        "--run", type=int, default=0, help="Monte-Carlo run of a reproduction's team (desilva2015)"
+    )
+    p.add_argument(
+        "--case",
+        default=None,
+        help="the team EIF's case: sharma2013's (default two_landmarks), or MODE/ANCHORS of "
+        "mrclam-cl with --estimator cooperative (default range_bearing/2_landmarks)",
+    )
+    p.add_argument(
+        "--estimator",
+        choices=("track", "cooperative"),
+        default="track",
+        help="with --dataset: seed 000's track manager, or seed 001's team EIF (mrclam-cl)",
+    )
+    p.add_argument(
+        "--fit", default=None, metavar="FILE", help="--estimator cooperative: fitted models"
+    )
+    p.add_argument(
+        "--duration",
+        type=float,
+        default=None,
+        help="simulated seconds of a reproduction's team (default: the paper's); with "
+        "--realtime, wall seconds to run (default: the whole recording)",
+    )
     p.add_argument("--filter", default="plkf", help="plkf | tekf | bcplkf")
     p.add_argument("--init", default="measurement", help="track initialisation policy")
+    p.add_argument(
+        "--realtime",
+        action="store_true",
+        help="run on wall time (the dataset/scenario replayed in real time through the live "
+        "sensor API) instead of the clock process' ticks; reports latency and deadlines",
+    )
+    p.add_argument("--tick", type=float, default=0.1, help="--realtime: wall seconds per tick")
+    p.add_argument(
+        "--teammates",
+        choices=("replay", "network"),
+        default="replay",
+        help="--realtime: teammates' odometry replayed from the recording, or from their "
+        "processes on the network",
+    )
+    p.add_argument(
+        "--only-needed-streams",
+        action="store_true",
+        help="subscribe to teammates' data only if this robot uses it (it makes readings, "
+        "talks or shares readings): large teams of robots that only move",
+    )
+    p.add_argument(
+        "--paced",
+        type=float,
+        default=0.0,
+        metavar="FACTOR",
+        help="the clock paces its ticks at FACTOR x real time (team up --realtime): report "
+        "measurement-to-estimate latency and missed deadlines",
+    )
     p.add_argument("--eqm-period", type=float, default=1.0, help="equivalent-measurement period, s")
     p.add_argument("--max-bytes", type=int, default=65_536, help="message size limit")
     p.add_argument(
@@ -115,30 +180,123 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
 
 
 def run(args: argparse.Namespace) -> int:
-    import numpy as np
+    from relloc.runtime.node import RobotNode
 
-    from relloc.errors import ConfigError
-    from relloc.estimators.initialisation import InitPolicy
-    from relloc.estimators.track_manager import TrackManagerSettings, track_manager_of
-    from relloc.runtime.estimation import TrackManagerEstimator
-    from relloc.runtime.node import NodeSettings, RobotNode
-    from relloc.runtime.scenario import load_team
-    from relloc.runtime.sources import RecordingSource
+    parts = node_parts(args)
+    if args.realtime:
+        return run_realtime(args, parts)
+    settings = node_settings(args, parts)
+    counters = RobotNode(settings, parts.source, parts.driver).run()
+    json.dump({"robot": args.robot, "counters": counters}, sys.stdout, sort_keys=True)
+    sys.stdout.write("\n")
+    return 0
 
-    recording = load_team(args.dataset or args.scenario, args.seed).recording
-    if args.robot not in recording.robots:
-        raise ConfigError(f"--robot: {args.robot!r} is not in the scenario {recording.robots}")
-    settings = NodeSettings(
+
+def node_settings(args: argparse.Namespace, parts: NodeParts) -> NodeSettings:
+    """The node's settings from its arguments and parts."""
+    from relloc.runtime.node import NodeSettings
+
+    return NodeSettings(
         team=args.team,
         robot=args.robot,
-        roster=recording.robots,
+        roster=parts.roster,
         transport=transport_from_args(args),
         faults=network_faults_from_args(args),
         fault_seed=args.seed,
         eqm_period_s=args.eqm_period,
         max_bytes=args.max_bytes,
         clock_timeout_s=args.clock_timeout,
+        talkers=parts.talkers,
+        share_rows=parts.share_rows,
+        only_needed_streams=args.only_needed_streams,
+        paced_factor=args.paced,
     )
+
+
+def run_realtime(args: argparse.Namespace, parts: NodeParts) -> int:
+    """``--realtime``: the robot on wall time, its recorded sensors replayed through the live
+    sensor API (:mod:`relloc.runtime.realtime`); prints its counters and timing as JSON."""
+    from relloc.errors import ConfigError
+    from relloc.runtime.realtime import WallClockNode, WallClockSettings
+    from relloc.runtime.sources import LiveSource, RecordingSource, ReplayFeeder
+
+    recording = parts.recording
+    if recording is None:
+        raise ConfigError("--realtime: this team source has no recording to replay")
+    t0, t1 = recording.span
+    live = LiveSource(args.robot, odometry_sigma=parts.source.odometry_sigma.tolist())
+    teammates = (
+        {r: RecordingSource(recording, r, all_readings=True) for r in parts.roster}
+        if args.teammates == "replay"
+        else {}
+    )
+    teammates.pop(args.robot, None)
+    wall = WallClockSettings(
+        duration_s=min(args.duration or (t1 - t0), t1 - t0), t0=t0, tick_s=args.tick
+    )
+    node = WallClockNode(
+        node_settings(args, parts),
+        live,
+        parts.driver,
+        wall,
+        feeder=ReplayFeeder(recording, args.robot, live, t0=t0),
+        teammates=teammates,
+    )
+    counters = node.run()
+    json.dump({"robot": args.robot, "counters": counters}, sys.stdout, sort_keys=True)
+    sys.stdout.write("\n")
+    return 0
+
+
+def node_parts(args: argparse.Namespace) -> NodeParts:
+    """The robot's sensor source and estimator for the team source the arguments name."""
+    from relloc.experiments.team_sources import named_node_parts, team_names
+
+    if args.dataset is None and args.scenario in team_names():
+        return named_node_parts(
+            args.scenario,
+            args.robot,
+            args.seed,
+            args.run,
+            args.duration,
+            args.case or "two_landmarks",
+        )
+    if args.dataset is not None and args.estimator == "cooperative":
+        from pathlib import Path
+
+        from relloc.errors import ConfigError
+        from relloc.experiments.mrclam_team import DEFAULT_CASE, cooperative_node_parts
+
+        if args.fit is None:
+            raise ConfigError("--estimator cooperative: --fit FILE (written by relloc team up)")
+        return cooperative_node_parts(
+            args.dataset,
+            args.robot,
+            args.seed,
+            Path(args.fit),
+            args.duration,
+            args.case or DEFAULT_CASE,
+        )
+    return track_manager_parts(args)
+
+
+def track_manager_parts(args: argparse.Namespace) -> NodeParts:
+    """Seed 000: the robot's own TrackManager (its relative filters of every teammate) on the
+    10 Hz recording grid, on a scenario or a recorded team."""
+    import numpy as np
+
+    from relloc.errors import ConfigError
+    from relloc.estimators.initialisation import InitPolicy
+    from relloc.estimators.track_manager import TrackManagerSettings, track_manager_of
+    from relloc.pipeline.team_report import RECORD_RATE_HZ
+    from relloc.runtime.estimation import WindowDriver, grid_record_times
+    from relloc.runtime.node import NodeParts
+    from relloc.runtime.scenario import load_team
+    from relloc.runtime.sources import RecordingSource
+
+    recording = load_team(args.dataset or args.scenario, args.seed).recording
+    if args.robot not in recording.robots:
+        raise ConfigError(f"--robot: {args.robot!r} is not in the scenario {recording.robots}")
     index = recording.index(args.robot)
     manager = track_manager_of(
         recording,
@@ -146,9 +304,12 @@ def run(args: argparse.Namespace) -> int:
         TrackManagerSettings(filter=args.filter, init=InitPolicy(name=args.init)),
         rng=np.random.default_rng(np.random.SeedSequence([args.seed, index])),
     )
-    estimator = TrackManagerEstimator(manager, record_origin=recording.span[0])
-    source = RecordingSource(recording, args.robot)
-    counters = RobotNode(settings, source, estimator).run()
-    json.dump({"robot": args.robot, "counters": counters}, sys.stdout, sort_keys=True)
-    sys.stdout.write("\n")
-    return 0
+    driver = WindowDriver(
+        manager,
+        recording.robots,
+        args.robot,
+        record_times=grid_record_times(RECORD_RATE_HZ, recording.span[0]),
+    )
+    return NodeParts(
+        recording.robots, RecordingSource(recording, args.robot), driver, recording=recording
+    )

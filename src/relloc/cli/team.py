@@ -1,4 +1,5 @@
-r"""``relloc team up SCENARIO|default|DATASET_DIR --out DIR`` — the whole team as processes.
+r"""``relloc team up SCENARIO|default|DATASET_DIR|REPRODUCTION --out DIR`` — the whole team as
+processes.
 
 Every robot runs as its own ``relloc node`` process and a ``relloc team clock`` process drives
 simulated time (faster than real time unless ``--realtime``); the launcher collects every
@@ -11,6 +12,11 @@ robot's estimates and writes ``summary.json`` and ``report.md`` (see
 ``--secure`` runs every process with mutual TLS only and Zenoh access control: each robot may
 publish only under its own key prefix, only the launcher's certificate may send ``tick``/``ctl``
 (certificates from ``--certs DIR``, see ``relloc certs``, or made in ``OUT/certs``).
+
+A reproduction's team (``desilva2015``, ``desilva2015-kidnapped``: seed 002's leaders and pods,
+see :mod:`relloc.experiments.desilva2015_team`) runs ``--runs N`` Monte-Carlo runs of
+``--duration S`` simulated seconds each and is scored beside the in-process reproduction on the
+same seeds.
 
 ``relloc team clock`` runs only the clock/simulator process (for robots started by hand).
 """
@@ -42,7 +48,31 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     up = actions.add_parser("up", help="launch a team, collect its estimates, write a report")
     up.add_argument(
         "scenario",
-        help="scenario TOML file, 'default' (built-in team), or an MRCLAM-layout dataset folder",
+        help="scenario TOML file, 'default' (built-in team), an MRCLAM-layout dataset folder, "
+        "or a reproduction: desilva2015, desilva2015-kidnapped, sharma2013",
+    )
+    up.add_argument("--runs", type=int, default=1, help="a reproduction's Monte-Carlo runs")
+    up.add_argument(
+        "--case",
+        default=None,
+        help="the team EIF's case: sharma2013's (default two_landmarks), or MODE/ANCHORS of "
+        "mrclam-cl with --estimator cooperative (default range_bearing/2_landmarks)",
+    )
+    up.add_argument(
+        "--fit",
+        default=None,
+        metavar="FILE",
+        help="--estimator cooperative: the fit.json of an earlier run (skip the fit)",
+    )
+    up.add_argument(
+        "--estimator",
+        choices=("track", "cooperative"),
+        default="track",
+        help="with a dataset folder: seed 000's track managers, or seed 001's team EIF in "
+        "every robot (the mrclam-cl reproduction)",
+    )
+    up.add_argument(
+        "--duration", type=float, default=None, help="a reproduction's simulated seconds per run"
     )
     up.add_argument("--out", type=Path, required=True, help="output folder")
     up.add_argument("--seed", type=int, default=0, help="simulation and fault seed")
@@ -100,6 +130,12 @@ def _robot_events(args: argparse.Namespace) -> dict[str, tuple[object, ...]]:
 
 
 def run_up(args: argparse.Namespace) -> int:
+    from relloc.runtime.scenario import REPRODUCTIONS
+
+    if args.scenario in REPRODUCTIONS:
+        return run_reproduction(args)
+    if args.estimator == "cooperative":
+        return run_mrclam(args)
     from relloc.runtime.launcher import TeamSettings
     from relloc.runtime.team import run_team
 
@@ -142,4 +178,105 @@ def run_clock(args: argparse.Namespace) -> int:
         restarts=events["restarts"],  # type: ignore[arg-type]
     )
     run_clock(settings, args.report)
+    return 0
+
+
+def run_reproduction(args: argparse.Namespace) -> int:
+    """``team up desilva2015`` / ``sharma2013``: the runs, scored beside the in-process
+    reproduction."""
+    from relloc.errors import ConfigError
+    from relloc.experiments.desilva2015_team import DeSilvaTeamSettings, run_desilva_team
+    from relloc.pipeline.output import fmt
+
+    if args.runs < 1:
+        raise ConfigError(f"--runs: {args.runs} must be ≥ 1")
+    if args.scenario == "sharma2013":
+        return run_sharma(args)
+    summary = run_desilva_team(
+        DeSilvaTeamSettings(
+            name=args.scenario,
+            out_dir=args.out,
+            seed=args.seed,
+            runs=args.runs,
+            duration_s=args.duration,
+            tick_s=args.tick,
+            faults=network_faults_from_args(args, **_robot_events(args)),
+            team=args.team,
+            wall_timeout_s=args.timeout,
+            realtime_factor=args.realtime,
+        )
+    )
+    if not args.quiet:
+        d, r = summary["distributed"], summary["in_process"]
+        print(
+            f"{summary['experiment']}: success rate {fmt(d['success_rate'])} (in-process "
+            f"{fmt(r['success_rate'])}), position RMSE {fmt(d['pos_rmse_m'])} m (in-process "
+            f"{fmt(r['pos_rmse_m'])} m); max |Δ belief| {fmt(summary['agreement']['max_abs_diff'])}"
+        )
+    return 0
+
+
+def run_sharma(args: argparse.Namespace) -> int:
+    """``team up sharma2013``: every agent's team EIF beside the in-process one."""
+    from relloc.experiments.sharma2013_team import SharmaTeamSettings, run_sharma_team
+    from relloc.pipeline.output import fmt
+
+    summary = run_sharma_team(
+        SharmaTeamSettings(
+            out_dir=args.out,
+            seed=args.seed,
+            runs=args.runs,
+            duration_s=args.duration,
+            case=args.case or "two_landmarks",
+            tick_s=args.tick,
+            faults=network_faults_from_args(args, **_robot_events(args)),
+            team=args.team,
+            wall_timeout_s=args.timeout,
+            realtime_factor=args.realtime,
+        )
+    )
+    if not args.quiet:
+        for run in summary["per_run"]:
+            ref = run["in_process"]["pos_rmse_m"]
+            for robot, a in run["agents"].items():
+                print(
+                    f"run {run['run']} agent {robot}: position RMSE {fmt(a['pos_rmse_m'])} m "
+                    f"(in-process {fmt(ref)} m), max |Δ| {fmt(a['max_abs_mean_diff'])}"
+                )
+    return 0
+
+
+def run_mrclam(args: argparse.Namespace) -> int:
+    """``team up MRCLAM_DIR --estimator cooperative``: every agent's team EIF beside the
+    in-process one."""
+    from pathlib import Path
+
+    from relloc.errors import ConfigError
+    from relloc.experiments.mrclam_team import DEFAULT_CASE, MrclamTeamSettings, run_mrclam_team
+    from relloc.pipeline.output import fmt
+
+    if not Path(args.scenario).is_dir():
+        raise ConfigError(f"--estimator cooperative: {args.scenario} is not a dataset folder")
+    summary = run_mrclam_team(
+        MrclamTeamSettings(
+            folder=Path(args.scenario),
+            out_dir=args.out,
+            seed=args.seed,
+            duration_s=args.duration,
+            case=args.case or DEFAULT_CASE,
+            tick_s=args.tick,
+            faults=network_faults_from_args(args, **_robot_events(args)),
+            team=args.team,
+            wall_timeout_s=args.timeout,
+            realtime_factor=args.realtime,
+            fit_path=Path(args.fit) if args.fit else None,
+        )
+    )
+    if not args.quiet:
+        run = summary["per_run"][0]
+        for robot, a in run["agents"].items():
+            print(
+                f"agent {robot}: position RMSE {fmt(a['pos_rmse_m'])} m (in-process "
+                f"{fmt(run['in_process']['pos_rmse_m'])} m), max |Δ| {fmt(a['max_abs_mean_diff'])}"
+            )
     return 0

@@ -141,17 +141,20 @@ class LeaderRunScores:
     world_xy: Array
 
 
-def _run(
-    seed_seq: np.random.SeedSequence, config: RunConfig
-) -> tuple[Estimates, Recording, dict[str, Array], GaussianSumSettings]:
-    """Simulate one run and replay it through the leaders' fusers: the estimates (dominant
-    tracks at each leader's scan times), the recording, those times and the settings."""
-    rng = np.random.default_rng(seed_seq)
-    recording = simulate(config.scenario, rng)
+def _task(seed_seq: np.random.SeedSequence, run_index: int, config: RunConfig) -> LeaderRunScores:
+    """Simulate one run, replay it through the leaders' fusers and score it (top-level,
+    picklable)."""
+    del run_index
+    recording = simulate(config.scenario, np.random.default_rng(seed_seq))
+    return score_run(leader_estimates(recording, config), recording, config)
+
+
+def leader_estimates(recording: Recording, config: RunConfig) -> Estimates:
+    """The leaders' fusers replayed over one run's recording, their dominant tracks recorded
+    at their scan times."""
     settings = replace(filter_settings(config.scenario), fusion=config.fusion)
     leaders = config.scenario.sensing
-    times = scan_times(recording.measurements, recording.robots, leaders, settings)
-    estimates = replay(
+    return replay(
         recording,
         team(
             recording.robots,
@@ -160,16 +163,16 @@ def _run(
             sharing=config.sharing,
             fusion_period=FUSION_PERIOD_S,
         ),
-        record_times=times,
+        record_times=scan_times(recording.measurements, recording.robots, leaders, settings),
     )
-    return estimates, recording, times, settings
 
 
-def _task(seed_seq: np.random.SeedSequence, run_index: int, config: RunConfig) -> LeaderRunScores:
-    """Simulate one run, replay it through the leaders' fusers and score it (top-level,
-    picklable)."""
-    del run_index
-    estimates, recording, times, settings = _run(seed_seq, config)
+def score_run(estimates: Estimates, recording: Recording, config: RunConfig) -> LeaderRunScores:
+    """One run's figures from the leaders' estimates (in-process, or collected from robot
+    processes)."""
+    settings = replace(filter_settings(config.scenario), fusion=config.fusion)
+    leaders = config.scenario.sensing
+    times = scan_times(recording.measurements, recording.robots, leaders, settings)
     kind = bearing_kind(settings)
     scores = [
         leader_scores(estimates, recording, i, times[recording.robots[i]], kind)
@@ -184,7 +187,8 @@ def export_run0(args: ReproduceArgs, runs: int, config: RunConfig) -> dict[str, 
     from relloc.pipeline.export import export_estimates
 
     assert args.export is not None
-    estimates, recording, _, _ = _run(spawn_seeds(args.seed, runs)[0], config)
+    recording = simulate(config.scenario, np.random.default_rng(spawn_seeds(args.seed, runs)[0]))
+    estimates = leader_estimates(recording, config)
     return export_estimates(
         args.export,
         estimates,
@@ -251,7 +255,7 @@ def _rms(x: Array) -> float:
     return float(np.sqrt(np.mean(x**2))) if x.size else float("nan")
 
 
-def _metrics(results: list[LeaderRunScores]) -> dict[str, Any]:
+def metrics(results: list[LeaderRunScores]) -> dict[str, Any]:
     """Figures of merit of one configuration over its runs."""
     t = results[0].times
     final = t >= t[-1] - FINAL_WINDOW_S
@@ -333,9 +337,12 @@ def _time_series(results: list[LeaderRunScores]) -> dict[str, dict[str, Array]]:
     return out
 
 
-def _kidnap_metrics(results: list[LeaderRunScores]) -> dict[str, Any]:
+def kidnap_metrics(
+    results: list[LeaderRunScores], kidnap: tuple[int, float, float, float, float] = KIDNAP
+) -> dict[str, Any]:
+    """Whether and how fast each leader re-found the kidnapped robot, over the runs."""
     t = results[0].times
-    robot, when = KIDNAP[0], KIDNAP[1]
+    robot, when = int(kidnap[0]), kidnap[1]
     final = t >= t[-1] - FINAL_WINDOW_S
     refound, delays = [], []
     for r in results:
@@ -347,7 +354,7 @@ def _kidnap_metrics(results: list[LeaderRunScores]) -> dict[str, Any]:
     return {
         "robot": ROBOT_NAMES[robot],
         "time_s": when,
-        "jump": {"dx_m": KIDNAP[2], "dy_m": KIDNAP[3], "dyaw_rad": KIDNAP[4]},
+        "jump": {"dx_m": kidnap[2], "dy_m": kidnap[3], "dyaw_rad": kidnap[4]},
         "runs": len(results),
         "refound_rate": float(np.mean(refound)),
         "time_to_refind_s": float(np.nanmean(delays)) if np.isfinite(delays).any() else None,
@@ -372,10 +379,10 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
         )
 
     paper_res = run(RunConfig(scenario=base), runs, "desilva2015 paper settings")
-    paper = _metrics(paper_res)
+    paper = metrics(paper_res)
     nosh_res = run(RunConfig(scenario=base, sharing=False), runs, "no sharing")
-    no_sharing = _metrics(nosh_res)
-    ci = _metrics(run(RunConfig(scenario=base, fusion="ci"), runs, "covariance intersection"))
+    no_sharing = metrics(nosh_res)
+    ci = metrics(run(RunConfig(scenario=base, fusion="ci"), runs, "covariance intersection"))
 
     def sweep_entry(m: dict[str, Any], scenario: DeSilvaScenario) -> dict[str, Any]:
         return {
@@ -393,14 +400,14 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
     clutter_sweep = {"1": sweep_entry(paper, base)}
     for factor in CLUTTER_FACTORS[1:]:
         sc = replace(base, clutter_density=base.clutter_density * factor)
-        m = _metrics(run(RunConfig(scenario=sc), runs, f"clutter x{factor}"))
+        m = metrics(run(RunConfig(scenario=sc), runs, f"clutter x{factor}"))
         clutter_sweep[str(factor)] = sweep_entry(m, sc)
     pd_sweep = {"0.95": sweep_entry(paper, base)}
     for pd in PD_VALUES[1:]:
         sc = replace(base, p_detect=pd)
-        m = _metrics(run(RunConfig(scenario=sc), runs, f"P_D {pd}"))
+        m = metrics(run(RunConfig(scenario=sc), runs, f"P_D {pd}"))
         pd_sweep[str(pd)] = sweep_entry(m, sc)
-    kidnapped = _kidnap_metrics(
+    kidnapped = kidnap_metrics(
         run(RunConfig(scenario=replace(base, kidnap=KIDNAP)), runs, "kidnapped robot")
     )
 

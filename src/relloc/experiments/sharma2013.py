@@ -141,10 +141,10 @@ PAPER_BOUNDED = {
 }
 
 
-def _scenario():  # type: ignore[no-untyped-def]
+def _scenario(duration_s: float = DURATION_S):  # type: ignore[no-untyped-def]
     from relloc.sim.cooperative import sharma2013_scenario
 
-    return sharma2013_scenario(gps_robots=(0,), duration=DURATION_S)
+    return sharma2013_scenario(gps_robots=(0,), duration=duration_s)
 
 
 def _detections(recording: Recording) -> Measurements:
@@ -231,9 +231,11 @@ def _simulated(seed_sequence: np.random.SeedSequence) -> tuple[Any, CooperativeS
     return scenario, sim, t, round(OUTPUT_EVERY_S / scenario.dt)
 
 
-def _case_settings(
+def case_settings(
     scenario: Any, case: str, linearisation: Literal["latest", "first_estimates"] = "latest"
 ) -> CooperativeSettings:
+    """The team EIF's settings of one case (:data:`CASES`) on the scenario's noise, with the
+    given linearisation (plain, or first-estimates Jacobians)."""
     from relloc.estimators.cooperative import CooperativeSettings, OdometryModel, SensorModel
 
     odometry = OdometryModel.from_discrete(scenario.sigma_v, scenario.sigma_w, scenario.dt)
@@ -257,7 +259,7 @@ def run_once(seed_sequence: np.random.SeedSequence, run_index: int) -> dict[str,
     for block, linearisation in FILTERS.items():
         result[block] = {}
         for case in CASES:
-            run = run_case(sim, _case_settings(scenario, case, linearisation), out_t)
+            run = run_case(sim, case_settings(scenario, case, linearisation), out_t)
             if run_index != 0:
                 run["mean"] = None
             result[block][case] = run
@@ -279,7 +281,7 @@ def export_run0(args: ReproduceArgs, runs: int) -> dict[str, Any]:
 
     assert args.export is not None
     scenario, sim, t, step = _simulated(spawn_seeds(args.seed, runs)[0])
-    estimates, _ = _case_estimates(sim, _case_settings(scenario, EXPORTED_CASE), t[::step])
+    estimates, _ = _case_estimates(sim, case_settings(scenario, EXPORTED_CASE), t[::step])
     return export_estimates(
         args.export,
         estimates,

@@ -192,6 +192,15 @@ class GaussianSumEstimator:
         self._next_fusion += self.fusion_period
         return list(self.fuser.broadcast())
 
+    def quiet_until(self) -> float:
+        """Nothing this estimator sends is stamped before this time (its next broadcast; −∞
+        before its first event): a robot node lets teammates run ahead to it."""
+        if self._t is None:
+            return float("-inf")
+        if not self.sharing:
+            return float("inf")
+        return self._t0 + self._next_fusion - 1e-9
+
     def receive(self, messages: Sequence[Any]) -> None:
         """Queue the teammates' equivalent measurements (fused at the next :meth:`advance`)."""
         for msg in messages:

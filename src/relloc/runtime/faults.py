@@ -36,7 +36,7 @@ import numpy as np
 from relloc.errors import ConfigError
 from relloc.runtime.keys import check_id
 
-FAULTED_KINDS = frozenset({"odom", "meas", "eqm"})
+FAULTED_KINDS = frozenset({"odom", "meas", "rows", "eqm", "mail"})
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -5,6 +5,8 @@
 | ``relloc/<team>/robot/<id>/odom``       | ``odom``: the robot's body velocities        |
 | ``relloc/<team>/robot/<id>/meas``       | ``meas``: its range/azimuth/elevation of a teammate |
 | ``relloc/<team>/robot/<id>/eqm``        | ``eqm``: its belief of a teammate (1 Hz broadcast) |
+| ``relloc/<team>/robot/<id>/rows``       | ``rows``: its readings, shared (seed 001) |
+| ``relloc/<team>/robot/<id>/mail``       | ``mail``: its estimator's messages to teammates |
 | ``relloc/<team>/robot/<id>/est``        | ``est``: its estimates, for the collector    |
 | ``relloc/<team>/robot/<id>/evt``        | ``evt``: its track events, for the collector |
 | ``relloc/<team>/robot/<id>/stats``      | ``stats``: its message and estimate counters |
@@ -24,7 +26,7 @@ import re
 
 from relloc.errors import ConfigError
 
-ROBOT_KINDS = ("odom", "meas", "eqm", "est", "evt", "stats", "ack")
+ROBOT_KINDS = ("odom", "meas", "rows", "eqm", "mail", "est", "evt", "stats", "ack")
 _ID = re.compile(r"^[A-Za-z0-9_-]{1,64}$")
 
 

@@ -73,6 +73,8 @@ class TeamSettings:
     """Mutual TLS and access control (:mod:`relloc.runtime.access`) for every process."""
     certs_dir: Path | None = None
     """The team's certificate folder (``relloc certs``); made in ``<out>/certs`` if None."""
+    node_args: tuple[str, ...] = ()
+    """Extra ``relloc node`` arguments of every robot (a reproduction's run and duration)."""
 
     def __post_init__(self) -> None:
         keys.check_id(self.team, "--team")
@@ -147,7 +149,9 @@ def node_command(
     ]
     for p in f.partitions:
         cmd += ["--partition", f"{','.join(p.side)}@{p.start_s!r}-{p.end_s!r}"]
-    return cmd
+    if settings.realtime_factor > 0:
+        cmd += ["--paced", repr(settings.realtime_factor)]
+    return cmd + list(settings.node_args)
 
 
 def clock_command(
@@ -195,6 +199,10 @@ PRELOAD = [
     "relloc.runtime.scenario",
     "relloc.runtime.estimation",
     "relloc.runtime.team",
+    "relloc.experiments.team_sources",
+    "relloc.experiments.sharma2013",
+    "relloc.estimators.cooperative",
+    "relloc.experiments.mrclam_team",
 ]
 """Modules the fork server imports once, so robot processes start in milliseconds instead of
 each paying numpy/scipy imports (zenoh is imported by each child: its runtime must not be

@@ -17,14 +17,20 @@ checked against their declared shape, ``-1`` meaning "any length". Kinds:
 - ``eqm`` — an *equivalent measurement* (seed 002 §III-6 "broadcast"): the sender's belief of
   ``target`` relative to itself, ``mean`` (4,) = (x, y, z, φ) and ``cov`` (4, 4), sent at the
   low broadcast rate (1 Hz in seed 002).
+- ``rows`` — the sender's own readings of one window, of any kind, shared with the team (seed
+  001); see :mod:`relloc.runtime.shared_rows`.
+- ``mail`` — what the sender's estimator sends its teammates' estimators (seed 002's equivalent
+  measurements, stamped with the event that produced them) and the sender's ``progress``; see
+  :mod:`relloc.runtime.mail`.
 - ``est`` — the sender's new estimates of one ``target`` (its track ``track``, ``""`` for the
   one track) for the collector (monitoring, not fusion): one increment of a
-  :class:`~relloc.core.estimates.BeliefSeries` — beliefs in ``frame`` (a 4-state frame of
-  :mod:`relloc.pipeline.frames`) on the recording grid ``stamps`` (n,), ``means`` (n, 4),
-  ``covs`` (n, 4, 4), track ``ages`` (n,) — and of its
+  :class:`~relloc.core.estimates.BeliefSeries` — beliefs in ``frame`` (a frame of
+  :mod:`relloc.pipeline.frames`, of dimension d) at the record times ``stamps`` (n,),
+  ``means`` (n, d), ``covs`` (n, d, d), track ``ages`` (n,) — and of its
   :class:`~relloc.core.estimates.UpdateSeries` — ``update_stamps`` (m,) with the track's
   ``update_ages``, ``nis`` and its degrees of freedom ``update_dofs``, ``cond_r``, ``cond_s``
-  (m,) (log10 condition numbers of R, S). :func:`est_bodies` and :func:`estimates_from_bodies`
+  (m,) (log10 condition numbers of R, S) — and the beliefs' scalar diagnostics ``info`` (n × k,
+  row-major) named ``info_names`` (k). :func:`est_bodies` and :func:`estimates_from_bodies`
   convert between these bodies and :class:`~relloc.core.estimates.Estimates`.
 - ``evt`` — track events of the sender: ``stamps`` (e,), ``targets`` (e,), ``kinds`` (e,) in
   ``{"created", "deleted", "recreated"}``.
@@ -59,14 +65,16 @@ from relloc.core.estimates import BeliefSeries, Estimates, SeriesKey, UpdateSeri
 from relloc.errors import DataError
 from relloc.pipeline.frames import FRAMES
 
-SCHEMA_VERSION = 2
+SCHEMA_VERSION = 3
 """Version 2: ``est`` carries ``frame``, ``track`` and the NIS degrees of freedom
-``update_dofs``."""
+``update_dofs``; version 3: ``est`` carries the beliefs' ``info`` in frames of any dimension,
+and ``rows`` and ``mail`` exist."""
 DEFAULT_MAX_BYTES = 65_536
 """Default size limit of one encoded message (bytes); larger payloads are rejected unread."""
 
 STATE_DIM = 4
-"""Relative state (x, y, z, φ) of seed 000 carried by ``eqm`` and ``est``."""
+"""Relative state (x, y, z, φ) of seed 000 carried by ``eqm`` and ``mail`` (``est`` carries
+the states of its frame)."""
 
 Shape = tuple[int, ...]
 HEADER: dict[str, str] = {
@@ -81,13 +89,33 @@ SCHEMA: dict[str, dict[str, str | Shape]] = {
     "odom": {"stamps": (-1,), "u": (-1, 4)},
     "meas": {"stamps": (-1,), "targets": "strlist", "z": (-1, 3), "sigma": (-1, 3)},
     "eqm": {"target": "str", "mean": (STATE_DIM,), "cov": (STATE_DIM, STATE_DIM)},
+    "rows": {
+        "stamps": (-1,),
+        "kinds": "strlist",
+        "subjects": "strlist",
+        "landmarks": (-1,),
+        "sensors": (-1,),
+        "values": (-1,),
+        "sigmas": (-1,),
+    },
+    "mail": {
+        "progress": "float",
+        "stamps": (-1,),
+        "subjects": "strlist",
+        "sizes": (-1,),
+        "means": (-1, STATE_DIM),
+        "covs": (-1, STATE_DIM, STATE_DIM),
+        "prior_means": (-1, STATE_DIM),
+        "prior_covs": (-1, STATE_DIM, STATE_DIM),
+        "weights": (-1,),
+    },
     "est": {
         "target": "str",
         "track": "str",
         "frame": "str",
         "stamps": (-1,),
-        "means": (-1, STATE_DIM),
-        "covs": (-1, STATE_DIM, STATE_DIM),
+        "means": (-1, -1),
+        "covs": (-1, -1, -1),
         "ages": (-1,),
         "update_stamps": (-1,),
         "update_ages": (-1,),
@@ -95,6 +123,8 @@ SCHEMA: dict[str, dict[str, str | Shape]] = {
         "update_dofs": (-1,),
         "cond_r": (-1,),
         "cond_s": (-1,),
+        "info_names": "strlist",
+        "info": (-1,),
     },
     "evt": {"stamps": (-1,), "targets": "strlist", "kinds": "strlist"},
     "stats": {"counters": "intmap"},
@@ -288,7 +318,7 @@ def _as_array(value: Any, shape: Shape, where: str) -> np.ndarray:
     except (ValueError, TypeError):
         raise MessageRejected("malformed", f"{where}: not a rectangular numeric array") from None
     if arr.size == 0 and shape[0] == -1:
-        arr = arr.reshape((0, *shape[1:]))
+        arr = arr.reshape((0, *(max(s, 0) for s in shape[1:])))
     fits = arr.ndim == len(shape) and all(
         s in (-1, a) for s, a in zip(shape, arr.shape, strict=True)
     )
@@ -299,7 +329,7 @@ def _as_array(value: Any, shape: Shape, where: str) -> np.ndarray:
     return arr
 
 
-def _check_consistency(kind: str, body: Mapping[str, Any]) -> None:
+def _check_consistency(kind: str, body: dict[str, Any]) -> None:
     """Cross-field rules: equal batch lengths, increasing stamps, sane covariances/sigmas."""
     if kind == "odom":
         if body["stamps"].shape[0] != body["u"].shape[0]:
@@ -323,11 +353,31 @@ def _check_consistency(kind: str, body: Mapping[str, Any]) -> None:
         if lengths != {m}:
             raise MessageRejected("shape", "est: update batch lengths differ")
         f = FRAMES.get(body["frame"])
-        if f is None or f.dim != STATE_DIM:
-            raise MessageRejected("malformed", f"est: {body['frame']!r} is not a 4-state frame")
+        if f is None:
+            raise MessageRejected("malformed", f"est: {body['frame']!r} is not a frame")
+        if n and (body["means"].shape[1:] != (f.dim,) or body["covs"].shape[1:] != (f.dim,) * 2):
+            raise MessageRejected("shape", f"est: states are not those of {body['frame']!r}")
+        if not n:
+            body["means"] = np.zeros((0, f.dim))
+            body["covs"] = np.zeros((0, f.dim, f.dim))
+        if body["info"].shape[0] != n * len(body["info_names"]):
+            raise MessageRejected("shape", "est: info is not one value per record and name")
         dofs = body["update_dofs"]
         if np.any((dofs < 1) | (dofs != np.round(dofs))):
             raise MessageRejected("malformed", "est: update_dofs must be integers ≥ 1")
+    elif kind == "mail":
+        sizes = body["sizes"]
+        k = body["means"].shape[0]
+        if not (len(body["subjects"]) == body["stamps"].shape[0] == sizes.shape[0]):
+            raise MessageRejected("shape", "mail: per-message lengths differ")
+        if np.any((sizes < 1) | (sizes != np.round(sizes))) or int(sizes.sum()) != k:
+            raise MessageRejected("shape", "mail: sizes must be integers ≥ 1 summing to the tracks")
+        if not (
+            body["covs"].shape[0] == body["prior_means"].shape[0] == body["prior_covs"].shape[0]
+        ) or not (body["weights"].shape[0] == body["covs"].shape[0] == k):
+            raise MessageRejected("shape", "mail: track arrays of different lengths")
+        if np.any(body["weights"] < 0):
+            raise MessageRejected("malformed", "mail: negative weights")
     elif kind == "evt":
         if not (len(body["targets"]) == len(body["kinds"]) == body["stamps"].shape[0]):
             raise MessageRejected("shape", "evt: batch lengths differ")
@@ -340,8 +390,11 @@ def _check_consistency(kind: str, body: Mapping[str, Any]) -> None:
     covs = body.get("cov")
     if kind == "est":
         covs = body["covs"]
+    elif kind == "mail":
+        covs = np.concatenate([body["covs"], body["prior_covs"]])
     if covs is not None:
-        covs = np.asarray(covs).reshape(-1, STATE_DIM, STATE_DIM)
+        covs = np.asarray(covs)
+        covs = covs.reshape(-1, *covs.shape[-2:])
         asym = np.abs(covs - np.swapaxes(covs, -1, -2)).max(initial=0.0)
         scale = max(1.0, float(np.abs(covs).max(initial=0.0)))
         if asym > 1e-9 * scale or np.any(np.diagonal(covs, axis1=-2, axis2=-1) < 0):
@@ -364,8 +417,8 @@ def est_bodies(increment: Estimates, *, frame: str) -> list[dict[str, Any]]:
                 "track": key[2],
                 "frame": b.frame if b is not None else frame,
                 "stamps": b.t if b is not None else np.zeros(0),
-                "means": b.mean if b is not None else np.zeros((0, STATE_DIM)),
-                "covs": b.cov if b is not None else np.zeros((0, STATE_DIM, STATE_DIM)),
+                "means": b.mean if b is not None else np.zeros((0, FRAMES[frame].dim)),
+                "covs": b.cov if b is not None else np.zeros((0, *(FRAMES[frame].dim,) * 2)),
                 "ages": b.age if b is not None else np.zeros(0),
                 "update_stamps": u.t,
                 "update_ages": u.age,
@@ -373,6 +426,12 @@ def est_bodies(increment: Estimates, *, frame: str) -> list[dict[str, Any]]:
                 "update_dofs": u.dof,
                 "cond_r": u.cond_r,
                 "cond_s": u.cond_s,
+                "info_names": sorted(b.info) if b is not None else [],
+                "info": (
+                    np.stack([b.info[k] for k in sorted(b.info)], axis=1).reshape(-1)
+                    if b is not None and b.info
+                    else np.zeros(0)
+                ),
             }
         )
     return bodies
@@ -399,6 +458,10 @@ def estimates_from_bodies(
                     mean=body["means"],
                     cov=body["covs"],
                     age=body["ages"],
+                    info={
+                        name: body["info"].reshape(-1, len(body["info_names"]))[:, i]
+                        for i, name in enumerate(body["info_names"])
+                    },
                 ),
             )
         updates: tuple[UpdateSeries, ...] = ()

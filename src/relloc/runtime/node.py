@@ -12,12 +12,21 @@ Per clock tick ``k`` (simulated time ``t_k``; see :mod:`relloc.runtime.clock`) a
    recognised by sequence number, late samples counted);
 2. publishes its own odometry and measurements of the window ``[t_{k−1}, t_k)`` — one ``odom``
    and one ``meas`` batch per tick: the configured publication rate is the tick rate;
-3. filters every pending window whose inputs are in: a window ``[a, b)`` is filtered once every
-   present teammate has published odometry up to ``b`` (normally at the next tick) or once it is
-   ``max_lag_ticks`` overdue (then the missing velocities are held, and the window is counted);
+3. filters every pending window whose inputs are in, through its estimator's
+   :class:`~relloc.runtime.estimation.WindowDriver` (any estimator of the contract): a window
+   ``[a, b)`` is started once every present teammate has published odometry up to ``b``
+   (normally at the next tick) or once it is ``max_lag_ticks`` overdue (then the missing
+   velocities are held, and the window is counted). Where the estimators talk (the
+   ``talkers``: seed 002's leaders), what the estimator sends leaves as ``mail`` stamped with
+   its event, together with the node's progress, and the node processes an event only once
+   every present talking teammate's progress has reached it (see
+   :mod:`relloc.runtime.estimation`); what arrives between ticks is filed at once and a window
+   whose inputs are in is filtered then, not at the next tick;
 4. every ``eqm_period_s`` broadcasts its belief of each teammate as an equivalent measurement
-   (seed 002: 1 Hz); every ``report_period_s`` ships its new estimates (``est``), track events
+   (monitoring, 1 Hz); every ``report_period_s`` ships its new estimates (``est``), track events
    (``evt``) and counters (``stats``) to the collector; finally it acknowledges ``k``.
+
+The last tick's window is ``[t_{n−1}, t_n]``: it holds the run's last instant.
 
 Teammates appear and disappear through Zenoh liveliness. Measurements of a teammate that is gone
 are not fused (its motion cannot be predicted without its odometry), so its track expires after
@@ -37,21 +46,26 @@ from typing import Any
 
 import numpy as np
 
+from relloc.core.recording import Measurements, Recording
 from relloc.errors import ConfigError
 from relloc.estimators.relative import FRAME
 from relloc.runtime import keys
 from relloc.runtime.admission import SenderBudget, TickGuard, admit, check_not_future
-from relloc.runtime.estimation import TrackManagerEstimator
+from relloc.runtime.estimation import WindowDriver
 from relloc.runtime.faults import FAULTED_KINDS, FaultSettings, LinkEmulator
+from relloc.runtime.mail import mail_body, mail_items
 from relloc.runtime.messages import (
     DEFAULT_MAX_BYTES,
+    STATE_DIM,
     Message,
     MessageRejected,
     encode,
     est_bodies,
 )
-from relloc.runtime.sources import MeasurementBatch, SensorSource
+from relloc.runtime.shared_rows import rows_body, rows_from_body
+from relloc.runtime.sources import SensorSource, batch_rows
 from relloc.runtime.teammates import ReceivedOdometry, SeenSequences, Teammate
+from relloc.runtime.timing import EstimateTiming
 from relloc.runtime.transport import (
     Inbox,
     Incoming,
@@ -81,6 +95,20 @@ class NodeSettings:
     max_lag_ticks: int = 5
     max_bytes: int = DEFAULT_MAX_BYTES
     clock_timeout_s: float = 60.0
+    talkers: tuple[str, ...] = ()
+    """Robots whose estimators exchange messages (``outbox``/``receive``) with one another."""
+    share_rows: bool = False
+    """Every robot shares its readings (``rows``) and every estimator fuses the team's (seed
+    001)."""
+    paced_factor: float = 0.0
+    """The clock paces its ticks at this multiple of real time (``team up --realtime``; 0: as
+    fast as the team goes). When paced, the node reports measurement-to-estimate latency and
+    missed deadlines (:mod:`relloc.runtime.timing`, deadline: one tick of wall time)."""
+    only_needed_streams: bool = False
+    """Subscribe to teammates' data only if this robot uses it: it makes readings (seed 000's
+    relative filters need the observed robots' odometry), talks or shares readings. A robot
+    that only moves then decodes nothing of its teammates' (each robot decoding every
+    teammate's stream is what grows as n² with the team)."""
 
     def __post_init__(self) -> None:
         keys.check_id(self.team, "node.team")
@@ -91,6 +119,8 @@ class NodeSettings:
             raise ConfigError(f"node.robot: {self.robot!r} is not on the roster {self.roster}")
         if len(set(self.roster)) != len(self.roster):
             raise ConfigError(f"node.roster: duplicate robot ids in {self.roster}")
+        if not set(self.talkers) <= set(self.roster):
+            raise ConfigError(f"node.talkers: {self.talkers} are not all on the roster")
         for name in ("eqm_period_s", "report_period_s", "clock_timeout_s"):
             if not getattr(self, name) > 0:
                 raise ConfigError(f"node.{name}: {getattr(self, name)} must be > 0")
@@ -100,22 +130,52 @@ class NodeSettings:
             raise ConfigError(f"node.max_bytes: {self.max_bytes} outside [256, 16 MiB]")
 
 
+@dataclass(frozen=True)
+class NodeParts:
+    """What a robot process runs: the team roster, its own sensors, its estimator's driver and
+    the robots whose estimators talk to one another (:attr:`NodeSettings.talkers`)."""
+
+    roster: tuple[str, ...]
+    source: SensorSource
+    driver: WindowDriver
+    talkers: tuple[str, ...] = ()
+    share_rows: bool = False
+    recording: Recording | None = None
+    """The recording the source reads (a replay), if any."""
+
+
 @dataclass
 class _Window:
     start: float
     end: float
-    measurements: list[MeasurementBatch]
+    rows: list[Measurements]
+    final: bool = False
+    started: bool = False
 
 
 class RobotNode:
     """The robot process (see module docstring). ``run()`` returns the final counters."""
 
     def __init__(
-        self, settings: NodeSettings, source: SensorSource, estimator: TrackManagerEstimator
+        self, settings: NodeSettings, source: SensorSource, estimator: WindowDriver
     ) -> None:
         self.s = settings
         self.source = source
         self.estimator = estimator
+        self.talks = settings.robot in settings.talkers
+        readings = getattr(source, "rows", None)
+        makes_readings = readings is None or readings(-np.inf, np.inf, inclusive=True).size > 0
+        self.listens = not settings.only_needed_streams or (
+            self.talks or settings.share_rows or makes_readings
+        )
+        if self.talks:
+            estimator.mark_talking()
+        self._acks_due: deque[tuple[int, float]] = deque()
+        self._tick_wall: dict[float, float] = {}
+        self.paced = (
+            EstimateTiming(1.0 / settings.paced_factor) if settings.paced_factor > 0 else None
+        )
+        self._mail_progress = -np.inf
         self.counters: Counter[str] = Counter()
         self.teammates = {r: Teammate(r) for r in settings.roster if r != settings.robot}
         self.own_odometry = ReceivedOdometry()
@@ -137,6 +197,7 @@ class RobotNode:
         self._next_report_s = 0.0
         self._done = False
         self._end_deadline: float | None = None
+        self._last_tick_seen = False
         self._ticks = TickGuard(end_s=getattr(source, "end_time", None))
         self._budget = SenderBudget.for_team(len(settings.roster))
         self._inbox: Inbox | None = None
@@ -147,29 +208,16 @@ class RobotNode:
         self._session = session = open_session(s.transport)
         inbox = self._inbox = Inbox(max_message_bytes=s.max_bytes)
         try:
-            for kind in ("odom", "meas", "eqm"):
-                inbox.subscribe(session, keys.robot_wildcard(s.team, kind))
+            if self.listens:
+                for kind in ("odom", "meas", "rows", "eqm", "mail"):
+                    inbox.subscribe(session, keys.robot_wildcard(s.team, kind))
             inbox.subscribe(session, keys.clock_key(s.team, "tick"))
             inbox.subscribe(session, keys.clock_key(s.team, "ctl"))
             inbox.watch_presence(session, keys.alive_wildcard(s.team))
             for kind in keys.ROBOT_KINDS:
                 self._pubs[kind] = declare_publisher(session, keys.robot_key(s.team, s.robot, kind))
             self._tokens.append(session.liveliness().declare_token(keys.alive_key(s.team, s.robot)))
-            while not self._done:
-                if self._end_deadline is not None:
-                    wait = self._end_deadline - time.monotonic()
-                    if wait <= 0 or all(self._inputs_in(w) for w in self._pending):
-                        self._finish()
-                        break
-                    item = inbox.get(timeout=min(wait, 0.05))
-                else:
-                    item = inbox.get(timeout=s.clock_timeout_s)
-                    if item is None:
-                        self.counters["exit.clock_silent"] += 1
-                        self._finish()
-                        break
-                if item is not None:
-                    self._on_incoming(item)
+            self._loop(inbox)
             self._report()
         finally:
             for token in self._tokens:
@@ -177,6 +225,28 @@ class RobotNode:
             inbox.close()
             session.close()
         return self.final_counters()
+
+    def _loop(self, inbox: Inbox) -> None:
+        """Handle what arrives until the run ends (clock ticks drive the node)."""
+        s = self.s
+        while not self._done:
+            if self._end_deadline is not None:
+                # what teammates sent before their last ack is due now: file it and filter
+                self._deliver(self.link.release(self._t))
+                self._filter_ready(force=False)
+                wait = self._end_deadline - time.monotonic()
+                if wait <= 0 or not self._pending:
+                    self._finish()
+                    break
+                item = inbox.get(timeout=min(wait, 0.05))
+            else:
+                item = inbox.get(timeout=s.clock_timeout_s)
+                if item is None:
+                    self.counters["exit.clock_silent"] += 1
+                    self._finish()
+                    break
+            if item is not None:
+                self._on_incoming(item)
 
     def _on_incoming(self, item: Incoming) -> None:
         if item.presence != "data":
@@ -211,6 +281,10 @@ class RobotNode:
             if len(self._latency_us) < LATENCY_SAMPLES:
                 self._latency_us.append((item.recv_wall_ns - msg.wall_ns) / 1e3)
             self.link.admit(msg, msg.sender, self._t)
+            # what is due now (all of it on a perfect network) is filed at once, and a window
+            # whose inputs are in is filtered between ticks, not at the next one
+            self._deliver(self.link.release(self._t))
+            self._filter_ready(force=False)
         else:
             self.counters[f"ignored.{msg.kind}"] += 1
 
@@ -233,7 +307,7 @@ class RobotNode:
             elif (
                 not joined
                 and mate.present
-                and (self._ticks.last_tick_seen or self._end_deadline is not None)
+                and (self._last_tick_seen or self._end_deadline is not None)
             ):
                 # after the last tick teammates exit normally (the clock sends ctl(end) once every
                 # robot acked that tick, and a teammate may leave before our ctl(end) arrives);
@@ -251,16 +325,25 @@ class RobotNode:
 
     # ------------------------------------------------------------------ one clock tick
     def _on_tick(self, msg: Message) -> None:
-        t, self._dt = msg.t, float(msg.body["dt"])
+        if self.paced is not None:  # when the clock sent t_k: its wall time on a paced clock
+            self._tick_wall[msg.t] = msg.wall_ns / 1e9
+        self._tick(int(msg.body["k"]), int(msg.body["n"]), msg.t, float(msg.body["dt"]))
+
+    def _tick(self, k: int, n: int, t: float, dt: float) -> None:
+        """Tick ``k`` of ``n`` at robot time ``t`` (module docstring)."""
+        self._dt = dt
         self._t = t
         self._budget.new_interval()
         self.counters["ticks"] += 1
+        self._last_tick_seen = k >= n
         if self._window_start is None:  # first tick heard (a restarted node joins mid-run)
             self._window_start = self._filtered_until = t - self._dt
             self._next_eqm_s = self._next_report_s = t
         self._deliver(self.link.release(t))
-        batch = self._publish_own_sensors(self._window_start, t)
-        self._pending.append(_Window(self._window_start, t, [batch]))
+        # the run's last instant belongs to the last window
+        final = self._last_tick_seen
+        rows = self._publish_own_sensors(self._window_start, t, final=final)
+        self._pending.append(_Window(self._window_start, t, [rows], final=final))
         self._window_start = t
         self._filter_ready(force=False)
         if t + TIME_TOL >= self._next_eqm_s:
@@ -269,16 +352,21 @@ class RobotNode:
         if t + TIME_TOL >= self._next_report_s:
             self._report()
             self._next_report_s += self.s.report_period_s
-        self._send("ack", {"k": msg.body["k"]})
+        if self.estimator.busy:  # waiting for a teammate: repeat our progress, in case the
+            self._send_mail(repeat=True)  # teammate waits for it and the last one was lost
+        self._acks_due.append((k, t - self._dt))
+        self._send_due_acks()
 
     def _finish(self) -> None:
         """End of run: filter everything left (teammates published it before their last ack)."""
         if self._done:
             return
         self._deliver(self.link.release(np.inf))
-        if self._pending:  # the run's last instant belongs to the last window (filtered here,
-            last = self._pending[-1]  # not published: teammates are already finishing)
-            last.measurements.append(self.source.measurements(last.end, last.end, inclusive=True))
+        last = self._pending[-1] if self._pending else None
+        if last is not None and not (last.final or last.started):
+            # the clock left before its last tick: the last instant we have ends the run
+            last.final = True
+            last.rows.append(self._own_rows(last.end, last.end, inclusive=True))
         self._filter_ready(force=True)
         self.counters["final"] = 1
         self._done = True
@@ -296,12 +384,53 @@ class RobotNode:
             if msg.kind == "odom":
                 mate.odometry.add(msg.body["stamps"], msg.body["u"])
                 mate.heard_until_s = max(mate.heard_until_s or -np.inf, msg.t)
+            elif msg.kind == "rows" and self.s.share_rows:
+                try:
+                    rows = rows_from_body(msg.body, self.s.roster, msg.sender)
+                except MessageRejected as exc:
+                    self.counters[f"rejected.{exc.reason}"] += 1
+                    self.counters["rejected"] += 1
+                    continue
+                mate.rows_until = max(mate.rows_until, msg.t)
+                late = rows.t < self._unstarted_from() - TIME_TOL
+                if late.any():  # its window is filtered: fuse it at its time stamp anyway
+                    self.counters["rows_late"] += int(late.sum())
+                    self.estimator.refilter(rows.select(late))
+                    rows = rows.select(~late)
+                mate.rows.append(rows)
+            elif msg.kind == "mail" and self.talks:
+                try:
+                    parcels = mail_items(msg.body, self.s.roster, msg.sender)
+                except MessageRejected as exc:
+                    self.counters[f"rejected.{exc.reason}"] += 1
+                    self.counters["rejected"] += 1
+                    continue
+                mate.progress = max(mate.progress, float(msg.body["progress"]))
+                for stamp, items in parcels:
+                    self.estimator.deliver(stamp, msg.sender, items)
 
-    def _publish_own_sensors(self, t0: float, t1: float) -> MeasurementBatch:
+    def _unstarted_from(self) -> float:
+        """Where the windows not yet started begin (readings before it are late)."""
+        for w in self._pending:
+            if not w.started:
+                return w.start
+        return -np.inf if self._window_start is None else self._window_start
+
+    def _own_rows(self, t0: float, t1: float, *, inclusive: bool = False) -> Measurements:
+        """This robot's readings of a window as measurement rows."""
+        rows = getattr(self.source, "rows", None)
+        if rows is not None:
+            return rows(t0, t1, inclusive=inclusive)  # type: ignore[no-any-return]
+        batch = self.source.measurements(t0, t1, inclusive=inclusive)
+        return batch_rows(batch, self.s.roster, self.s.robot)
+
+    def _publish_own_sensors(self, t0: float, t1: float, *, final: bool) -> Measurements:
+        """Publish the window's odometry, its readings (``meas``; and ``rows`` where the team
+        shares them) and return the readings as rows (``[t0, t1]`` for the ``final`` window)."""
         stamps, u = self.source.odometry(t0, t1)
         self.own_odometry.add(stamps, u)
         self._send("odom", {"stamps": stamps, "u": u})
-        batch = self.source.measurements(t0, t1)
+        batch = self.source.measurements(t0, t1, inclusive=final)
         if batch.size:
             self._send(
                 "meas",
@@ -312,41 +441,129 @@ class RobotNode:
                     "sigma": batch.sigma,
                 },
             )
-        return batch
+        if hasattr(self.source, "rows"):
+            rows = self._own_rows(t0, t1, inclusive=final)
+        else:
+            rows = batch_rows(batch, self.s.roster, self.s.robot)
+        if self.s.share_rows:
+            self._send("rows", rows_body(rows, self.s.roster))
+        return rows
 
     def _inputs_in(self, window: _Window) -> bool:
-        return all(
+        """Every present teammate's odometry (and shared readings) up to the window's end is
+        in (a node that does not listen needs none)."""
+        return not self.listens or all(
             (m.heard_until_s or -np.inf) >= window.end - TIME_TOL
+            and (not self.s.share_rows or m.rows_until >= window.end - TIME_TOL)
             for m in self.teammates.values()
             if m.present
         )
 
+    def _window_rows(self, w: _Window) -> Measurements:
+        """The window's readings: this robot's and, where the team shares them, its
+        teammates', in time order and, at one time, in robot order."""
+        parts = list(w.rows)
+        if self.s.share_rows:
+            for mate in self.teammates.values():
+                parts += mate.take_rows(w.start, w.end, inclusive=w.final)
+        rows = Measurements.concatenate(parts)
+        if len(parts) > 1 and rows.size:
+            order = np.lexsort((rows.observer, rows.t))
+            if np.any(np.diff(order) < 0):
+                rows = rows.select(order)
+        return rows
+
     def _filter_ready(self, *, force: bool) -> None:
+        """Filter what can be filtered (module docstring, step 3), then ship the progress."""
         while self._pending:
             w = self._pending[0]
             overdue = self._t >= w.end + self.s.max_lag_ticks * self._dt - TIME_TOL
-            if not (force or overdue or self._inputs_in(w)):
-                return
-            if overdue and not force and not self._inputs_in(w):
-                self.counters["overdue_windows"] += 1
+            if not w.started:
+                ready = self._inputs_in(w)
+                if not (force or overdue or ready):
+                    break
+                if overdue and not (force or ready):
+                    self.counters["overdue_windows"] += 1
+                self.estimator.start_window(
+                    w.start,
+                    w.end,
+                    streams=[
+                        self.own_odometry if r == self.s.robot else self.teammates[r].odometry
+                        for r in self.s.roster
+                    ],
+                    rows=self._window_rows(w),
+                    present={r for r, m in self.teammates.items() if m.present},
+                    inclusive=w.final,
+                )
+                w.started = True
+            until = None if force or overdue else self._talk_progress()
+            if not self.estimator.run(until):
+                if overdue:
+                    self.counters["overdue_windows.waiting_for_mail"] += 1
+                break
             self._pending.popleft()
-            last = force and not self._pending
-            self.estimator.advance(
-                w.start,
-                w.end,
-                own=self.own_odometry,
-                teammates={r: m.odometry for r, m in self.teammates.items()},
-                measurements=w.measurements,
-                present={r for r, m in self.teammates.items() if m.present},
-                inclusive=last,
-            )
+            self._window_done(w)
             for mate in self.teammates.values():
                 mate.odometry.consume_until(w.end)
             self.own_odometry.consume_until(w.end)
             self._filtered_until = w.end
+        self._send_mail()
+        self._send_due_acks()
+
+    def _send_due_acks(self) -> None:
+        """Acknowledge the ticks that are done. A node whose estimator talks acknowledges tick
+        ``k`` only once every window up to ``max_lag_ticks − 1`` ticks before ``t_{k−1}`` is
+        filtered: its teammates' progress comes between ticks, and the clock must not run so
+        far ahead of the filters that a window waiting for it is overdue; any other node at
+        once."""
+        slack = (self.s.max_lag_ticks - 1) * self._dt
+        while self._acks_due:
+            k, due = self._acks_due[0]
+            if self.talks and self._pending and self._pending[0].end <= due - slack + TIME_TOL:
+                return
+            self._acks_due.popleft()
+            self._send("ack", {"k": k})
+
+    def _window_done(self, window: _Window) -> None:
+        """A window was filtered: on a paced clock, time it (module :mod:`~relloc.runtime.timing`;
+        a reading at ``t`` was taken ``(t_k − t) / factor`` before the clock sent ``t_k``)."""
+        end_wall = self._tick_wall.pop(window.end, None)
+        if self.paced is None or end_wall is None:
+            return
+        factor = self.s.paced_factor
+        taken = end_wall - (window.end - window.rows[0].t) / factor
+        self.paced.deadline_s = self._dt / factor
+        self.paced.window_done(taken, end_wall, time.time())
+
+    def _talk_progress(self) -> float | None:
+        """How far every present talking teammate has got (None: nobody to wait for)."""
+        if not self.talks:
+            return None
+        mates = [m.progress for r, m in self.teammates.items() if r in self.s.talkers and m.present]
+        return min(mates) if mates else None
+
+    def _send_mail(self, *, repeat: bool = False) -> None:
+        """Publish what the estimator sent and this node's progress, if either is new (or to
+        ``repeat`` the progress)."""
+        if not self.talks or not self._pubs:
+            return
+        sent = self.estimator.take_sent()
+        progress = self.estimator.progress
+        if not sent and not progress > self._mail_progress and not repeat:
+            return
+        if not np.isfinite(progress):  # nothing processed yet; the messages wait for it
+            self.estimator.sent[:0] = sent
+            return
+        self._mail_progress = progress
+        for body in mail_body(progress, sent, self.s.roster, self.s.max_bytes):
+            self._send("mail", body)
 
     def _broadcast_beliefs(self) -> None:
+        """Every relative-pose belief as an ``eqm`` (monitoring; a team filter's world poses
+        are not relative poses and are not sent)."""
         for belief in self.estimator.beliefs():
+            if belief.mean.size != STATE_DIM:
+                continue
             self._send("eqm", {"target": belief.subject, "mean": belief.mean, "cov": belief.cov})
 
     def _report(self) -> None:
@@ -390,6 +607,10 @@ class RobotNode:
                 out["rejected.oversized"] = out.get("rejected.oversized", 0) + self._inbox.oversized
                 out["rejected"] = out.get("rejected", 0) + self._inbox.oversized
         out["late_samples"] = sum(m.odometry.late for m in self.teammates.values())
+        out["late_rows"] = sum(m.late_rows for m in self.teammates.values())
+        out["listens"] = int(self.listens)
+        if self.paced is not None:
+            out |= self.paced.counters()
         out["cpu_ms"] = int(time.process_time() * 1000)
         for name, value in self.link.counters.as_dict().items():
             out[f"fault.{name}"] = value

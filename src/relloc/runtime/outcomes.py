@@ -5,9 +5,9 @@ restarted at ``T2`` (end of run if never) — the *affected pairs* are those who
 observed robot are on different sides of the partition, or that involve the killed robot.
 Over those pairs:
 
-- position RMSE (m) and yaw RMSE (rad) of all recorded beliefs before ``T1``, in ``[T1, T2)``
-  and from ``T2`` on (no steady-state filter: the point is what the fault does to a running
-  team);
+- position RMSE (m) and yaw RMSE (rad) (the states of each belief's frame) of all recorded
+  beliefs before ``T1``, in ``[T1, T2)`` and from ``T2`` on (no steady-state filter: the point
+  is what the fault does to a running team);
 - ``tracks_kept``: affected pairs with a live track at ``T1`` that were not deleted before
   ``T2 + keep window`` and did not die with a killed observer's process
   (``tracks_lost_with_process``); ``tracks_deleted``: deletions of affected pairs in that interval;
@@ -27,19 +27,26 @@ import numpy as np
 
 from relloc.core.estimates import Estimates
 from relloc.core.recording import Recording
+from relloc.pipeline.frames import FRAMES
 from relloc.pipeline.team_report import RunResult
 from relloc.runtime.faults import FaultSettings
 
-
-def _rmse(errors: Sequence[np.ndarray]) -> float | None:
-    """Position RMSE (m) of stacked ``(K, 4)`` errors; None without samples."""
-    e = np.concatenate([x[:, :3] for x in errors]) if errors else np.zeros((0, 3))
-    return float(np.sqrt(np.mean(np.sum(e**2, axis=1)))) if e.size else None
+Errors = Sequence[tuple[np.ndarray, str]]
+"""Per series, its ``(K, d)`` errors (angles wrapped) and the name of its frame."""
 
 
-def _yaw_rmse(errors: Sequence[np.ndarray]) -> float | None:
-    """Yaw RMSE (rad) of stacked ``(K, 4)`` errors (already wrapped); None without samples."""
-    e = np.concatenate([x[:, 3] for x in errors]) if errors else np.zeros(0)
+def _rmse(errors: Errors) -> float | None:
+    """Position RMSE (m) over the series (each frame's position states); None without
+    samples."""
+    sq = [np.sum(e[:, list(FRAMES[f].position)] ** 2, axis=1) for e, f in errors]
+    e = np.concatenate(sq) if sq else np.zeros(0)
+    return float(np.sqrt(np.mean(e))) if e.size else None
+
+
+def _yaw_rmse(errors: Errors) -> float | None:
+    """Yaw RMSE (rad) over the series whose frame has a yaw; None without samples."""
+    parts = [e[:, FRAMES[f].yaw] for e, f in errors if FRAMES[f].yaw is not None]
+    e = np.concatenate(parts) if parts else np.zeros(0)
     return float(np.sqrt(np.mean(e**2))) if e.size else None
 
 
@@ -55,16 +62,18 @@ def _window_outcome(
 ) -> dict[str, Any]:
     pairs = [p for p in result.evaluations if (p.owner, p.subject) in affected]
     phases = {
-        "before": [p.error[p.t < t1] for p in pairs],
-        "during": [p.error[(p.t >= t1) & (p.t < t2)] for p in pairs],
-        "after": [p.error[p.t >= t2] for p in pairs],
+        "before": [(p.error[p.t < t1], p.frame) for p in pairs],
+        "during": [(p.error[(p.t >= t1) & (p.t < t2)], p.frame) for p in pairs],
+        "after": [(p.error[p.t >= t2], p.frame) for p in pairs],
     }
     events = [e for e in estimates.events if (e.owner, e.subject) in affected]
     horizon = t2 + keep_window_s
     deleted = [e for e in events if e.kind == "deleted" and t1 <= e.t <= horizon]
     refound = [e for e in events if e.kind in ("created", "recreated") and e.t > t1]
     live_at_start = {
-        (s.owner, s.subject) for s in estimates.beliefs if s.t.size and s.t[0] < t1 <= s.t[-1]
+        (s.owner, s.subject)
+        for s in estimates.beliefs
+        if (s.owner, s.subject) in affected and s.t.size and s.t[0] < t1 <= s.t[-1]
     }
     deleted_pairs = {(e.owner, e.subject) for e in deleted}
     lost = {pair for pair in live_at_start - deleted_pairs if pair[0] in dead_observers}
@@ -131,8 +140,8 @@ def fault_outcomes(
                     f"reorder={faults.reorder:g}"
                 ),
                 "window_s": [recording.span[0], t_end],
-                "position_rmse_during_m": _rmse([p.error for p in result.evaluations]),
-                "yaw_rmse_during_rad": _yaw_rmse([p.error for p in result.evaluations]),
+                "position_rmse_during_m": _rmse([(p.error, p.frame) for p in result.evaluations]),
+                "yaw_rmse_during_rad": _yaw_rmse([(p.error, p.frame) for p in result.evaluations]),
                 "tracks_created": counts["created"],
                 "tracks_deleted": counts["deleted"],
                 "tracks_refound": counts["recreated"],
@@ -140,3 +149,13 @@ def fault_outcomes(
             }
         )
     return out
+
+
+def outcomes_of(
+    faults: FaultSettings, estimates: Estimates, recording: Recording
+) -> list[dict[str, Any]]:
+    """:func:`fault_outcomes` of a team's collected estimates, scored against the recording."""
+    from relloc.pipeline.evaluation import evaluate
+
+    result = RunResult(evaluations=evaluate(estimates, recording), events=estimates.events)
+    return fault_outcomes(faults, result, estimates, recording)

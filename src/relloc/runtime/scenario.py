@@ -39,9 +39,14 @@ class Team:
     scenario: Scenario | None
 
 
+REPRODUCTIONS = ("desilva2015", "desilva2015-kidnapped", "sharma2013")
+"""Reproductions whose teams run as processes (:mod:`relloc.experiments.team_sources`)."""
+
+
 def check_source(spec: str) -> str:
-    """``spec`` if it names a team source (see module docstring), else a ConfigError."""
-    if spec != "default" and not Path(spec).exists():
+    """``spec`` if it names a team source (see module docstring) or a reproduction of
+    :data:`REPRODUCTIONS`, else a ConfigError."""
+    if spec != "default" and spec not in REPRODUCTIONS and not Path(spec).exists():
         raise ConfigError(
             f"team source: {spec!r} is neither 'default', a scenario file nor a dataset folder"
         )

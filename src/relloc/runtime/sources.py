@@ -30,6 +30,7 @@ Example (a live robot)::
 from __future__ import annotations
 
 import threading
+import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Protocol
@@ -37,7 +38,7 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from relloc.core.recording import Recording, kind_code
+from relloc.core.recording import Measurements, Recording, kind_code, measurement_rows
 from relloc.errors import DataError
 
 Array = NDArray[np.float64]
@@ -77,10 +78,12 @@ class RecordingSource:
     The robot's readings travel as ``meas`` messages of range, azimuth and elevation of named
     teammates (seed 000 Eq. 2) with their stated σ; a recording in which the robot made other
     readings (another kind, of an unknown target, without σ) is a :class:`DataError` naming
-    what it holds.
+    what it holds — unless ``all_readings``: then :meth:`rows` hands the node every reading the
+    robot made, of any kind (seed 002's heights, ranges and bearings of unknown origin), and
+    :meth:`measurements` the range/azimuth/elevation ones among them.
     """
 
-    def __init__(self, recording: Recording, robot: str) -> None:
+    def __init__(self, recording: Recording, robot: str, *, all_readings: bool = False) -> None:
         self.robot = robot
         self._index = recording.index(robot)
         odo = recording.odometry[self._index]
@@ -94,17 +97,19 @@ class RecordingSource:
             & np.all(np.isfinite(m.sigma), axis=1)
         )
         other = mine & ~usable
-        if other.any():
+        if other.any() and not all_readings:
             kinds = sorted({m.kind_names()[int(q)] for q in np.flatnonzero(other)})
             raise DataError(
                 f"{recording.source or 'recording'}: robot {robot!r} has {int(other.sum())} "
                 f"readings a robot node cannot send (kinds {kinds}, no named target or no σ); "
                 "the runtime carries range_bearing_elevation readings of teammates with their σ"
             )
-        self._m_t = m.t[mine]
-        self._m_targets = tuple(recording.robots[j] for j in m.target[mine])
-        self._m_z = m.value[mine]
-        self._m_sigma = m.sigma[mine]
+        self._rows = m.select(mine)
+        sent = mine & usable
+        self._m_t = m.t[sent]
+        self._m_targets = tuple(recording.robots[j] for j in m.target[sent])
+        self._m_z = m.value[sent]
+        self._m_sigma = m.sigma[sent]
         self.end_time = float(recording.span[1])
 
     def odometry(self, t0: float, t1: float) -> tuple[Array, Array]:
@@ -117,6 +122,28 @@ class RecordingSource:
         return MeasurementBatch(
             self._m_t[lo:hi], self._m_targets[lo:hi], self._m_z[lo:hi], self._m_sigma[lo:hi]
         )
+
+    def rows(self, t0: float, t1: float, *, inclusive: bool = False) -> Measurements:
+        """The robot's own readings in the window as rows of the recording's table."""
+        lo = np.searchsorted(self._rows.t, t0, side="left")
+        hi = np.searchsorted(self._rows.t, t1, side="right" if inclusive else "left")
+        return self._rows.select(slice(int(lo), int(hi)))
+
+
+def batch_rows(batch: MeasurementBatch, roster: Sequence[str], robot: str) -> Measurements:
+    """A :class:`MeasurementBatch` of ``robot`` as range/azimuth/elevation rows (robot indices
+    in ``roster`` order); a target not on the roster is a :class:`DataError`."""
+    unknown = sorted(set(batch.targets) - set(roster))
+    if unknown:
+        raise DataError(f"{robot}: readings of {unknown}, who are not on the roster {roster}")
+    return measurement_rows(
+        "range_bearing_elevation",
+        t=batch.t,
+        observer=list(roster).index(robot),
+        target=np.array([list(roster).index(r) for r in batch.targets], dtype=np.int64),
+        value=batch.z,
+        sigma=batch.sigma,
+    )
 
 
 class LiveSource:
@@ -190,3 +217,55 @@ class LiveSource:
             np.stack([m[2] for m in take]),
             np.stack([m[3] for m in take]),
         )
+
+
+class ReplayFeeder:
+    """Plays one robot's recorded samples into a :class:`LiveSource` at the wall time they were
+    recorded (a dataset replayed in real time through the live API): a thread pushes each
+    odometry sample and reading at ``start + (t − t0)`` on the monotonic clock."""
+
+    def __init__(self, recording: Recording, robot: str, live: LiveSource, *, t0: float) -> None:
+        index = recording.index(robot)
+        odo = recording.odometry[index]
+        self._odo = [(float(t), u) for t, u in zip(odo.t, odo.velocity, strict=True)]
+        m = recording.measurements
+        mine = np.flatnonzero(
+            (m.observer == index)
+            & (m.kind == kind_code("range_bearing_elevation"))
+            & (m.target >= 0)
+        )
+        self._meas = [
+            (float(m.t[i]), recording.robots[int(m.target[i])], m.value[i], m.sigma[i])
+            for i in mine
+        ]
+        self.live = live
+        self.t0 = float(t0)
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+
+    def start(self, start_wall: float) -> None:
+        """Start pushing, with robot time ``t0`` at monotonic wall time ``start_wall``."""
+        self._thread = threading.Thread(target=self._play, args=(start_wall,), daemon=True)
+        self._thread.start()
+
+    def stop(self) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout=5.0)
+
+    def _play(self, start_wall: float) -> None:
+        events = sorted(
+            [(t, 0, k) for k, (t, _) in enumerate(self._odo) if t >= self.t0]
+            + [(t, 1, k) for k, (t, *_) in enumerate(self._meas) if t >= self.t0]
+        )
+        for t, which, k in events:
+            wait = start_wall + (t - self.t0) - time.monotonic()
+            if wait > 0 and self._stop.wait(wait):
+                return
+            if self._stop.is_set():
+                return
+            if which == 0:
+                self.live.push_odometry(t, self._odo[k][1])
+            else:
+                _, target, z, sigma = self._meas[k]
+                self.live.push_measurement(t, target, z, sigma)

@@ -10,6 +10,7 @@ distributed beliefs with the in-process ones.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -21,14 +22,14 @@ from relloc.errors import ConfigError
 from relloc.runtime.launcher import Collected
 from relloc.runtime.messages import estimates_from_bodies
 
-DATA_KINDS = ("odom", "meas", "eqm")
+DATA_KINDS = ("odom", "meas", "rows", "eqm", "mail")
 
 
 def assemble_estimates(collected: Collected, roster: Sequence[str], estimator: str) -> Estimates:
     """Every robot's shipped estimates as one record (series sorted by time: a restarted
     observer's second life follows its first); events sorted by time, then roster order."""
     order = {r: i for i, r in enumerate(roster)}
-    estimates = estimates_from_bodies(estimator, collected.estimates)
+    estimates = latest_of_each_time(estimates_from_bodies(estimator, collected.estimates))
     events = sorted(collected.events, key=lambda e: (e[0], order[e[1]], order[e[2]]))
     return Estimates(
         estimator=estimator,
@@ -38,11 +39,34 @@ def assemble_estimates(collected: Collected, roster: Sequence[str], estimator: s
     )
 
 
+def latest_of_each_time(estimates: Estimates) -> Estimates:
+    """Each series with one belief per record time: the last one shipped (a node that
+    re-filtered late readings ships the beliefs of those times again; series are sorted by
+    time, stable, so the last of equal times is the latest)."""
+    beliefs = []
+    for s in estimates.beliefs:
+        if s.t.size < 2 or np.all(np.diff(s.t) > 0):
+            beliefs.append(s)
+            continue
+        last = np.append(np.diff(s.t) > 0, True)
+        beliefs.append(
+            dataclasses.replace(
+                s,
+                t=s.t[last],
+                mean=s.mean[last],
+                cov=s.cov[last],
+                age=s.age[last],
+                info={k: v[last] for k, v in s.info.items()},
+            )
+        )
+    return dataclasses.replace(estimates, beliefs=tuple(beliefs))
+
+
 def _sum_counters(incarnations: Sequence[Mapping[str, int]]) -> dict[str, int]:
     total: dict[str, int] = {}
     for counters in incarnations:
         for key, value in counters.items():
-            if key.startswith("latency_us."):
+            if key.startswith(("latency_us.", "latency_ms.")):
                 continue
             total[key] = total.get(key, 0) + int(value)
     return total
@@ -72,6 +96,7 @@ def robot_messages(collected: Collected, roster: Sequence[str]) -> dict[str, dic
             "faults": {k.split(".", 1)[1]: v for k, v in c.items() if k.startswith("fault.")},
             "tracks": {k.split(".", 1)[1]: v for k, v in c.items() if k.startswith("tracks.")},
             "ticks": c.get("ticks", 0),
+            "listens": bool(last.get("listens", 1)),
             "cpu_s": c.get("cpu_ms", 0) / 1000.0,
             "teammate_departures_seen": c.get("teammate.departures", 0),
             "teammate_joins_seen": c.get("teammate.joins", 0),
@@ -79,6 +104,15 @@ def robot_messages(collected: Collected, roster: Sequence[str]) -> dict[str, dic
                 "p50": last.get("latency_us.p50"),
                 "p99": last.get("latency_us.p99"),
                 "samples": last.get("latency_us.samples", 0),
+            },
+            "estimate_latency_ms": {
+                "p50": last.get("latency_ms.p50"),
+                "p99": last.get("latency_ms.p99"),
+                "samples": last.get("latency_ms.samples", 0),
+            },
+            "deadlines": {
+                "windows": c.get("deadline.windows", 0),
+                "missed": c.get("deadline.missed", 0),
             },
         }
     return out
@@ -88,14 +122,17 @@ def team_message_totals(
     per_robot: Mapping[str, Mapping[str, Any]], *, killed: bool = False
 ) -> dict[str, Any]:
     """Team totals and the transport loss rate ``1 − received / expected`` of the data streams,
-    where each data message is expected once at every other robot (emulated faults act after
-    reception, so this is what the transport itself lost). With a killed robot the expectation
-    is undefined (a dead robot receives nothing) and the rate is None."""
-    n = len(per_robot)
+    where each data message is expected once at every other robot that listens to its
+    teammates (all of them, unless robots subscribe only to what they use; emulated faults act
+    after reception, so this is what the transport itself lost). With a killed robot the
+    expectation is undefined (a dead robot receives nothing) and the rate is None."""
+    listeners = {r for r, m in per_robot.items() if m.get("listens", True)}
     sent = sum(sum(r["sent"][k] for k in DATA_KINDS) for r in per_robot.values())
     wire = sum(sum(r["received_wire"].values()) for r in per_robot.values())
     delivered = sum(sum(r["received_delivered"].values()) for r in per_robot.values())
-    expected = sent * (n - 1)
+    expected = sum(
+        sum(m["sent"][k] for k in DATA_KINDS) * len(listeners - {r}) for r, m in per_robot.items()
+    )
     return {
         "data_messages_sent": sent,
         "data_messages_expected": expected,

@@ -17,6 +17,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.core.recording import Measurements
+
 Array = NDArray[np.float64]
 
 
@@ -98,6 +100,31 @@ class Teammate:
     odometry: ReceivedOdometry = field(default_factory=ReceivedOdometry)
     heard_until_s: float | None = None
     """End of the latest odometry window received (the header time of its ``odom``)."""
+    progress: float = -np.inf
+    """The teammate's estimator has processed every event before this time (its latest
+    ``mail``; see :mod:`relloc.runtime.estimation`)."""
+    rows_until: float = -np.inf
+    """End of the latest window of shared readings received (the header time of its ``rows``)."""
+    rows: list[Measurements] = field(default_factory=list)
+    """Its shared readings received and not yet filtered."""
+
+    def take_rows(self, t0: float, t1: float, *, inclusive: bool = False) -> list[Measurements]:
+        """The shared readings stamped in ``[t0, t1)`` (``[t0, t1]``); earlier ones are
+        dropped (their window is filtered already) and counted in :attr:`late_rows`."""
+        taken, kept = [], []
+        for part in self.rows:
+            before = part.t < t0
+            inside = ~before & ((part.t <= t1) if inclusive else (part.t < t1))
+            self.late_rows += int(before.sum())
+            if inside.any():
+                taken.append(part.select(inside))
+            if (~before & ~inside).any():
+                kept.append(part.select(~before & ~inside))
+        self.rows = kept
+        return taken
+
+    late_rows: int = 0
+    """Shared readings that arrived after their window was filtered (not used)."""
 
 
 class SeenSequences:

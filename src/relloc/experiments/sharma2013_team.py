@@ -1,0 +1,266 @@
+"""``relloc team up sharma2013 --out DIR``: seed 001's cooperative localization, decentralised
+over robot processes, beside the in-process team EIF on the same seeds.
+
+Every run ``i`` of ``--runs N`` launches robots 1–5 as processes
+(:mod:`relloc.experiments.team_sources`): each shares its odometry (``odom``) and its readings
+(``rows``: bearings of robots and landmarks, robot 1's GPS fixes) every tick, and runs the team
+EIF of one case (``--case``, default ``two_landmarks``) on everything it received. The
+in-process reference is that case's filter of ``relloc reproduce sharma2013`` replayed over the
+same recording (:func:`relloc.pipeline.replay.replay`, poses recorded every 0.5 s).
+
+Tolerance. On a perfect network each agent filters the same events with the same readings as
+the in-process EIF; the readings of one instant reach it in robot order rather than in the
+recording's order, so its information sums are added in another order: each agent's beliefs
+must match the in-process ones within :data:`AGREEMENT_TOLERANCE` (any mean or covariance
+entry). With loss or delay (``--drop``, ``--delay``, ``--jitter``, ...) a window is filtered once a
+later ``rows`` of every teammate has arrived or it is overdue; a reading that arrives after its
+window was filtered is still fused at its own time stamp: the agent goes back to the state it
+checkpointed before that window and filters every window since again with it
+(:meth:`relloc.runtime.estimation.WindowDriver.refilter`, 5 s of checkpoints). Lost readings stay
+lost: ``cost_of_loss`` reports each agent's accuracy against the perfect-network (in-process)
+run.
+
+``summary.json``: ``in_process`` (position and heading RMSE over the robots and the record
+times), ``agents.<robot>`` (the same of that agent's estimates, its ``max_abs_mean_diff`` /
+``max_abs_cov_diff`` against the in-process EIF, its late readings — re-filtered from a
+checkpoint or lost — and overdue windows), ``agreement``
+(worst over agents, ``within_tolerance``), ``cost_of_loss`` (per agent, RMSE − in-process
+RMSE), ``messages`` per run and robot, per run ``fault_outcomes`` (accuracy before / during /
+after each fault: :mod:`relloc.runtime.outcomes`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from relloc.core.estimates import Estimates
+from relloc.core.recording import Recording
+from relloc.experiments.sharma2013 import OUTPUT_EVERY_S
+from relloc.experiments.team_sources import sharma_estimator, sharma_sim
+from relloc.pipeline.evaluation import evaluate
+from relloc.pipeline.output import fmt, markdown_table, prepare_out_dir, write_report, write_summary
+from relloc.pipeline.replay import replay
+from relloc.runtime.faults import FaultSettings
+from relloc.runtime.launcher import Collected, TeamLauncher, TeamSettings
+from relloc.runtime.outcomes import outcomes_of
+from relloc.runtime.summary import agreement, assemble_estimates, robot_messages
+
+AGREEMENT_TOLERANCE = 1e-9
+"""Largest |difference| of an agent's belief entry from the in-process EIF's at a common record
+time on a perfect network (summation order only; see the module docstring)."""
+
+
+@dataclass(frozen=True, kw_only=True)
+class SharmaTeamSettings:
+    """One ``team up sharma2013`` invocation."""
+
+    out_dir: Path
+    seed: int = 0
+    runs: int = 1
+    duration_s: float | None = None
+    case: str = "two_landmarks"
+    tick_s: float = 0.1
+    faults: FaultSettings = field(default_factory=FaultSettings)
+    team: str = "team"
+    wall_timeout_s: float = 300.0
+    realtime_factor: float = 0.0
+    """Pace the clock at this multiple of real time (0: as fast as the team goes)."""
+
+
+def in_process(recording: Recording, sim: Any, scenario: Any, case: str) -> Estimates:
+    """The case's team EIF replayed over the recording, as in ``relloc reproduce sharma2013``."""
+    t = recording.require_truth("sharma2013")[0].t
+    out_t = t[:: round(OUTPUT_EVERY_S / scenario.dt)]
+    estimator = sharma_estimator(sim, scenario, case)
+    return replay(recording, [estimator], record_times=out_t, start=0.0, end=float(out_t[-1]))
+
+
+def accuracy(estimates: Estimates, recording: Recording) -> dict[str, float | None]:
+    """Position RMSE (m) and heading RMSE (rad) over every robot and record time."""
+    errors = [e.error for e in evaluate(estimates, recording)]
+    if not errors:
+        return {"pos_rmse_m": None, "heading_rmse_rad": None, "records": 0}
+    e = np.concatenate(errors)
+    return {
+        "pos_rmse_m": float(np.sqrt(np.mean(e[:, 0] ** 2 + e[:, 1] ** 2))),
+        "heading_rmse_rad": float(np.sqrt(np.mean(e[:, 2] ** 2))),
+        "records": int(e.shape[0]),
+    }
+
+
+def _of_owner(estimates: Estimates, owner: str, as_owner: str | None = None) -> Estimates:
+    """The series of one owner (renamed ``as_owner``)."""
+    beliefs = tuple(
+        dataclasses.replace(s, owner=as_owner or owner)
+        for s in estimates.beliefs
+        if s.owner == owner
+    )
+    return Estimates(estimator=estimates.estimator, beliefs=beliefs)
+
+
+def compare_agents(
+    got: Estimates, ref: Estimates, recording: Recording, collected: Collected
+) -> dict[str, Any]:
+    """Per agent: its accuracy, its largest difference from the in-process team filter
+    (``ref``, owner ``"team"``), the records it lacks and its late readings."""
+    agents: dict[str, Any] = {}
+    for robot in recording.robots:
+        mine = _of_owner(got, robot)
+        agree = agreement(mine, _of_owner(ref, "team", robot))
+        agents[robot] = accuracy(mine, recording) | {
+            "max_abs_mean_diff": agree["max_abs_mean_diff"],
+            "max_abs_cov_diff": agree["max_abs_cov_diff"],
+            "records_missing": sum(p.get("only_in_process", 0) for p in agree["pairs"].values()),
+            **_late_counts(collected.stats.get(robot, [{}])[-1]),
+        }
+    return agents
+
+
+def run_sharma_team(s: SharmaTeamSettings) -> dict[str, Any]:
+    """Run every run's team, compare every agent with the in-process EIF, write the outputs."""
+    out = prepare_out_dir(s.out_dir)
+    start = time.monotonic()
+    runs: list[dict[str, Any]] = []
+    for i in range(s.runs):
+        scenario, sim = sharma_sim(s.seed, i, s.duration_s)
+        recording = sim.recording
+        settings = TeamSettings(
+            scenario="sharma2013",
+            out_dir=out / f"run{i}",
+            seed=s.seed,
+            team=s.team,
+            tick_s=s.tick_s,
+            faults=s.faults,
+            wall_timeout_s=s.wall_timeout_s,
+            realtime_factor=s.realtime_factor,
+            node_args=("--run", str(i), "--duration", repr(scenario.duration), "--case", s.case),
+        )
+        span = recording.span[1] - recording.span[0]
+        collected = TeamLauncher(settings, recording.robots, span).run()
+        got = assemble_estimates(collected, recording.robots, "eif")
+        ref = in_process(recording, sim, scenario, s.case)
+        agents = compare_agents(got, ref, recording, collected)
+        messages = robot_messages(collected, recording.robots)
+        runs.append(
+            {
+                "run": i,
+                "fault_outcomes": outcomes_of(s.faults, got, recording),
+                "wall_s": collected.wall_s,
+                "in_process": accuracy(ref, recording),
+                "agents": agents,
+                "messages": messages,
+                "exit_codes": collected.exit_codes,
+            }
+        )
+    summary = _summary(s, runs)
+    summary["wall_s"] = time.monotonic() - start
+    write_summary(out, summary)
+    write_report(out, report_markdown(summary))
+    return summary
+
+
+def _late_counts(counters: Mapping[str, int]) -> dict[str, int]:
+    """An agent's late readings: arrived after their window was filtered, re-filtered from a
+    checkpoint, or lost (older than every checkpoint); windows filtered overdue."""
+    return {
+        "readings_late": counters.get("rows_late", 0),
+        "readings_refiltered": counters.get("tracks.rows_refiltered", 0),
+        "readings_late_lost": counters.get("tracks.rows_late_lost", 0),
+        "overdue_windows": counters.get("overdue_windows", 0),
+    }
+
+
+def _summary(s: SharmaTeamSettings, runs: list[dict[str, Any]]) -> dict[str, Any]:
+    return agents_summary(runs, s.faults) | {
+        "experiment": "sharma2013",
+        "case": s.case,
+        "seed": s.seed,
+        "runs": s.runs,
+    }
+
+
+def agents_summary(runs: list[dict[str, Any]], faults: FaultSettings) -> dict[str, Any]:
+    """The agreement of every agent of every run, and the cost of what was lost."""
+    worst = max(
+        max(a["max_abs_mean_diff"], a["max_abs_cov_diff"])
+        for r in runs
+        for a in r["agents"].values()
+    )
+    missing = sum(a["records_missing"] for r in runs for a in r["agents"].values())
+    perfect = not faults.network_faulty and not faults.kills
+    cost = {
+        f"run{r['run']}:{robot}": _diff(a["pos_rmse_m"], r["in_process"]["pos_rmse_m"])
+        for r in runs
+        for robot, a in r["agents"].items()
+    }
+    return {
+        "faults": faults.to_dict(),
+        "tolerance": AGREEMENT_TOLERANCE,
+        "agreement": {
+            "max_abs_diff": worst,
+            "records_missing": missing,
+            "perfect_network": perfect,
+            "within_tolerance": bool(worst <= AGREEMENT_TOLERANCE and missing == 0),
+        },
+        "cost_of_loss": {"pos_rmse_minus_in_process_m": cost},
+        "per_run": runs,
+    }
+
+
+def _diff(a: float | None, b: float | None) -> float | None:
+    return None if a is None or b is None else float(a) - float(b)
+
+
+def report_markdown(summary: Mapping[str, Any]) -> str:
+    """``report.md``: every agent's accuracy and agreement beside the in-process EIF."""
+    rows = []
+    for r in summary["per_run"]:
+        ref = r["in_process"]
+        rows.append(
+            [r["run"], "in-process EIF", ref["pos_rmse_m"], ref["heading_rmse_rad"], "", ""]
+        )
+        for robot, a in r["agents"].items():
+            rows.append(
+                [
+                    r["run"],
+                    f"agent {robot}",
+                    a["pos_rmse_m"],
+                    a["heading_rmse_rad"],
+                    max(a["max_abs_mean_diff"], a["max_abs_cov_diff"]),
+                    f"{a['readings_late']} ({a['readings_refiltered']} re-filtered)",
+                ]
+            )
+    agree = summary["agreement"]
+    return "\n".join(
+        [
+            f"# relloc team up — {summary['experiment']}, case {summary['case']} "
+            f"({summary['runs']} run(s), seed {summary['seed']})",
+            "",
+            "Every robot shares its odometry and readings and runs the team EIF on what it "
+            "received.",
+            "",
+            markdown_table(
+                [
+                    "run",
+                    "",
+                    "pos. RMSE (m)",
+                    "heading RMSE (rad)",
+                    "max |Δ| vs in-process",
+                    "late readings",
+                ],
+                rows,
+            ),
+            "",
+            f"Largest |Δ| of a belief entry: {fmt(agree['max_abs_diff'])} (tolerance "
+            f"{summary['tolerance']:g}), records missing: {agree['records_missing']}: "
+            f"{'met' if agree['within_tolerance'] else 'not met'}"
+            f"{'' if agree['perfect_network'] else ' — faults were injected, so not expected'}.",
+        ]
+    )

@@ -1,0 +1,300 @@
+"""Any contract estimator in a robot node: the window driver's message rule, the ``mail``
+codec, re-filtering late readings from a checkpoint, seed 002's leaders as processes (``relloc team
+up desilva2015-kidnapped``) and seed 001's agents as processes (``relloc team up sharma2013``).
+
+The driver tests run two seed-002 leaders' drivers in one process, window by window, handing
+each other only what the node protocol hands over (stamped messages and progress): they must
+reproduce the in-process replay exactly. The end-to-end test launches the whole team over
+loopback Zenoh.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from relloc.cli import main
+from relloc.core.recording import Measurements
+from relloc.errors import DataError
+from relloc.experiments.desilva2015 import RunConfig, leader_estimates
+from relloc.experiments.sharma2013_team import in_process
+from relloc.experiments.team_sources import (
+    desilva_recording,
+    desilva_scenario,
+    named_node_parts,
+    sharma_node_parts,
+    sharma_sim,
+)
+from relloc.fusion.messages import EquivalentMeasurement
+from relloc.runtime.mail import mail_body, mail_items
+from relloc.runtime.messages import decode, encode, est_bodies, estimates_from_bodies
+from relloc.runtime.summary import latest_of_each_time
+from relloc.runtime.teammates import ReceivedOdometry
+
+ROSTER = ("L1", "L2", "P1", "P2", "P3")
+
+
+def _leader_drivers(duration_s: float):
+    recording = desilva_recording("desilva2015", 4, 0, duration_s)
+    parts = [named_node_parts("desilva2015", r, 4, 0, duration_s) for r in ("L1", "L2")]
+    streams = []
+    for robot in recording.robots:
+        s = ReceivedOdometry()
+        od = recording.odometry[recording.index(robot)]
+        s.add(od.t, od.velocity)
+        streams.append(s)
+    return recording, parts, streams
+
+
+def _exchange(pairs):
+    """Hand each driver's sent messages to the other, stamped (what ``mail`` carries)."""
+    for d, other in pairs:
+        for stamp, m in d.take_sent():
+            other.deliver(stamp, d.robot, [m])
+
+
+def test_two_leader_drivers_exchanging_mail_reproduce_the_in_process_replay():
+    recording, parts, streams = _leader_drivers(4.0)
+    drivers = [p.driver for p in parts]
+    pairs = list(zip(drivers, drivers[::-1], strict=True))
+    edges = np.round(np.arange(0, 41) * 0.1, 12)
+    for k in range(40):
+        last = k == 39
+        for p in parts:
+            rows = p.source.rows(edges[k], edges[k + 1], inclusive=last)
+            p.driver.start_window(
+                edges[k],
+                edges[k + 1],
+                streams=streams,
+                rows=rows,
+                present=set(ROSTER),
+                inclusive=last,
+            )
+        stalls = 0
+        # a driver learns a teammate's progress with the messages sent before it (one mail)
+        shipped = [other.progress for _, other in pairs]
+        while not all([d.run(until=p) for (d, _), p in zip(pairs, shipped, strict=True)]):
+            shipped = [other.progress for _, other in pairs]
+            _exchange(pairs)
+            stalls += 1
+            assert stalls < 100, "the drivers wait for each other forever"
+        _exchange(pairs)
+    reference = leader_estimates(
+        recording, RunConfig(scenario=desilva_scenario("desilva2015", 4.0))
+    )
+    got = {s.key: s for d in drivers for s in d.take_new().beliefs}
+    assert set(got) == {s.key for s in reference.beliefs}
+    for ref in reference.beliefs:
+        g = got[ref.key]
+        np.testing.assert_array_equal(g.t, ref.t)
+        np.testing.assert_allclose(g.mean, ref.mean, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(g.cov, ref.cov, rtol=0, atol=1e-12)
+    fused = {k: v for d in drivers for k, v in d.counters().items() if "messages" in k}
+    assert fused.get("messages_late", 0) == 0
+    assert sum(v for k, v in fused.items() if k.startswith("messages_fused")) > 0
+
+
+def _eqm(subject: int, k: int, t: float) -> EquivalentMeasurement:
+    rng = np.random.default_rng(subject * 10 + k)
+    means = rng.normal(size=(k, 4))
+    covs = np.stack([np.eye(4) * (1 + i) for i in range(k)])
+    return EquivalentMeasurement(
+        sender=0,
+        subject=subject,
+        time=t,
+        means=means,
+        covs=covs,
+        prior_means=means + 0.1,
+        prior_covs=covs * 2,
+        weights=np.arange(1, k + 1, dtype=float),
+    )
+
+
+def test_mail_round_trip_and_split_keeps_the_progress_of_the_earliest_message():
+    sent = [(1.0, _eqm(1, 3, 1.0)), (1.0, _eqm(2, 2, 1.0)), (2.0, _eqm(3, 4, 2.0))]
+    whole = mail_body(2.5, sent, ROSTER, 65_536)
+    assert len(whole) == 1 and whole[0]["progress"] == 2.5
+    parts = mail_body(2.5, sent, ROSTER, 1024 + 5 * 400)  # at most 5 tracks a part
+    assert [p["progress"] for p in parts] == [1.0, 2.5]
+    got = []
+    for body in parts:
+        msg = decode(encode("mail", "L1", 0, 2.5, body), roster=ROSTER, key_sender="L1")
+        got += [(stamp, m) for stamp, ms in mail_items(msg.body, ROSTER, "L1") for m in ms]
+    assert [s for s, _ in got] == [1.0, 1.0, 2.0]
+    for (_, a), (_, b) in zip(sent, got, strict=True):
+        assert (a.sender, a.subject, a.time) == (b.sender, b.subject, b.time)
+        for name in ("means", "covs", "prior_means", "prior_covs", "weights"):
+            np.testing.assert_allclose(getattr(a, name), getattr(b, name), rtol=0, atol=1e-15)
+
+
+@pytest.mark.slow
+def test_desilva_leaders_as_processes_match_in_process_and_refind_the_kidnapped_pod(tmp_path):
+    out = tmp_path / "out"
+    argv = ["team", "up", "desilva2015-kidnapped", "--out", str(out), "--duration", "10"]
+    assert main([*argv, "--seed", "0", "--quiet"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    agree = summary["agreement"]
+    assert agree["perfect_network"] and agree["within_tolerance"], agree
+    assert agree["max_abs_diff"] < 1e-9
+    for figure, diff in summary["difference"].items():
+        assert diff is None or abs(diff) <= summary["tolerance"]["figure"], figure
+    kidnapped = summary["kidnapped"]
+    assert kidnapped["distributed"] == kidnapped["in_process"]
+    # P2 (moved by 3 m, −2 m, 2 rad at 5 s) is re-found by both leaders, across processes
+    assert kidnapped["distributed"]["time_to_refind_s"] is not None
+    assert kidnapped["distributed"]["tracked_last_second"] == 1.0
+    run = summary["per_run"][0]
+    assert set(run["exit_codes"]) == {"clock", *ROSTER}
+    assert all(codes == [0] for codes in run["exit_codes"].values())
+    for robot, m in run["messages"].items():
+        assert m["rejected"] == 0 and m["final_report"]
+        assert (m["sent"]["mail"] > 0) == (robot in ("L1", "L2"))
+    for me, mate in (("L1", "L2"), ("L2", "L1")):
+        # every mail the teammate sent, but perhaps its last (sent as this leader finished)
+        got, sent = (
+            run["messages"][me]["received_delivered"]["mail"],
+            run["messages"][mate]["sent"]["mail"],
+        )
+        assert sent - 1 <= got <= sent
+    assert (out / "report.md").read_text().startswith("# relloc team up — desilva2015-kidnapped")
+
+
+def test_an_agent_refilters_late_readings_from_a_checkpoint_and_matches_the_in_process_eif():
+    """Seed 001's team EIF in one agent's driver, window by window; a third of its teammates'
+    readings arrive two windows late and are re-filtered from the checkpoints: the beliefs
+    equal the in-process EIF's (the readings are fused at their own time stamps)."""
+    scenario, sim = sharma_sim(2, 0, 3.0)
+    recording = sim.recording
+    parts = sharma_node_parts("1", 2, 0, 3.0, "two_landmarks")
+    driver = parts.driver
+    streams = []
+    for od in recording.odometry:
+        s = ReceivedOdometry()
+        s.add(od.t, od.velocity)
+        streams.append(s)
+    m = recording.measurements
+    rng = np.random.default_rng(11)  # which readings are late (seed not used elsewhere)
+    late = (m.observer != 0) & (rng.random(m.size) < 0.33)
+    edges = np.round(np.arange(0, 31) * 0.1, 12)
+    held_back: list[tuple[int, Measurements]] = []
+    for k in range(30):
+        last = k == 29
+        inside = (m.t >= edges[k]) & ((m.t <= edges[k + 1]) if last else (m.t < edges[k + 1]))
+        driver.start_window(
+            edges[k],
+            edges[k + 1],
+            streams=streams,
+            rows=m.select(inside & ~late),
+            present=set(recording.robots[1:]),
+            inclusive=last,
+        )
+        assert driver.run()
+        held_back.append((k + 2, m.select(inside & late)))
+        due = [h for h in held_back if h[0] == k or last]
+        held_back = [h for h in held_back if not (h[0] == k or last)]
+        for _, rows in due:
+            assert driver.refilter(rows) == 0
+    counters = driver.counters()
+    assert counters["rows_refiltered"] == int(late.sum()) > 0
+    assert counters["rows_late_lost"] == 0
+    reference = in_process(recording, sim, scenario, "two_landmarks")
+    got = latest_of_each_time(
+        estimates_from_bodies(
+            "eif", [("1", b) for b in est_bodies(driver.take_new(), frame="world_pose2")]
+        )
+    )
+    for ref in reference.beliefs:
+        g = got.series("1", ref.subject)
+        np.testing.assert_array_equal(np.round(g.t, 9), np.round(ref.t, 9))
+        np.testing.assert_allclose(g.mean, ref.mean, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(g.cov, ref.cov, rtol=0, atol=1e-9)
+
+
+@pytest.mark.slow
+def test_sharma_agents_as_processes_each_equal_the_in_process_eif(tmp_path):
+    out = tmp_path / "out"
+    assert main(["team", "up", "sharma2013", "--out", str(out), "--duration", "3", "--quiet"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    agree = summary["agreement"]
+    assert agree["perfect_network"] and agree["within_tolerance"], agree
+    run = summary["per_run"][0]
+    assert set(run["agents"]) == {"1", "2", "3", "4", "5"}
+    for robot, a in run["agents"].items():
+        assert a["pos_rmse_m"] == pytest.approx(run["in_process"]["pos_rmse_m"], abs=1e-9), robot
+        assert a["readings_late"] == 0 and a["records_missing"] == 0
+        m = run["messages"][robot]
+        assert m["sent"]["rows"] == m["sent"]["odom"] == 30 and m["rejected"] == 0
+        assert m["received_delivered"]["rows"] == 4 * 30  # every teammate's, every tick
+
+
+def _handmade_fit(folder: str):
+    """Error models for the runtime test (round values, not fitted: the test is of the runtime,
+    the fit has its own tests and takes half a minute)."""
+    from relloc.calibration.camera import CameraFit
+    from relloc.calibration.odometry import OdometryModelFit
+    from relloc.calibration.window import CalibrationWindow
+    from relloc.experiments.mrclam_cl import FittedModels
+
+    window = CalibrationWindow(start_s=0.0, end_s=400.0, source=folder)
+    return FittedModels(
+        odometry=OdometryModelFit(
+            calibration_window=window,
+            latency_s=0.1,
+            scale_v=(0.9,) * 5,
+            scale_w=(0.8,) * 5,
+            q_v0=1e-6,
+            k_v=0.01,
+            q_w0=1e-6,
+            k_w=0.04,
+            k_wv=0.0,
+            odometry_window_s=5.0,
+        ),
+        camera=CameraFit(
+            calibration_window=window,
+            bearing_offset=(0.0,) * 5,
+            sigma_bearing_raw=0.007,
+            bearing_inflation=25.0,
+            sigma_bearing=0.035,
+            range_bias_coeffs=(0.06, 0.0, 0.0, 0.0, 0.0),
+            sigma_range_raw=0.04,
+            range_inflation=15.0,
+            sigma_range=0.17,
+            range_interval_s=1.0,
+            correlation={"range": {"1s": 0.8}},
+            n_residuals=100,
+        ),
+    )
+
+
+def test_fitted_models_round_trip_through_fit_json(tmp_path):
+    from relloc.experiments.mrclam_team import load_fit, save_fit
+
+    fit = _handmade_fit("somewhere")
+    save_fit(fit, tmp_path / "fit.json")
+    assert load_fit(tmp_path / "fit.json") == fit
+    (tmp_path / "bad.json").write_text('{"odometry": {}}')
+    with pytest.raises(DataError, match=r"bad\.json: not the fitted models"):
+        load_fit(tmp_path / "bad.json")
+
+
+@pytest.mark.slow
+def test_mrclam_agents_as_processes_each_equal_the_in_process_eif(tmp_path):
+    from relloc.datasets.paths import default_mrclam_dataset
+    from relloc.experiments.mrclam_team import save_fit
+
+    folder = default_mrclam_dataset()
+    if not folder.is_dir():
+        pytest.skip(f"{folder} is not here")
+    save_fit(_handmade_fit(str(folder)), tmp_path / "fit.json")
+    out = tmp_path / "out"
+    argv = ["team", "up", str(folder), "--estimator", "cooperative", "--out", str(out)]
+    assert main([*argv, "--fit", str(tmp_path / "fit.json"), "--duration", "2", "--quiet"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["agreement"]["within_tolerance"], summary["agreement"]
+    run = summary["per_run"][0]
+    assert set(run["agents"]) == {"1", "2", "3", "4", "5"}
+    for robot, a in run["agents"].items():
+        assert a["records_missing"] == 0 and a["readings_late"] == 0, robot
+        assert run["messages"][robot]["sent"]["rows"] > 0
