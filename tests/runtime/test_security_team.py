@@ -200,6 +200,8 @@ def _confined_attacks(session: Any) -> None:
         "update_dofs": [],
         "cond_r": [],
         "cond_s": [],
+        "info_names": [],
+        "info": [],
     }
     _put(session, keys.robot_key(TEAM, "observer", "est"), encode("est", "observer", 99, 0.5, est))
     ctl = keys.clock_key(TEAM, "ctl")
