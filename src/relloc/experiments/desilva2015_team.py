@@ -90,6 +90,7 @@ def run_desilva_team(s: DeSilvaTeamSettings) -> dict[str, Any]:
     for i in range(s.runs):
         recording = desilva_recording(s.name, s.seed, i, s.duration_s)
         settings = TeamSettings(
+            preload=("relloc.experiments.team_sources",),
             scenario=s.name,
             out_dir=out / f"run{i}",
             seed=s.seed,

@@ -193,6 +193,7 @@ def run_mrclam_team(s: MrclamTeamSettings) -> dict[str, Any]:
     rec = prepared.recording
     end = window_end(prepared, s.duration_s)
     team = TeamSettings(
+        preload=("relloc.experiments.mrclam_team", "relloc.estimators.cooperative"),
         scenario=str(s.folder),
         out_dir=out / "run0",
         seed=s.seed,

@@ -132,6 +132,7 @@ def run_sharma_team(s: SharmaTeamSettings) -> dict[str, Any]:
         scenario, sim = sharma_sim(s.seed, i, s.duration_s)
         recording = sim.recording
         settings = TeamSettings(
+            preload=("relloc.experiments.team_sources", "relloc.experiments.sharma2013"),
             scenario="sharma2013",
             out_dir=out / f"run{i}",
             seed=s.seed,

@@ -75,6 +75,9 @@ class TeamSettings:
     """The team's certificate folder (``relloc certs``); made in ``<out>/certs`` if None."""
     node_args: tuple[str, ...] = ()
     """Extra ``relloc node`` arguments of every robot (a reproduction's run and duration)."""
+    preload: tuple[str, ...] = ()
+    """Modules the robot processes need beyond :data:`PRELOAD` (a reproduction's team names
+    its own), imported once by the fork server."""
 
     def __post_init__(self) -> None:
         keys.check_id(self.team, "--team")
@@ -199,10 +202,6 @@ PRELOAD = [
     "relloc.runtime.scenario",
     "relloc.runtime.estimation",
     "relloc.runtime.team",
-    "relloc.experiments.team_sources",
-    "relloc.experiments.sharma2013",
-    "relloc.estimators.cooperative",
-    "relloc.experiments.mrclam_team",
 ]
 """Modules the fork server imports once, so robot processes start in milliseconds instead of
 each paying numpy/scipy imports (zenoh is imported by each child: its runtime must not be
@@ -225,10 +224,11 @@ def _child_main(argv: list[str], log_path: str) -> None:
     os._exit(code)
 
 
-def _fork_context() -> Any:
-    """A ``forkserver`` multiprocessing context preloading :data:`PRELOAD`."""
+def _fork_context(extra: tuple[str, ...]) -> Any:
+    """A ``forkserver`` multiprocessing context preloading :data:`PRELOAD` and ``extra`` (the
+    server starts once per process: the first team's list holds; preloading only saves time)."""
     ctx = multiprocessing.get_context("forkserver")
-    ctx.set_forkserver_preload(PRELOAD)
+    ctx.set_forkserver_preload([*PRELOAD, *extra])
     return ctx
 
 
@@ -253,7 +253,7 @@ class TeamLauncher:
             "restart": sorted(settings.faults.restarts, key=lambda e: e.at_s),
         }
         self.secure: SecureTeam | None = None
-        self.context = _fork_context()
+        self.context = _fork_context(settings.preload)
 
     def _spawn(self, name: str, argv: list[str]) -> Any:
         """Start ``relloc <argv>`` as a separate OS process (forked by the fork server)."""
