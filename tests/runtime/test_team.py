@@ -79,7 +79,12 @@ def _inject_bad_messages(team: str, endpoint: str, roster: tuple[str, ...]) -> N
 def test_three_robot_team_finds_itself_agrees_and_rejects_bad_messages(trio_scenario, tmp_path):
     path = trio_scenario(4.0)
     port = free_loopback_port()
-    settings = TeamSettings(scenario=str(path), out_dir=tmp_path / "out", seed=3, port=port)
+    # paced at 2.5× real time, as a team runs: unpaced, the clock ticks as fast as the acks come,
+    # and on a starved machine a teammate's odometry can then arrive after its window is due
+    # (max_lag_ticks), which the node fills with held velocities by design (overdue_windows)
+    settings = TeamSettings(
+        scenario=str(path), out_dir=tmp_path / "out", seed=3, port=port, realtime_factor=2.5
+    )
     rec = load_team(str(path), 3).recording
     launcher = TeamLauncher(settings, rec.robots, rec.span[1] - rec.span[0])
     failures: list[BaseException] = []
