@@ -109,6 +109,15 @@ def run_average_band(nees_runs: ArrayLike, dof: int, p: float = 0.95) -> dict[st
     lo, hi = mean_chi2_band(dof, runs, p)
     avg = v.mean(axis=0)
     avg = avg[np.isfinite(avg)]
+    if avg.size == 0:
+        return {
+            "in_band_percent": float("nan"),
+            "band": [lo, hi],
+            "runs": runs,
+            "instants": 0,
+            "verdict": None,
+            "reason": "no instant with a value in every run",
+        }
     inside = float(100.0 * np.mean((avg >= lo) & (avg <= hi)))
     below = float(100.0 * np.mean(avg < lo))
     above = float(100.0 * np.mean(avg > hi))

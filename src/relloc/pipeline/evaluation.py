@@ -34,7 +34,13 @@ from relloc.core.events import TIME_TOL
 from relloc.core.recording import Recording
 from relloc.errors import ConfigError
 from relloc.metrics.conditioning import condition_log10_batch
-from relloc.metrics.consistency import anees, chi2_upper, mean_chi2_band, nees, percent_beyond
+from relloc.metrics.consistency import (
+    anees,
+    chi2_upper,
+    nees,
+    percent_beyond,
+    run_average_band,
+)
 from relloc.metrics.errors import state_errors
 from relloc.pipeline.frames import frame
 
@@ -220,11 +226,11 @@ def accuracy_and_consistency(
     }
 
 
-def run_averaged_nees(
+def steady_nees_table(
     runs: Sequence[SeriesEvaluation], *, rate_hz: float, settle_s: float
-) -> tuple[Array, Array, int]:
-    """NEES averaged over independent runs at each record time where every run has a
-    steady-state sample: ``(t, mean_nees, n_runs)`` (records on a grid at ``rate_hz``)."""
+) -> tuple[Array, Array]:
+    """The NEES of independent runs at the record times where every run has a steady-state
+    sample: ``(t, table (R, T))`` (records on a grid at ``rate_hz``)."""
     t0 = min((float(r.t[0]) for r in runs if r.t.size), default=0.0)
     idx = [np.rint((r.t - t0) * rate_hz).astype(np.int64) for r in runs]
     width = max((int(i.max()) + 1 for i in idx if i.size), default=0)
@@ -234,21 +240,28 @@ def run_averaged_nees(
         table[k, i[steady]] = r.nees[steady]
     full = np.all(np.isfinite(table), axis=0)
     t = t0 + np.arange(width) / rate_hz
-    return t[full], table[:, full].mean(axis=0), len(runs)
+    return t[full], table[:, full]
+
+
+def run_averaged_nees(
+    runs: Sequence[SeriesEvaluation], *, rate_hz: float, settle_s: float
+) -> tuple[Array, Array, int]:
+    """NEES averaged over independent runs at each record time where every run has a
+    steady-state sample: ``(t, mean_nees, n_runs)`` (:func:`steady_nees_table`)."""
+    t, table = steady_nees_table(runs, rate_hz=rate_hz, settle_s=settle_s)
+    return t, table.mean(axis=0), len(runs)
 
 
 def nees_band_check(
     runs: Sequence[SeriesEvaluation], *, rate_hz: float, settle_s: float, p: float = 0.95
 ) -> dict[str, Any]:
     """Share of record times at which the run-averaged NEES lies inside its two-sided ``p``
-    band (about ``100 p`` % for a consistent filter); needs ≥ 2 independent runs."""
+    band (about ``100 p`` % for a consistent filter), and the verdict of
+    :func:`relloc.metrics.consistency.run_average_band`; needs ≥ 2 independent runs."""
     if len(runs) < 2:
         raise ConfigError("nees_band_check: needs at least two independent runs")
-    dim = frame(runs[0].frame).dim
-    _, avg, n = run_averaged_nees(runs, rate_hz=rate_hz, settle_s=settle_s)
-    lo, hi = mean_chi2_band(dim, n, p)
-    inside = float(100.0 * np.mean((avg >= lo) & (avg <= hi))) if avg.size else float("nan")
-    return {"in_band_percent": inside, "band": [lo, hi], "runs": n, "instants": int(avg.size)}
+    _, table = steady_nees_table(runs, rate_hz=rate_hz, settle_s=settle_s)
+    return run_average_band(table, frame(runs[0].frame).dim, p)
 
 
 def convergence_time(evaluation: SeriesEvaluation, thresholds: Sequence[float]) -> float | None:

@@ -162,6 +162,7 @@ def _pair_summary(
         band = nees_band_check(runs, rate_hz=rate, settle_s=settle_s)
         out["nees_run_average_in_band_percent"] = band["in_band_percent"]
         out["nees_run_average_band"] = band["band"]
+        out["nees_run_average_verdict"] = band["verdict"]
     out["max_condition_log10"] = {
         "P": max((float(np.max(r.cond_p)) for r in runs if r.cond_p.size), default=float("nan")),
         "R": max((float(np.max(r.cond_r)) for r in runs if r.cond_r.size), default=float("nan")),
