@@ -303,3 +303,16 @@ def test_relative_pose_matches_core_pose_algebra():
         ref, _, _ = relative(a[k], b[k])
         np.testing.assert_allclose(ours[k, :3], ref[:3], atol=1e-12)
         assert abs(np.angle(np.exp(1j * (ours[k, 3] - ref[3])))) < 1e-12
+
+
+def test_ground_truth_marks_its_gaps():
+    pose = np.zeros((4, 4))
+    truth = GroundTruth(t=np.array([0.0, 0.1, 1.1, 1.2]), pose=pose, gap_s=0.5)
+    # inside the 1 s dropout the pose is bridged, not measured; outside the span it is unknown
+    np.testing.assert_array_equal(
+        truth.valid_at([0.0, 0.05, 0.1, 0.6, 1.1, 1.15, 1.2, 1.3]),
+        [True, True, True, False, True, True, True, False],
+    )
+    assert GroundTruth(t=np.array([0.0, 5.0]), pose=np.zeros((2, 4))).valid_at(2.5).all()
+    with pytest.raises(DataError, match="gap_s"):
+        GroundTruth(t=np.array([0.0, 1.0]), pose=np.zeros((2, 4)), gap_s=0.0)

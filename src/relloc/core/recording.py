@@ -29,6 +29,7 @@ and the first offending row.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from types import MappingProxyType
@@ -170,11 +171,16 @@ def _check_times(t: Array, where: str, *, strict: bool) -> None:
 
 @dataclass(frozen=True, kw_only=True)
 class GroundTruth:
-    """True poses of one robot: ``t (N,)`` strictly increasing, ``pose (N, 4)`` = (x, y, z, ψ)."""
+    """True poses of one robot: ``t (N,)`` strictly increasing, ``pose (N, 4)`` = (x, y, z, ψ).
+
+    ``gap_s``: samples further apart than this enclose a gap of the recording (e.g. a motion
+    capture dropout), across which :meth:`at` interpolates but :meth:`valid_at` says no.
+    """
 
     t: Array
     pose: Array
     where: str = field(default="truth", compare=False, repr=False)
+    gap_s: float = math.inf
 
     def __post_init__(self) -> None:
         t = _float_array(self.t, (), f"{self.where}.t")
@@ -184,8 +190,20 @@ class GroundTruth:
         if t.size < 2:
             raise DataError(f"{self.where}: at least two samples are needed, got {t.size}")
         _check_times(t, f"{self.where}.t", strict=True)
+        if not self.gap_s > 0:
+            raise DataError(f"{self.where}.gap_s: must be > 0, got {self.gap_s}")
         object.__setattr__(self, "t", t)
         object.__setattr__(self, "pose", pose)
+
+    def valid_at(self, t: Array | float) -> NDArray[np.bool_]:
+        """Whether each time ``t`` is a sample or lies between two samples at most ``gap_s``
+        apart (a pose there is measured, not bridged over a gap or extrapolated)."""
+        tq = np.atleast_1d(np.asarray(t, dtype=float))
+        hi = np.clip(np.searchsorted(self.t, tq, side="left"), 1, self.t.size - 1)
+        inside = (tq >= self.t[0]) & (tq <= self.t[-1])
+        bridged = self.t[hi] - self.t[hi - 1] <= self.gap_s
+        sample = (self.t[hi] == tq) | (self.t[hi - 1] == tq)
+        return np.asarray(inside & (bridged | sample))
 
     def at(self, t: Array | float) -> Array:
         """Poses interpolated at times ``t`` (linear in x, y, z; on the circle in ψ).

@@ -867,7 +867,7 @@ def to_recording(ds: MrclamDataset) -> rec.Recording:
     every camera reading a ``"range_bearing"`` row of another robot (``target``) or of a
     landmark (``landmark``, indexed in the order of ``Landmark_Groundtruth.dat``, positions
     ``(x, y, 0)``), rows of one time sorted in robot order, ``sigma`` not stated; the Vicon
-    ground truth ``(x, y, 0, θ)`` (gaps are not marked: :meth:`GroundTruth.at` flags them).
+    ground truth ``(x, y, 0, θ)`` with its gaps (``GroundTruth.gap_s``).
 
     Readings the table cannot hold are skipped and counted per measurement file
     (:data:`UNMAPPED_SUBJECT`: a robot seeing itself or a subject in no table;
@@ -940,12 +940,14 @@ def _unicycle_odometry(robot: RobotData) -> rec.Odometry:
 
 
 def _pose_truth(robot: RobotData) -> rec.GroundTruth:
-    """Vicon poses ``(x, y, 0, θ)``."""
+    """Vicon poses ``(x, y, 0, θ)``; samples further apart than the dataset's gap threshold
+    enclose a gap (:attr:`relloc.core.recording.GroundTruth.gap_s`)."""
     g = robot.groundtruth
     return rec.GroundTruth(
         t=g.t,
         pose=np.column_stack([g.x, g.y, np.zeros(len(g.t)), g.theta]),
         where=f"Robot{robot.subject}_Groundtruth.dat",
+        gap_s=g.gap_threshold,
     )
 
 

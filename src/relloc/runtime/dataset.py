@@ -8,10 +8,13 @@ team, so that its robots can replay it:
 - every robot of the folder (:func:`relloc.datasets.mrclam.load_mrclam`) becomes a robot of the
   recording — ``observer`` on the sensor plane (z = 0), every other robot on a plane ``height``
   above;
-- the window starts ``start_after_odometry_s`` after the last robot's first odometry record and
-  lasts ``duration_s`` (shortened to what every robot recorded), re-timed to start at 0;
-- truth is the Vicon pose on a ``rate_hz`` grid (yaw on the circle); odometry is each robot's
-  recorded ``(v, ω)`` held on that grid, with the white-noise σ fitted from the recording itself
+- the dataset is converted once (:func:`relloc.datasets.mrclam.to_recording`); the window
+  starts ``start_after_odometry_s`` after the last robot's first odometry record (or at the
+  last robot's first ground truth, if later) and lasts ``duration_s`` (shortened to what every
+  robot recorded), re-timed to start at 0;
+- truth is the Vicon pose on a ``rate_hz`` grid (yaw on the circle, gaps from
+  :meth:`~relloc.core.recording.GroundTruth.valid_at`); odometry is each robot's recorded
+  ``(v, ω)`` held on that grid, with the white-noise σ fitted from the recording itself
   (:func:`relloc.calibration.odometry.fit_odometry_noise` over everywhere the robot has both
   odometry and ground truth);
 - the observer measures every other robot at the sensor's rate with the sensor's noise
@@ -28,7 +31,7 @@ import numpy as np
 from relloc.calibration.odometry import fit_odometry_noise
 from relloc.calibration.window import odometry_and_truth
 from relloc.core.recording import GroundTruth, Odometry, Recording, measurement_rows
-from relloc.datasets.mrclam import load_mrclam
+from relloc.datasets.mrclam import load_mrclam, to_recording
 from relloc.errors import DataError
 from relloc.sim.scenario import SensorSpec
 from relloc.sim.sensors import measurement_times, sense
@@ -54,12 +57,17 @@ def mrclam_team_recording(
     if observer not in ids:
         raise DataError(f"{folder}: observer robot {observer} not in the dataset (robots {ids})")
     order = (observer, *(i for i in ids if i != observer))
-    robots = [ds.robot(i) for i in order]
-    start = max(r.odometry.t[0] for r in robots) + start_after_odometry_s
+    base = to_recording(ds)  # the one MRCLAM conversion: robots named by their subject ids
+    which = [base.index(str(i)) for i in order]
+    assert base.truth is not None
+    start = max(
+        max(float(base.odometry[k].t[0]) for k in which) + start_after_odometry_s,
+        max(float(base.truth[k].t[0]) for k in which),
+    )
     end = min(
         [start + duration_s]
-        + [float(r.groundtruth.t[-1]) for r in robots]
-        + [float(r.odometry.t[-1]) for r in robots]
+        + [float(base.truth[k].t[-1]) for k in which]
+        + [float(base.odometry[k].t[-1]) for k in which]
     )
     if end - start < 10.0:
         raise DataError(
@@ -69,32 +77,26 @@ def mrclam_team_recording(
     n = int(np.floor((end - start) * rate_hz + 1e-9))
     t = np.arange(n + 1) / rate_hz
     truths, odometries, valid = [], [], []
-    for k, robot in enumerate(robots):
-        q = robot.groundtruth.at(start + t)
-        z = np.zeros_like(q.x) if k == 0 else np.full_like(q.x, height)
-        truths.append(
-            GroundTruth(
-                t=t, pose=np.stack([q.x, q.y, z, q.theta], axis=1), where=f"robot{order[k]}"
-            )
-        )
-        valid.append(np.asarray(q.valid))
-        v, w = robot.odometry.at(start + t)
-        u = np.zeros((t.size, 4))
-        u[:, 0], u[:, 3] = v, w
+    for rank, (rid, k) in enumerate(zip(order, which, strict=True)):
+        pose = base.truth[k].at(start + t)
+        pose[:, 2] = 0.0 if rank == 0 else height
+        truths.append(GroundTruth(t=t, pose=pose, where=f"robot{rid}"))
+        valid.append(base.truth[k].valid_at(start + t))
+        robot = ds.robot(rid)
         fit = fit_odometry_noise(
-            robot,
-            odometry_and_truth(robot, f"{ds.path}: robot {robot.subject}"),
-            rate_hz=rate_hz,
+            robot, odometry_and_truth(robot, f"{ds.path}: robot {rid}"), rate_hz=rate_hz
         )
         odometries.append(
             Odometry(
-                t=t, velocity=u, sigma=np.array([fit.sigma_v, fit.sigma_lateral, 0.0, fit.sigma_w])
+                t=t,
+                velocity=base.odometry[k].held_at(start + t),
+                sigma=np.array([fit.sigma_v, fit.sigma_lateral, 0.0, fit.sigma_w]),
             )
         )
     epochs = measurement_times(sensor.rate_hz, float(t[-1]))
     steps = np.clip(np.rint(epochs * rate_hz).astype(np.int64), 0, t.size - 1)
     rows_t, rows_j, rows_z, skipped = [], [], [], 0
-    for j in range(1, len(robots)):
+    for j in range(1, len(order)):
         z, seen = sense(truths[0].pose[steps], truths[j].pose[steps], sensor, rng)
         ok = seen & valid[0][steps] & valid[j][steps]
         skipped += int(np.count_nonzero(seen & ~ok))
@@ -114,7 +116,7 @@ def mrclam_team_recording(
     )
     return Recording(
         robots=tuple(f"robot{i}" for i in order),
-        platforms=("ground",) * len(robots),
+        platforms=("ground",) * len(order),
         truth=tuple(truths),
         odometry=tuple(odometries),
         measurements=measurements,
