@@ -24,6 +24,9 @@ forward speed and turn rate by central differences (:func:`ground_truth_velociti
    ``W`` sets the time scale the rates are right at: the real errors are correlated over
    seconds, so the caller picks the horizon its filter must bridge.
 
+:func:`calibrated_commands` applies a fit to a recording's odometry: every command re-stamped
+by when it acts (``t + τ``) and scaled (``s_v v``, ``s_ω ω``).
+
 **Equivalent white noise** (:func:`fit_odometry_noise`, one robot, used where the filter's
 input noise is one σ per channel and propagation step). On a ``rate_hz`` grid the held commands
 are integrated over windows of ``window_s = W`` seconds and compared with the ground-truth
@@ -36,13 +39,14 @@ windowed error — bias included, which makes the fit conservative; the bias its
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
 
 from relloc.calibration.window import CalibrationWindow
 from relloc.core.angles import wrap_angle
+from relloc.core.recording import Odometry
 from relloc.datasets.mrclam import GroundTruth, MrclamDataset, RobotData
 from relloc.errors import ConfigError
 
@@ -224,6 +228,15 @@ def fit_odometry_model(
     )
 
 
+def calibrated_commands(od: Odometry, latency_s: float, scale_v: float, scale_w: float) -> Odometry:
+    """``od`` as a calibrated model sees it: every command re-stamped by when it acts
+    (``t + τ``) and its forward speed and turn rate scaled (``s_v v_x``, ``s_ω ω_z``)."""
+    velocity = np.array(od.velocity)
+    velocity[:, 0] *= scale_v
+    velocity[:, 3] *= scale_w
+    return replace(od, t=od.t + latency_s, velocity=velocity, where=f"{od.where} calibrated")
+
+
 # ----------------------------------------------------------------------------------------------
 # Equivalent white noise of one robot
 # ----------------------------------------------------------------------------------------------
@@ -260,11 +273,16 @@ def fit_odometry_noise(
     *,
     rate_hz: float = 100.0,
     window_s: float = 1.0,
+    latency_s: float = 0.0,
+    scale_v: float = 1.0,
+    scale_w: float = 1.0,
 ) -> OdometryNoiseFit:
     """Fit the white-noise level that explains the odometry's drift over ``window_s`` seconds
     inside ``window`` (module docstring). The real errors are correlated over seconds (command
     lag, scale errors), so a σ fitted for one integration length is only right at that time
-    scale."""
+    scale. With ``latency_s``, ``scale_v``, ``scale_w`` (a fitted :class:`OdometryModelFit`'s)
+    the commands are first calibrated, ``(s_v v(t − τ), s_ω ω(t − τ))``: the fit is then the
+    noise left after that calibration."""
     if not (rate_hz > 0 and window_s > 0):
         raise ConfigError(
             f"fit_odometry_noise: need rate_hz > 0 and window_s > 0; got {rate_hz}, {window_s}"
@@ -278,7 +296,8 @@ def fit_odometry_noise(
         )
     t = window.start_s + dt * np.arange(n_windows * steps + 1)
     q = robot.groundtruth.at(t)
-    v_cmd, w_cmd = robot.odometry.at(t[:-1])
+    v_cmd, w_cmd = robot.odometry.at(t[:-1] - latency_s)
+    v_cmd, w_cmd = scale_v * v_cmd, scale_w * w_cmd
     c, s = np.cos(q.theta[:-1]), np.sin(q.theta[:-1])
     dx, dy = np.diff(q.x), np.diff(q.y)
     dth = np.diff(np.unwrap(q.theta))

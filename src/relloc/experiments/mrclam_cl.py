@@ -55,7 +55,11 @@ from numpy.typing import NDArray
 
 from relloc.calibration.camera import CameraFit, fit_camera, landmark_wait_s
 from relloc.calibration.inflation import CORRELATION_HORIZON_S
-from relloc.calibration.odometry import OdometryModelFit, fit_odometry_model
+from relloc.calibration.odometry import (
+    OdometryModelFit,
+    calibrated_commands,
+    fit_odometry_model,
+)
 from relloc.calibration.window import CalibrationWindow, leading_fraction
 from relloc.core.gaussian import Gaussian
 from relloc.core.recording import Measurements, Odometry, Recording, measurement_rows
@@ -186,15 +190,13 @@ def build_recording(ds: Any, fit: FittedModels, rng: np.random.Generator) -> Pre
 
 
 def calibrated_odometry(recording: Recording, fit: FittedModels) -> tuple[Odometry, ...]:
-    """Every command re-stamped by when it acts (``t + τ``) and scaled per robot
-    (``s_v v``, ``s_ω ω``): the odometry as the filter's model sees it."""
-    out = []
-    for i, od in enumerate(recording.odometry):
-        velocity = np.zeros_like(od.velocity)
-        velocity[:, 0] = fit.odometry.scale_v[i] * od.velocity[:, 0]
-        velocity[:, 3] = fit.odometry.scale_w[i] * od.velocity[:, 3]
-        out.append(replace(od, t=od.t + fit.odometry.latency_s, velocity=velocity))
-    return tuple(out)
+    """Every robot's commands calibrated with the fitted latency and its scales
+    (:func:`relloc.calibration.odometry.calibrated_commands`)."""
+    o = fit.odometry
+    return tuple(
+        calibrated_commands(od, o.latency_s, o.scale_v[i], o.scale_w[i])
+        for i, od in enumerate(recording.odometry)
+    )
 
 
 def corrected_bearings(m: Measurements, fit: FittedModels) -> Measurements:
