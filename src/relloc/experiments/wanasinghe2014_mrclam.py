@@ -316,9 +316,14 @@ def _calibrated_replay(settings: ReplaySettings, ds: MrclamDataset, raw: ReplayD
             latency_s=latency,
             scale_v=s_v,
             scale_w=s_w,
+            time_constant_s=team.time_constant_s,
         )
         od = calibrated_commands(
-            recording.odometry[recording.index(str(subject))], latency, s_v, s_w
+            recording.odometry[recording.index(str(subject))],
+            latency,
+            s_v,
+            s_w,
+            team.time_constant_s,
         )
         odometry.append(_held(od, raw.t, _sigma(fits[label]), f"{od.where} on the grid"))
     return replace(
