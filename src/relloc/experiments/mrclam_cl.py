@@ -21,8 +21,9 @@ Error models, fitted by :mod:`relloc.calibration` on the *first half* of the sam
 window is ``fit.calibration_window`` in summary.json) and checked on the second half
 (``heldout`` entries):
 
-- odometry (:func:`relloc.calibration.odometry.fit_odometry_model`): one latency ``τ`` (the
-  commands lead the motion), per-robot scale factors ``s_v, s_ω`` and white input noise with
+- odometry (:func:`relloc.calibration.odometry.fit_odometry_model`): one latency ``τ`` and one
+  first-order lag ``T`` (the commands lead the motion, which follows them through the lag),
+  per-robot scale factors ``s_v, s_ω`` and white input noise with
   variance rates ``q_v = q_v0 + k_v|v|`` and ``q_ω = q_ω0 + k_ω|ω| + k_ωv|v|``, the rates fitted
   over integration windows as long as the expected wait for the next landmark detection
   (:func:`relloc.calibration.camera.landmark_wait_s`, clipped to [0.5, 10] s);
@@ -532,8 +533,9 @@ def _heading_explanation(cases: dict[str, Any], fit: dict[str, Any]) -> str:
         f"clusters; heading RMSE {far['heading_rmse_rad']:.3f} rad there) against "
         f"{near['heading_rmse_rad']:.3f} rad within 1 s of a landmark sighting: between "
         "sightings the heading drifts with the odometry's turn-rate errors (commanded rates, "
-        f"fitted turn-rate scales {min(fit['scale_w']):.2f}–{max(fit['scale_w']):.2f}, a lag "
-        "that a pure delay only approximates) and robot→robot "
+        f"fitted turn-rate scales {min(fit['scale_w']):.2f}–{max(fit['scale_w']):.2f} after a "
+        f"{fit['latency_s']:.2f} s delay and a {fit['time_constant_s']:.2f} s first-order lag; "
+        "what is left is the commands' own error) and robot→robot "
         "bearings only constrain relative headings. We did not shrink the fitted noise to reach "
         "the target, because that breaks the NEES target (odometry rates fitted over 1 s "
         "windows with only an AR(1) bearing inflation gave about 50 % of NEES values beyond "
@@ -611,7 +613,8 @@ def _report(summary: dict[str, Any], figures: list[tuple[str, str]]) -> str:
     f = summary["fit"]
     fit_text = (
         f"Fitted on [{f['t_lo']:.0f}, {f['t_hi']:.0f}] s of this run: odometry latency "
-        f"{f['latency_s']:.2f} s, speed scales {', '.join(f'{s:.3f}' for s in f['scale_v'])}, "
+        f"{f['latency_s']:.2f} s, first-order lag {f['time_constant_s']:.2f} s, speed scales "
+        f"{', '.join(f'{s:.3f}' for s in f['scale_v'])}, "
         f"turn-rate scales {', '.join(f'{s:.3f}' for s in f['scale_w'])}; variance rates over "
         f"{f['odometry_window_s']:.2f} s windows (the expected wait for the next landmark "
         f"detection): q_v0 {f['q_v0']:.2e} m²/s, k_v {f['k_v']:.2e} m, q_ω0 {f['q_w0']:.2e} "

@@ -1224,8 +1224,7 @@ def _replay_yaw_cause(s: dict[str, Any]) -> str:
         )
     return (
         f"The yaw bank from the same pose gives {bank:.3f} rad in case 1, so the initial guess "
-        "is not the cause: the recorded turn rates are off by up to a quarter of the real ones "
-        "for seconds at a time, and at these speeds the motion corrects the yaw drift slowly."
+        "is not the cause: at these speeds the motion corrects the odometry's yaw drift slowly."
     )
 
 
@@ -1253,11 +1252,25 @@ def replay_text(s: dict[str, Any]) -> str:
         f"{k}: {dv * 100:.2f} cm/s and {dw:.4f} rad/s rms over {w:g} s"
         for k, (dv, dw, w) in drift.items()
     )
-    verdict = (
-        "Every case meets the yaw and NEES targets."
-        if not missed
-        else f"Missed in {', '.join(missed)}: the yaw RMSE stays at {span(yaw, ' rad')}."
-    )
+    yaw_missed = [c for c, v in targets.items() if not v["yaw_ok"]]
+    nees_missed = [c for c, v in targets.items() if not v["nees_ok"]]
+    verdict = "Every case meets the yaw and NEES targets." if not missed else ""
+    if yaw_missed:
+        verdict += (
+            f"The yaw target (≤ 0.10 rad) is missed in {', '.join(yaw_missed)}: the calibrated "
+            f"yaw RMSE is {span(yaw, ' rad')}. "
+        )
+    if nees_missed:
+        verdict += (
+            f"The NEES target (≤ 10 %) is missed in {', '.join(nees_missed)} ("
+            + ", ".join(f"{c} {targets[c]['nees_percent_beyond']:.1f} %" for c in nees_missed)
+            + "). The precise-sensor cases run on the same odometry, so the excess comes with "
+            "the noisy sensor: the filter averages its readings over many seconds against "
+            "odometry errors correlated over those seconds, which an equivalent white noise "
+            "fitted at one time scale does not describe, and the PLKF's pseudo-measurement "
+            "noise is evaluated at the estimate with 0.1 rad bearings; this run does not "
+            "separate the two. "
+        )
     return (
         "- **Tables 3–4 (real data).** The paper used two Pioneer robots with laser map-based "
         "localisation as ground truth; we use two iRobot Create robots of MRCLAM with Vicon "

@@ -16,9 +16,11 @@ sensor settings. Here the same is done with two robots of any MRCLAM-layout data
 
   - **calibrated** (the headline): fitted on the *calibration window* — the rest of the
     recording after the scored window, so the two are disjoint — by
-    :func:`relloc.calibration.odometry.fit_odometry_model` (one latency ``τ`` for the team, the
-    commands leading the motion, and per-robot scales ``s_v, s_ω``); the filters get the
-    commands re-stamped and scaled, ``(s_v v(t − τ), s_ω ω(t − τ))``, and the equivalent white
+    :func:`relloc.calibration.odometry.fit_odometry_model` (one latency ``τ`` and one
+    first-order time constant ``T`` for the team — the commands lead the motion and the robots
+    follow them through a lag — and per-robot scales ``s_v, s_ω``); the filters get the
+    modelled response ``s · c_τ,T`` (:func:`relloc.calibration.odometry.calibrated_commands`)
+    held on the grid, and the equivalent white
     noise left after that calibration (:func:`relloc.calibration.odometry.fit_odometry_noise`)
     over ``calibration_noise_window_s`` windows (10 s, the correlation horizon of
     :mod:`relloc.calibration.inflation`: the relative yaw is corrected only through the observed
