@@ -83,7 +83,7 @@ def _small_config(dataset: Path) -> Wanasinghe2014Config:
             duration_s=10.0,
             min_duration_s=8.0,
             start_after_odometry_s=1.0,
-            calibration_noise_window_s=2.0,
+            calibration_noise_windows_s=(1.0, 2.0),
         ),
     )
 

@@ -20,12 +20,14 @@ sensor settings. Here the same is done with two robots of any MRCLAM-layout data
     first-order time constant ``T`` for the team — the commands lead the motion and the robots
     follow them through a lag — and per-robot scales ``s_v, s_ω``); the filters get the
     modelled response ``s · c_τ,T`` (:func:`relloc.calibration.odometry.calibrated_commands`)
-    held on the grid, and the equivalent white
-    noise left after that calibration (:func:`relloc.calibration.odometry.fit_odometry_noise`)
-    over ``calibration_noise_window_s`` windows (10 s, the correlation horizon of
-    :mod:`relloc.calibration.inflation`: the relative yaw is corrected only through the observed
-    robot's motion, so the odometry errors the filter must bridge are the ones accumulated over
-    seconds, and the real errors are correlated over seconds);
+    held on the grid, and the equivalent white noise left after that calibration
+    (:func:`relloc.calibration.odometry.fit_odometry_noise`) at the time scale where the
+    turn-rate error is largest: the fit over each window length of
+    ``calibration_noise_windows_s`` (1 s up to 40 s, the settling time Table 3 allows) is made
+    and the one with the largest σ_ω kept. The real errors are correlated over seconds, so an
+    equivalent white noise is right at one time scale only; the relative yaw is corrected only
+    through the observed robot's motion, slowly, so the filter must not be over-confident at any
+    time scale it bridges, and the largest σ is the conservative choice;
   - **raw** (the earlier replay, kept beside): the recorded commands as they are, with the
     equivalent white noise over 1 s windows fitted over each robot's whole recording (the
     scored window included);
@@ -53,7 +55,6 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from relloc.calibration.inflation import CORRELATION_HORIZON_S
 from relloc.calibration.odometry import (
     OdometryModelFit,
     OdometryNoiseFit,
@@ -127,7 +128,7 @@ class ReplaySettings:
     min_duration_s: float = 20.0
     rate_hz: float = 100.0
     noise_window_s: float = 1.0
-    calibration_noise_window_s: float = CORRELATION_HORIZON_S
+    calibration_noise_windows_s: tuple[float, ...] = (1.0, 2.0, 5.0, 10.0, 20.0, 40.0)
     init_range: tuple[float, float] = (0.3, 8.0)
 
     def __post_init__(self) -> None:
@@ -138,7 +139,6 @@ class ReplaySettings:
             "duration_s",
             "min_duration_s",
             "rate_hz",
-            "calibration_noise_window_s",
         ):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0) or (
@@ -147,6 +147,13 @@ class ReplaySettings:
                 raise ConfigError(f"ReplaySettings.{name}: must be a positive number, got {value}")
         if not (math.isfinite(self.height)):
             raise ConfigError(f"ReplaySettings.height: must be finite, got {self.height}")
+        if not self.calibration_noise_windows_s or any(
+            not (math.isfinite(w) and w > 0) for w in self.calibration_noise_windows_s
+        ):
+            raise ConfigError(
+                "ReplaySettings.calibration_noise_windows_s: positive window lengths, got "
+                f"{self.calibration_noise_windows_s}"
+            )
         lo, hi = self.init_range
         if not 0 <= lo < hi:
             raise ConfigError(
@@ -302,24 +309,32 @@ def calibration_window(ds: MrclamDataset, scored: CalibrationWindow) -> Calibrat
 def _calibrated_replay(settings: ReplaySettings, ds: MrclamDataset, raw: ReplayData) -> ReplayData:
     """``raw`` with the odometry calibrated on :func:`calibration_window` (module docstring)."""
     window = calibration_window(ds, raw.scored_window)
-    noise_s = settings.calibration_noise_window_s
-    team = fit_odometry_model(ds, window, integration_s=noise_s)
+    lengths = [w for w in settings.calibration_noise_windows_s if 2 * w <= window.duration_s]
+    if not lengths:
+        raise window.too_little(
+            f"no noise window of {settings.calibration_noise_windows_s} s fits twice"
+        )
+    team = fit_odometry_model(ds, window, integration_s=min(lengths))
     recording = to_recording(ds)
     odometry, fits, scales = [], {}, []
     for label, subject in (("observer", settings.observer), ("observed", settings.observed)):
         k = ds.robot_ids.index(subject)
         latency, s_v, s_w = team.latency_s, team.scale_v[k], team.scale_w[k]
         scales.append((s_v, s_w))
-        fits[label] = fit_odometry_noise(
-            ds.robot(subject),
-            window,
-            rate_hz=settings.rate_hz,
-            window_s=noise_s,
-            latency_s=latency,
-            scale_v=s_v,
-            scale_w=s_w,
-            time_constant_s=team.time_constant_s,
-        )
+        candidates = [
+            fit_odometry_noise(
+                ds.robot(subject),
+                window,
+                rate_hz=settings.rate_hz,
+                window_s=length,
+                latency_s=latency,
+                scale_v=s_v,
+                scale_w=s_w,
+                time_constant_s=team.time_constant_s,
+            )
+            for length in lengths
+        ]
+        fits[label] = max(candidates, key=lambda f: f.sigma_w)
         od = calibrated_commands(
             recording.odometry[recording.index(str(subject))],
             latency,
