@@ -5,6 +5,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from relloc.calibration.odometry import command_response
 from relloc.core.angles import wrap_angle
 from relloc.datasets.mrclam import (
     GroundTruth,
@@ -86,16 +87,18 @@ def commanded_robot(
     sigma_w: float = 0.0,
     dt: float = 0.01,
     command_period: float = 1.0,
+    time_constant: float = 0.0,
 ) -> RobotData:
     """A unicycle driven by piecewise-constant commands: the true input is
-    ``(s_v c_v(t − τ) + n_v, s_ω c_ω(t − τ) + n_ω)`` with white per-step noise ``n`` of σ
+    ``(s_v c_v + n_v, s_ω c_ω + n_ω)`` with ``c`` the commands delayed by τ and (for
+    ``time_constant`` T > 0) passed through a first-order lag, white per-step noise ``n`` of σ
     ``sigma_v``, ``sigma_w`` on a ``dt`` grid; ground truth on that grid (midpoint heading)."""
     t_cmd = np.arange(0.0, duration, command_period)
     odo = Odometry(
         t=t_cmd, v=rng.uniform(0.1, 0.4, t_cmd.size), omega=rng.uniform(-0.5, 0.5, t_cmd.size)
     )
     t = np.arange(0.0, duration, dt)
-    v_cmd, w_cmd = odo.at(t - latency)
+    v_cmd, w_cmd = command_response(odo.at, t, latency, time_constant)
     v = scale_v * v_cmd + sigma_v * rng.standard_normal(t.size)
     w = scale_w * w_cmd + sigma_w * rng.standard_normal(t.size)
     theta = np.concatenate([[0.0], np.cumsum(w * dt)])[:-1]

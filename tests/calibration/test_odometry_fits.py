@@ -4,8 +4,13 @@ refuse windows without enough data."""
 import numpy as np
 import pytest
 
-from relloc.calibration.odometry import fit_odometry_model, fit_odometry_noise
+from relloc.calibration.odometry import (
+    calibrated_commands,
+    fit_odometry_model,
+    fit_odometry_noise,
+)
 from relloc.calibration.window import CalibrationWindow
+from relloc.core.recording import Odometry as BodyOdometry
 from relloc.datasets.mrclam import GroundTruth, Odometry
 from relloc.errors import ConfigError, DataError
 
@@ -79,6 +84,7 @@ def test_odometry_model_recovers_latency_scales_and_noise_rate(synthetic):
     fit = fit_odometry_model(ds, window, integration_s=1.0)
     assert fit.calibration_window == window and fit.odometry_window_s == 1.0
     assert fit.latency_s == pytest.approx(0.2, abs=0.011)
+    assert fit.time_constant_s == 0.0  # a pure delay: no lag invented
     # (central differences of the ground truth round the command steps off: ~1 % low)
     assert fit.scale_v == pytest.approx((0.9, 0.9), rel=0.02)
     assert fit.scale_w == pytest.approx((1.1, 1.1), rel=0.02)
@@ -88,6 +94,51 @@ def test_odometry_model_recovers_latency_scales_and_noise_rate(synthetic):
     assert rate_v == pytest.approx(q_v, rel=0.3)
     assert rate_w == pytest.approx(q_w, rel=0.3)
     assert set(fit.to_dict()) >= {"latency_s", "scale_v", "q_v0", "calibration_window"}
+
+
+def test_odometry_model_recovers_a_first_order_lag(synthetic):
+    """A robot that follows its delayed commands through a 0.2 s lag: the fit finds the delay,
+    the lag and the scales of the steady motion (a pure delay would shrink the scales)."""
+    rng = np.random.default_rng(5)
+    robots = [
+        synthetic.commanded_robot(
+            subject,
+            rng,
+            duration=200.0,
+            latency=0.1,
+            time_constant=0.2,
+            scale_v=0.95,
+            scale_w=0.9,
+            command_period=2.0,
+        )
+        for subject in (1, 2)
+    ]
+    fit = fit_odometry_model(
+        synthetic.dataset(robots), CalibrationWindow(0.0, 200.0, "synthetic"), integration_s=1.0
+    )
+    assert fit.latency_s == pytest.approx(0.1, abs=0.011)
+    assert fit.time_constant_s == 0.2
+    assert fit.scale_v == pytest.approx((0.95, 0.95), rel=0.01)
+    assert fit.scale_w == pytest.approx((0.9, 0.9), rel=0.01)
+
+
+def test_calibrated_commands_follow_the_fitted_response():
+    """Re-stamped by τ, lagged by T (steps approach the command as 1 − e^{−t/T}), scaled."""
+    od = BodyOdometry(
+        t=np.array([0.0, 10.0]),
+        velocity=np.array([[0, 0, 0, 0], [1.0, 0, 0, 2.0]]),
+        sigma=np.zeros(4),
+    )
+    cal = calibrated_commands(od, latency_s=0.1, scale_v=0.5, scale_w=0.25, time_constant_s=0.2)
+    held = cal.held_at(np.array([10.05, 10.1 + 0.2, 10.1 + 1.0, 30.0]))
+    np.testing.assert_allclose(held[0], 0.0)  # before the delayed step
+    np.testing.assert_allclose(
+        held[1, [0, 3]], [0.5, 0.5] * np.array([1 - np.exp(-1.0)] * 2), atol=0.05
+    )
+    np.testing.assert_allclose(held[2:, [0, 3]], [[0.5, 0.5], [0.5, 0.5]], atol=0.01)
+    plain = calibrated_commands(od, latency_s=0.1, scale_v=0.5, scale_w=0.25)
+    np.testing.assert_array_equal(plain.t, od.t + 0.1)
+    np.testing.assert_array_equal(plain.velocity[1], [0.5, 0, 0, 0.5])
 
 
 def test_odometry_model_refuses_a_window_without_ground_truth(synthetic):

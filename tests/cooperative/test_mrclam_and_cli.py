@@ -57,6 +57,18 @@ def test_mrclam_cl_cli_on_a_synthetic_mrclam_folder(
     dr = summary["cases"]["dead_reckoning/none"]["pos_rmse_m"]["mean"]
     assert rb["pos_rmse_m"]["mean"] < dr
     assert (out / "report.md").is_file() and (out / "pos_rmse.png").is_file()
+    # every target is judged on the held-out window, which starts where the fit's window ends;
+    # the whole-run (in-sample) figures are only shown beside
+    held, fitted = summary["scored_on"], summary["fit"]["calibration_window"]
+    assert held["start_s"] == fitted["end_s"] and held["end_s"] > held["start_s"]
+    dr_held = summary["cases"]["dead_reckoning/none"]["heldout"]["pos_rmse_m"]
+    for mode in ("range_bearing", "bearing"):
+        target, case = summary["targets"][mode], summary["cases"][f"{mode}/all_landmarks"]
+        for key in ("pos_rmse_m", "heading_rmse_rad", "nees_pct_beyond"):
+            assert target[key] == case["heldout"][key]
+        assert target["improvement_over_dead_reckoning"] == dr_held / target["pos_rmse_m"]
+        assert target["in_sample"]["pos_rmse_m"] == case["pos_rmse_m"]["mean"]
+    assert "judged on the held-out window" in (out / "report.md").read_text()
 
 
 def test_mrclam_missing_file_is_a_data_error(synthetic_mrclam, tmp_path, capsys):

@@ -24,6 +24,8 @@ from relloc.experiments.wanasinghe2014 import (
     STATES,
     Wanasinghe2014Config,
     run_reproduction,
+    table1_best_summary,
+    table1_summary,
 )
 from relloc.experiments.wanasinghe2014_mrclam import (
     TABLE2,
@@ -31,7 +33,7 @@ from relloc.experiments.wanasinghe2014_mrclam import (
     prepare_replay,
     replay_recording,
 )
-from relloc.experiments.wanasinghe2014_sim import SimSettings
+from relloc.experiments.wanasinghe2014_sim import SimSettings, team_task
 from relloc.models.measurement import range_bearing
 from relloc.sim.scenario import default_scenario
 
@@ -77,7 +79,11 @@ def _small_config(dataset: Path) -> Wanasinghe2014Config:
             scenario=dataclasses.replace(default_scenario(), duration_s=6.0), n_poses=3
         ),
         replay=ReplaySettings(
-            dataset=dataset, duration_s=10.0, min_duration_s=8.0, start_after_odometry_s=1.0
+            dataset=dataset,
+            duration_s=10.0,
+            min_duration_s=8.0,
+            start_after_odometry_s=1.0,
+            calibration_noise_windows_s=(1.0, 2.0),
         ),
     )
 
@@ -107,30 +113,35 @@ def test_small_reproduction_on_another_mrclam_folder(small_dataset: Path, tmp_pa
                     cell = entry[rule][state]
                     assert set(cell) == {"mean", "median", "worst"}
                     assert 1 <= cell["mean"] <= cell["worst"]
-    # the yaw bank's acceptance threshold (issue 2): yaw inside 0.1 rad within 12 updates for
-    # every guess; by Eq. 32 (thresholds from only 2 draws here) it must beat the plain PLKF,
-    # and the summary's acceptance flags must say what the numbers say
-    best = summary["table1_best"]
-    assert best["case4"]["fixed"]["phi"]["worst"] <= 12
-    assert best["acceptance"]["case4_fixed_phi_worst_le_12"] is True
-    plkf_mean = summary["table1"]["case4"]["PLKF"]["paper_rule"]["phi"]["mean"]
-    bank_mean = best["case4"]["paper_rule"]["phi"]["mean"]
-    assert bank_mean < plkf_mean
-    assert best["acceptance"]["case4_paper_rule_ok"] == (
-        bank_mean <= 12 or bank_mean <= plkf_mean / 3
-    )
-    # Tables 3-4 on the truncated copy
+    # the yaw bank's fixed-rule acceptance (issue 2): yaw inside 0.1 rad within 12 updates for
+    # every guess (the Eq.-32 guard needs a longer team: test_yaw_bank_meets_the_eq32_rule)
+    assert summary["table1_best"]["case4"]["fixed"]["phi"]["worst"] <= 12
+    # Tables 3-4 on the truncated copy: calibrated and raw odometry, calibrated on the rest of
+    # the recording after the scored window (disjoint windows, both stated)
     assert summary["replay"]["dataset"] == str(small_dataset)
-    assert set(summary["table3"]) == {"case1", "case2", "case3", "case4"}
-    for case, t3 in summary["table3"].items():
-        for state in STATES:
-            assert math.isfinite(t3[state]["rmse_mean"]) and t3[state]["paper_rmse"] > 0
-        t4 = summary["table4"][case]
-        assert 0 <= t4["nees_percent_beyond"] <= 100
-        assert set(t4["max_conditioning"]) == {"P", "R", "S"}
+    windows = summary["table3"]["windows"]
+    assert windows == summary["table4"]["windows"]
+    assert windows["calibration"]["start_s"] >= windows["scored"]["end_s"]
+    fits = summary["odometry_noise"]["replay_fit"]["calibrated"]
+    assert all(f["calibration_window"] == windows["calibration"] for f in fits.values())
+    for kind in ("calibrated", "raw"):
+        assert set(summary["table3"][kind]) == {"case1", "case2", "case3", "case4"}
+        for case, t3 in summary["table3"][kind].items():
+            for state in STATES:
+                assert math.isfinite(t3[state]["rmse_mean"]) and t3[state]["paper_rmse"] > 0
+            t4 = summary["table4"][kind][case]
+            assert 0 <= t4["nees_percent_beyond"] <= 100
+            assert set(t4["max_conditioning"]) == {"P", "R", "S"}
+            assert t4["run_averaged_nees"] is None  # one draw: no band across draws
+        assert set(summary["table3_best"][kind]) == set(summary["table3"][kind])
+        assert set(summary["table4"][kind]["case1"]["yaw_bank"]) >= {"nees_percent_beyond"}
     assert set(summary["bias_comparison"]["case2"]) == {"PLKF", "BC-PLKF", "TEKF", "yaw bank"}
-    assert set(summary["table3_best"]) == set(summary["table3"])
-    assert set(summary["table4"]["case1"]["yaw_bank"]) >= {"nees_percent_beyond", "anees"}
+    assert set(summary["replay_targets"]) == set(summary["table3"]["calibrated"])
+    # the accuracy's NEES band is across the independent team draws at each instant
+    for acc in summary["accuracy"].values():
+        band = acc["run_averaged_nees"]
+        assert band["runs"] == 2 and band["instants"] > 0
+        assert 0 <= band["in_band_percent"] <= 100
     for ratios in summary["pcrlb_ratio"].values():
         assert all(math.isfinite(v) and v > 0 for v in ratios.values())
     # report and every figure it shows
@@ -138,6 +149,24 @@ def test_small_reproduction_on_another_mrclam_folder(small_dataset: Path, tmp_pa
     figures = [line.split("](")[1].rstrip(")") for line in report.splitlines() if "](" in line]
     assert len(figures) >= 8
     assert all((out / f).is_file() for f in figures)
+
+
+def test_yaw_bank_meets_the_eq32_rule() -> None:
+    """Table 1, case 4, by Eq. 32: the yaw bank's mean updates to converge in φ is ≤ 12 or ≤ ⅓
+    of the plain PLKF's from the same guesses on the same draws.
+
+    Size: a 20 s team (200 updates), 3 guesses, 2 draws. A shorter team censors the plain
+    PLKF's count at the run length (a 6 s team failed the rule at 4 of 6 seeds) and the Eq.-32
+    threshold from 2 draws is noisy; at 20 s the rule held at every development seed root
+    (11, 1-7). The seed root 8101 below was not used while developing.
+    """
+    sim = SimSettings(scenario=dataclasses.replace(default_scenario(), duration_s=20.0), n_poses=3)
+    team = [team_task(s, i, sim) for i, s in enumerate(np.random.SeedSequence(8101).spawn(2))]
+    table1, _, thresholds, _ = table1_summary(team)
+    best = table1_best_summary(team, table1, thresholds)
+    plkf = table1["case4"]["PLKF"]["paper_rule"]["phi"]["mean"]
+    bank = best["case4"]["paper_rule"]["phi"]["mean"]
+    assert bank <= 12 or bank <= plkf / 3, f"yaw bank {bank:.1f} updates, plain PLKF {plkf:.1f}"
 
 
 def test_config_from_cli_arguments(tmp_path: Path) -> None:

@@ -21,8 +21,8 @@ observer's and target's ground truth are valid (a landmark's position is known) 
   their information; the variance inflation :func:`~relloc.calibration.inflation.
   autocorrelation_inflation` at the readings' spacing (the median gap between consecutive
   detections of a pair for bearings, at least the caller's ``range_interval_s`` for ranges —
-  the filter keeps one range per pair per interval) gives the σ the filter should assume,
-  ``σ·√f``.
+  the filter keeps one range per pair per interval), summed up to the longest measured lag,
+  gives the σ the filter should assume, ``σ·√f``.
 
 **Detection probability** (:func:`fit_detection_probability`): ``P_D`` = the share of (camera
 frame, other robot) pairs in which that robot is detected — the camera's narrow field of view
@@ -62,8 +62,11 @@ BEARING_INLIER_RAD = 0.1
 RANGE_INLIER_M = 1.0
 #: A robot's bearing offset needs more inlier rows than this (else 0).
 MIN_OFFSET_ROWS = 10
-#: Lags (s) at which the residual correlation is measured.
-CORRELATION_LAGS_S = (0.25, 0.5, 1.0, 2.0, 5.0, 10.0)
+#: Lags (s) at which the residual correlation is measured. They reach a minute because the
+#: MRCLAM range error depends on where the robot sits in the image and stays correlated for
+#: tens of seconds (about 0.6 at 10 s on run 6); the inflation sums the measured correlation up
+#: to the longest lag (cutting it at 10 s would over-count the ranges' information).
+CORRELATION_LAGS_S = (0.25, 0.5, 1.0, 2.0, 5.0, 10.0, 20.0, 40.0, 60.0)
 #: A later residual counts as ``lag`` later when it is within this (s) of ``t + lag``.
 LAG_TOLERANCE_S = 0.25
 #: Fewest residual pairs for a lag correlation (else 0).
@@ -220,8 +223,9 @@ def fit_camera(
     rho_r = {lag: lag_correlation(res, er, good_r, lag) for lag in CORRELATION_LAGS_S}
     rho_b = {lag: lag_correlation(res, eb, good_b, lag) for lag in CORRELATION_LAGS_S}
     spacing = pair_spacing_s(res)
-    f_b = autocorrelation_inflation(rho_b, spacing)
-    f_r = autocorrelation_inflation(rho_r, max(spacing, range_interval_s))
+    horizon = max(CORRELATION_LAGS_S)
+    f_b = autocorrelation_inflation(rho_b, spacing, horizon)
+    f_r = autocorrelation_inflation(rho_r, max(spacing, range_interval_s), horizon)
     return CameraFit(
         calibration_window=window,
         bearing_offset=tuple(float(o) for o in offsets),

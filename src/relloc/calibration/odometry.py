@@ -7,22 +7,31 @@ used by the cooperative EIF of mrclam-cl). On a ``GRID_DT_S`` grid inside the wi
 from each robot's first command and last ground-truth sample) the ground truth gives the true
 forward speed and turn rate by central differences (:func:`ground_truth_velocities`).
 
-1. *Latency* ``τ`` (one for the team; the commands lead the motion): a grid search over
-   ``LATENCY_GRID_S`` minimising ``Σ_robots Σ_{v,ω} ‖m − s c_τ‖² / ‖m‖²`` with ``m`` the true
-   velocity, ``c_τ(t) = c(t − τ)`` the delayed command and ``s`` its least-squares scale — the
-   share of the velocity the delayed, scaled command cannot explain, normalised per robot and
-   channel so that no robot dominates.
-2. *Scales* ``s_v, s_ω`` per robot: ``s = m·c_τ / c_τ·c_τ`` at that ``τ`` (1 for a robot with
+1. *Latency* ``τ`` and *time constant* ``T`` (one each for the team; the commands lead the
+   motion, and the robot follows a step of its command through a first-order lag,
+   ``ẏ = (c(t − τ) − y)/T``): a grid search over ``LATENCY_GRID_S × TIME_CONSTANT_GRID_S``
+   minimising ``Σ_robots Σ_{v,ω} ‖m − s c_τ,T‖² / ‖m‖²`` with ``m`` the true velocity,
+   ``c_τ,T`` the delayed and lagged command (:func:`command_response`) and ``s`` its
+   least-squares scale — the share of the velocity the modelled command cannot explain,
+   normalised per robot and channel so that no robot dominates. A pure delay (``T = 0``) is
+   on the grid; without the lag a delay alone fits the transients of a step by shrinking the
+   scale, which then under-states every steady turn.
+2. *Scales* ``s_v, s_ω`` per robot: ``s = m·c / c·c`` at that ``(τ, T)`` (1 for a robot with
    no samples in the window).
 3. *Variance rates*: the calibrated commands are integrated over consecutive windows of
    ``integration_s = W`` seconds and compared with the ground-truth displacement (no
-   differentiation noise): ``D_v = Δs_fwd − Σ s_v c_v dt``, ``D_ω = Δθ − Σ s_ω c_ω dt``.
+   differentiation noise): ``D_v = Δs_fwd − Σ s_v c_v dt``, ``D_ω = Δθ − Σ s_ω c_ω dt`` (``c``
+   the modelled command ``c_τ,T``).
    White input noise of variance rate ``q`` accumulates ``E[D²] = q W``, and the rates are
    modelled as ``q_v = q_v0 + k_v |v|``, ``q_ω = q_ω0 + k_ω |ω| + k_ωv |v|`` (mean |command| over
    the window), fitted by non-negative least squares on ``D²/W`` (rates cannot be negative).
    The constant terms are floored at ``RATE_FLOOR`` so that a still robot keeps some noise.
    ``W`` sets the time scale the rates are right at: the real errors are correlated over
    seconds, so the caller picks the horizon its filter must bridge.
+
+:func:`calibrated_commands` applies a fit to a recording's odometry: the modelled response
+``c_τ,T`` (re-stamped by when it acts, ``t + τ``; lagged, on a ``GRID_DT_S`` grid, when
+``T > 0``) scaled (``s_v v``, ``s_ω ω``).
 
 **Equivalent white noise** (:func:`fit_odometry_noise`, one robot, used where the filter's
 input noise is one σ per channel and propagation step). On a ``rate_hz`` grid the held commands
@@ -36,13 +45,15 @@ windowed error — bias included, which makes the fit conservative; the bias its
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
 
 from relloc.calibration.window import CalibrationWindow
 from relloc.core.angles import wrap_angle
+from relloc.core.recording import Odometry
 from relloc.datasets.mrclam import GroundTruth, MrclamDataset, RobotData
 from relloc.errors import ConfigError
 
@@ -52,6 +63,11 @@ Array = NDArray[np.float64]
 GRID_DT_S = 0.02
 #: Latencies (s) searched by :func:`fit_odometry_model`.
 LATENCY_GRID_S = np.arange(0.0, 0.5001, 0.01)
+#: First-order time constants (s) searched by :func:`fit_odometry_model` (0: a pure delay).
+TIME_CONSTANT_GRID_S = (0.0, 0.05, 0.1, 0.15, 0.2, 0.3, 0.4, 0.6)
+#: The lagged response starts this many time constants before the first time asked for
+#: (its start-up transient has decayed to e⁻⁸ by then).
+SETTLE_TIME_CONSTANTS = 8.0
 #: Half-step (s) of the central differences of the ground truth.
 DIFFERENCE_STEP_S = 0.05
 #: Floor of the fitted constant variance rates ``q_v0``, ``q_ω0``.
@@ -67,12 +83,14 @@ _TINY = 1e-12
 
 @dataclass(frozen=True)
 class OdometryModelFit:
-    """Latency (s), per-robot scales (in ``ds.robot_ids`` order) and variance rates: ``q_v0``
+    """Latency (s), first-order time constant (s), per-robot scales (in ``ds.robot_ids``
+    order) and variance rates: ``q_v0``
     (m²/s), ``k_v`` (m), ``q_w0`` (rad²/s), ``k_w`` (rad), ``k_wv`` (rad²/m), fitted over
     ``odometry_window_s``-long integration windows inside ``calibration_window``."""
 
     calibration_window: CalibrationWindow
     latency_s: float
+    time_constant_s: float
     scale_v: tuple[float, ...]
     scale_w: tuple[float, ...]
     q_v0: float
@@ -130,18 +148,68 @@ def _scale(measured: Array, command: Array) -> float:
     return float(measured @ command) / max(float(command @ command), _TINY)
 
 
-def _latency(samples: list[_RobotSamples]) -> float:
-    """Grid-search latency ``τ`` minimising the normalised unexplained velocity (module doc)."""
-    cost = np.zeros(LATENCY_GRID_S.size)
-    for k, tau in enumerate(LATENCY_GRID_S):
+def command_response(
+    at: Callable[[Array], tuple[Array, Array]],
+    t: Array,
+    latency_s: float,
+    time_constant_s: float,
+    average_s: float = 0.0,
+) -> tuple[Array, Array]:
+    """The modelled motion ``(v, ω)`` at times ``t`` of the commands ``at`` (zero-order hold):
+    delayed by ``τ`` and, for ``T > 0``, passed through the first-order lag
+    ``ẏ = (c(t − τ) − y)/T``, integrated exactly on a ``GRID_DT_S`` grid
+    (``y_k = (1 − a) y_{k−1} + a c_k``, ``a = 1 − e^{−dt/T}``) that starts
+    ``SETTLE_TIME_CONSTANTS · T`` before ``min(t)`` at rest on its first command. With
+    ``average_s = h > 0`` the mean of the response over ``[t − h, t + h]`` — what central
+    differences of the ground truth over ``t ± h`` measure (:func:`ground_truth_velocities`),
+    so that the fit compares like with like."""
+    t = np.asarray(t, dtype=np.float64)
+    if (time_constant_s <= 0.0 and average_s <= 0.0) or t.size == 0:
+        return at(t - latency_s)
+    from scipy.signal import lfilter
+
+    start = float(t.min()) - SETTLE_TIME_CONSTANTS * time_constant_s - average_s - GRID_DT_S
+    n = int((float(t.max()) + average_s - start) / GRID_DT_S) + 2
+    grid = np.asarray(start + GRID_DT_S * np.arange(n), dtype=np.float64)
+    a = 1.0 - np.exp(-GRID_DT_S / time_constant_s) if time_constant_s > 0.0 else 1.0
+    out = []
+    for c in at(grid - latency_s):
+        y = c if a == 1.0 else lfilter([a], [1.0, a - 1.0], c, zi=[(1.0 - a) * c[0]])[0]
+        if average_s <= 0.0:
+            out.append(np.interp(t, grid, y))
+            continue
+        # y[k] holds over [grid[k], grid[k+1]): its integral at the cell edges
+        integral = np.concatenate([[0.0], np.cumsum(y) * GRID_DT_S])
+        edges = np.concatenate([grid, [grid[-1] + GRID_DT_S]])
+        upper = np.interp(t + average_s, edges, integral)
+        lower = np.interp(t - average_s, edges, integral)
+        out.append((upper - lower) / (2.0 * average_s))
+    return out[0], out[1]
+
+
+def _latency_and_lag(samples: list[_RobotSamples]) -> tuple[float, float]:
+    """Grid-search ``(τ, T)`` minimising the normalised unexplained velocity (module doc).
+
+    The lag is time-invariant, so the response to the delayed command is the delayed response:
+    one :func:`command_response` per robot and ``T`` at every ``t − τ`` of the grid."""
+    taus = LATENCY_GRID_S
+    best, best_cost = (0.0, 0.0), np.inf
+    for lag in TIME_CONSTANT_GRID_S:
+        cost = np.zeros(taus.size)
         for s in samples:
             if s.t.size == 0:
                 continue
-            vc, wc = s.robot.odometry.at(s.t - tau)
-            for meas, cmd in ((s.v, vc), (s.w, wc)):
-                residual = meas - _scale(meas, cmd) * cmd
-                cost[k] += np.sum(residual**2) / max(float(meas @ meas), _TINY)
-    return float(LATENCY_GRID_S[int(np.argmin(cost))])
+            shifted = (s.t[None, :] - taus[:, None]).reshape(-1)
+            responses = command_response(s.robot.odometry.at, shifted, 0.0, lag, DIFFERENCE_STEP_S)
+            for meas, cmd in zip((s.v, s.w), responses, strict=True):
+                c = cmd.reshape(taus.size, s.t.size)
+                scale = (c @ meas) / np.maximum(np.einsum("ij,ij->i", c, c), _TINY)
+                residual = meas[None, :] - scale[:, None] * c
+                cost += np.sum(residual**2, axis=1) / max(float(meas @ meas), _TINY)
+        k = int(np.argmin(cost))
+        if cost[k] < best_cost:
+            best, best_cost = (float(taus[k]), float(lag)), float(cost[k])
+    return best
 
 
 @dataclass(frozen=True)
@@ -155,7 +223,7 @@ class _RateRows:
 
 
 def _rate_rows(
-    s: _RobotSamples, tau: float, sv: float, sw: float, integration_s: float
+    s: _RobotSamples, tau: float, lag: float, sv: float, sw: float, integration_s: float
 ) -> _RateRows:
     """Windowed integrated errors of the calibrated commands against the ground-truth
     displacement over contiguous, valid windows of ``integration_s`` (module doc, step 3)."""
@@ -166,7 +234,7 @@ def _rate_rows(
     t0, t1 = tw[:, 0], tw[:, -1] + GRID_DT_S
     g0, g1 = s.robot.groundtruth.at(t0), s.robot.groundtruth.at(t1)
     ok = contiguous & g0.valid & g1.valid
-    vcw, wcw = s.robot.odometry.at(tw.reshape(-1) - tau)
+    vcw, wcw = command_response(s.robot.odometry.at, tw.reshape(-1), tau, lag)
     vcw = sv * vcw.reshape(n_win, steps)
     wcw = sw * wcw.reshape(n_win, steps)
     dtheta = np.asarray(wrap_angle(g1.theta - g0.theta))
@@ -196,23 +264,24 @@ def fit_odometry_model(
     samples = [_robot_samples(ds.robot(rid), window, integration_s) for rid in ds.robot_ids]
     if not any(s.t.size for s in samples):
         raise window.too_little("no odometry overlapping ground truth to fit the odometry on")
-    tau = _latency(samples)
+    tau, lag = _latency_and_lag(samples)
     scale_v, scale_w, rows = [], [], []
     for s in samples:
         if s.t.size == 0:
             scale_v.append(1.0)
             scale_w.append(1.0)
             continue
-        vc, wc = s.robot.odometry.at(s.t - tau)
+        vc, wc = command_response(s.robot.odometry.at, s.t, tau, lag, DIFFERENCE_STEP_S)
         sv, sw = _scale(s.v, vc), _scale(s.w, wc)
         scale_v.append(sv)
         scale_w.append(sw)
-        rows.append(_rate_rows(s, tau, sv, sw, integration_s))
+        rows.append(_rate_rows(s, tau, lag, sv, sw, integration_s))
     cv, _ = nnls(np.vstack([r.rows_v for r in rows]), np.concatenate([r.rhs_v for r in rows]))
     cw, _ = nnls(np.vstack([r.rows_w for r in rows]), np.concatenate([r.rhs_w for r in rows]))
     return OdometryModelFit(
         calibration_window=window,
         latency_s=tau,
+        time_constant_s=lag,
         scale_v=tuple(scale_v),
         scale_w=tuple(scale_w),
         q_v0=max(float(cv[0]), RATE_FLOOR),
@@ -222,6 +291,30 @@ def fit_odometry_model(
         k_wv=float(cw[2]),
         odometry_window_s=float(integration_s),
     )
+
+
+def calibrated_commands(
+    od: Odometry, latency_s: float, scale_v: float, scale_w: float, time_constant_s: float = 0.0
+) -> Odometry:
+    """``od`` as a calibrated model sees it: forward speed and turn rate scaled (``s_v v_x``,
+    ``s_ω ω_z``) and re-stamped by when they act (``t + τ``); with ``T > 0`` the lagged
+    response of :func:`command_response` on a ``GRID_DT_S`` grid from the first command to
+    ``SETTLE_TIME_CONSTANTS · T`` after the last (held from then on)."""
+    if time_constant_s > 0.0 and od.t.size:
+        n = int((od.t[-1] - od.t[0] + SETTLE_TIME_CONSTANTS * time_constant_s) / GRID_DT_S) + 1
+        t = od.t[0] + GRID_DT_S * np.arange(n)
+
+        def held(tq: Array) -> tuple[Array, Array]:
+            u = od.held_at(tq)
+            return u[:, 0], u[:, 3]
+
+        velocity = np.zeros((n, 4))
+        velocity[:, 0], velocity[:, 3] = command_response(held, t, 0.0, time_constant_s)
+        od = replace(od, t=t, velocity=velocity)
+    velocity = np.array(od.velocity)
+    velocity[:, 0] *= scale_v
+    velocity[:, 3] *= scale_w
+    return replace(od, t=od.t + latency_s, velocity=velocity, where=f"{od.where} calibrated")
 
 
 # ----------------------------------------------------------------------------------------------
@@ -260,11 +353,17 @@ def fit_odometry_noise(
     *,
     rate_hz: float = 100.0,
     window_s: float = 1.0,
+    latency_s: float = 0.0,
+    scale_v: float = 1.0,
+    scale_w: float = 1.0,
+    time_constant_s: float = 0.0,
 ) -> OdometryNoiseFit:
     """Fit the white-noise level that explains the odometry's drift over ``window_s`` seconds
     inside ``window`` (module docstring). The real errors are correlated over seconds (command
     lag, scale errors), so a σ fitted for one integration length is only right at that time
-    scale."""
+    scale. With ``latency_s``, ``scale_v``, ``scale_w``, ``time_constant_s`` (a fitted
+    :class:`OdometryModelFit`'s) the commands are first calibrated, ``s · c_τ,T``
+    (:func:`command_response`): the fit is then the noise left after that calibration."""
     if not (rate_hz > 0 and window_s > 0):
         raise ConfigError(
             f"fit_odometry_noise: need rate_hz > 0 and window_s > 0; got {rate_hz}, {window_s}"
@@ -276,9 +375,10 @@ def fit_odometry_noise(
         raise window.too_little(
             f"robot {robot.subject}: fewer than two {window_s:g} s windows for the odometry fit"
         )
-    t = window.start_s + dt * np.arange(n_windows * steps + 1)
+    t = np.asarray(window.start_s + dt * np.arange(n_windows * steps + 1), dtype=np.float64)
     q = robot.groundtruth.at(t)
-    v_cmd, w_cmd = robot.odometry.at(t[:-1])
+    v_cmd, w_cmd = command_response(robot.odometry.at, t[:-1], latency_s, time_constant_s)
+    v_cmd, w_cmd = scale_v * v_cmd, scale_w * w_cmd
     c, s = np.cos(q.theta[:-1]), np.sin(q.theta[:-1])
     dx, dy = np.diff(q.x), np.diff(q.y)
     dth = np.diff(np.unwrap(q.theta))

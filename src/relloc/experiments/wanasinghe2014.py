@@ -32,7 +32,9 @@ summary.json keys
 -----------------
 ``experiment``, ``seed``, ``runs``, ``replay_runs``, ``sweep_runs``, ``seeds``;
 ``accuracy[robot]``: steady-state (t ≥ 10 s) position RMSE (3-D, m), yaw RMSE (rad), RMSE per
-state, fraction of updates with the error inside ±3σ per state, ANEES with its 95 % band, NIS %
+state, fraction of updates with the error inside ±3σ per state, ANEES, the NEES averaged over
+the independent draws at each update against the 95 % band of such a mean
+(``run_averaged_nees``: % of instants inside, the band, draws), NIS %
 beyond χ²(3, 0.95), and ``paper`` (5–10 cm, 0.075–0.1 rad);
 ``odometry_noise``: the σ used by the team, the sweep (σ_v, σ_ω and the position/yaw RMSE of
 each robot per scale) and the σ fitted for the replay (``replay_fit``, each with its
@@ -43,11 +45,18 @@ a guess that never converges counts as (updates + 1) and is counted in
 ``table1_not_converged[case][filter][rule][state]``; ``table1_thresholds[filter][rule]``;
 ``table1_best[case][rule][state]`` (the yaw bank; case 3 has a known yaw, where the bank is the
 PLKF), ``table1_best[case]["speedup_vs_plkf"][rule][state]`` and ``table1_best["acceptance"]``;
-``table3[case][state] = {rmse_mean, rmse_std, paper_rmse, paper_std}`` (PLKF, MRCLAM replay,
-steady state t ≥ 40 s of the window) and ``table3_best[case]`` (the same for the yaw bank
-started from the same pose); ``table4[case]``: % NEES beyond χ²(4, 0.95) with the
-paper's value, % NIS beyond χ²(3, 0.95), ANEES, max log10 conditioning of P, R, S, and the
-same for the yaw bank under ``table4[case]["yaw_bank"]``;
+``table1_readings[filter][reading]``: case 4, φ, the count under each reading of the paper's
+set-up (:data:`TABLE1_READINGS`) beside the paper's;
+``table3[odometry][case][state] = {rmse_mean, rmse_std, paper_rmse, paper_std}`` (PLKF,
+MRCLAM replay, steady state t ≥ 40 s of the window; ``odometry`` ``calibrated`` or ``raw``) and
+``table3_best`` (the same for the yaw bank started from the same pose);
+``table4[odometry][case]``: % NEES beyond χ²(4, 0.95) with the paper's value, % NIS beyond
+χ²(3, 0.95), ANEES, the run-averaged NEES against its band (``run_averaged_nees``), max log10
+conditioning of P, R, S, and the same for the yaw bank under ``["yaw_bank"]``; ``table3``,
+``table3_best`` and ``table4`` also carry ``windows`` (``calibration``: where the calibrated
+odometry was fitted, ``scored``: the replayed window, disjoint); ``replay_targets[case]``: the
+issue's targets (calibrated yaw RMSE ≤ 0.10 rad, NEES beyond ≤ 10 %, position no worse than
+raw) and whether each is met;
 ``bias_comparison[case][filter]``: radial bias (m), position and yaw RMSE of PLKF, BC-PLKF
 (noisy cases) and TEKF on the replay; ``replay``: dataset, robots, window, skipped epochs,
 loader report; ``pcrlb_ratio[robot][state]``: RMSE / √PCRLB (steady state) from
@@ -76,7 +85,7 @@ from relloc.experiments.wanasinghe2014_mrclam import (
     ReplayData,
     ReplaySettings,
     ReplayTrack,
-    prepare_replay,
+    prepare_replays,
     replay_filters,
     replay_task,
 )
@@ -87,12 +96,15 @@ from relloc.experiments.wanasinghe2014_sim import (
     team_task,
     true_pair_inputs,
 )
-from relloc.metrics.consistency import anees_band
 from relloc.metrics.convergence import FIXED_THRESHOLDS, paper_thresholds, updates_to_converge
 from relloc.metrics.errors import rmse
 from relloc.models.motion import VelocityNoise
 from relloc.observability.pcrlb import pcrlb_ratio, relative_pair_pcrlb
-from relloc.pipeline.evaluation import SeriesEvaluation, accuracy_and_consistency
+from relloc.pipeline.evaluation import (
+    SeriesEvaluation,
+    accuracy_and_consistency,
+    nees_band_check,
+)
 from relloc.pipeline.export import ExportRequest, export_estimates
 from relloc.pipeline.montecarlo import run_monte_carlo, spawn_seeds
 from relloc.pipeline.output import (
@@ -215,7 +227,7 @@ def run_reproduction(
     with ``export``, the :data:`EXPORTED_RUN` as MCAP/TUM files)."""
     started = time.perf_counter()
     out = prepare_out_dir(out_dir)
-    data = prepare_replay(config.replay)  # fail early on a bad --dataset
+    data = prepare_replays(config.replay)  # fail early on a bad --dataset
     team = run_monte_carlo(
         team_task,
         config.runs,
@@ -225,15 +237,18 @@ def run_reproduction(
         description="seed 000: team (accuracy, Table 1)",
         quiet=quiet,
     )
-    replay = run_monte_carlo(
-        replay_task,
-        config.replay_runs,
-        seed + 1,
-        executor=executor,
-        task_args=(data, config.replay),
-        description="seed 000: MRCLAM replay (Tables 3-4)",
-        quiet=quiet,
-    )
+    replay = {
+        kind: run_monte_carlo(
+            replay_task,
+            config.replay_runs,
+            seed + 1,  # the same sensor-noise draws and initial poses for both odometries
+            executor=executor,
+            task_args=(replay_data, config.replay),
+            description=f"seed 000: MRCLAM replay, {kind} odometry (Tables 3-4)",
+            quiet=quiet,
+        )
+        for kind, replay_data in data.items()
+    }
     sweep = []
     for i, scale in enumerate(config.sweep_scales):
         settings = dataclasses.replace(
@@ -274,12 +289,21 @@ def run_reproduction(
     summary["table1_not_converged"] = not_converged
     summary["table1_thresholds"] = thresholds
     summary["table1_best"] = table1_best_summary(team, table1, thresholds)
-    table3, table3_best, table4, bias, replay_series = replay_summary(replay, config)
-    summary["table3"] = table3
-    summary["table3_best"] = table3_best
-    summary["table4"] = table4
-    summary["bias_comparison"] = bias
-    summary["replay"] = replay_info(config, data)
+    summary["table1_readings"] = table1_readings(team, thresholds)
+    windows = replay_windows(data["calibrated"])
+    replay_series: dict[str, dict[str, dict[str, Array]]] = {}
+    for key in ("table3", "table3_best", "table4"):
+        summary[key] = {"windows": windows}
+    for kind, runs in replay.items():
+        table3, table3_best, table4, bias, series = replay_summary(runs, config, kind)
+        summary["table3"][kind] = table3
+        summary["table3_best"][kind] = table3_best
+        summary["table4"][kind] = table4
+        if kind == "calibrated":
+            summary["bias_comparison"] = bias
+            replay_series = series
+    summary["replay_targets"] = replay_targets(summary)
+    summary["replay"] = replay_info(config, data["calibrated"])
     ratios, bounds = pcrlb_summary(config, acc_series)
     summary["pcrlb_ratio"] = ratios
     if export is not None:
@@ -342,7 +366,7 @@ def accuracy_summary(
             "rmse": steady["rmse"],
             "inside_3sigma": {k: v / 100.0 for k, v in every["within_3sigma_percent"].items()},
             "anees": every["anees"],
-            "anees_band_95": list(anees_band(4, every["samples"])),
+            "run_averaged_nees": run_averaged_band(runs, 0.0),
             "nees_percent_beyond": every["nees_percent_beyond"],
             "nis_percent_beyond": every["nis_percent_beyond"],
             "updates": int(runs[0].t.size),
@@ -353,7 +377,9 @@ def accuracy_summary(
 
 
 def odometry_noise_summary(
-    config: Wanasinghe2014Config, sweep: list[list[dict[str, SeriesEvaluation]]], data: ReplayData
+    config: Wanasinghe2014Config,
+    sweep: list[list[dict[str, SeriesEvaluation]]],
+    data: dict[str, ReplayData],
 ) -> dict[str, Any]:
     """The σ the team uses, the sweep's RMSE per scale, and the σ fitted for the replay."""
     scenario = config.sim.scenario
@@ -385,7 +411,11 @@ def odometry_noise_summary(
         "team_note": "white noise per 100 Hz propagation step on each reported body velocity",
         "sweep": rows,
         "sweep_duration_s": config.sweep_duration_s,
-        "replay_fit": {label: fit.to_dict() for label, fit in data.fits.items()},
+        "replay_fit": {
+            kind: {label: fit.to_dict() for label, fit in d.fits.items()}
+            for kind, d in data.items()
+        },
+        "replay_calibration": _calibration_dict(data["calibrated"]),
     }
 
 
@@ -492,6 +522,55 @@ def table1_best_summary(
     return best
 
 
+#: Readings of the paper's Table-1 count (case 4, φ) computed from the same curves
+#: (:func:`table1_readings`): name → what it counts.
+TABLE1_READINGS: dict[str, str] = {
+    "stays_below": "ours: updates until the RMSE over draws stays below the Eq.-32 threshold, "
+    "mean over the guesses",
+    "first_below": "updates until the RMSE first dips below the threshold, mean over the guesses",
+    "pooled_guesses": "stays below, one RMSE over every draw and guess (the guesses averaged "
+    "before counting)",
+    "yaw_within_half_pi": "stays below, mean over the guesses whose initial yaw error is under "
+    "π/2 (a narrower yaw spread)",
+}
+
+
+def _first_below(series: Array, threshold: float) -> int | None:
+    """Updates until ``|series|`` first dips below ``threshold`` (``None``: never)."""
+    below = np.flatnonzero(np.abs(series) < threshold)
+    return int(below[0]) + 1 if below.size else None
+
+
+def table1_readings(team: list[dict[str, Any]], thresholds: dict[str, Any]) -> dict[str, Any]:
+    """Case 4, φ, plain PLKF and TEKF: the count under each reading of the paper's set-up
+    (:data:`TABLE1_READINGS`) beside the paper's, all from the same draws and guesses (no
+    noise changed). A count that never settles is (updates + 1), as in Table 1."""
+    out: dict[str, Any] = {"readings": TABLE1_READINGS}
+    for filt in ("PLKF", "TEKF"):
+        E = np.stack([run["table1"]["case4"][filt] for run in team])[..., 3]  # (runs, g, K)
+        n = E.shape[-1]
+        th = float(thresholds[filt]["paper_rule"]["phi"])
+        curves = rmse(E, axis=0)  # (guesses, updates)
+
+        def count(k: int | None, never: int = n + 1) -> int:
+            return never if k is None else k
+
+        stays = np.array([count(updates_to_converge(c, th)) for c in curves], dtype=float)
+        first = np.array([count(_first_below(c, th)) for c in curves], dtype=float)
+        near = np.mean(np.abs(E[:, :, 0]), axis=0) < math.pi / 2
+        pooled = rmse(E.reshape(-1, n), axis=0)
+        out[filt] = {
+            "stays_below": float(stays.mean()),
+            "first_below": float(first.mean()),
+            "pooled_guesses": float(count(updates_to_converge(pooled, th))),
+            "yaw_within_half_pi": float(stays[near].mean()) if near.any() else float("nan"),
+            "guesses_within_half_pi": int(near.sum()),
+            "guesses": int(near.size),
+            "paper": PAPER_TABLE1["case4"][filt]["phi"],
+        }
+    return out
+
+
 # ---------------------------------------------------------------------------------------------
 # Tables 3–4 on the MRCLAM replay, bias comparison
 # ---------------------------------------------------------------------------------------------
@@ -525,14 +604,29 @@ def _consistency_entry(runs: list[SeriesEvaluation], settle_s: float) -> dict[st
             "S": float(max(np.max(r.cond_s) for r in runs)),
         },
         "samples": pooled["samples"],
+        "run_averaged_nees": run_averaged_band(runs, settle_s),
     }
 
 
+def run_averaged_band(runs: list[SeriesEvaluation], settle_s: float) -> dict[str, Any] | None:
+    """The NEES averaged over the draws at each update time (t ≥ ``settle_s``) against the
+    95 % band of a mean of that many independent χ²(4) values
+    (:func:`relloc.pipeline.evaluation.nees_band_check`): the share of instants inside it is
+    about 95 % for a consistent filter. ``None`` with fewer than two draws. The updates are on
+    one grid; its rate is read from the first draw's update times."""
+    if len(runs) < 2 or runs[0].t.size < 2:
+        return None
+    rate_hz = 1.0 / float(np.median(np.diff(runs[0].t)))
+    return nees_band_check(runs, rate_hz=rate_hz, settle_s=settle_s)
+
+
 def replay_summary(
-    replay: list[dict[str, dict[str, ReplayTrack]]], config: Wanasinghe2014Config
+    replay: list[dict[str, dict[str, ReplayTrack]]],
+    config: Wanasinghe2014Config,
+    odometry_kind: str,
 ) -> tuple[dict[str, Any], ...]:
     """Table 3 (PLKF; yaw bank in ``table3_best``), Table 4, bias comparison, series (time
-    from the start of the window)."""
+    from the start of the window) of the replay with ``odometry_kind`` odometry."""
     table3: dict[str, Any] = {}
     table3_best: dict[str, Any] = {}
     table4: dict[str, Any] = {}
@@ -542,7 +636,7 @@ def replay_summary(
     for case in TABLE2:
         bias[case] = {}
         series[case] = {}
-        for filt in replay_filters(case):
+        for filt in replay_filters(case, odometry_kind):
             runs = [run[case][filt].evaluation for run in replay]
             t = runs[0].age
             ss = t >= settle
@@ -566,6 +660,53 @@ def replay_summary(
                 table3_best[case] = _table3_entry(stacked["errors"], ss, case)
                 table4[case]["yaw_bank"] = _consistency_entry(runs, settle)
     return table3, table3_best, table4, bias, series
+
+
+def replay_windows(data: ReplayData) -> dict[str, Any]:
+    """The calibrated odometry's calibration window and the scored window (disjoint)."""
+    assert data.calibration is not None
+    return {
+        "calibration": data.calibration.calibration_window.to_dict(),
+        "scored": data.scored_window.to_dict(),
+    }
+
+
+def _calibration_dict(data: ReplayData) -> dict[str, Any]:
+    """The team fit behind the calibrated odometry: window, latency, the pair's scales."""
+    fit = data.calibration
+    assert fit is not None
+    return {
+        "calibration_window": fit.calibration_window.to_dict(),
+        "latency_s": fit.latency_s,
+        "scale_v": {r: sc[0] for r, sc in zip(data.robots, data.pair_scales, strict=True)},
+        "scale_w": {r: sc[1] for r, sc in zip(data.robots, data.pair_scales, strict=True)},
+    }
+
+
+#: Issue targets of the calibrated replay, every Table-3/4 case.
+TARGET_YAW_RMSE_RAD = 0.10
+TARGET_NEES_PERCENT = 10.0
+
+
+def replay_targets(summary: dict[str, Any]) -> dict[str, Any]:
+    """Per Table-2 case: the calibrated PLKF's yaw RMSE ≤ 0.10 rad, % NEES beyond χ²(4, 0.95)
+    ≤ 10 % and position RMSE (x, y, z mean) no worse than the raw replay's."""
+    out: dict[str, Any] = {}
+    for case in summary["table3"]["calibrated"]:
+        cal, raw = summary["table3"]["calibrated"][case], summary["table3"]["raw"][case]
+        yaw = cal["phi"]["rmse_mean"]
+        nees = summary["table4"]["calibrated"][case]["nees_percent_beyond"]
+        pos = [float(np.mean([t3[st]["rmse_mean"] for st in STATES[:3]])) for t3 in (cal, raw)]
+        out[case] = {
+            "yaw_rmse_rad": yaw,
+            "yaw_ok": yaw <= TARGET_YAW_RMSE_RAD,
+            "nees_percent_beyond": nees,
+            "nees_ok": nees <= TARGET_NEES_PERCENT,
+            "position_rmse_m": pos[0],
+            "raw_position_rmse_m": pos[1],
+            "position_ok": pos[0] <= pos[1],
+        }
+    return out
 
 
 def replay_info(config: Wanasinghe2014Config, data: ReplayData) -> dict[str, Any]:
@@ -766,6 +907,14 @@ def _table3_cells(t3: dict[str, Any]) -> list[str]:
     return cells
 
 
+def _band_cell(band: dict[str, Any] | None) -> str:
+    """``in-band % [lo, hi], n draws`` of :func:`run_averaged_band` (— with one draw)."""
+    if band is None:
+        return "— (one draw)"
+    lo, hi = band["band"]
+    return f"{band['in_band_percent']:.1f} % [{lo:.2f}, {hi:.2f}], {band['runs']} draws"
+
+
 def _t1_cell(entry: dict[str, Any]) -> str:
     return f"{fmt(entry['mean'], 3)} / {fmt(entry['median'], 3)} / {entry['worst']}"
 
@@ -792,8 +941,8 @@ def build_report(summary: dict[str, Any], figures: dict[str, str], *, elapsed_s:
                 "position RMSE (m)",
                 "yaw RMSE (rad)",
                 "inside ±3σ (x/y/z/φ)",
-                "ANEES",
-                "ANEES 95 % band",
+                "ANEES (pooled)",
+                "run-averaged NEES in its 95 % band (% of instants; band, draws)",
                 "NIS % > χ²(3)",
                 "paper",
             ],
@@ -804,7 +953,7 @@ def build_report(summary: dict[str, Any], figures: dict[str, str], *, elapsed_s:
                     a["yaw_rmse_rad"],
                     " / ".join(f"{v:.3f}" for v in a["inside_3sigma"].values()),
                     a["anees"],
-                    " – ".join(f"{v:.2f}" for v in a["anees_band_95"]),
+                    _band_cell(a["run_averaged_nees"]),
                     a["nis_percent_beyond"],
                     "0.05–0.10 m, 0.075–0.1 rad",
                 ]
@@ -889,72 +1038,13 @@ def build_report(summary: dict[str, Any], figures: dict[str, str], *, elapsed_s:
         f"{fmt(s['table1_best']['acceptance']['case4_plkf_paper_rule_phi_mean'], 3)} (≤ 12 or "
         f"≤ 1/3 of the PLKF: {fmt(s['table1_best']['acceptance']['case4_paper_rule_ok'])}).",
         "",
+        *readings_section(s),
         figure_md(figures["convergence"], "Yaw RMSE per initial guess: TEKF, PLKF, yaw bank"),
         figure_md(
             figures["arbitrary_init"],
             "PLKF vs TEKF vs yaw bank from an arbitrary pose (paper Fig. 6)",
         ),
-        "## Tables 3–4 — real MRCLAM trajectories",
-        "",
-        f"{s['replay']['source']}; observed plane raised {s['replay']['observed_height_m']:g} m; "
-        f"window {s['replay']['window_s'][0]:.1f}–{s['replay']['window_s'][1]:.1f} s of the "
-        f"recording, steady state after {s['replay']['steady_state_after_s']:g} s; recorded "
-        "odometry as inputs; measurements synthesised from the ground truth. Odometry noise "
-        "assumed (fitted from the recording, equivalent white noise over 1 s windows): "
-        + "; ".join(
-            f"{k}: σ_v {v['sigma_v']:.3f} m/s, σ_lateral {v['sigma_lateral']:.3f} m/s, "
-            f"σ_ω {v['sigma_w']:.3f} rad/s"
-            for k, v in s["odometry_noise"]["replay_fit"].items()
-        )
-        + ".",
-        "",
-        markdown_table(
-            [
-                "case",
-                "filter",
-                "φ RMSE (std)",
-                "paper",
-                "x RMSE (std)",
-                "paper",
-                "y RMSE (std)",
-                "paper",
-                "z RMSE (std)",
-                "paper",
-            ],
-            [
-                [case, filt, *_table3_cells(s[key][case])]
-                for case in s["table3"]
-                for key, filt in (("table3", "PLKF"), ("table3_best", "yaw bank"))
-            ],
-        ),
-        "",
-        markdown_table(
-            [
-                "case",
-                "% NEES > χ²(4, .95)",
-                "paper",
-                "% NIS > χ²(3, .95)",
-                "ANEES",
-                "max cond P / R / S",
-                "paper: all < 6",
-                "yaw bank: % NEES / % NIS",
-            ],
-            [
-                [
-                    case,
-                    t4["nees_percent_beyond"],
-                    t4["paper_nees_percent_beyond"],
-                    t4["nis_percent_beyond"],
-                    t4["anees"],
-                    " / ".join(f"{v:.2f}" for v in t4["max_conditioning"].values()),
-                    "yes" if max(t4["max_conditioning"].values()) < 6 else "no",
-                    f"{t4['yaw_bank']['nees_percent_beyond']:.2f} / "
-                    f"{t4['yaw_bank']['nis_percent_beyond']:.2f}",
-                ]
-                for case, t4 in s["table4"].items()
-            ],
-        ),
-        "",
+        *replay_section(s),
         "### Radial bias: PLKF vs bias-compensated PLKF vs TEKF (replay, steady state)",
         "",
         markdown_table(
@@ -984,9 +1074,160 @@ def build_report(summary: dict[str, Any], figures: dict[str, str], *, elapsed_s:
     return "\n".join(lines)
 
 
+def readings_section(s: dict[str, Any]) -> list[str]:
+    """Table 1, case 4, φ: which reading of the paper's set-up gives its count."""
+    r = s["table1_readings"]
+    closest = min(TABLE1_READINGS, key=lambda k: abs(r["PLKF"][k] - r["PLKF"]["paper"]))
+    return [
+        "### Case 4, φ: which reading of the paper's set-up gives its 12 updates",
+        "",
+        markdown_table(
+            ["reading", "PLKF", "TEKF"],
+            [[text, r["PLKF"][k], r["TEKF"][k]] for k, text in TABLE1_READINGS.items()]
+            + [["paper (Table 1)", r["PLKF"]["paper"], r["TEKF"]["paper"]]],
+        ),
+        "",
+        f"Same draws, guesses and noise for every reading ({r['PLKF']['guesses_within_half_pi']} "
+        f"of {r['PLKF']['guesses']} guesses start within π/2 of the true yaw). Closest to the "
+        f"paper's PLKF count: {TABLE1_READINGS[closest].split(':')[-1].strip()} "
+        f"({r['PLKF'][closest]:.1f} updates)"
+        + (
+            "; none comes within a factor of two of it, so neither the counting rule nor the "
+            "yaw spread explains the gap: the plain PLKF's slow φ comes from the guesses whose "
+            "yaw correction stalls (the worst column above). "
+            if r["PLKF"][closest] > 2 * r["PLKF"]["paper"]
+            else ". "
+        )
+        + "Our guesses sit at ⅓ and ⅔ of the sensor's range "
+        "across its field of view with yaws evenly on the circle "
+        "(`relloc.estimators.initialisation.poses_spread_in_fov`); the paper says only that its "
+        "13 poses are spread within the field of view.",
+        "",
+    ]
+
+
+def replay_section(s: dict[str, Any]) -> list[str]:
+    """Tables 3–4: the windows, the calibration, the targets, then calibrated and raw."""
+    w = s["table3"]["windows"]
+    cal = s["odometry_noise"]["replay_calibration"]
+    fits = s["odometry_noise"]["replay_fit"]
+
+    def noise(kind: str) -> str:
+        return "; ".join(
+            f"{k}: σ_v {v['sigma_v']:.3f} m/s, σ_lateral {v['sigma_lateral']:.3f} m/s, "
+            f"σ_ω {v['sigma_w']:.3f} rad/s over {v['window_s']:g} s windows of "
+            f"[{v['calibration_window']['start_s']:.1f}, {v['calibration_window']['end_s']:.1f}] s"
+            for k, v in fits[kind].items()
+        )
+
+    lines = [
+        "## Tables 3–4 — real MRCLAM trajectories",
+        "",
+        f"{s['replay']['source']}; observed plane raised {s['replay']['observed_height_m']:g} m; "
+        f"scored window [{w['scored']['start_s']:.1f}, {w['scored']['end_s']:.1f}] s of the "
+        f"recording, steady state after {s['replay']['steady_state_after_s']:g} s; "
+        "measurements synthesised from the ground truth; the same draws (sensor noise, initial "
+        "pose) for both odometries.",
+        "",
+        f"- **Calibrated odometry** (the headline): fitted on [{w['calibration']['start_s']:.1f}, "
+        f"{w['calibration']['end_s']:.1f}] s (the rest of the recording after the scored window, "
+        f"disjoint from it): latency {cal['latency_s']:.2f} s, speed scales "
+        + ", ".join(f"robot {r} {v:.3f}" for r, v in cal["scale_v"].items())
+        + ", turn-rate scales "
+        + ", ".join(f"robot {r} {v:.3f}" for r, v in cal["scale_w"].items())
+        + f"; noise left after the calibration: {noise('calibrated')}.",
+        "- **Raw odometry** (the recorded commands as they are, kept beside): noise "
+        f"{noise('raw')} (each robot's whole recording, the scored window included).",
+        "",
+        "Targets (calibrated, PLKF): yaw RMSE ≤ 0.10 rad, NEES beyond χ²(4, 0.95) ≤ 10 %, "
+        "position RMSE (mean of x, y, z) no worse than raw.",
+        "",
+        markdown_table(
+            ["case", "yaw RMSE", "≤ 0.10", "% NEES > χ²", "≤ 10", "pos RMSE", "raw", "≤ raw"],
+            [
+                [
+                    case,
+                    v["yaw_rmse_rad"],
+                    v["yaw_ok"],
+                    v["nees_percent_beyond"],
+                    v["nees_ok"],
+                    v["position_rmse_m"],
+                    v["raw_position_rmse_m"],
+                    v["position_ok"],
+                ]
+                for case, v in s["replay_targets"].items()
+            ],
+        ),
+        "",
+    ]
+    for kind in ("calibrated", "raw"):
+        lines += [f"### {kind.capitalize()} odometry", "", *_replay_tables(s, kind), ""]
+    return lines
+
+
+def _replay_tables(s: dict[str, Any], kind: str) -> list[str]:
+    """Table 3 (PLKF and yaw bank) and Table 4 of the replay with ``kind`` odometry."""
+    t4s = s["table4"][kind]
+    return [
+        markdown_table(
+            [
+                "case",
+                "filter",
+                "φ RMSE (std)",
+                "paper",
+                "x RMSE (std)",
+                "paper",
+                "y RMSE (std)",
+                "paper",
+                "z RMSE (std)",
+                "paper",
+            ],
+            [
+                [case, filt, *_table3_cells(s[key][kind][case])]
+                for case in s["table3"][kind]
+                for key, filt in (("table3", "PLKF"), ("table3_best", "yaw bank"))
+            ],
+        ),
+        "",
+        markdown_table(
+            [
+                "case",
+                "% NEES > χ²(4, .95)",
+                "paper",
+                "% NIS > χ²(3, .95)",
+                "ANEES (pooled)",
+                "run-averaged NEES in its 95 % band",
+                "max cond P / R / S",
+                "paper: all < 6",
+                "yaw bank: % NEES / % NIS",
+            ],
+            [
+                [
+                    case,
+                    t4["nees_percent_beyond"],
+                    t4["paper_nees_percent_beyond"],
+                    t4["nis_percent_beyond"],
+                    t4["anees"],
+                    _band_cell(t4["run_averaged_nees"]),
+                    " / ".join(f"{v:.2f}" for v in t4["max_conditioning"].values()),
+                    "yes" if max(t4["max_conditioning"].values()) < 6 else "no",
+                    f"{t4['yaw_bank']['nees_percent_beyond']:.2f} / "
+                    f"{t4['yaw_bank']['nis_percent_beyond']:.2f}",
+                ]
+                for case, t4 in t4s.items()
+            ],
+        ),
+        "",
+        "% NEES beyond the bound is the paper's single-run share over the steady state. The "
+        "run-averaged NEES averages the draws at each update time; the draws differ in sensor "
+        "noise and initial pose but share the one recorded odometry, so its band tests the "
+        "consistency towards the sensor noise, not towards the odometry error.",
+    ]
+
+
 def conditioning_text(s: dict[str, Any]) -> str:
     """Covariance conditioning on the replay against the paper's bound of 6 (its Fig. 12)."""
-    worst = {c: max(t4["max_conditioning"].values()) for c, t4 in s["table4"].items()}
+    worst = {c: max(t4["max_conditioning"].values()) for c, t4 in s["table4"]["calibrated"].items()}
     above = [c for c, v in worst.items() if v >= 6.0]
     text = (
         "- **Conditioning (paper: all below 6).** Max log10 condition numbers of P, R, S on "
@@ -1004,8 +1245,8 @@ def conditioning_text(s: dict[str, Any]) -> str:
 
 def _replay_yaw_cause(s: dict[str, Any]) -> str:
     """Whether the replay's yaw error comes from the initial guess or from the odometry."""
-    plkf = s["table3"]["case1"]["phi"]["rmse_mean"]
-    bank = s["table3_best"]["case1"]["phi"]["rmse_mean"]
+    plkf = s["table3"]["calibrated"]["case1"]["phi"]["rmse_mean"]
+    bank = s["table3_best"]["calibrated"]["case1"]["phi"]["rmse_mean"]
     if bank < 0.7 * plkf:
         return (
             f"Part of it is the initial guess: the yaw bank from the same pose reaches {bank:.3f} "
@@ -1013,8 +1254,81 @@ def _replay_yaw_cause(s: dict[str, Any]) -> str:
         )
     return (
         f"The yaw bank from the same pose gives {bank:.3f} rad in case 1, so the initial guess "
-        "is not the cause: the recorded turn rates are off by up to a quarter of the real ones "
-        "for seconds at a time, and at these speeds the motion corrects the yaw drift slowly."
+        "is not the cause: at these speeds the motion corrects the odometry's yaw drift slowly."
+    )
+
+
+def replay_text(s: dict[str, Any]) -> str:
+    """Tables 3–4 against the paper: what the calibration changes and what it cannot."""
+    cal, raw = s["table3"]["calibrated"], s["table3"]["raw"]
+    t4c, t4r = s["table4"]["calibrated"], s["table4"]["raw"]
+    targets = s["replay_targets"]
+    yaw = [v["yaw_rmse_rad"] for v in targets.values()]
+    missed = [c for c, v in targets.items() if not (v["yaw_ok"] and v["nees_ok"])]
+
+    def span(values: list[float], unit: str = "") -> str:
+        return f"{min(values):.3f}–{max(values):.3f}{unit}"
+
+    fits = s["odometry_noise"]["replay_fit"]["calibrated"]
+    drift = {
+        k: (
+            v["sigma_v"] * math.sqrt(1.0 / (v["rate_hz"] * v["window_s"])),
+            v["sigma_w"] * math.sqrt(1.0 / (v["rate_hz"] * v["window_s"])),
+            v["window_s"],
+        )
+        for k, v in fits.items()
+    }
+    drift_text = "; ".join(
+        f"{k}: {dv * 100:.2f} cm/s and {dw:.4f} rad/s rms over {w:g} s"
+        for k, (dv, dw, w) in drift.items()
+    )
+    yaw_missed = [c for c, v in targets.items() if not v["yaw_ok"]]
+    nees_missed = [c for c, v in targets.items() if not v["nees_ok"]]
+    verdict = "Every case meets the yaw and NEES targets." if not missed else ""
+    if yaw_missed:
+        verdict += (
+            f"The yaw target (≤ 0.10 rad) is missed in {', '.join(yaw_missed)}: the calibrated "
+            f"yaw RMSE is {span(yaw, ' rad')}. "
+        )
+    if nees_missed:
+        verdict += (
+            f"The NEES target (≤ 10 %) is missed in {', '.join(nees_missed)} ("
+            + ", ".join(f"{c} {targets[c]['nees_percent_beyond']:.1f} %" for c in nees_missed)
+            + "). "
+            + (
+                "The precise-sensor cases run on the same odometry and meet it, so the excess "
+                "comes with the noisy sensor, whose readings the filter averages over many "
+                "seconds; the PLKF's pseudo-measurement noise is also evaluated at the estimate "
+                "with 0.1 rad bearings, and this run does not separate the two. "
+                if all(targets[c]["nees_ok"] for c in ("case1", "case3") if c in targets)
+                else "The odometry errors left after the calibration are correlated over "
+                "seconds to a minute (the fitted turn-rate σ grows with the window length), "
+                "which no equivalent white noise describes at every time scale; with the yaw "
+                "only weakly observable, the filter's yaw also absorbs the speed errors it does "
+                "not model. "
+            )
+        )
+    return (
+        "- **Tables 3–4 (real data).** The paper used two Pioneer robots with laser map-based "
+        "localisation as ground truth; we use two iRobot Create robots of MRCLAM with Vicon "
+        "truth and their recorded *commanded* odometry. Calibrating it (latency, scales and the "
+        "noise left after them, fitted after the scored window) changes the yaw RMSE from "
+        f"{span([raw[c]['phi']['rmse_mean'] for c in raw], ' rad')} (raw) to "
+        f"{span([cal[c]['phi']['rmse_mean'] for c in cal], ' rad')} and the NEES beyond the bound "
+        f"from {span([t4r[c]['nees_percent_beyond'] for c in t4r], ' %')} to "
+        f"{span([t4c[c]['nees_percent_beyond'] for c in t4c], ' %')} (paper 0.03–0.18 rad, "
+        f"0.06–9.25 %). {verdict} {_replay_yaw_cause(s)} What is left after the calibration is "
+        "not a lag or a scale but the commands' own error: the commanded speed is quantised and "
+        "constant while the real speed wanders, and the mean error of the calibrated commands "
+        f"over the noise windows is {drift_text} — several percent of the robots' 5–7 cm/s. "
+        "The relative yaw is observable only through the observed robot's motion (seed 000 "
+        "Lemma 1), so a speed error of the observer across the observed robot's direction of "
+        "motion reads as a yaw error of the same share (a 7 % speed error is about 0.07 rad), "
+        "and turn-rate errors add to it between the corrections. We did not shrink the fitted "
+        "noise or choose a window by its score on the scored stretch. Positions, measured "
+        f"directly, are at {cal['case1']['x']['rmse_mean'] * 100:.1f} / "
+        f"{cal['case1']['y']['rmse_mean'] * 100:.1f} cm in case 1 (paper 1.0 / 1.3 cm). "
+        f"The replay averages {s['replay_runs']} sensor-noise draws; the paper's table is one run."
     )
 
 
@@ -1046,8 +1360,6 @@ def differences(s: dict[str, Any]) -> list[str]:
     t1 = s["table1"]["case4"]
     c3 = s["table1"]["case3"]
     best = s["table1_best"]["case4"]
-    t3 = s["table3"]
-    t4 = s["table4"]
     bias = s["bias_comparison"]
     noisy = [c for c in ("case2", "case4") if "BC-PLKF" in bias.get(c, {})]
     bias_text = "; ".join(
@@ -1084,21 +1396,7 @@ def differences(s: dict[str, Any]) -> list[str]:
         "updates by more than these thresholds. The yaw bank brings φ inside 0.1 rad "
         f"within {best['fixed']['phi']['worst']} updates for every guess (Eq. 32 mean "
         f"{best['paper_rule']['phi']['mean']:.1f}).",
-        "- **Tables 3–4 (real data).** The paper used two Pioneer robots with laser map-based "
-        "localisation as ground truth; we use two iRobot Create robots of MRCLAM with Vicon "
-        "truth and their recorded *commanded* odometry (quantised, leading the motion by about "
-        "0.2 s, a few percent fast, turning more than the robots do). These robots move slowly "
-        "(≈ 5–6 cm/s) and the relative yaw is observable only through the observed robot's "
-        "motion (seed 000 Lemma 1), so the yaw error is larger than the paper's (case 1: "
-        f"{t3['case1']['phi']['rmse_mean']:.3f} rad vs 0.031). {_replay_yaw_cause(s)} The "
-        "odometry errors, correlated over seconds rather than white, also make the filter "
-        f"over-confident (case 1: {t4['case1']['nees_percent_beyond']:.1f} % of NEES values "
-        "beyond the bound vs the paper's 0.06 %, and "
-        f"{t4['case1']['nis_percent_beyond']:.1f} % of NIS values beyond theirs, where 5 % "
-        "is expected). "
-        f"Positions, measured directly, are at {t3['case1']['x']['rmse_mean'] * 100:.1f} / "
-        f"{t3['case1']['y']['rmse_mean'] * 100:.1f} cm in case 1 (paper 1.0 / 1.3 cm). "
-        f"The replay averages {s['replay_runs']} sensor-noise draws; the paper's table is one run.",
+        replay_text(s),
         "- **Bias.** With the noisy Table-2 sensor the measured bearings inside H_pmo correlate "
         "the PLKF's gain with its pseudo-measurement noise, which pushes the range estimate "
         "outwards; the bias-compensated PLKF (`relloc.estimators.relative`, after Nguyen & "
