@@ -151,3 +151,28 @@ def test_hidden_correspondence_turns_frames_into_scans(tmp_path: Path) -> None:
         same = (bearings.t == camera.t[r]) & (bearings.observer == camera.observer[r])
         hit = same & (bearings.value[:, 0] == camera.value[r, 1])
         assert bearings.origin[hit].tolist() == [camera.target[r]]
+
+
+def test_run6_camera_sees_teammates_only_inside_its_field_of_view() -> None:
+    """On run 6's calibration window, the in-view P_D the unknown-correspondence model uses is
+    well above the all-frames share, and the ground truth puts hardly any detection outside
+    the fitted field of view (else a P_D of 0 outside it would be wrong)."""
+    from relloc.calibration.camera import (
+        fit_detection_in_view,
+        fit_detection_probability,
+        fit_field_of_view,
+    )
+    from relloc.datasets.mrclam import load_mrclam
+    from relloc.datasets.paths import default_mrclam_dataset
+
+    folder = default_mrclam_dataset()
+    if not (folder / "Barcodes.dat").is_file():
+        pytest.skip(f"MRCLAM run 6 not found at {folder} (shared data absent)")
+    ds = load_mrclam(folder)
+    fov = fit_field_of_view(ds, mrclam_association._whole_run(ds, str(folder))).half_width_rad
+    start = max(float(ds.robot(s).odometry.t[0]) for s in ds.robot_ids)
+    window = mrclam_association.following(start, mrclam_association.CALIBRATION_S, str(folder))
+    fit = fit_detection_in_view(ds, window, fov)
+    everywhere = fit_detection_probability(ds, window)
+    assert fit.p_detect > 2.0 * everywhere.p_detect
+    assert fit.detected_outside <= 0.01 * (fit.detected_in_view + fit.detected_outside)

@@ -140,7 +140,8 @@ class GaussianSumSettings:
             ``None`` (the sensor sees all around). With it, ``formation.p_detect`` is the
             detection probability of a teammate *inside* the field of view, and a track's
             ``P_D`` is that times the probability that its predicted azimuth lies inside
-            ``±field_of_view`` (module docstring); separate sensors only.
+            ``±field_of_view`` (module docstring), and the bearing space spans
+            ``±field_of_view`` (:attr:`bearing_volume`); separate sensors only.
         known_outlier_probability: probability ``ε`` that a range or height is an outlier
             (uniform over the sensor's span; module docstring).
         max_range, max_position_sigma: tracks farther than ``max_range`` (m) or with a position
@@ -250,8 +251,11 @@ class GaussianSumSettings:
 
     @property
     def bearing_volume(self) -> float:
-        """Volume of the bearing space: 2π·π (azimuth × elevation) or 2π (azimuth only)."""
-        return 2.0 * np.pi * (np.pi if self.use_elevation else 1.0)
+        """Volume of the bearing space: 2π·π (azimuth × elevation) or 2π (azimuth only); with
+        a field of view ``f`` the azimuth spans ``2f`` (no bearing comes from outside it, so
+        clutter and a teammate of unknown place are uniform over ``±f``)."""
+        azimuth = 2.0 * np.pi if self.field_of_view is None else 2.0 * self.field_of_view
+        return azimuth * (np.pi if self.use_elevation else 1.0)
 
 
 @dataclass(frozen=True, kw_only=True)

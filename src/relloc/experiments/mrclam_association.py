@@ -283,6 +283,7 @@ def _settings(ds: MrclamDataset, window: CalibrationWindow, fov: float) -> _Mode
     unknown = replace(
         base,
         field_of_view=fov,
+        expected_clutter=CLUTTER_PER_SCAN,  # over its bearing space, the field of view
         formation=replace(base.formation, p_detect=in_view.p_detect),
     )
     camera = replace(base, ranges_mark_detections=True)
