@@ -738,7 +738,8 @@ class GaussianSumFuser:
     # ------------------------------------------------------------------ reduction
 
     def reduce(self) -> None:
-        """Delete unusable tracks, prune, N-scan prune, merge and cap every filter (§II-D.5)."""
+        """Delete unusable tracks (too far, too uncertain, or of a filter whose weights all
+        underflowed to 0), prune, N-scan prune, merge and cap every filter (§II-D.5)."""
         st = self.settings
         t = self.tracks
         if t.size == 0:
@@ -746,6 +747,10 @@ class GaussianSumFuser:
         usable = (np.linalg.norm(t.means[:, :3], axis=1) <= st.max_range) & (
             np.trace(t.covs[:, :3, :3], axis1=1, axis2=2) <= st.max_position_sigma**2
         )
+        # a filter whose every track has weight 0 (each density it was given underflowed) says
+        # nothing about where its teammate is: it is emptied and waits for new births
+        total = np.bincount(t.groups, weights=t.weights, minlength=len(self.teammates))
+        usable &= total[t.groups] > 0.0
         t = t.take(np.flatnonzero(usable))
         self.tracks = t
         if t.size == 0:
