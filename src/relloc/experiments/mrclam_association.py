@@ -71,10 +71,11 @@ Vicon ground truth, planar position, after 10 s), ``yaw_rmse_rad``, ``tracked_fr
 ``coverage`` (records with a track, of all records × teammates) — all the unknown-correspondence
 means over the runs —, ``spread`` (``runs``: each run's figures and clock offset; per figure
 ``mean, min, max``), ``run0`` (run 0's figures with ``per_observer``), ``unknown_shared``,
-``unknown_no_clutter`` and ``camera`` (the other models' figures, run 0's frames), ``bearings`` (counts of robot, landmark and injected
-bearings, scans with several robots, ``unknown_subject``: camera rows of no other robot and no
-landmark, skipped by the conversion, and ``truth_missing``: filter ticks × robots inside a
-Vicon gap longer than the dataset's gap threshold, scored against the interpolated pose),
+``unknown_no_clutter`` and ``camera`` (the other models' figures, run 0's frames),
+``bearings`` (counts of robot, landmark and injected bearings, scans with several robots,
+``unknown_subject``: camera rows of no other robot and no landmark, skipped by the
+conversion, and ``truth_missing``: filter ticks × robots inside a Vicon gap longer than the
+dataset's gap threshold, scored against the interpolated pose),
 ``scans`` (camera frames used), ``load_report``.
 """
 
@@ -94,6 +95,7 @@ from relloc.calibration.camera import (
 )
 from relloc.calibration.odometry import fit_odometry_noise
 from relloc.calibration.window import CalibrationWindow, following, spanning
+from relloc.core.estimates import Estimates
 from relloc.core.recording import (
     CLUTTER,
     Measurements,
@@ -233,11 +235,12 @@ def _by_time(columns: Array) -> Array:
     return columns[np.argsort(columns[:, 0], kind="stable")]
 
 
-def _run(
+def _estimates(
     rec: Recording, settings: GaussianSumSettings, clock: Array, *, sharing: bool
-) -> list[LeaderScores]:
-    """Every robot's fuser on the filter clock (mutual and indirect fusion when ``sharing``);
-    the scores of each observer, recorded at the ticks its scans are fed at."""
+) -> tuple[Estimates, dict[str, Array]]:
+    """Every robot's fuser on the filter clock (mutual and indirect fusion when ``sharing``):
+    the estimates, recorded at the ticks each observer's scans are fed at, and those ticks
+    per observer."""
     sensing = list(range(rec.n_robots))
     stamps = scan_times(rec.measurements, rec.robots, sensing, settings)
     times = {name: np.unique(feed_ticks(st, clock)) for name, st in stamps.items()}
@@ -247,8 +250,25 @@ def _run(
         clock=clock,
         record_times=times,
     )
+    return estimates, times
+
+
+def _scores(
+    estimates: Estimates, rec: Recording, times: dict[str, Array], settings: GaussianSumSettings
+) -> list[LeaderScores]:
+    """The scores of each observer at its ticks."""
     kind = bearing_kind(settings)
-    return [leader_scores(estimates, rec, i, times[rec.robots[i]], kind) for i in sensing]
+    return [
+        leader_scores(estimates, rec, i, times[rec.robots[i]], kind) for i in range(rec.n_robots)
+    ]
+
+
+def _run(
+    rec: Recording, settings: GaussianSumSettings, clock: Array, *, sharing: bool
+) -> list[LeaderScores]:
+    """Every robot's fuser on the filter clock, scored (:func:`_estimates`, :func:`_scores`)."""
+    estimates, times = _estimates(rec, settings, clock, sharing=sharing)
+    return _scores(estimates, rec, times, settings)
 
 
 @dataclass(frozen=True)
