@@ -573,9 +573,9 @@ ranging sensor as in seed 002, so an unseen robot gives no range either. The dri
 then takes another robot's bearing or a false one for its own — the no-clutter column shows
 how much of the loss is telling robots apart rather than rejecting clutter. The odometry is
 not the limit: on run 6 the commanded velocities dead-reckon a robot to about 0.15 m and
-0.15 rad over 20 s. Mutual and indirect fusion spread the unresolved yaw hypotheses of the teammates'
-filters, hence direct fusion for the headline. "Records tracked" counts the records with a
-track; "records with a track" says how many there are.
+0.15 rad over 20 s. Mutual and indirect fusion spread the unresolved yaw hypotheses of the
+teammates' filters, hence direct fusion for the headline. "Records tracked" counts the records
+with a track; "records with a track" says how many there are.
 """
 
 
