@@ -138,7 +138,7 @@ POS_TOL_M = 0.5
 YAW_TOL_RAD = 0.5
 FUSION_PERIOD_S = 1.0
 #: runs of the spread (``--runs``): clutter draws and filter-clock offsets
-SPREAD_RUNS = 3
+SPREAD_RUNS = 5
 #: issue 14's targets for the unknown-correspondence model
 TARGET_ACCURACY = 0.90
 TARGET_TRACKED = 0.5
