@@ -7,6 +7,7 @@ import pytest
 from relloc.calibration.camera import (
     camera_residuals,
     fit_camera,
+    fit_detection_in_view,
     fit_detection_probability,
     fit_field_of_view,
     lag_correlation,
@@ -129,6 +130,22 @@ def test_detection_probability_is_the_share_of_frames_showing_a_teammate(synthet
     # a window without frames says so by the documented fallback, and P_D is clipped
     assert fit_detection_probability(ds, CalibrationWindow(200.0, 300.0, "s")).p_detect == 0.5
     assert fit_detection_probability(ds, CalibrationWindow(0.0, 0.4, "s")).p_detect == 0.95
+
+
+def test_detection_in_view_counts_only_teammates_the_truth_puts_in_view(synthetic):
+    ds = _frames_dataset(synthetic)
+    window = CalibrationWindow(0.0, 100.0, "synthetic")
+    # robot 2 lies straight ahead of robot 1 (in view, seen in 30 of 100 frames); robot 1 lies
+    # behind robot 2 (out of a ±0.5 rad view, yet "seen" in 50 frames: counted as outside)
+    fit = fit_detection_in_view(ds, window, 0.5)
+    assert (fit.pairs_in_view, fit.detected_in_view, fit.detected_outside) == (100, 30, 50)
+    assert fit.p_detect == pytest.approx(0.3) and fit.half_width_rad == 0.5
+    # a view all around is the share over all frames
+    everywhere = fit_detection_in_view(ds, window, np.pi)
+    assert everywhere.p_detect == pytest.approx(fit_detection_probability(ds, window).p_detect)
+    assert fit.to_dict()["calibration_window"] == window.to_dict()
+    with pytest.raises(ConfigError, match="half_width_rad"):
+        fit_detection_in_view(ds, window, 0.0)
 
 
 def test_field_of_view_is_the_widest_bearing_in_the_window(synthetic):

@@ -287,3 +287,43 @@ def test_filter_settings_follow_the_scenario() -> None:
     assert st.expected_clutter == pytest.approx(sc.expected_clutter)
     assert st.sigma_range == pytest.approx(np.sqrt(8.0) * 1e-3)
     assert replace(st, fusion="ci").fusion == "ci"
+
+
+def _two_tracks(depth: int) -> Tracks:
+    """Two equally weighted tracks of one teammate: 2 m straight ahead and 2 m to the left."""
+    cov = np.diag([0.01, 0.01, 0.01, 0.01])
+    means = np.array([[2.0, 0.0, 0.0, 0.0], [0.0, 2.0, 0.0, 0.0]])
+    return Tracks(
+        groups=np.zeros(2, dtype=np.int64),
+        means=means,
+        covs=np.stack([cov, cov]),
+        prior_means=means.copy(),
+        prior_covs=np.stack([cov, cov]),
+        weights=np.full(2, 0.5),
+        history=np.zeros((2, depth + 1), dtype=np.int64),
+        assoc=np.full(2, -1, dtype=np.int64),
+    )
+
+
+@pytest.mark.parametrize("fov", [None, 0.5])
+def test_a_missed_detection_weighs_against_tracks_in_the_field_of_view(fov: float | None) -> None:
+    st = _settings(use_elevation=False, field_of_view=fov)
+    st = replace(st, formation=replace(st.formation, p_detect=0.8))
+    fuser = GaussianSumFuser(0, [1], st)
+    fuser.tracks = _two_tracks(st.nscan_depth)
+    fuser.update_bearings(np.zeros((0, 1)), [np.nan], [np.nan])
+    fuser.reduce()
+    w = fuser.tracks.weights
+    if fov is None:
+        # a constant P_D: every track is equally likely to have been missed
+        assert w == pytest.approx([0.5, 0.5])
+    else:
+        # the track ahead should have been seen (P_D 0.8 · P_G 0.95), the one to the left not
+        assert w[0] / w[1] == pytest.approx(1.0 - 0.8 * 0.95, rel=1e-6)
+
+
+def test_field_of_view_is_checked() -> None:
+    with pytest.raises(ConfigError, match="field_of_view"):
+        _settings(use_elevation=False, field_of_view=0.0)
+    with pytest.raises(ConfigError, match="ranges_mark_detections"):
+        _settings(use_elevation=False, field_of_view=0.5, ranges_mark_detections=True)

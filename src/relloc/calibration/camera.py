@@ -29,6 +29,10 @@ frame, other robot) pairs in which that robot is detected — the camera's narro
 makes this far below the 0.95 often assumed, and assuming 0.95 would make every frame without
 a teammate strong evidence that a false bearing is it.
 
+**Detection probability in view** (:func:`fit_detection_in_view`): the same share over the
+pairs whose ground truth puts the other robot inside the field of view, for a filter whose
+``P_D`` depends on where it predicts the teammate.
+
 **Field of view** (:func:`fit_field_of_view`): the half-width, the widest ``|η̃|`` of any
 detection in the window.
 
@@ -279,6 +283,65 @@ def fit_detection_probability(
     p = float(np.clip(seen / pairs, *P_DETECT_LIMITS)) if pairs else P_DETECT_UNKNOWN
     return DetectionProbabilityFit(
         calibration_window=window, p_detect=p, frames=frames, pairs=pairs, detected_pairs=seen
+    )
+
+
+@dataclass(frozen=True)
+class InViewDetectionFit:
+    """``P_D`` of a teammate *inside* the field of view ``±half_width_rad`` (clipped to
+    ``P_DETECT_LIMITS``), the (frame, robot) pairs it came from, and the detections of robots
+    the ground truth puts outside it (a check that the field of view is right)."""
+
+    calibration_window: CalibrationWindow
+    half_width_rad: float
+    p_detect: float
+    pairs_in_view: int
+    detected_in_view: int
+    detected_outside: int
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON-ready record (the window as ``calibration_window``)."""
+        return {**asdict(self), "calibration_window": self.calibration_window.to_dict()}
+
+
+def fit_detection_in_view(
+    ds: MrclamDataset, window: CalibrationWindow, half_width_rad: float
+) -> InViewDetectionFit:
+    """``P_D`` inside the field of view: over the camera frames in ``window`` (distinct time
+    stamps of an observer) and every other robot whose true bearing from the observer,
+    ``wrap(atan2(Δy, Δx) − θ)`` on the ground truth, lies inside ``±half_width_rad``, the
+    share detected (pairs with invalid ground truth are left out). :func:`fit_detection_probability`
+    is the same share over all pairs; the camera's narrow view makes the two differ by the
+    fraction of the time a teammate is in view."""
+    if not (np.isfinite(half_width_rad) and 0.0 < half_width_rad <= np.pi):
+        raise ConfigError(
+            f"fit_detection_in_view: half_width_rad must lie in (0, π]: {half_width_rad}"
+        )
+    pairs = seen = outside = 0
+    for s in ds.robot_ids:
+        meas = ds.robot(s).measurements
+        sel = window.contains(meas.t)
+        frames = np.unique(meas.t[sel])
+        q = ds.robot(s).groundtruth.at(frames)
+        for o in ds.robot_ids:
+            if o == s:
+                continue
+            p = ds.robot(o).groundtruth.at(frames)
+            bearing = np.abs(wrap_angle(np.arctan2(p.y - q.y, p.x - q.x) - q.theta))
+            valid = q.valid & p.valid
+            detected = np.isin(frames, meas.t[sel & (meas.subject == o)])
+            inside = valid & (bearing <= half_width_rad)
+            pairs += int(inside.sum())
+            seen += int((inside & detected).sum())
+            outside += int((valid & ~inside & detected).sum())
+    p_d = float(np.clip(seen / pairs, *P_DETECT_LIMITS)) if pairs else P_DETECT_UNKNOWN
+    return InViewDetectionFit(
+        calibration_window=window,
+        half_width_rad=float(half_width_rad),
+        p_detect=p_d,
+        pairs_in_view=pairs,
+        detected_in_view=seen,
+        detected_outside=outside,
     )
 
 

@@ -74,6 +74,7 @@ from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.special import ndtr
 
 from relloc.association.assignment import assign
 from relloc.association.gating import GateSettings, mahalanobis_batch, modified_gate_covariance
@@ -135,6 +136,12 @@ class GaussianSumSettings:
             reading a barcode's range and bearing): a teammate with a range in a scan has its
             bearing in the set (``P_D = 1`` for that scan) and one without has none
             (``P_D = 0``); ``False``: separate sensors, ``P_D = formation.p_detect``.
+        field_of_view: half-width (rad) of the bearing sensor's azimuth field of view, or
+            ``None`` (the sensor sees all around). With it, ``formation.p_detect`` is the
+            detection probability of a teammate *inside* the field of view, and a track's
+            ``P_D`` is that times the probability that its predicted azimuth lies inside
+            ``±field_of_view`` (module docstring), and the bearing space spans
+            ``±field_of_view`` (:attr:`bearing_volume`); separate sensors only.
         known_outlier_probability: probability ``ε`` that a range or height is an outlier
             (uniform over the sensor's span; module docstring).
         max_range, max_position_sigma: tracks farther than ``max_range`` (m) or with a position
@@ -163,6 +170,7 @@ class GaussianSumSettings:
     confirm_position_sigma: float = 0.3
     confirm_yaw_sigma: float = 0.35
     ranges_mark_detections: bool = False
+    field_of_view: float | None = None
     known_outlier_probability: float = 0.01
     max_range: float = 20.0
     max_position_sigma: float = 5.0
@@ -208,6 +216,16 @@ class GaussianSumSettings:
                 "GaussianSumSettings.ranges_mark_detections must be a bool: "
                 f"{self.ranges_mark_detections!r}"
             )
+        if self.field_of_view is not None:
+            if not (np.isfinite(self.field_of_view) and 0.0 < self.field_of_view <= np.pi):
+                raise ConfigError(
+                    f"GaussianSumSettings.field_of_view must lie in (0, π]: {self.field_of_view}"
+                )
+            if self.ranges_mark_detections:
+                raise ConfigError(
+                    "GaussianSumSettings: field_of_view is a separate-sensor model; it cannot "
+                    "be combined with ranges_mark_detections"
+                )
         if self.fusion not in FUSION_MODES:
             raise ConfigError(f"GaussianSumSettings.fusion: one of {FUSION_MODES}: {self.fusion}")
 
@@ -233,8 +251,11 @@ class GaussianSumSettings:
 
     @property
     def bearing_volume(self) -> float:
-        """Volume of the bearing space: 2π·π (azimuth × elevation) or 2π (azimuth only)."""
-        return 2.0 * np.pi * (np.pi if self.use_elevation else 1.0)
+        """Volume of the bearing space: 2π·π (azimuth × elevation) or 2π (azimuth only); with
+        a field of view ``f`` the azimuth spans ``2f`` (no bearing comes from outside it, so
+        clutter and a teammate of unknown place are uniform over ``±f``)."""
+        azimuth = 2.0 * np.pi if self.field_of_view is None else 2.0 * self.field_of_view
+        return azimuth * (np.pi if self.use_elevation else 1.0)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -408,6 +429,22 @@ class GaussianSumFuser:
             return np.where(np.isfinite(ranges), 1.0, 0.0)
         return np.full(len(self.teammates), st.formation.p_detect)
 
+    def _track_detection(self, p_det: Array) -> Array:
+        """``P_D`` of every track: its teammate's ``p_det``, times, with a field of view, the
+        probability ``Φ((f − α̂)/σ) − Φ((−f − α̂)/σ)`` that the azimuth lies inside ``±f``
+        (``α̂`` the predicted azimuth, ``σ²`` its innovation variance)."""
+        st = self.settings
+        t = self.tracks
+        p = p_det[t.groups]
+        if st.field_of_view is None or t.size == 0:
+            return p
+        azimuth = range_bearing(t.means)[:, 1]
+        H = range_bearing_jacobian(t.means)[:, 1:2, :]
+        var = (H @ t.covs @ np.swapaxes(H, -1, -2))[:, 0, 0] + st.sigma_azimuth**2
+        sd = np.sqrt(var)
+        fov = st.field_of_view
+        return p * (ndtr((fov - azimuth) / sd) - ndtr((-fov - azimuth) / sd))
+
     # ------------------------------------------------------------------ prediction
 
     def predict(self, u_self: ArrayLike, u_team: ArrayLike, dt: float) -> None:
@@ -520,9 +557,10 @@ class GaussianSumFuser:
             gated = d2 <= chi2_threshold(nb, st.gate.p_gate)
             near = d2 <= chi2_threshold(nb, st.gate.p_birth_exclusion)
             lik = _gaussian_density(nu, np.broadcast_to(S[:, None], (k, m, nb, nb)))
-            kappa = self._false_density(lik, m, p_det)
+            p_track = self._track_detection(p_det)
+            kappa = self._false_density(lik, m, p_det, p_track)
             w_fa, w_det = formation_weights(
-                t.weights, lik, gated, st.formation, kappa[t.groups], p_detect=p_det[t.groups]
+                t.weights, lik, gated, st.formation, kappa[t.groups], p_detect=p_track
             )
             fa = replace(
                 t,
@@ -553,9 +591,13 @@ class GaussianSumFuser:
                 )
                 parts.append(det)
         elif k:
-            # no bearing at all: every track is a false-alarm branch with the same factor
-            # (1 − P_D P_G), which normalisation cancels; only the associations change
-            self.tracks = replace(t, assoc=np.full(k, -1, dtype=np.int64))
+            # no bearing at all: every track is a false-alarm branch with the factor
+            # (1 − P_D P_G); without a field of view it is the same for all tracks of a
+            # filter and normalisation cancels it, so only the associations change
+            weights = t.weights
+            if st.field_of_view is not None:
+                weights = weights * (1.0 - self._track_detection(p_det) * st.formation.p_gate)
+            self.tracks = replace(t, weights=weights, assoc=np.full(k, -1, dtype=np.int64))
             return
         if m:
             if not k:
@@ -564,26 +606,35 @@ class GaussianSumFuser:
         if parts:
             self.tracks = Tracks.concat(parts)
 
-    def _false_density(self, lik: Array, m: int, p_det: Array) -> Array:
+    def _false_density(
+        self, lik: Array, m: int, p_det: Array, p_track: Array | None = None
+    ) -> Array:
         """``κ[j, b]``: density at bearing ``b`` of everything that is not teammate ``j``.
 
         Clutter (``expected_clutter/V``) plus ``P_D`` (``p_det``, per teammate) times the
         predicted bearing density of every other teammate: the mixture
         ``Σ_h w_h N(z_b; ẑ_h, S_h)`` of its filter when it has tracks, uniform ``1/V`` while it
         has none. A bearing that another teammate's tracks explain is therefore weak evidence
-        for ``j`` (no ghost track of ``j`` can feed on it).
+        for ``j`` (no ghost track of ``j`` can feed on it). With a field of view each track's
+        density is weighted by its own ``P_D`` (``p_track``, :meth:`_track_detection`).
         """
         st = self.settings
         n_team = len(self.teammates)
         t = self.tracks
         dens = np.zeros((n_team, m))
         tracked = np.zeros(n_team, dtype=bool)
-        if t.size:
+        if st.field_of_view is not None and p_track is not None and t.size:
             w = t.normalised_weights()
-            np.add.at(dens, t.groups, w[:, None] * lik)
+            np.add.at(dens, t.groups, (w * p_track)[:, None] * lik)
             tracked[t.groups] = True
-        dens[~tracked] = 1.0 / st.bearing_volume
-        dens *= p_det[:, None]
+            dens[~tracked] = p_det[~tracked, None] / st.bearing_volume
+        else:
+            if t.size:
+                w = t.normalised_weights()
+                np.add.at(dens, t.groups, w[:, None] * lik)
+                tracked[t.groups] = True
+            dens[~tracked] = 1.0 / st.bearing_volume
+            dens *= p_det[:, None]
         others = dens.sum(axis=0)[None, :] - dens
         clutter = max(st.expected_clutter, 1e-3) / st.bearing_volume
         return clutter + others
@@ -661,7 +712,9 @@ class GaussianSumFuser:
             d2 = mahalanobis_batch(nu, S[:, None, :, :])
             kappa = max(st.expected_clutter, 1e-3) / st.bearing_volume
             c = 0.5 * d2 + 0.5 * np.log(np.linalg.det(2.0 * np.pi * S))[:, None]
-            owner_pd = p_det[t.groups[dom]]
+            owner_pd = self._track_detection(p_det)[dom]
+            p_det = p_det.copy()
+            p_det[t.groups[dom]] = owner_pd
             with np.errstate(divide="ignore"):
                 c += np.log(kappa) - np.log(owner_pd)[:, None]
             inside = (d2 <= chi2_threshold(nb, st.gate.p_gate)) & (owner_pd > 0.0)[:, None]
@@ -685,7 +738,8 @@ class GaussianSumFuser:
     # ------------------------------------------------------------------ reduction
 
     def reduce(self) -> None:
-        """Delete unusable tracks, prune, N-scan prune, merge and cap every filter (§II-D.5)."""
+        """Delete unusable tracks (too far, too uncertain, or of a filter whose weights all
+        underflowed to 0), prune, N-scan prune, merge and cap every filter (§II-D.5)."""
         st = self.settings
         t = self.tracks
         if t.size == 0:
@@ -693,6 +747,10 @@ class GaussianSumFuser:
         usable = (np.linalg.norm(t.means[:, :3], axis=1) <= st.max_range) & (
             np.trace(t.covs[:, :3, :3], axis1=1, axis2=2) <= st.max_position_sigma**2
         )
+        # a filter whose every track has weight 0 (each density it was given underflowed) says
+        # nothing about where its teammate is: it is emptied and waits for new births
+        total = np.bincount(t.groups, weights=t.weights, minlength=len(self.teammates))
+        usable &= total[t.groups] > 0.0
         t = t.take(np.flatnonzero(usable))
         self.tracks = t
         if t.size == 0:
