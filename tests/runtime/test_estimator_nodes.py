@@ -242,6 +242,7 @@ def _handmade_fit(folder: str):
         odometry=OdometryModelFit(
             calibration_window=window,
             latency_s=0.1,
+            time_constant_s=0.0,
             scale_v=(0.9,) * 5,
             scale_w=(0.8,) * 5,
             q_v0=1e-6,
