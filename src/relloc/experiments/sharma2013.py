@@ -141,10 +141,13 @@ PAPER_BOUNDED = {
 }
 
 
-def _scenario(duration_s: float = DURATION_S):  # type: ignore[no-untyped-def]
+def _scenario(duration_s: float | None = None):  # type: ignore[no-untyped-def]
+    """The paper's scenario, :data:`DURATION_S` long unless ``duration_s`` is given."""
     from relloc.sim.cooperative import sharma2013_scenario
 
-    return sharma2013_scenario(gps_robots=(0,), duration=duration_s)
+    return sharma2013_scenario(
+        gps_robots=(0,), duration=DURATION_S if duration_s is None else duration_s
+    )
 
 
 def _detections(recording: Recording) -> Measurements:
