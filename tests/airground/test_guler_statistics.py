@@ -8,18 +8,8 @@ import pytest
 from relloc.estimators.switching_ekf import BLOCKS
 from relloc.experiments.guler2023 import RunSummary, build_cases, hexagon_offsets, summarise
 from relloc.metrics import mean_chi2_band
-from relloc.models.uwb_noise import UwbNoiseModel
+from relloc.models.uwb_noise import TIERS_ROUNDED
 from relloc.sim.airground import CameraSettings
-
-TIERS_LIKE = UwbNoiseModel(
-    bias=0.35,
-    spread=0.075,
-    outlier_rate=0.04,
-    outlier_excess_mean=0.15,
-    outlier_positive_fraction=0.9,
-    link_bias_std=0.1,
-    correlation_time=1.2,
-)
 
 
 def _run(nees_position: np.ndarray) -> RunSummary:
@@ -59,13 +49,13 @@ def test_verdict_uses_the_run_average_at_each_tick():
 
 
 def test_cases_take_the_hexagon_side_and_the_camera_noise():
-    default = build_cases(TIERS_LIKE)
+    default = build_cases(TIERS_ROUNDED)
     assert default["two_drones"].scenario.offsets == hexagon_offsets(4, 0.7)
-    wide = build_cases(TIERS_LIKE, side=0.9)
+    wide = build_cases(TIERS_ROUNDED, side=0.9)
     assert wide["two_drones"].scenario.offsets == hexagon_offsets(4, 0.9)
     assert wide["formation"].scenario.offsets == default["formation"].scenario.offsets
     noisy_cam = CameraSettings(bearing_sigma=0.06, heading_sigma=0.1)
-    noisy = build_cases(TIERS_LIKE, camera=noisy_cam)["two_drones"]
+    noisy = build_cases(TIERS_ROUNDED, camera=noisy_cam)["two_drones"]
     assert noisy.scenario.camera == noisy_cam
     assert noisy.filter.bearing_sigma > default["two_drones"].filter.bearing_sigma
     assert noisy.filter.heading_sigma > default["two_drones"].filter.heading_sigma

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import Any
 
 from relloc.cli.console import plain_text
 from relloc.cli.export_args import add_export_arguments, export_request, print_export
@@ -181,6 +182,18 @@ def run_clock(args: argparse.Namespace) -> int:
     return 0
 
 
+def _reproduction_team_args(args: argparse.Namespace) -> dict[str, Any]:
+    """The settings every reproduction's team takes from the command line (clock step, faults,
+    team name, wall-time limit, pacing)."""
+    return {
+        "tick_s": args.tick,
+        "faults": network_faults_from_args(args, **_robot_events(args)),
+        "team": args.team,
+        "wall_timeout_s": args.timeout,
+        "realtime_factor": args.realtime,
+    }
+
+
 def run_reproduction(args: argparse.Namespace) -> int:
     """``team up desilva2015`` / ``sharma2013``: the runs, scored beside the in-process
     reproduction."""
@@ -199,11 +212,7 @@ def run_reproduction(args: argparse.Namespace) -> int:
             seed=args.seed,
             runs=args.runs,
             duration_s=args.duration,
-            tick_s=args.tick,
-            faults=network_faults_from_args(args, **_robot_events(args)),
-            team=args.team,
-            wall_timeout_s=args.timeout,
-            realtime_factor=args.realtime,
+            **_reproduction_team_args(args),
         )
     )
     if not args.quiet:
@@ -228,11 +237,7 @@ def run_sharma(args: argparse.Namespace) -> int:
             runs=args.runs,
             duration_s=args.duration,
             case=args.case or "two_landmarks",
-            tick_s=args.tick,
-            faults=network_faults_from_args(args, **_robot_events(args)),
-            team=args.team,
-            wall_timeout_s=args.timeout,
-            realtime_factor=args.realtime,
+            **_reproduction_team_args(args),
         )
     )
     if not args.quiet:
@@ -264,11 +269,7 @@ def run_mrclam(args: argparse.Namespace) -> int:
             seed=args.seed,
             duration_s=args.duration,
             case=args.case or DEFAULT_CASE,
-            tick_s=args.tick,
-            faults=network_faults_from_args(args, **_robot_events(args)),
-            team=args.team,
-            wall_timeout_s=args.timeout,
-            realtime_factor=args.realtime,
+            **_reproduction_team_args(args),
             fit_path=Path(args.fit) if args.fit else None,
         )
     )
