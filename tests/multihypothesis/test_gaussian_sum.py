@@ -252,7 +252,7 @@ def _tracked_at_end(result, window: float = 4.0) -> np.ndarray:  # type: ignore[
 #: fresh root 48611 the kidnapped robot is re-found too late in runs 1 and 2 (mutual fusion
 #: after a kidnap locks onto a wrong yaw), a defect being fixed; until then these runs are
 #: in-sample.
-SHORT_RUN_SEEDS = spawn_seeds(2026, 4)
+SHORT_RUN_SEEDS = spawn_seeds(48611, 4)
 
 
 @pytest.mark.slow
