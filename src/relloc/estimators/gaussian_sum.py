@@ -59,9 +59,13 @@ previous-broadcast priors propagated to now. :meth:`GaussianSumFuser.fuse` takes
 message: ``j``'s belief of ``i`` (mutual, inverted with ⊖, Eq. 9) or ``l``'s belief of another
 teammate (indirect, registered through this fuser's own belief of ``l`` with ⊕, Eq. 11), and
 fuses it track by track with the de-correlation of Eqs. 10/12 (or covariance intersection).
-Pairs inside the χ² gate of ``P_h + P_h'`` are fused with weight ``w_h w_h' N(Δ; 0, P_h + P_h')``
-(Eq. 10); a local track with no partner keeps weight ``w_h (1 − P_G) N_γ``; a received track
-that falls in no local gate is born with weight ``P_B w_h' N_γ``. The same increment is also
+Pairs inside the χ² gate of ``P_h + P_h'`` are fused, scored ``w_h' N(Δ; 0, P_h + P_h')``
+(Eq. 10); a local track with no partner is scored ``(1 − P_G) N_γ``; a received track that
+falls in no local gate is born with weight ``P_B w_h' N_γ`` if it explains the receiver's own
+height and range of that instant. Unlike Eq. 10, the scores only share each local track's
+weight ``w_h`` among its outcomes (the two fusers' weights rest on common information that the
+weights, unlike the states, carry no prior to remove; :meth:`GaussianSumFuser._fuse_tracks`
+derives it). The same increment is also
 fused into the local track's broadcast prior, so that a later broadcast forwards only this
 robot's own direct information (what was fused from others is never sent back to them).
 """
@@ -865,7 +869,32 @@ class GaussianSumFuser:
         prior_covs: Array,
         weights: Array,
     ) -> None:
-        """Gate, form, fuse and reduce received tracks into ``GSF^(i,j)`` (module docstring)."""
+        """Gate, form, fuse and reduce received tracks into ``GSF^(i,j)``.
+
+        A received track ``b`` (``w'_b``, ``N(x_b, P_b)``) and a local track ``h`` (``w_h``,
+        ``N(x_h, P_h)``) pair when ``d²(x_b − x_h; P_h + P_b) ≤ γ`` (``P_G``); their states are
+        fused with the de-correlation of Eq. 10. Eq. 10's formation scores the pair by
+        ``λ_hb = w'_b N(x_b − x_h; 0, P_h + P_b)``, the local track left unpaired by
+        ``λ_h0 = (1 − P_G) N_γ(P_h + Σ_b w'_b P_b)``, and a received track in no gate is born
+        with ``β_b = P_B w'_b N_γ(P_b)`` (if :meth:`_scan_admits` it).
+
+        Eq. 10 multiplies ``w_h`` by ``λ``, i.e. takes the sender's weights as evidence
+        independent of the receiver's. They are not: every fuser predicts ``j`` with the same
+        communicated odometry ``u_j`` (Eq. 5), from which the relative motion — the evidence
+        that tells heading hypotheses apart — is computed, and both hold what they exchanged
+        before. Eq. 10 removes that shared part from the states (the broadcast prior), but the
+        weights carry no broadcast prior (Eq. 8) to remove it with, so the product counts it
+        again every fusion period: a hypothesis the receiver's own scans still support but
+        the sender has dropped is cut by ``λ_h0 / λ_hb`` each period and pruned, and two fusers
+        leaning to the same wrong heading (after a kidnap) lock each other onto it. Here a
+        message only redistributes each local hypothesis's weight among its outcomes,
+
+            w_hk = w_h λ_hk / Σ_k' λ_hk'     (k = 0 or a gated b),
+
+        so the states fuse as in Eq. 10 while which local hypothesis is right is left to the
+        direct scans (Eq. 7); a birth keeps its share ``β_b / (Σ_h w_h Σ_k λ_hk + Σ_b β_b)`` of
+        Eq. 10's whole mixture. With one local track the result equals Eq. 10's.
+        """
         st = self.settings
         t = self.tracks
         mine = np.flatnonzero(t.groups == j)
@@ -887,7 +916,8 @@ class GaussianSumFuser:
             S_mean = local.covs + np.einsum("k,kij->ij", weights, covs)[None]
             unpaired = (1.0 - st.gate.p_gate) * _edge_density(S_mean, gamma)
             paired = np.where(gated, weights[None, :] * dens, 0.0)
-            share = 1.0 / (unpaired + paired.sum(axis=1))
+            evidence = unpaired + paired.sum(axis=1)  # Σ_k λ_hk
+            share = 1.0 / evidence
             keep = replace(
                 local,
                 weights=local.weights * unpaired * share,
@@ -925,9 +955,8 @@ class GaussianSumFuser:
         if free.size:
             born = st.formation.p_birth * weights[free] * _edge_density(covs[free], gamma)
             if n_loc:
-                # on the scale where the local part sums to 1 (Σ_h w_h): the births keep
-                # their share of Eq. 10's whole mixture
-                born = born / np.sum(local.weights * (unpaired + paired.sum(axis=1)))
+                # on the scale where the local part sums to Σ_h w_h = 1
+                born = born / np.sum(local.weights * evidence)
             ids = self._ids(free.size)
             parts.append(
                 Tracks(
