@@ -24,6 +24,8 @@ from relloc.experiments.desilva2015 import (
     _task,
     filter_settings,
 )
+from relloc.fusion.messages import EquivalentMeasurement
+from relloc.fusion.pose_beliefs import invert_beliefs
 from relloc.models.motion import VelocityNoise
 from relloc.pipeline.montecarlo import spawn_seeds
 from relloc.sim.multihypothesis import DeSilvaScenario
@@ -211,6 +213,57 @@ def test_fuse_dispatches_mutual_and_indirect_and_validates() -> None:
         a.teammate_index(7)
 
 
+def _message_about_receiver(sender: int, receiver: int, mean: np.ndarray, cov: np.ndarray):  # type: ignore[no-untyped-def]
+    """A one-track message of ``sender`` about ``receiver`` that inverts to ``N(mean, cov)``
+    in the receiver's frame, carrying no information since the previous broadcast."""
+    m, P = invert_beliefs(mean[None], cov[None])
+    return EquivalentMeasurement(
+        sender=sender,
+        subject=receiver,
+        time=0.0,
+        means=m,
+        covs=P,
+        prior_means=m.copy(),
+        prior_covs=P.copy(),
+        weights=np.ones(1),
+    )
+
+
+def test_a_message_does_not_reweigh_the_receivers_own_hypotheses() -> None:
+    """Two heading hypotheses of teammate 1, 0.4 / 0.6; teammate 1's message pairs with the
+    first only. The weights of the two stay the receiver's (Eq. 10's product would cut the
+    unpaired one by (1 − P_G) N_γ / N(Δ) and prune it)."""
+    st = _settings()
+    fus = GaussianSumFuser(0, [1], st)
+    cov = np.diag([0.05, 0.05, 0.02, 0.1]) ** 2
+    a, b = np.array([3.0, 1.0, 0.2, 0.0]), np.array([3.0, 1.0, 0.2, 1.5])
+    fus.tracks = Tracks.concat(
+        [_one_track(a, cov, st.nscan_depth), _one_track(b, cov, st.nscan_depth)]
+    )
+    fus.tracks = replace(fus.tracks, weights=np.array([0.4, 0.6]))
+    assert fus.fuse(_message_about_receiver(1, 0, a + 0.01, cov)) == "mutual"
+    mix = fus.mixture(1)
+    assert mix is not None
+    second = np.abs(wrap_angle(mix.means[:, 3] - 1.5)) < 0.2
+    # up to the pruned, negligible branches (below prune_weight)
+    assert mix.weights[second].sum() == pytest.approx(0.6, abs=st.prune_weight)
+
+
+def test_a_received_track_is_born_only_if_the_receivers_scan_admits_it() -> None:
+    """A confident received track 2 m off the range the receiver has just measured is not born;
+    without a range of that teammate in the scan it is."""
+    st = _settings()
+    far = np.array([5.0, 0.0, 0.0, 0.3])
+    for ranges, born in (([3.0], False), ([np.nan], True)):
+        fus = GaussianSumFuser(0, [1], st)
+        fus.direct_scan([0.0], ranges, np.array([[0.0, 0.0]]))
+        fus.fuse(_message_about_receiver(1, 0, far, np.eye(4) * 0.01))
+        mix = fus.mixture(1)
+        assert mix is not None
+        near_far = np.linalg.norm(mix.means[:, :3] - far[:3], axis=1) < 0.1
+        assert near_far.any() == born, (ranges, mix.means)
+
+
 def test_predict_fusers_equals_separate_predictions() -> None:
     st = _settings()
     fa, fb = GaussianSumFuser(0, [1], st), GaussianSumFuser(1, [0], st)
@@ -247,12 +300,12 @@ def _tracked_at_end(result, window: float = 4.0) -> np.ndarray:  # type: ignore[
     return result.tracked[:, final, :].mean(axis=1)
 
 
-#: independent seeded runs (not hand-picked: the first children of one root seed). These are
-#: the children of 2026, the root the Gaussian-sum fuser's fixes were developed on: on the
-#: fresh root 48611 the kidnapped robot is re-found too late in runs 1 and 2 (mutual fusion
-#: after a kidnap locks onto a wrong yaw), a defect being fixed; until then these runs are
-#: in-sample.
-SHORT_RUN_SEEDS = spawn_seeds(2026, 4)
+#: independent seeded runs (not hand-picked: the first children of one root seed). The root
+#: 48611 was not used while developing the fuser (developed on the children of 2026). Its
+#: runs 1 and 2 exposed the defect of Eq. 10's weights after a kidnap; they were instrumented
+#: to find it, and the fix (``GaussianSumFuser._fuse_tracks``) follows from the model, with
+#: no threshold or setting changed.
+SHORT_RUN_SEEDS = spawn_seeds(48611, 4)
 
 
 @pytest.mark.slow

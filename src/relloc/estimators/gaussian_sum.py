@@ -59,9 +59,13 @@ previous-broadcast priors propagated to now. :meth:`GaussianSumFuser.fuse` takes
 message: ``j``'s belief of ``i`` (mutual, inverted with ⊖, Eq. 9) or ``l``'s belief of another
 teammate (indirect, registered through this fuser's own belief of ``l`` with ⊕, Eq. 11), and
 fuses it track by track with the de-correlation of Eqs. 10/12 (or covariance intersection).
-Pairs inside the χ² gate of ``P_h + P_h'`` are fused with weight ``w_h w_h' N(Δ; 0, P_h + P_h')``
-(Eq. 10); a local track with no partner keeps weight ``w_h (1 − P_G) N_γ``; a received track
-that falls in no local gate is born with weight ``P_B w_h' N_γ``. The same increment is also
+Pairs inside the χ² gate of ``P_h + P_h'`` are fused, scored ``w_h' N(Δ; 0, P_h + P_h')``
+(Eq. 10); a local track with no partner is scored ``(1 − P_G) N_γ``; a received track that
+falls in no local gate is born with weight ``P_B w_h' N_γ`` if it explains the receiver's own
+height and range of that instant. Unlike Eq. 10, the scores only share each local track's
+weight ``w_h`` among its outcomes (the two fusers' weights rest on common information that the
+weights, unlike the states, carry no prior to remove; :meth:`GaussianSumFuser._fuse_tracks`
+derives it). The same increment is also
 fused into the local track's broadcast prior, so that a later broadcast forwards only this
 robot's own direct information (what was fused from others is never sent back to them).
 """
@@ -388,6 +392,9 @@ class GaussianSumFuser:
         self._speed = np.zeros(len(team))
         #: per teammate, the bearing index the last :meth:`decide` gave it (−1: none)
         self.last_decision = np.full(len(team), -1, dtype=np.int64)
+        #: the last direct scan: its time and, per teammate, its height and range (NaN: none)
+        self._scan_time = float("nan")
+        self._scan_known: dict[str, Array] = {}
 
     # ------------------------------------------------------------------ bookkeeping helpers
 
@@ -497,22 +504,7 @@ class GaussianSumFuser:
         if sel.size == 0:
             return
         mean, cov = t.means[sel], t.covs[sel]
-        if kind == "height":
-            H = np.broadcast_to(_H_HEIGHT, (sel.size, 1, 4))
-            pred = mean[:, 2:3]
-            var = self.settings.sigma_height**2
-        elif kind == "range":
-            H = range_bearing_jacobian(mean)[:, :1, :]
-            pred = range_bearing(mean)[:, :1]
-            var = self.settings.sigma_range**2
-        else:
-            raise ConfigError(f"update_known: kind must be 'height' or 'range', got {kind!r}")
-        R = np.full((sel.size, 1, 1), var)
-        nu = z[sel, None] - pred
-        S = H @ cov @ np.swapaxes(H, -1, -2) + R
-        eps = self.settings.known_outlier_probability
-        valid = (1.0 - eps) * _gaussian_density(nu, S)
-        outlier = eps / self.settings.known_span(kind)
+        nu, H, R, valid, outlier = self._known_density(kind, z[sel], mean, cov)
         inside = valid >= outlier
         new_m, new_P, _ = kalman_update(
             mean, cov, nu, H, R, where=f"fuser {self.robot} {kind} t={self.time:.3f}"
@@ -522,6 +514,30 @@ class GaussianSumFuser:
         covs[sel] = np.where(inside[:, None, None], new_P, cov)
         weights[sel] = t.weights[sel] * (valid + outlier)
         self.tracks = replace(t, means=means, covs=covs, weights=weights)
+
+    def _known_density(
+        self, kind: Literal["height", "range"], z: Array, mean: Array, cov: Array
+    ) -> tuple[Array, Array, Array, Array, float]:
+        """Innovation ``ν``, Jacobian ``H``, noise ``R`` of a known-correspondence reading ``z``
+        (one per track ``mean, cov``), the valid density ``(1 − ε) N(ν; 0, S)`` and the outlier
+        density ``ε / V_z`` (module docstring)."""
+        n = mean.shape[0]
+        if kind == "height":
+            H = np.broadcast_to(_H_HEIGHT, (n, 1, 4))
+            pred = mean[:, 2:3]
+            var = self.settings.sigma_height**2
+        elif kind == "range":
+            H = range_bearing_jacobian(mean)[:, :1, :]
+            pred = range_bearing(mean)[:, :1]
+            var = self.settings.sigma_range**2
+        else:
+            raise ConfigError(f"update_known: kind must be 'height' or 'range', got {kind!r}")
+        R = np.full((n, 1, 1), var)
+        nu = z[:, None] - pred
+        S = H @ cov @ np.swapaxes(H, -1, -2) + R
+        eps = self.settings.known_outlier_probability
+        valid = (1.0 - eps) * _gaussian_density(nu, S)
+        return nu, H, R, valid, eps / self.settings.known_span(kind)
 
     def update_bearings(self, bearings: ArrayLike, ranges: ArrayLike, heights: ArrayLike) -> None:
         """Gate, form and update with a bearing set of unknown correspondence.
@@ -730,6 +746,11 @@ class GaussianSumFuser:
         ``last_decision``.
         """
         self.last_decision = self.decide(bearings, ranges)
+        self._scan_time = self.time
+        self._scan_known = {
+            "height": self._per_teammate(heights, "height"),
+            "range": self._per_teammate(ranges, "range"),
+        }
         self.update_known("height", heights)
         self.update_known("range", ranges)
         self.update_bearings(bearings, ranges, heights)
@@ -906,7 +927,32 @@ class GaussianSumFuser:
         prior_covs: Array,
         weights: Array,
     ) -> None:
-        """Gate, form, fuse and reduce received tracks into ``GSF^(i,j)`` (module docstring)."""
+        """Gate, form, fuse and reduce received tracks into ``GSF^(i,j)``.
+
+        A received track ``b`` (``w'_b``, ``N(x_b, P_b)``) and a local track ``h`` (``w_h``,
+        ``N(x_h, P_h)``) pair when ``d²(x_b − x_h; P_h + P_b) ≤ γ`` (``P_G``); their states are
+        fused with the de-correlation of Eq. 10. Eq. 10's formation scores the pair by
+        ``λ_hb = w'_b N(x_b − x_h; 0, P_h + P_b)``, the local track left unpaired by
+        ``λ_h0 = (1 − P_G) N_γ(P_h + Σ_b w'_b P_b)``, and a received track in no gate is born
+        with ``β_b = P_B w'_b N_γ(P_b)`` (if :meth:`_scan_admits` it).
+
+        Eq. 10 multiplies ``w_h`` by ``λ``, i.e. takes the sender's weights as evidence
+        independent of the receiver's. They are not: every fuser predicts ``j`` with the same
+        communicated odometry ``u_j`` (Eq. 5), from which the relative motion — the evidence
+        that tells heading hypotheses apart — is computed, and both hold what they exchanged
+        before. Eq. 10 removes that shared part from the states (the broadcast prior), but the
+        weights carry no broadcast prior (Eq. 8) to remove it with, so the product counts it
+        again every fusion period: a hypothesis the receiver's own scans still support but
+        the sender has dropped is cut by ``λ_h0 / λ_hb`` each period and pruned, and two fusers
+        leaning to the same wrong heading (after a kidnap) lock each other onto it. Here a
+        message only redistributes each local hypothesis's weight among its outcomes,
+
+            w_hk = w_h λ_hk / Σ_k' λ_hk'     (k = 0 or a gated b),
+
+        so the states fuse as in Eq. 10 while which local hypothesis is right is left to the
+        direct scans (Eq. 7); a birth keeps its share ``β_b / (Σ_h w_h Σ_k λ_hk + Σ_b β_b)`` of
+        Eq. 10's whole mixture. With one local track the result equals Eq. 10's.
+        """
         st = self.settings
         t = self.tracks
         mine = np.flatnonzero(t.groups == j)
@@ -926,9 +972,13 @@ class GaussianSumFuser:
             gated = d2 <= gamma
             dens = _gaussian_density(diff, S)
             S_mean = local.covs + np.einsum("k,kij->ij", weights, covs)[None]
+            unpaired = (1.0 - st.gate.p_gate) * _edge_density(S_mean, gamma)
+            paired = np.where(gated, weights[None, :] * dens, 0.0)
+            evidence = unpaired + paired.sum(axis=1)  # Σ_k λ_hk
+            share = 1.0 / evidence
             keep = replace(
                 local,
-                weights=local.weights * (1.0 - st.gate.p_gate) * _edge_density(S_mean, gamma),
+                weights=local.weights * unpaired * share,
                 history=branch(local.history, np.arange(n_loc), self._ids(n_loc)),
             )
             parts.append(keep)
@@ -954,12 +1004,17 @@ class GaussianSumFuser:
                     )
                 fused = replace(
                     fused,
-                    weights=local.weights[hi] * weights[ri] * dens[hi, ri],
+                    weights=local.weights[hi] * paired[hi, ri] * share[hi],
                     history=branch(local.history, hi, self._ids(hi.size)),
                 )
                 parts.append(fused)
         free = np.flatnonzero(~gated.any(axis=0)) if n_loc else np.arange(n_rx)
+        free = free[self._scan_admits(j, means[free], covs[free])]
         if free.size:
+            born = st.formation.p_birth * weights[free] * _edge_density(covs[free], gamma)
+            if n_loc:
+                # on the scale where the local part sums to Σ_h w_h = 1
+                born = born / np.sum(local.weights * evidence)
             ids = self._ids(free.size)
             parts.append(
                 Tracks(
@@ -968,7 +1023,7 @@ class GaussianSumFuser:
                     covs=covs[free].copy(),
                     prior_means=means[free].copy(),
                     prior_covs=covs[free].copy(),
-                    weights=st.formation.p_birth * weights[free] * _edge_density(covs[free], gamma),
+                    weights=born,
                     history=new_history(ids, st.nscan_depth),
                     assoc=np.full(free.size, -1, dtype=np.int64),
                 )
@@ -976,6 +1031,35 @@ class GaussianSumFuser:
         self.tracks = Tracks.concat(parts)
         self._normalise()
         self.reduce()
+
+    def _scan_admits(self, j: int, means: Array, covs: Array) -> NDArray[np.bool_]:
+        """Which received tracks of ``GSF^(i,j)`` this fuser's own direct scan of the same
+        instant admits (all when the tracks were predicted since the scan, or it read no
+        height nor range of ``j``).
+
+        A received track in no local gate is a hypothesis this fuser does not hold. It is born
+        only if it explains the height and range this fuser itself measured of ``j`` at this
+        instant: more likely valid than an outlier, ``(1 − ε) N(z; ẑ, H P Hᵀ + R) ≥ ε / V_z``,
+        the test :meth:`update_known` applies before updating a track. The sender's track is a
+        posterior (Eq. 8) that may rest on readings that are out of date — a teammate that has
+        not yet seen a jump of ``j`` still broadcasts its old, confident track — while the
+        receiver's reading is current; Eq. 13 likewise weighs a direct birth by the reading
+        (height) not used to form it. Without the test such a track, its covariance ``P``
+        small, is born with the weight ``P_B w' N_γ(P)`` of a tight Gaussian at its gate edge
+        and, normalised, displaces the receiver's re-found tracks before its next scan can
+        refute it.
+        """
+        ok = np.ones(means.shape[0], dtype=bool)
+        if self.time != self._scan_time or means.shape[0] == 0:
+            return ok
+        for kind in ("height", "range"):
+            z = self._scan_known[kind][j]
+            if np.isfinite(z):
+                _, _, _, valid, outlier = self._known_density(
+                    kind, np.full(means.shape[0], z), means, covs
+                )
+                ok &= valid >= outlier
+        return ok
 
     def _fuse_pair(
         self,
