@@ -551,14 +551,18 @@ def _figures(
 
 
 DEPARTURES = [
-    "Track formation in mutual and indirect fusion (estimators/gaussian_sum.py): every local "
-    "track keeps an unfused branch of weight w_h·(1 − P_G)·N_γ, and a received track that falls "
-    "in no local gate is born with weight P_B·w_h′·N_γ, where N_γ = e^{−γ/2}/√det(2πS) is the "
-    "Gaussian density on the gate boundary (γ the χ² gate) and fused pairs get "
-    "w_h·w_h′·N(Δ; 0, P_h + P_h′). The paper's formation rule weights a false-alarm track "
-    "w_h·(1 − P_D·P_G) and a detected track w_h·P_D·N. Ours leaves out P_D (a received track is "
-    "a teammate's belief, not a detection) and puts the unfused and new branches on the density "
-    "scale of the fused pairs.",
+    "Track formation in mutual and indirect fusion (estimators/gaussian_sum.py): a message "
+    "only splits each local hypothesis's weight among its outcomes, w_hk = w_h·λ_hk / Σ_k′ "
+    "λ_hk′, with λ = (1 − P_G)·N_γ for the unfused branch and N(Δ; 0, P_h + P_h′) for a gated "
+    "received track (N_γ = e^{−γ/2}/√det(2πS), the density on the gate boundary); the states "
+    "fuse as in Eq. 10. The paper's Eq. 10 multiplies by the sender's weight w_h′ and its "
+    "formation rule weights a false-alarm track w_h·(1 − P_D·P_G) and a detected one w_h·P_D·N: "
+    "with both leaders predicting a teammate from the same communicated odometry (Eq. 5), the "
+    "product counts the evidence that separates heading hypotheses twice and locked both onto a "
+    "wrong heading after a kidnap (fresh seed root 48611). A received track in no local gate is "
+    "born (weight P_B·w_h′·N_γ of the whole mixture) only if it explains the receiver's own "
+    "height and range at that scan, as Eq. 13 weighs a direct birth by the reading not used to "
+    "form it; the paper does not test it.",
     "De-correlation of Eqs. 10/12 (fusion/decorrelation.py): the information increment "
     "ΔY = P⁺⁻¹ − P⁻⁻¹ can be slightly indefinite after linearisation and registration; its "
     "negative eigenvalues are clipped to 0 (information is never removed), which the paper does "
