@@ -88,9 +88,9 @@ def unobservable_directions(X: Array, anchors_xy: Array, fixed: bool) -> Array:
 def constrained_transition(F_blocks: Array, N_before: Array, N_after: Array) -> Array:
     """The dense ``Φ* (3n, 3n)`` closest to ``diag(F_blocks)`` with ``Φ* N_before = N_after``."""
     n = F_blocks.shape[0]
-    F = np.zeros((n, 3, n, 3))
-    F[np.arange(n), :, np.arange(n), :] = F_blocks
-    F = F.reshape(3 * n, 3 * n)
+    F4 = np.zeros((n, 3, n, 3))
+    F4[np.arange(n), :, np.arange(n), :] = F_blocks
+    F = F4.reshape(3 * n, 3 * n)
     if N_before.shape[1] == 0:
         return F
     residual = F @ N_before - N_after
