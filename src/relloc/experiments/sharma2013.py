@@ -20,7 +20,7 @@ translation/rotation out of the linearised filter's information: first-estimates
 - ``gps_robot1``: robot→robot bearings plus robot 1's absolute pose.
 
 Run count: the paper shows one realisation; the default here is 10 Monte-Carlo runs (about
-100 s of CPU each for the three filters, plus about 30 s for the symbolic observability ranks),
+50 s of CPU each for the three filters, plus about 30 s for the symbolic observability ranks),
 ``--runs`` changes it.
 
 NEES: each robot's 3-DOF NEES of its world-frame pose ``(x, y, ψ)`` (its marginal belief against
