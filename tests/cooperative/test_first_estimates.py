@@ -1,10 +1,12 @@
-"""First-estimates Jacobians (FEJ): the linearised team keeps the unobservable global frame.
+"""First-estimates (FEJ) and observability-constrained (OC) Jacobians: the linearised team
+keeps the unobservable global frame.
 
-The derivation is in :mod:`relloc.estimators.first_estimates`. These tests record every
-transition ``Φ_k`` and measurement Jacobian ``H_k`` the filter is handed over a seeded short
-run (seed 001 scenario) and check the property the derivation promises: the unobservable
-directions ``N`` travel with the transitions and stay in the null space of every ``H``, for the
-FEJ filter exactly and for the plain filter not.
+The derivations are in :mod:`relloc.estimators.first_estimates` and
+:mod:`relloc.estimators.observability_constrained`. These tests record every transition ``Φ_k``
+(per-robot blocks, or dense for OC) and measurement Jacobian ``H_k`` the filter is handed over a
+seeded short run (seed 001 scenario) and check the property the derivations promise: the
+unobservable directions ``N`` travel with the transitions and stay in the null space of every
+``H``, for the FEJ and OC filters exactly and for the plain filter not.
 """
 
 from dataclasses import dataclass, field
@@ -16,6 +18,11 @@ import relloc.estimators.cooperative as cooperative
 from relloc.errors import ConfigError
 from relloc.estimators.cooperative import CooperativeSettings, OdometryModel, SensorModel
 from relloc.estimators.first_estimates import first_estimates_transition
+from relloc.estimators.observability_constrained import (
+    constrained_rows,
+    constrained_transition,
+    unobservable_directions,
+)
 from relloc.models.planar_measurement import LinearisedRows
 from relloc.pipeline.replay import replay
 from relloc.sim.cooperative import sharma2013_scenario, simulate
@@ -101,18 +108,21 @@ def _worst_leak(filt: RecordingFilter, N: np.ndarray) -> float:
     n = N.shape[0] // 3
     worst = 0.0
     for F, H in zip(filt.transitions, filt.jacobians, strict=True):
-        N = np.einsum("iab,ibk->iak", F, N.reshape(n, 3, -1)).reshape(3 * n, -1)
+        if F.ndim == 2:  # dense (OC)
+            N = F @ N
+        else:
+            N = np.einsum("iab,ibk->iak", F, N.reshape(n, 3, -1)).reshape(3 * n, -1)
         if H is not None and H.size:
             worst = max(worst, np.linalg.norm(H @ N) / (np.linalg.norm(H) * np.linalg.norm(N)))
     return worst
 
 
 @pytest.mark.parametrize("landmarks", [0, 1])
-def test_fej_keeps_the_unobservable_directions_and_the_plain_filter_does_not(
+def test_fej_and_oc_keep_the_unobservable_directions_and_the_plain_filter_does_not(
     sharma_short, monkeypatch, landmarks
 ):
     leaks = {}
-    for lin in ("first_estimates", "latest"):
+    for lin in ("first_estimates", "observability_constrained", "latest"):
         filt, X0, lm = _run(sharma_short, monkeypatch, lin, anchors=tuple(range(landmarks)))
         if landmarks == 0:  # translation and rotation about the origin
             N = np.column_stack([_translations(len(X0)), _rotation_direction(X0, np.zeros(2))])
@@ -121,14 +131,61 @@ def test_fej_keeps_the_unobservable_directions_and_the_plain_filter_does_not(
         assert sum(H is not None for H in filt.jacobians) > 50
         leaks[lin] = _worst_leak(filt, N)
     assert leaks["first_estimates"] < 1e-9, leaks
+    assert leaks["observability_constrained"] < 1e-9, leaks
     assert leaks["latest"] > 1e-4, leaks
 
 
-def test_fej_and_plain_filters_agree_before_the_first_update(sharma_short):
+def test_oc_transition_is_the_least_change_that_carries_the_directions():
+    rng = np.random.default_rng(12)
+    n = 4
+    before, after = rng.normal(size=(n, 3)) * 30, rng.normal(size=(n, 3)) * 30
+    F_blocks = np.tile(np.eye(3), (n, 1, 1))
+    F_blocks[:, :2, 2] = rng.normal(size=(n, 2))
+    for anchors in (np.zeros((0, 2)), np.array([[12.0, -7.0]])):
+        N0 = unobservable_directions(before, anchors, fixed=False)
+        N1 = unobservable_directions(after, anchors, fixed=False)
+        F = constrained_transition(F_blocks, N0, N1)
+        np.testing.assert_allclose(F @ N0, N1, atol=1e-9)
+        # least change: F − diag(F_blocks) has its rows in the span of N0ᵀ (the Lagrange form)
+        plain = constrained_transition(F_blocks, np.zeros((3 * n, 0)), np.zeros((3 * n, 0)))
+        change = F - plain
+        np.testing.assert_allclose(change @ N0 @ np.linalg.pinv(N0), change, atol=1e-9)
+        # any other solution is farther from the plain transition
+        other = F + rng.normal(size=(3 * n, 3 * n)) @ (np.eye(3 * n) - N0 @ np.linalg.pinv(N0))
+        np.testing.assert_allclose(other @ N0, N1, atol=1e-8)
+        assert np.linalg.norm(other - plain) > np.linalg.norm(change)
+    two = np.array([[0.0, 0.0], [10.0, 0.0]])
+    assert unobservable_directions(before, two, fixed=False).shape == (3 * n, 0)
+    assert unobservable_directions(before, np.zeros((0, 2)), fixed=True).shape == (3 * n, 0)
+
+
+def test_oc_rows_annihilate_the_directions_within_their_sparsity():
+    rng = np.random.default_rng(13)
+    n, m = 4, 6
+    X = rng.normal(size=(n, 3)) * 30
+    N = unobservable_directions(X, np.zeros((0, 2)), fixed=False)
+    index = np.array([[0, 1], [2, 3], [1, 0], [3, 2], [0, 2], [1, 3]])
+    lin = LinearisedRows(
+        residual=rng.normal(size=m),
+        blocks=rng.normal(size=(m, 2, 3)),
+        block_index=index,
+        sigma=np.ones(m),
+        group=np.arange(m),
+    )
+    out = constrained_rows(lin, N)
+    H = out.dense_jacobian(n)
+    np.testing.assert_allclose(H @ N, 0.0, atol=1e-9)
+    np.testing.assert_array_equal(out.residual, lin.residual)
+    # rows already annihilating N are unchanged
+    again = constrained_rows(out, N)
+    np.testing.assert_allclose(again.blocks, out.blocks, atol=1e-12)
+
+
+def test_fej_oc_and_plain_filters_agree_before_the_first_update(sharma_short):
     scenario, sim = sharma_short
     rec = sim.recording
     beliefs = {}
-    for lin in ("first_estimates", "latest"):
+    for lin in ("first_estimates", "observability_constrained", "latest"):
         settings = CooperativeSettings(
             odometry=OdometryModel.from_discrete(scenario.sigma_v, scenario.sigma_w, scenario.dt),
             sensor=SensorModel(sigma_bearing=scenario.sigma_bearing),
@@ -137,10 +194,11 @@ def test_fej_and_plain_filters_agree_before_the_first_update(sharma_short):
         )
         est = cooperative.CooperativeEstimator(rec.robots, sim.prior, settings, rec.landmarks)
         beliefs[lin] = replay(rec, [est], record_times=np.array([5.0]), start=0.0, end=5.0)
-    a = beliefs["first_estimates"].stacked("team", rec.robots)
     b = beliefs["latest"].stacked("team", rec.robots)
-    np.testing.assert_array_equal(a[1], b[1])
-    np.testing.assert_allclose(a[2], b[2], rtol=1e-12, atol=1e-12)
+    for lin in ("first_estimates", "observability_constrained"):
+        a = beliefs[lin].stacked("team", rec.robots)
+        np.testing.assert_array_equal(a[1], b[1])
+        np.testing.assert_allclose(a[2], b[2], rtol=1e-12, atol=1e-12)
 
 
 def test_linearisation_setting_is_validated():

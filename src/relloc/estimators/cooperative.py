@@ -58,7 +58,10 @@ Jacobian at the latest estimate. Without enough anchors that filter is inconsist
 information along the unobservable global rotation. ``"first_estimates"`` evaluates every
 Jacobian at the first estimate of the state it differentiates (FEJ, Huang et al. 2008–2010),
 which keeps the unobservable subspace of the linearised team equal to the nonlinear one; the
-derivation is in :mod:`relloc.estimators.first_estimates`.
+derivation is in :mod:`relloc.estimators.first_estimates`. ``"observability_constrained"``
+(OC-EKF/EIF, Huang et al. 2010–2011) linearises at the latest estimate and changes the
+Jacobians least so that they keep that subspace (:mod:`relloc.estimators.observability_constrained`;
+its transition is dense, coupling the robots).
 
 Measurements
 ------------
@@ -90,7 +93,12 @@ from relloc.core.recording import NO_TARGET, Measurements, kind_code
 from relloc.errors import ConfigError, DataError, ModelError
 from relloc.estimators.eif import ExtendedInformationFilter
 from relloc.estimators.first_estimates import first_estimates_transition
-from relloc.estimators.joint_ekf import JointEkf
+from relloc.estimators.joint_ekf import JointEkf, propagate_team_covariance
+from relloc.estimators.observability_constrained import (
+    constrained_rows,
+    constrained_transition,
+    unobservable_directions,
+)
 from relloc.models.planar_measurement import (
     RANGE_BIAS_FEATURES,
     LinearisedRows,
@@ -112,6 +120,12 @@ BEARING = kind_code("bearing")
 POSE = kind_code("pose")
 #: The frame of the beliefs: every robot's ``(x, y, ψ)`` in the world frame.
 FRAME = "world_pose2"
+Linearisation = Literal["latest", "first_estimates", "observability_constrained"]
+LINEARISATIONS: tuple[Linearisation, ...] = (
+    "latest",
+    "first_estimates",
+    "observability_constrained",
+)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -212,7 +226,9 @@ class CooperativeSettings:
     χ² gate probability (``None``: no gating); ``filter``: ``"eif"`` or ``"ekf"``;
     ``linearisation``: ``"latest"`` (the standard filter: every Jacobian at the latest estimate)
     or ``"first_estimates"`` (FEJ, :mod:`relloc.estimators.first_estimates`: the linearised team
-    keeps the unobservable global translation/rotation unobservable).
+    keeps the unobservable global translation/rotation unobservable) or
+    ``"observability_constrained"`` (OC, :mod:`relloc.estimators.observability_constrained`: the
+    latest-estimate Jacobians changed least to keep that subspace).
     """
 
     odometry: OdometryModel
@@ -224,17 +240,17 @@ class CooperativeSettings:
     use_fixes: bool = False
     p_gate: float | None = 0.999
     filter: Literal["eif", "ekf"] = "eif"
-    linearisation: Literal["latest", "first_estimates"] = "latest"
+    linearisation: Linearisation = "latest"
 
     def __post_init__(self) -> None:
         if self.filter not in ("eif", "ekf"):
             raise ConfigError(
                 f"CooperativeSettings.filter must be 'eif' or 'ekf', got {self.filter}"
             )
-        if self.linearisation not in ("latest", "first_estimates"):
+        if self.linearisation not in LINEARISATIONS:
             raise ConfigError(
-                "CooperativeSettings.linearisation must be 'latest' or 'first_estimates', got "
-                f"{self.linearisation}"
+                f"CooperativeSettings.linearisation must be one of {', '.join(LINEARISATIONS)}, "
+                f"got {self.linearisation}"
             )
         if self.p_gate is not None and not 0.0 < self.p_gate < 1.0:
             raise ConfigError(f"CooperativeSettings.p_gate must lie in (0, 1), got {self.p_gate}")
@@ -717,6 +733,8 @@ class CooperativeEstimator(Silent):
         self.name: str = settings.filter
         self.settings = settings
         self._landmarks = lm[:, :2]
+        # the known landmarks the constrained Jacobians need (those the detections may use)
+        self._anchors_xy = self._landmarks[[a for a in settings.anchors if a < lm.shape[0]]]
         self._filter = make_filter(prior, settings.filter)
         self._pending = TeamPending.at(self._filter.mean())
         # the team mean before the last epoch's update (the first estimate of that instant)
@@ -798,10 +816,14 @@ class CooperativeEstimator(Silent):
             self._apply_motion()
         n = self.n_robots
         diag = np.arange(n)
-        Pb = self._filter.covariance().reshape(n, 3, n, 3)[diag, :, diag, :]
         p = self._pending
         F = self._transition()
-        cov = F @ Pb @ np.swapaxes(F, -1, -2) + p.Q
+        if F.ndim == 2:  # dense (observability-constrained): the joint propagation's marginals
+            P = propagate_team_covariance(self._filter.covariance(), F, p.Q)
+            cov = P.reshape(n, 3, n, 3)[diag, :, diag, :]
+        else:
+            Pb = self._filter.covariance().reshape(n, 3, n, 3)[diag, :, diag, :]
+            cov = F @ Pb @ np.swapaxes(F, -1, -2) + p.Q
         if not np.isfinite(cov.sum() + p.pose.sum()):
             raise ModelError("cooperative filter produced non-finite estimates")
         age = 0.0 if np.isnan(self._t) else self._t - self._t_start
@@ -885,22 +907,36 @@ class CooperativeEstimator(Silent):
         self._t_applied = self._t
 
     def _transition(self) -> Array:
-        """The pending prediction's per-robot ``Φ_i``: the accumulated one, or with
-        ``first_estimates`` the one from the last epoch's first estimates (identity while no
-        time has passed since that epoch)."""
+        """The pending prediction's per-robot ``Φ_i (n, 3, 3)``: the accumulated one, or with
+        ``first_estimates`` the one from the last epoch's first estimates; with
+        ``observability_constrained`` the dense ``Φ* (3n, 3n)`` closest to the accumulated one
+        that carries the unobservable directions from the last epoch's first estimates to the
+        propagated poses. Each is the identity while no time has passed since that epoch."""
         p = self._pending
-        if self.settings.linearisation == "latest" or self._t_applied == self._t_epoch:
+        lin = self.settings.linearisation
+        if lin == "latest" or self._t_applied == self._t_epoch:
             return p.F
-        return first_estimates_transition(p.pose, self._first)
+        if lin == "first_estimates":
+            return first_estimates_transition(p.pose, self._first)
+        return constrained_transition(
+            p.F, self._unobservable(self._first), self._unobservable(p.pose)
+        )
+
+    def _unobservable(self, X: Array) -> Array:
+        """The team's unobservable directions ``N (3n, d)`` at ``X`` under these settings."""
+        return unobservable_directions(X, self._anchors_xy, self.settings.use_fixes)
 
     def _linearise(self, X: Array, rows: ScalarRows) -> LinearisedRows:
         """Residuals at the latest mean ``X``; with ``first_estimates`` the Jacobian blocks at
-        the first estimate of this instant (the same as ``X`` unless an epoch at this instant
-        was already applied)."""
+        the first estimate of this instant, with ``observability_constrained`` the blocks at
+        ``X`` projected off the unobservable directions at that first estimate (either the same
+        as the plain blocks unless an epoch at this instant was already applied)."""
         lin = linearise_rows(X, rows)
         if self.settings.linearisation == "latest" or np.array_equal(self._first, X):
             return lin
-        return replace(lin, blocks=linearise_rows(self._first, rows).blocks)
+        if self.settings.linearisation == "first_estimates":
+            return replace(lin, blocks=linearise_rows(self._first, rows).blocks)
+        return constrained_rows(lin, self._unobservable(self._first))
 
     def _update(self, rows: ScalarRows) -> None:
         """Predict to now and update with the rows of one epoch (gated per detection / fix)."""

@@ -38,11 +38,15 @@ Array = NDArray[np.float64]
 
 
 def propagate_team_covariance(P: Array, F_blocks: Array, Q_blocks: Array) -> Array:
-    """``F P Fᵀ + diag(Q)`` for block-diagonal ``F = diag(F_blocks)``; ``F_blocks (n,3,3)``."""
-    n = F_blocks.shape[0]
-    P4 = P.reshape(n, 3, n, 3)
-    FP = np.einsum("iab,ibjc->iajc", F_blocks, P4)
-    FPF = np.einsum("iajc,jdc->iajd", FP, F_blocks)
+    """``F P Fᵀ + diag(Q)`` for block-diagonal ``F = diag(F_blocks)``, ``F_blocks (n,3,3)``, or
+    a dense ``F_blocks (3n,3n)`` (the observability-constrained transition couples robots)."""
+    n = Q_blocks.shape[0]
+    if F_blocks.ndim == 2:
+        FPF = (F_blocks @ P @ F_blocks.T).reshape(n, 3, n, 3)
+    else:
+        P4 = P.reshape(n, 3, n, 3)
+        FP = np.einsum("iab,ibjc->iajc", F_blocks, P4)
+        FPF = np.einsum("iajc,jdc->iajd", FP, F_blocks)
     idx = np.arange(n)
     FPF[idx, :, idx, :] += Q_blocks
     return symmetrise(FPF.reshape(3 * n, 3 * n))
@@ -50,9 +54,15 @@ def propagate_team_covariance(P: Array, F_blocks: Array, Q_blocks: Array) -> Arr
 
 def check_blocks(n: int, mean_pred: Array, F_blocks: Array, Q_blocks: Array) -> None:
     """Shape and finiteness checks shared by both joint filters' predictions."""
-    if mean_pred.shape != (3 * n,) or F_blocks.shape != (n, 3, 3) or Q_blocks.shape != (n, 3, 3):
+    dense = (3 * n, 3 * n)
+    if (
+        mean_pred.shape != (3 * n,)
+        or F_blocks.shape not in ((n, 3, 3), dense)
+        or Q_blocks.shape != (n, 3, 3)
+    ):
         raise ModelError(
-            f"team prediction: expected mean ({3 * n},), F and Q blocks ({n},3,3); got "
+            f"team prediction: expected mean ({3 * n},), F blocks ({n},3,3) or dense {dense} and "
+            f"Q blocks ({n},3,3); got "
             f"{mean_pred.shape}, {F_blocks.shape}, {Q_blocks.shape}"
         )
     if not (np.isfinite(mean_pred).all() and np.isfinite(F_blocks).all()):
