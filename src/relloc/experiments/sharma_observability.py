@@ -501,6 +501,7 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
 def _figures(out_dir: Any, fig2: dict[str, Any], bounds: dict[str, np.ndarray]) -> list[str]:
     from relloc.plotting.observability import plot_beta_sigma, plot_team_snapshot
     from relloc.plotting.setup import pyplot
+    from relloc.plotting.style import legend_outside
 
     plt = pyplot()
 
@@ -529,7 +530,7 @@ def _figures(out_dir: Any, fig2: dict[str, Any], bounds: dict[str, np.ndarray]) 
             ax.plot(t, 3.0 * b[:, j], lw=1.0, label=case)
         ax.set_yscale("log")
         ax.set_ylabel(f"3√PCRLB {label}")
-    axes[0].legend(fontsize=8)
+    legend_outside(axes[0])
     axes[-1].set_xlabel("time (s)")
     axes[0].set_title("Robot 2: smallest achievable 3σ (cf. seed 001 Figs. 8–10)")
     files.append(save_figure(fig, out_dir, "pcrlb_robot2"))

@@ -16,6 +16,7 @@ from numpy.typing import ArrayLike
 
 from relloc.metrics.conditioning import ILL_CONDITIONED_LOG10
 from relloc.metrics.consistency import chi2_upper, mean_chi2_band
+from relloc.plotting.style import legend_outside
 
 
 def plot_chi2_series(
@@ -56,7 +57,7 @@ def plot_chi2_series(
         ax.axhline(dof * scale, color="0.5", lw=0.6, ls="--")
     ax.set_yscale("log")
     ax.grid(True, alpha=0.3, which="both")
-    ax.legend(loc="upper right", fontsize="small")
+    legend_outside(ax)
 
 
 def plot_conditioning(
@@ -73,4 +74,4 @@ def plot_conditioning(
     ax.set_ylabel("log10 condition number")
     ax.set_xlabel("time (s)")
     ax.grid(True, alpha=0.3)
-    ax.legend(loc="upper right", fontsize="small")
+    legend_outside(ax)

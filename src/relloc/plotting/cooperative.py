@@ -11,6 +11,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from relloc.plotting.style import legend_outside
+
 
 def plot_topology(
     ax: Any,
@@ -48,7 +50,7 @@ def plot_topology(
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
     ax.grid(True, alpha=0.3)
-    ax.legend(loc="best", fontsize="small")
+    legend_outside(ax)
 
 
 def plot_case_series(
@@ -70,7 +72,7 @@ def plot_case_series(
     ax.set_xlabel("time (s)")
     ax.set_ylabel(ylabel)
     ax.grid(True, alpha=0.3, which="both")
-    ax.legend(loc="best", fontsize="small")
+    legend_outside(ax)
 
 
 def plot_grouped_bars(
@@ -96,4 +98,4 @@ def plot_grouped_bars(
         ax.set_yscale("log")
     ax.set_ylabel(ylabel)
     ax.grid(True, alpha=0.3, axis="y", which="both")
-    ax.legend(loc="best", fontsize="small")
+    legend_outside(ax)

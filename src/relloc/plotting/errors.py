@@ -14,6 +14,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from relloc.plotting.style import legend_outside
+
 
 def break_gaps(t: ArrayLike, *series: ArrayLike) -> tuple[np.ndarray, ...]:
     """Insert a NaN row wherever the time step exceeds 1.5× its median, so a line is not drawn
@@ -71,7 +73,7 @@ def plot_pose_errors_with_bounds(
     s = np.asarray(sigmas, dtype=float)
     for i, ax in enumerate(axes):
         plot_error_with_bounds(ax, t, e[:, i], s[:, i], n_sigma=n_sigma, ylabel=STATE_LABELS[i])
-    axes[0].legend(loc="upper right", fontsize="small")
+    legend_outside(axes[0])
     axes[-1].set_xlabel("time (s)")
 
 
@@ -91,7 +93,7 @@ def plot_robot_errors(
         ax.set_ylabel(STATE_LABELS[i])
         ax.axhline(0.0, color="0.6", lw=0.5)
         ax.grid(True, alpha=0.3)
-    axes[0].legend(loc="upper right", fontsize="small", ncol=2)
+    legend_outside(axes[0])
     axes[-1].set_xlabel("time (s)")
 
 
@@ -104,7 +106,6 @@ def plot_trajectories(
 ) -> None:
     """Planar paths ``(K, ≥2)`` of several robots, with start markers (in the legend) and the
     arena outline; the legend sits outside the data."""
-    from relloc.plotting.style import legend_outside
 
     for k, (name, path) in enumerate(paths.items()):
         p = np.asarray(path, dtype=float)

@@ -12,6 +12,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from relloc.plotting.style import legend_outside
+
 
 def plot_world_paths(ax: Any, truth: ArrayLike, names: Sequence[str]) -> None:
     """World paths ``truth (T, n, ≥2)`` of every robot, start marked with a dot."""
@@ -22,7 +24,7 @@ def plot_world_paths(ax: Any, truth: ArrayLike, names: Sequence[str]) -> None:
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
     ax.set_aspect("equal", adjustable="datalim")
-    ax.legend(fontsize=7, loc="best")
+    legend_outside(ax)
 
 
 def plot_relative_estimates(
@@ -47,7 +49,7 @@ def plot_relative_estimates(
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
     ax.set_aspect("equal", adjustable="datalim")
-    ax.legend(fontsize=6, loc="best")
+    legend_outside(ax)
 
 
 def plot_series(
@@ -75,7 +77,7 @@ def plot_series(
     ax.set_ylabel(f"log10 {ylabel}" if log10 else ylabel)
     ax.grid(alpha=0.3)
     if legend:
-        ax.legend(fontsize=6, loc="upper right", ncol=2)
+        legend_outside(ax)
 
 
 def plot_sweep(
@@ -95,4 +97,4 @@ def plot_sweep(
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, loc="best")
+    legend_outside(ax)

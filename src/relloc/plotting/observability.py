@@ -18,6 +18,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from relloc.plotting.style import legend_outside
+
 _AGREE_COLOURS = {True: "tab:green", False: "tab:red", None: "tab:gray"}
 
 
@@ -43,7 +45,7 @@ def plot_case_ranks(
         ("tab:gray", "no claim"),
     ):
         ax.barh([np.nan], [np.nan], color=colour, label=text)
-    ax.legend(loc="lower right", fontsize=8)
+    legend_outside(ax)
 
 
 def plot_subset_ranks(ax: Any, table: Mapping[str, Mapping[str, int]]) -> None:

@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from relloc.plotting.errors import STATE_LABELS
+from relloc.plotting.style import legend_outside
 
 
 def plot_convergence_curves(
@@ -51,7 +52,7 @@ def plot_rmse_vs_bound(
         ax.set_ylabel(STATE_LABELS[i])
         ax.set_yscale("log")
         ax.grid(True, alpha=0.3, which="both")
-    axes[0].legend(loc="upper right", fontsize="small", ncol=2)
+    legend_outside(axes[0])
     axes[-1].set_xlabel("time (s)")
 
 
@@ -72,7 +73,7 @@ def plot_noise_sweep(
     ax.set_xlabel("odometry σ_v (m/s, white at 100 Hz)")
     ax.set_ylabel("position RMSE (m)")
     ax.grid(True, alpha=0.3, which="both")
-    ax.legend(loc="upper left", fontsize="small")
+    legend_outside(ax)
 
 
 def plot_bias_comparison(
@@ -92,4 +93,4 @@ def plot_bias_comparison(
     ax.axhline(0.0, color="0.4", lw=0.6)
     ax.set_ylabel(ylabel)
     ax.grid(True, axis="y", alpha=0.3)
-    ax.legend(fontsize="small")
+    legend_outside(ax)
