@@ -61,8 +61,17 @@ def write_report(out_dir: Path, markdown: str) -> Path:
 
 
 def save_figure(fig: Any, out_dir: Path, name: str, *, dpi: int = 110) -> str:
-    """Save a matplotlib figure as ``name.png`` in ``out_dir``, close it, return the file name."""
+    """Save a matplotlib figure as ``name.png`` in ``out_dir``, close it, return the file name.
+
+    A figure without a layout engine is laid out first (``tight_layout``), so legends placed
+    outside their axes (:func:`relloc.plotting.style.legend_outside`) get room beside them."""
+    import warnings
+
     filename = f"{name}.png"
+    if fig.get_layout_engine() is None:
+        with warnings.catch_warnings():  # "not compatible with tight_layout" for odd axes
+            warnings.simplefilter("ignore", UserWarning)
+            fig.tight_layout()
     fig.savefig(prepare_out_dir(out_dir) / filename, dpi=dpi, bbox_inches="tight")
     from relloc.plotting.setup import pyplot
 
