@@ -203,9 +203,10 @@ class Recorder:
             rows.mean.append(b.mean.copy())
             rows.cov.append(b.cov.copy())
             rows.age.append(float(b.age))
-            for name in set(rows.info) | set(b.info):
-                col = rows.info.setdefault(name, [np.nan] * (len(rows.t) - 1))
-                col.append(float(b.info.get(name, np.nan)))
+            if rows.info or b.info:  # (most estimators report no diagnostics)
+                for name in set(rows.info) | set(b.info):
+                    col = rows.info.setdefault(name, [np.nan] * (len(rows.t) - 1))
+                    col.append(float(b.info.get(name, np.nan)))
 
     def add_updates(self, owner: str, updates: Iterable[UpdateRecord]) -> None:
         for u in updates:
