@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -48,8 +48,7 @@ from relloc.experiments.desilva2015 import (
 )
 from relloc.experiments.team_sources import desilva_recording, desilva_scenario
 from relloc.pipeline.output import fmt, markdown_table, prepare_out_dir, write_report, write_summary
-from relloc.runtime.faults import FaultSettings
-from relloc.runtime.launcher import TeamLauncher, TeamSettings
+from relloc.runtime.launcher import ProcessTeam, TeamLauncher
 from relloc.runtime.outcomes import outcomes_of
 from relloc.runtime.summary import agreement, assemble_estimates, robot_messages
 
@@ -62,7 +61,7 @@ HEADLINE = ("success_rate", "pos_rmse_m", "yaw_rmse_rad", "anees", "time_to_firs
 
 
 @dataclass(frozen=True, kw_only=True)
-class DeSilvaTeamSettings:
+class DeSilvaTeamSettings(ProcessTeam):
     """One ``team up desilva2015`` invocation."""
 
     name: str
@@ -70,12 +69,6 @@ class DeSilvaTeamSettings:
     seed: int = 0
     runs: int = 1
     duration_s: float | None = None
-    tick_s: float = 0.1
-    faults: FaultSettings = field(default_factory=FaultSettings)
-    team: str = "team"
-    wall_timeout_s: float = 300.0
-    realtime_factor: float = 0.0
-    """Pace the clock at this multiple of real time (0: as fast as the team goes)."""
 
 
 def run_desilva_team(s: DeSilvaTeamSettings) -> dict[str, Any]:
@@ -89,16 +82,11 @@ def run_desilva_team(s: DeSilvaTeamSettings) -> dict[str, Any]:
     start = time.monotonic()
     for i in range(s.runs):
         recording = desilva_recording(s.name, s.seed, i, s.duration_s)
-        settings = TeamSettings(
-            preload=("relloc.experiments.team_sources",),
+        settings = s.launch(
             scenario=s.name,
             out_dir=out / f"run{i}",
             seed=s.seed,
-            team=s.team,
-            tick_s=s.tick_s,
-            faults=s.faults,
-            wall_timeout_s=s.wall_timeout_s,
-            realtime_factor=s.realtime_factor,
+            preload=("relloc.experiments.team_sources",),
             node_args=("--run", str(i), "--duration", repr(scenario.duration)),
         )
         span = recording.span[1] - recording.span[0]

@@ -20,7 +20,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -51,8 +51,7 @@ from relloc.experiments.sharma2013_team import (
 from relloc.pipeline.output import prepare_out_dir, write_report, write_summary
 from relloc.pipeline.replay import replay
 from relloc.runtime.estimation import WindowDriver, grid_record_times
-from relloc.runtime.faults import FaultSettings
-from relloc.runtime.launcher import TeamLauncher, TeamSettings
+from relloc.runtime.launcher import ProcessTeam, TeamLauncher
 from relloc.runtime.node import NodeParts
 from relloc.runtime.outcomes import outcomes_of
 from relloc.runtime.sources import RecordingSource
@@ -159,7 +158,7 @@ def in_process(prepared: Prepared, settings: CooperativeSettings, end: float) ->
 
 
 @dataclass(frozen=True, kw_only=True)
-class MrclamTeamSettings:
+class MrclamTeamSettings(ProcessTeam):
     """One ``team up MRCLAM_DIR --estimator cooperative`` invocation."""
 
     folder: Path
@@ -167,12 +166,7 @@ class MrclamTeamSettings:
     seed: int = 0
     duration_s: float | None = None
     case: str = DEFAULT_CASE
-    tick_s: float = 0.1
-    faults: FaultSettings = field(default_factory=FaultSettings)
-    team: str = "team"
     wall_timeout_s: float = 600.0
-    realtime_factor: float = 0.0
-    """Pace the clock at this multiple of real time (0: as fast as the team goes)."""
     fit_path: Path | None = None
     """Models fitted before (a ``fit.json`` of an earlier run): used instead of fitting."""
 
@@ -192,16 +186,11 @@ def run_mrclam_team(s: MrclamTeamSettings) -> dict[str, Any]:
     prepared, settings = prepared_team(ds, fit, s.seed, s.case)
     rec = prepared.recording
     end = window_end(prepared, s.duration_s)
-    team = TeamSettings(
-        preload=("relloc.experiments.mrclam_team", "relloc.estimators.cooperative"),
+    team = s.launch(
         scenario=str(s.folder),
         out_dir=out / "run0",
         seed=s.seed,
-        team=s.team,
-        tick_s=s.tick_s,
-        faults=s.faults,
-        wall_timeout_s=s.wall_timeout_s,
-        realtime_factor=s.realtime_factor,
+        preload=("relloc.experiments.mrclam_team", "relloc.estimators.cooperative"),
         node_args=("--estimator", "cooperative", "--fit", str(out / FIT_FILE), "--case", s.case),
     )
     # the clock's last tick at or after the last record time (nodes filter whole ticks)

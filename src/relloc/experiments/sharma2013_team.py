@@ -34,7 +34,7 @@ from __future__ import annotations
 import dataclasses
 import time
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -48,7 +48,7 @@ from relloc.pipeline.evaluation import evaluate
 from relloc.pipeline.output import fmt, markdown_table, prepare_out_dir, write_report, write_summary
 from relloc.pipeline.replay import replay
 from relloc.runtime.faults import FaultSettings
-from relloc.runtime.launcher import Collected, TeamLauncher, TeamSettings
+from relloc.runtime.launcher import Collected, ProcessTeam, TeamLauncher
 from relloc.runtime.outcomes import outcomes_of
 from relloc.runtime.summary import agreement, assemble_estimates, robot_messages
 
@@ -58,7 +58,7 @@ time on a perfect network (summation order only; see the module docstring)."""
 
 
 @dataclass(frozen=True, kw_only=True)
-class SharmaTeamSettings:
+class SharmaTeamSettings(ProcessTeam):
     """One ``team up sharma2013`` invocation."""
 
     out_dir: Path
@@ -66,12 +66,6 @@ class SharmaTeamSettings:
     runs: int = 1
     duration_s: float | None = None
     case: str = "two_landmarks"
-    tick_s: float = 0.1
-    faults: FaultSettings = field(default_factory=FaultSettings)
-    team: str = "team"
-    wall_timeout_s: float = 300.0
-    realtime_factor: float = 0.0
-    """Pace the clock at this multiple of real time (0: as fast as the team goes)."""
 
 
 def in_process(recording: Recording, sim: Any, scenario: Any, case: str) -> Estimates:
@@ -131,16 +125,11 @@ def run_sharma_team(s: SharmaTeamSettings) -> dict[str, Any]:
     for i in range(s.runs):
         scenario, sim = sharma_sim(s.seed, i, s.duration_s)
         recording = sim.recording
-        settings = TeamSettings(
-            preload=("relloc.experiments.team_sources", "relloc.experiments.sharma2013"),
+        settings = s.launch(
             scenario="sharma2013",
             out_dir=out / f"run{i}",
             seed=s.seed,
-            team=s.team,
-            tick_s=s.tick_s,
-            faults=s.faults,
-            wall_timeout_s=s.wall_timeout_s,
-            realtime_factor=s.realtime_factor,
+            preload=("relloc.experiments.team_sources", "relloc.experiments.sharma2013"),
             node_args=("--run", str(i), "--duration", repr(scenario.duration), "--case", s.case),
         )
         span = recording.span[1] - recording.span[0]

@@ -208,6 +208,42 @@ each paying numpy/scipy imports (zenoh is imported by each child: its runtime mu
 inherited across fork)."""
 
 
+@dataclass(frozen=True, kw_only=True)
+class ProcessTeam:
+    """How a reproduction's team runs as robot processes: the clock step, the faults, the team
+    name, the wall-time limit and the pacing (0: as fast as the team goes). Settings of a
+    reproduction's team extend it with what the reproduction needs."""
+
+    tick_s: float = 0.1
+    faults: FaultSettings = field(default_factory=FaultSettings)
+    team: str = "team"
+    wall_timeout_s: float = 300.0
+    realtime_factor: float = 0.0
+
+    def launch(
+        self,
+        *,
+        scenario: str,
+        out_dir: Path,
+        seed: int,
+        preload: tuple[str, ...],
+        node_args: tuple[str, ...],
+    ) -> TeamSettings:
+        """The launcher's settings of one run of this team."""
+        return TeamSettings(
+            scenario=scenario,
+            out_dir=out_dir,
+            seed=seed,
+            team=self.team,
+            tick_s=self.tick_s,
+            faults=self.faults,
+            wall_timeout_s=self.wall_timeout_s,
+            realtime_factor=self.realtime_factor,
+            preload=preload,
+            node_args=node_args,
+        )
+
+
 def _child_main(argv: list[str], log_path: str) -> None:
     """Entry of a child process: ``relloc <argv>`` with stdout/stderr to ``log_path``."""
     fd = os.open(log_path, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o644)
