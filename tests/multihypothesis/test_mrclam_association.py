@@ -169,9 +169,9 @@ def test_run6_camera_sees_teammates_only_inside_its_field_of_view() -> None:
     if not (folder / "Barcodes.dat").is_file():
         pytest.skip(f"MRCLAM run 6 not found at {folder} (shared data absent)")
     ds = load_mrclam(folder)
-    fov = fit_field_of_view(ds, mrclam_association._whole_run(ds, str(folder))).half_width_rad
     start = max(float(ds.robot(s).odometry.t[0]) for s in ds.robot_ids)
     window = mrclam_association.following(start, mrclam_association.CALIBRATION_S, str(folder))
+    fov = fit_field_of_view(ds, window).half_width_rad  # as the experiment: on the window
     fit = fit_detection_in_view(ds, window, fov)
     everywhere = fit_detection_probability(ds, window)
     assert fit.p_detect > 2.0 * everywhere.p_detect

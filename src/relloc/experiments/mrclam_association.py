@@ -55,7 +55,8 @@ Noise models: the detection probabilities and the odometry noise are fitted
 ``CALIBRATION_S`` seconds after every robot has started moving (``calibration_window``) — and
 the scoring uses the next ``EVAL_S`` seconds (``scored_on``), so nothing is fitted on the data
 it is scored on. The field of view, which sets where the injected clutter falls and where the
-camera can see, is the widest bearing of the whole run (``field_of_view_window``). Range σ
+camera can see, is the widest bearing in the calibration window too (``field_of_view_window``).
+Range σ
 0.2 m and bearing σ 0.03 rad follow the dataset's documented error levels (range error bias
 −0.25 … +0.2 m depending on bearing, strongly correlated; bearings 0.01–0.02 rad with rare
 outliers).
@@ -94,7 +95,7 @@ from relloc.calibration.camera import (
     fit_field_of_view,
 )
 from relloc.calibration.odometry import fit_odometry_noise
-from relloc.calibration.window import CalibrationWindow, following, spanning
+from relloc.calibration.window import CalibrationWindow, following
 from relloc.core.estimates import Estimates
 from relloc.core.recording import (
     CLUTTER,
@@ -157,18 +158,6 @@ HEADLINE_KEYS = (
     "tracked_fraction",
     "coverage",
 )
-
-
-def _whole_run(ds: MrclamDataset, source: str) -> CalibrationWindow:
-    """From the first to the last camera row of any robot: the field of view is the widest
-    bearing the camera ever reports, so it is taken over the whole run."""
-    return spanning(np.concatenate([ds.robot(s).measurements.t for s in ds.robot_ids]), source)
-
-
-# ---------------------------------------------------------------------------------------------
-# MRCLAM → Recording. TEMPORARY: the one shared conversion, relloc.datasets.mrclam.to_recording
-# (being added in parallel), replaces this function at merge; it follows the same rules.
-# ---------------------------------------------------------------------------------------------
 
 
 def _hidden_correspondence(
@@ -331,10 +320,12 @@ def _settings(ds: MrclamDataset, window: CalibrationWindow, fov: float) -> _Mode
 
 @dataclass(frozen=True)
 class _Window:
-    """The run's calibration and scoring windows, the field of view and the models."""
+    """The run's calibration and scoring windows, the field of view and the models; ``raw``
+    is the dataset as a Recording (:func:`relloc.datasets.mrclam.to_recording`)."""
 
     folder: Path
     ds: MrclamDataset
+    raw: Recording
     calibration: CalibrationWindow
     t_start: float
     t_end: float
@@ -354,9 +345,9 @@ def _windows(folder: Path) -> _Window:
     t_end = min(t_start + EVAL_S, ds.duration)
     if t_end - t_start < 2 * WARMUP_S:
         raise DataError(f"{folder}: too short for a {EVAL_S:.0f} s evaluation after calibration")
-    fov_fit = fit_field_of_view(ds, _whole_run(ds, str(folder)))
+    fov_fit = fit_field_of_view(ds, calibration)
     models = _settings(ds, calibration, fov_fit.half_width_rad)
-    return _Window(folder, ds, calibration, t_start, t_end, fov_fit, models)
+    return _Window(folder, ds, to_recording(ds), calibration, t_start, t_end, fov_fit, models)
 
 
 def _clock(w: _Window, offset: float) -> Array:
@@ -370,12 +361,11 @@ def _spread_runs(w: _Window, seed: int, runs: int) -> list[dict[str, Any]]:
     that the runs sample the two things a single run's figure depends on by chance (where
     the clutter falls, and which tick each camera frame is fused at)."""
     out = []
-    raw = to_recording(w.ds)
     for k, ss in enumerate(spawn_seeds(seed, runs)):
         offset = k / (runs * FILTER_RATE)
         clock = _clock(w, offset)
         rec, _ = _hidden_correspondence(
-            raw, clock[0], clock[-1], w.fov_fit.half_width_rad, np.random.default_rng(ss)
+            w.raw, clock[0], clock[-1], w.fov_fit.half_width_rad, np.random.default_rng(ss)
         )
         names = [f"R{name}" for name in rec.robots]
         figures, _ = _evaluate(_run(rec, w.models.unknown, clock, sharing=False), clock[0], names)
@@ -411,7 +401,7 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
     spread = _spread(spread_runs)
     clock = _clock(w, 0.0)
     rng = np.random.default_rng(spawn_seeds(args.seed, runs)[0])
-    rec, counts = _hidden_correspondence(to_recording(w.ds), clock[0], clock[-1], fov, rng)
+    rec, counts = _hidden_correspondence(w.raw, clock[0], clock[-1], fov, rng)
     counts["unknown_subject"] = rec.skips.skipped_by_reason().get(UNMAPPED_SUBJECT, 0)
     counts["truth_missing"] = sum(
         int((~w.ds.robot(s).groundtruth.at(clock).valid).sum()) for s in w.ds.robot_ids
@@ -427,7 +417,7 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
     scores = _scores(estimates, rec, times, w.models.unknown)
     unknown, rows = _evaluate(scores, clock[0], names)
     shared, _ = _evaluate(_run(rec, w.models.unknown, clock, sharing=True), clock[0], names)
-    clean, _ = _hidden_correspondence(to_recording(w.ds), clock[0], clock[-1], fov, rng, 0.0)
+    clean, _ = _hidden_correspondence(w.raw, clock[0], clock[-1], fov, rng, 0.0)
     no_clutter, _ = _evaluate(
         _run(clean, replace(w.models.unknown, expected_clutter=0.0), clock, sharing=False),
         clock[0],
