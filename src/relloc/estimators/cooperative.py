@@ -78,6 +78,7 @@ conditioning ``log10(λmax/λmin)`` of its ``R`` (diagonal) and of its ``S`` (at
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from typing import Literal, Protocol
@@ -853,6 +854,41 @@ class CooperativeEstimator(Silent):
         parts.append(StaleIntervals(robot, last[robot] + hold, np.full(robot.size, np.inf)))
         seconds = StaleIntervals.concatenate(parts).seconds(self.n_robots, self._t_start, self._t)
         return replace(self._counts, stale_odometry_s=seconds)
+
+    # -- a restarted agent rejoins the team's estimate ------------------------------------
+
+    def team_belief(self) -> tuple[float, Gaussian]:
+        """The joint belief of the whole team at the latest event time ``t``: ``N(X̂, P)`` of
+        dimension ``3n`` with the pending prediction applied (``X̂`` the propagated poses,
+        ``P = Φ P Φᵀ + Q``). It is computed on a copy, so this filter's arithmetic is untouched
+        (applying the motion here would cut its unicycle steps at ``t``)."""
+        if np.isnan(self._t):
+            raise ModelError("CooperativeEstimator.team_belief before the first advance")
+        probe = copy.deepcopy(self)
+        probe._apply_motion()
+        p = probe._pending
+        P = propagate_team_covariance(probe._filter.covariance(), probe._transition(), p.Q)
+        return probe._t, Gaussian(p.pose.reshape(-1), P)
+
+    def resumed(self, t: float, belief: Gaussian) -> CooperativeEstimator:
+        """A filter of these settings that starts at ``t`` from ``belief`` (a teammate's
+        :meth:`team_belief`). It continues as the teammate's filter would: ``X̂, P`` are what
+        that filter's next prediction starts from, the information form is ``P⁻¹`` again (the
+        same up to round-off). Row counts start from zero; with first-estimates or
+        observability-constrained Jacobians the first estimate is ``X̂`` (an approximation:
+        the teammate's is that of its last epoch)."""
+        if belief.dim != 3 * self.n_robots:
+            raise ConfigError(f"resumed: belief of dimension {belief.dim}, the team needs "
+                              f"{3 * self.n_robots}")
+        out = CooperativeEstimator(
+            self.robots,
+            belief,
+            self.settings,
+            self._landmarks,
+            record_updates=self._record_updates,
+        )
+        out.advance(t, HeldOdometry.still(self.n_robots))
+        return out
 
     # -- internals -------------------------------------------------------------------------
 
