@@ -26,7 +26,21 @@ spectral densities (variance rates, SI units per second)
     q_v = q_v0 + k_v |v|,     q_ω = q_ω0 + k_ω |ω| + k_ωv |v|,
 
 so the dead-reckoning variance grows with distance travelled and angle turned, independent of
-the odometry rate. Over a step of length ``dt`` the covariance of the averaged input is
+the odometry rate.
+
+A robot whose odometry stops *and whose robot may still be moving* — a teammate whose process
+died while its wheels kept turning (robot processes, :mod:`relloc.runtime.handoff`) — is not
+still: all the filter knows is that it moves at most at the platform's speed ``V`` and turns at
+most at ``Ω``. With ``lost_speed = V > 0`` (default 0: off) its expired command is replaced, as
+above, by a still robot, and its position gets the isotropic variance of an unknown velocity of
+that size held since the command expired, ``(V a)²`` per axis at age ``a`` — growing with the
+square of the age (the displacement of a moving robot), not linearly like white input noise,
+which would claim it has barely moved; its heading gets ``min((Ω a)², π²/3)`` (``π²/3``: a
+heading uniform on the circle). Mean zero: the last command may have been stopped, reversed or
+kept, and no choice is better than the centre of what it can reach. The variance is added to
+the prediction's ``Q`` block of the robot: a still robot's ``Φ_i`` leaves its position block
+unchanged, so the position part is exact; the heading part misses the coupling into position
+of the one step in which a fresh command ends the loss (small next to ``(V a)²``). Over a step of length ``dt`` the covariance of the averaged input is
 ``diag(q_v, q_ω)/dt``. A calibrated latency ``τ`` (the commands lead the motion) and scale
 factors are properties of the data, not of the filter: they are applied to the recording before
 the replay (each command re-stamped ``t + τ`` and scaled), because the filter learns a command
@@ -116,6 +130,8 @@ IntArray = NDArray[np.int64]
 BoolArray = NDArray[np.bool_]
 
 _MIN_SEPARATION_M = 1e-3
+HEADING_UNKNOWN = np.pi**2 / 3
+"""Variance of a heading uniform on the circle (rad²): a lost robot's heading is no less known."""
 RANGE_BEARING = kind_code("range_bearing")
 BEARING = kind_code("bearing")
 POSE = kind_code("pose")
@@ -154,11 +170,24 @@ class OdometryModel:
     stale_q_v: float = 0.01
     stale_q_w: float = 0.01
     max_step_s: float = 0.1
+    lost_speed: float = 0.0
+    lost_turn_rate: float = 0.0
 
     def __post_init__(self) -> None:
         _check_nonneg(
             self,
-            ("q_v0", "q_w0", "k_v", "k_w", "k_wv", "max_hold_s", "stale_q_v", "stale_q_w"),
+            (
+                "q_v0",
+                "q_w0",
+                "k_v",
+                "k_w",
+                "k_wv",
+                "max_hold_s",
+                "stale_q_v",
+                "stale_q_w",
+                "lost_speed",
+                "lost_turn_rate",
+            ),
         )
         if not (np.isfinite(self.max_step_s) and self.max_step_s > 0):
             raise ConfigError("OdometryModel.max_step_s must be a finite number > 0")
@@ -171,6 +200,13 @@ class OdometryModel:
         if dt <= 0:
             raise ConfigError("OdometryModel.from_discrete: dt must be > 0")
         return OdometryModel(q_v0=sigma_v**2 * dt, q_w0=sigma_w**2 * dt, max_step_s=dt)
+
+    def lost_variance(self, age: Array) -> tuple[Array, Array]:
+        """Variance of a lost robot's position (per axis, m²) and heading (rad²) ``age``
+        seconds after its command expired: ``(V a)²`` and ``min((Ω a)², π²/3)``
+        (:data:`lost_speed` ``V``, :data:`lost_turn_rate` ``Ω``; module docstring)."""
+        a = np.maximum(age, 0.0)
+        return (self.lost_speed * a) ** 2, np.minimum((self.lost_turn_rate * a) ** 2, HEADING_UNKNOWN)
 
     def rates(self, v: Array, w: Array) -> tuple[Array, Array]:
         """Variance rates ``(q_v, q_ω)`` of fresh commands ``(v, ω)``."""
@@ -937,10 +973,31 @@ class CooperativeEstimator(Silent):
         )
         if stale.robot.size:
             self._stale.append(stale)
+        if self.settings.odometry.lost_speed > 0:
+            self._add_lost_noise(held)
         self._in_force = held.stamp[-1]
         self._held.clear()
         self._held_t.clear()
         self._t_applied = self._t
+
+    def _add_lost_noise(self, held: HeldCommands) -> None:
+        """The variance of lost robots (module docstring) over the held intervals: per
+        interval ``(b_k, e_k]`` and robot, the growth of :meth:`OdometryModel.lost_variance`
+        between ``max(b_k, expiry)`` and ``e_k`` (the age counted from the expiry of the
+        command held over it)."""
+        model = self.settings.odometry
+        expiry = held.stamp + model.max_hold_s  # (K, n); NaN: no command yet (not lost)
+        lo = np.maximum(held.begin[:, None], expiry)
+        hi = np.maximum(held.end[:, None], lo)
+        ok = ~np.isnan(expiry)
+        pos_hi, yaw_hi = model.lost_variance(np.where(ok, hi - expiry, 0.0))
+        pos_lo, yaw_lo = model.lost_variance(np.where(ok, lo - expiry, 0.0))
+        d_pos = (pos_hi - pos_lo).sum(axis=0)
+        d_yaw = (yaw_hi - yaw_lo).sum(axis=0)
+        Q = self._pending.Q
+        Q[:, 0, 0] += d_pos
+        Q[:, 1, 1] += d_pos
+        Q[:, 2, 2] += d_yaw
 
     def _transition(self) -> Array:
         """The pending prediction's per-robot ``Φ_i (n, 3, 3)``: the accumulated one, or with
