@@ -795,6 +795,12 @@ class CooperativeEstimator(Silent):
     def n_robots(self) -> int:
         return len(self.robots)
 
+    @property
+    def follows_lost_robots(self) -> bool:
+        """Whether a robot whose odometry stopped is followed with the lost model (module
+        docstring): the others' detections of it are then worth fusing."""
+        return self.settings.odometry.lost_speed > 0
+
     # -- the contract ----------------------------------------------------------------------
 
     def advance(self, t: float, odometry: HeldOdometry) -> None:

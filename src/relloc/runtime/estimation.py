@@ -27,6 +27,9 @@ later are fused late — at the next event — and counted).
 Measurements of a teammate whose process is gone (its liveliness token vanished) are not fused —
 its motion can no longer be predicted — and are counted (``skipped_absent``); a track of it then
 expires and is re-created when the teammate is back and seen again (``recreated``, re-found).
+An estimator that follows lost robots (seed 001's team filter with its lost model:
+:attr:`relloc.estimators.cooperative.OdometryModel.lost_speed`) still fuses what the others
+measure *of* such a teammate; only the teammate's own readings are skipped.
 
 A :class:`~relloc.core.estimates.Recorder` collects what the estimator believed and did;
 :meth:`WindowDriver.take_new` returns only what is *new* since its last call (an
@@ -424,14 +427,19 @@ class WindowDriver:
         return c.t0 if c.t is None else c.t
 
     def _live_rows(self, rows: Measurements, present: set[str]) -> Measurements:
-        """``rows`` without those of (or about) a teammate that is not present."""
+        """``rows`` without those of (or about) a teammate that is not present — the rows
+        about it are kept where the estimator follows lost robots (optional
+        ``follows_lost_robots``: seed 001's team filter, whose lost model predicts such a
+        robot's motion, loosely)."""
         if rows.size == 0:
             return rows
         absent = np.array(
             [r not in present and r != self.robot for r in self.roster] + [False], dtype=bool
         )
-        # index −1 (no target robot: a landmark, a bearing of unknown origin) maps to False
-        dead = absent[np.where(rows.target >= 0, rows.target, -1)] | absent[rows.observer]
+        dead = absent[rows.observer]
+        if not getattr(self.estimator, "follows_lost_robots", False):
+            # index −1 (no target robot: a landmark, a bearing of unknown origin) maps to False
+            dead |= absent[np.where(rows.target >= 0, rows.target, -1)]
         self._counts["skipped_absent"] += int(dead.sum())
         return rows.select(~dead) if dead.any() else rows
 
