@@ -102,3 +102,39 @@ def test_sync_messages_are_shape_checked():
             decode(msgpack.packb(payload), roster=roster)
         assert exc.value.reason == reason
     assert Gaussian(ok["mean"], ok["cov"]).dim == 6
+
+
+def test_a_reply_is_taken_only_from_the_teammate_asked_with_the_team_dimensions():
+    from collections import Counter
+
+    from relloc.runtime.handoff import RETRY_TICKS, WAIT_TICKS, Handoff
+
+    counters: Counter[str] = Counter()
+    h = Handoff("3", ("1", "2", "3"), counters)
+    assert h.request(["1", "2"]) is None  # not waiting: nothing to ask
+    h.begin(after=5.0)
+    first = h.request(["1", "2"])
+    assert first is not None and first["target"] == "1" and first["stamp"] == 5.0
+    for _ in range(RETRY_TICKS - 1):
+        assert h.request(["1", "2"]) is None
+    second = h.request(["1", "2"])
+    assert second is not None and second["target"] == "2"  # the next teammate
+    good = {"target": "3", "stamp": 5.2, "mean": np.zeros(9), "cov": np.eye(9)}
+    assert h.accept("1", good, 5.2, 0.1) is None  # not the one asked now
+    assert h.accept("2", {**good, "mean": np.zeros(6), "cov": np.eye(6)}, 5.2, 0.1) is None
+    assert h.accept("2", {**good, "stamp": 4.0}, 5.2, 0.1) is None  # before the time asked
+    assert h.accept("2", {**good, "stamp": 9.0}, 5.2, 0.1) is None  # ahead of the clock
+    singular = np.diag([1.0] * 8 + [0.0])
+    assert h.accept("2", {**good, "cov": singular}, 5.2, 0.1) is None
+    assert counters["rejected.sync_unasked"] == 1 and counters["rejected.shape"] == 1
+    assert counters["rejected.sync_stamp"] == 2 and counters["rejected.bad_covariance"] == 1
+    stamp, belief = h.accept("2", good, 5.2, 0.1)
+    assert stamp == 5.2 and belief.dim == 9
+    h.resumed()
+    assert not h.waiting and counters["sync.resumed"] == 1
+    # a node that never hears back gives up and filters from its prior
+    late = Handoff("3", ("1", "2", "3"), counters)
+    late.begin(after=1.0)
+    for _ in range(WAIT_TICKS + 1):
+        late.request(["1"])
+    assert not late.waiting and counters["sync.timeout"] == 1

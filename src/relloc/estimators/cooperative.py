@@ -26,25 +26,27 @@ spectral densities (variance rates, SI units per second)
     q_v = q_v0 + k_v |v|,     q_ω = q_ω0 + k_ω |ω| + k_ωv |v|,
 
 so the dead-reckoning variance grows with distance travelled and angle turned, independent of
-the odometry rate.
-
-A robot whose odometry stops *and whose robot may still be moving* — a teammate whose process
-died while its wheels kept turning (robot processes, :mod:`relloc.runtime.handoff`) — is not
-still: all the filter knows is that it moves at most at the platform's speed ``V`` and turns at
-most at ``Ω``. With ``lost_speed = V > 0`` (default 0: off) its expired command is replaced, as
-above, by a still robot, and its position gets the isotropic variance of an unknown velocity of
-that size held since the command expired, ``(V a)²`` per axis at age ``a`` — growing with the
-square of the age (the displacement of a moving robot), not linearly like white input noise,
-which would claim it has barely moved; its heading gets ``min((Ω a)², π²/3)`` (``π²/3``: a
-heading uniform on the circle). Mean zero: the last command may have been stopped, reversed or
-kept, and no choice is better than the centre of what it can reach. The variance is added to
-the prediction's ``Q`` block of the robot: a still robot's ``Φ_i`` leaves its position block
-unchanged, so the position part is exact; the heading part misses the coupling into position
-of the one step in which a fresh command ends the loss (small next to ``(V a)²``). Over a step of length ``dt`` the covariance of the averaged input is
+the odometry rate. Over a step of length ``dt`` the covariance of the averaged input is
 ``diag(q_v, q_ω)/dt``. A calibrated latency ``τ`` (the commands lead the motion) and scale
 factors are properties of the data, not of the filter: they are applied to the recording before
 the replay (each command re-stamped ``t + τ`` and scaled), because the filter learns a command
 only once the loop holds it.
+
+A robot whose odometry stops *while the robot may still be moving* — a teammate whose process
+died while its wheels kept turning (robot processes, :mod:`relloc.runtime.handoff`) — is not
+still: all the filter knows is that it moves at most at the platform's speed ``V`` and turns at
+most at ``Ω``. With ``lost_speed = V > 0`` (default 0: off) such a robot is *lost* once its
+command expires: still, as above (mean zero: the last command may have been kept, stopped or
+reversed, and the centre of the disc it can reach errs least in the worst case, while holding
+the last velocity errs by up to ``2 V a``), and its position gets the isotropic variance
+``(V a)²`` per axis at age ``a`` since the expiry — the reach as one standard deviation
+(conservative: a uniform disc of that radius has a quarter of it), growing with the square of
+the age like a displacement, not linearly like white input noise, which would claim the robot
+has barely moved and make the filter reject every reading of it when it is back; its heading
+gets ``min((Ω a)², π²/3)`` (``π²/3``: a heading uniform on the circle). The variance is added
+to the robot's block of the prediction's ``Q``: a still robot's ``Φ_i`` leaves the position
+block unchanged, so the position part is exact; the heading part misses its coupling into
+position over the one step in which a fresh command ends the loss (small next to ``(V a)²``).
 
 Exact multi-step prediction
 ---------------------------
@@ -206,7 +208,9 @@ class OdometryModel:
         seconds after its command expired: ``(V a)²`` and ``min((Ω a)², π²/3)``
         (:data:`lost_speed` ``V``, :data:`lost_turn_rate` ``Ω``; module docstring)."""
         a = np.maximum(age, 0.0)
-        return (self.lost_speed * a) ** 2, np.minimum((self.lost_turn_rate * a) ** 2, HEADING_UNKNOWN)
+        return (self.lost_speed * a) ** 2, np.minimum(
+            (self.lost_turn_rate * a) ** 2, HEADING_UNKNOWN
+        )
 
     def rates(self, v: Array, w: Array) -> tuple[Array, Array]:
         """Variance rates ``(q_v, q_ω)`` of fresh commands ``(v, ω)``."""
@@ -920,8 +924,9 @@ class CooperativeEstimator(Silent):
         observability-constrained Jacobians the first estimate is ``X̂`` (an approximation:
         the teammate's is that of its last epoch)."""
         if belief.dim != 3 * self.n_robots:
-            raise ConfigError(f"resumed: belief of dimension {belief.dim}, the team needs "
-                              f"{3 * self.n_robots}")
+            raise ConfigError(
+                f"resumed: belief of dimension {belief.dim}, the team needs {3 * self.n_robots}"
+            )
         out = CooperativeEstimator(
             self.robots,
             belief,

@@ -231,7 +231,9 @@ def rejoined(
                 "robot": robot,
                 "restart_s": restart.at_s,
                 "sync": {k.split(".", 1)[1]: v for k, v in last.items() if k.startswith("sync.")},
-                "first_record_s": min((float(b.t[0]) for b in mine.beliefs if b.t.size), default=None),
+                "first_record_s": min(
+                    (float(b.t[0]) for b in mine.beliefs if b.t.size), default=None
+                ),
                 "max_abs_diff_from_agents": diffs,
             }
         )
@@ -289,6 +291,10 @@ def agents_summary(runs: list[dict[str, Any]], faults: FaultSettings) -> dict[st
     }
 
 
+def _largest(values: Mapping[str, float]) -> float | None:
+    return max(values.values(), default=None)
+
+
 def _diff(a: float | None, b: float | None) -> float | None:
     return None if a is None or b is None else float(a) - float(b)
 
@@ -316,7 +322,7 @@ def report_markdown(summary: Mapping[str, Any]) -> str:
     rejoins = [
         f"Run {r['run']}: agent {j['robot']} restarted at {j['restart_s']:g} s, rejoined "
         f"({', '.join(f'{k} {v}' for k, v in sorted(j['sync'].items()))}); largest |Δ| from "
-        f"the agents that stayed up: {fmt(max(j['max_abs_diff_from_agents'].values(), default=None))}."
+        f"the agents that stayed up: {fmt(_largest(j['max_abs_diff_from_agents']))}."
         for r in summary["per_run"]
         for j in r["rejoined"]
     ]

@@ -57,8 +57,8 @@ from relloc.core.contract import (
     UpdateRecord,
 )
 from relloc.core.estimates import Estimates, Recorder
-from relloc.core.gaussian import Gaussian
 from relloc.core.events import TIME_TOL, run_events
+from relloc.core.gaussian import Gaussian
 from relloc.core.recording import Measurements
 from relloc.pipeline.replay import merge_times
 from relloc.runtime.teammates import ReceivedOdometry
@@ -389,6 +389,10 @@ class WindowDriver:
         counted (``rows_late_lost``, samples ``odometry_late_lost``), the fused ones too
         (``rows_refiltered``, ``odometry_refiltered``)."""
         samples = np.zeros(0) if odometry is None else np.asarray(odometry, dtype=float)
+        handed = late.t <= self._handed_at + TIME_TOL  # in the belief handed over already
+        if handed.any():
+            self._counts["rows_before_handoff"] += int(handed.sum())
+            late = late.select(~handed)
         if late.size == 0 and samples.size == 0:
             return 0
         earliest = float(np.min(np.concatenate([late.t, samples])))

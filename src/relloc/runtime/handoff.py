@@ -137,9 +137,7 @@ class Handoff:
         for r in due:
             del self._requests[r]
         self.counters["sync.replies_sent"] += len(due)
-        return [
-            {"target": r, "stamp": stamp, "mean": belief.mean, "cov": belief.cov} for r in due
-        ]
+        return [{"target": r, "stamp": stamp, "mean": belief.mean, "cov": belief.cov} for r in due]
 
 
 _EMPTY = np.zeros((0, 0))

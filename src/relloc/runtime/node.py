@@ -9,7 +9,10 @@ Per clock tick ``k`` (simulated time ``t_k``; see :mod:`relloc.runtime.clock`) a
 
 1. releases what its :class:`~relloc.runtime.faults.LinkEmulator` holds for ``t_k``, files
    teammates' odometry and counts their measurements and equivalent measurements (duplicates
-   recognised by sequence number, late samples counted);
+   recognised by sequence number, late samples counted); where the estimator keeps
+   checkpoints (seed 001), readings and odometry samples that arrive after their window was
+   filtered are re-filtered from the checkpoint before them
+   (:meth:`~relloc.runtime.estimation.WindowDriver.refilter`);
 2. publishes its own odometry and measurements of the window ``[t_{k−1}, t_k)`` — one ``odom``
    and one ``meas`` batch per tick: the configured publication rate is the tick rate;
 3. filters every pending window whose inputs are in, through its estimator's
@@ -27,6 +30,11 @@ Per clock tick ``k`` (simulated time ``t_k``; see :mod:`relloc.runtime.clock`) a
    (``evt``) and counters (``stats``) to the collector; finally it acknowledges ``k``.
 
 The last tick's window is ``[t_{n−1}, t_n]``: it holds the run's last instant.
+
+A node that joins a running team (restarted: its first tick is not the first) and whose
+estimator runs the team's filter asks a teammate for its team belief (``sync``) and filters
+nothing until it continues from it (:mod:`relloc.runtime.handoff`); every node answers such
+requests once its estimator has reached the time asked for.
 
 Teammates appear and disappear through Zenoh liveliness. Measurements of a teammate that is gone
 are not fused (its motion cannot be predicted without its odometry), so its track expires after
