@@ -138,3 +138,45 @@ def test_a_reply_is_taken_only_from_the_teammate_asked_with_the_team_dimensions(
     for _ in range(WAIT_TICKS + 1):
         late.request(["1"])
     assert not late.waiting and counters["sync.timeout"] == 1
+
+
+def test_a_lost_robot_gets_the_variance_of_a_robot_driving_at_the_platform_speed():
+    """Two unicycles; robot B's odometry stops at 1 s. With ``lost_speed`` V its position
+    variance, ``a`` seconds after its command expired, exceeds the still model's by ``(V a)²``
+    per axis and its heading's by ``min((Ω a)², π²/3)``; robot A is untouched; with V = 0
+    nothing changes at all."""
+    from dataclasses import replace
+
+    from relloc.core.contract import HeldOdometry
+    from relloc.estimators.cooperative import (
+        CooperativeEstimator,
+        CooperativeSettings,
+        OdometryModel,
+        SensorModel,
+    )
+
+    still_model = OdometryModel(q_v0=1e-3, q_w0=1e-3, max_hold_s=0.5)
+    prior = Gaussian(np.array([0.0, 0, 0, 5, 0, 0]), np.eye(6) * 0.01)
+
+    def run(model: OdometryModel) -> list:
+        settings = CooperativeSettings(odometry=model, sensor=SensorModel(sigma_bearing=0.01))
+        est = CooperativeEstimator(("A", "B"), prior, settings)
+        velocity = np.array([[1.0, 0, 0, 0.1], [1.0, 0, 0, 0.1]])
+        for k in range(41):  # events every 0.1 s to 4 s; B's last command at 1 s
+            t = round(0.1 * k, 10)
+            held_since = max(round(t - 0.1, 10), 0.0)  # held over the step ending at t
+            stamp = np.array([held_since, min(held_since, 1.0)])
+            est.advance(t, HeldOdometry(velocity=velocity, stamp=stamp))
+        return est.beliefs()
+
+    speed, turn = 2.0, 0.5
+    still = run(still_model)
+    lost = run(replace(still_model, lost_speed=speed, lost_turn_rate=turn))
+    age = 4.0 - (1.0 + 0.5)
+    np.testing.assert_allclose(lost[0].cov, still[0].cov, rtol=0, atol=0)
+    np.testing.assert_allclose(lost[0].mean, still[0].mean, rtol=0, atol=0)
+    extra = lost[1].cov - still[1].cov
+    np.testing.assert_allclose(np.diag(extra), [(speed * age) ** 2] * 2 + [(turn * age) ** 2])
+    np.testing.assert_allclose(lost[1].mean, still[1].mean, rtol=0, atol=0)  # still: mean zero
+    off = run(replace(still_model, lost_speed=0.0, lost_turn_rate=turn))
+    assert all(np.array_equal(o.cov, s.cov) for o, s in zip(off, still, strict=True))
