@@ -32,6 +32,22 @@ factors are properties of the data, not of the filter: they are applied to the r
 the replay (each command re-stamped ``t + τ`` and scaled), because the filter learns a command
 only once the loop holds it.
 
+A robot whose odometry stops *while the robot may still be moving* — a teammate whose process
+died while its wheels kept turning (robot processes, :mod:`relloc.runtime.handoff`) — is not
+still: all the filter knows is that it moves at most at the platform's speed ``V`` and turns at
+most at ``Ω``. With ``lost_speed = V > 0`` (default 0: off) such a robot is *lost* once its
+command expires: still, as above (mean zero: the last command may have been kept, stopped or
+reversed, and the centre of the disc it can reach errs least in the worst case, while holding
+the last velocity errs by up to ``2 V a``), and its position gets the isotropic variance
+``(V a)²`` per axis at age ``a`` since the expiry — the reach as one standard deviation
+(conservative: a uniform disc of that radius has a quarter of it), growing with the square of
+the age like a displacement, not linearly like white input noise, which would claim the robot
+has barely moved and make the filter reject every reading of it when it is back; its heading
+gets ``min((Ω a)², π²/3)`` (``π²/3``: a heading uniform on the circle). The variance is added
+to the robot's block of the prediction's ``Q``: a still robot's ``Φ_i`` leaves the position
+block unchanged, so the position part is exact; the heading part misses its coupling into
+position over the one step in which a fresh command ends the loss (small next to ``(V a)²``).
+
 Exact multi-step prediction
 ---------------------------
 Between two measurement epochs each robot moves on its own inputs, so the joint transition is
@@ -78,6 +94,7 @@ conditioning ``log10(λmax/λmin)`` of its ``R`` (diagonal) and of its ``S`` (at
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from typing import Literal, Protocol
@@ -115,6 +132,8 @@ IntArray = NDArray[np.int64]
 BoolArray = NDArray[np.bool_]
 
 _MIN_SEPARATION_M = 1e-3
+HEADING_UNKNOWN = np.pi**2 / 3
+"""Variance of a heading uniform on the circle (rad²): a lost robot's heading is no less known."""
 RANGE_BEARING = kind_code("range_bearing")
 BEARING = kind_code("bearing")
 POSE = kind_code("pose")
@@ -153,11 +172,24 @@ class OdometryModel:
     stale_q_v: float = 0.01
     stale_q_w: float = 0.01
     max_step_s: float = 0.1
+    lost_speed: float = 0.0
+    lost_turn_rate: float = 0.0
 
     def __post_init__(self) -> None:
         _check_nonneg(
             self,
-            ("q_v0", "q_w0", "k_v", "k_w", "k_wv", "max_hold_s", "stale_q_v", "stale_q_w"),
+            (
+                "q_v0",
+                "q_w0",
+                "k_v",
+                "k_w",
+                "k_wv",
+                "max_hold_s",
+                "stale_q_v",
+                "stale_q_w",
+                "lost_speed",
+                "lost_turn_rate",
+            ),
         )
         if not (np.isfinite(self.max_step_s) and self.max_step_s > 0):
             raise ConfigError("OdometryModel.max_step_s must be a finite number > 0")
@@ -170,6 +202,15 @@ class OdometryModel:
         if dt <= 0:
             raise ConfigError("OdometryModel.from_discrete: dt must be > 0")
         return OdometryModel(q_v0=sigma_v**2 * dt, q_w0=sigma_w**2 * dt, max_step_s=dt)
+
+    def lost_variance(self, age: Array) -> tuple[Array, Array]:
+        """Variance of a lost robot's position (per axis, m²) and heading (rad²) ``age``
+        seconds after its command expired: ``(V a)²`` and ``min((Ω a)², π²/3)``
+        (:data:`lost_speed` ``V``, :data:`lost_turn_rate` ``Ω``; module docstring)."""
+        a = np.maximum(age, 0.0)
+        return (self.lost_speed * a) ** 2, np.minimum(
+            (self.lost_turn_rate * a) ** 2, HEADING_UNKNOWN
+        )
 
     def rates(self, v: Array, w: Array) -> tuple[Array, Array]:
         """Variance rates ``(q_v, q_ω)`` of fresh commands ``(v, ω)``."""
@@ -758,6 +799,12 @@ class CooperativeEstimator(Silent):
     def n_robots(self) -> int:
         return len(self.robots)
 
+    @property
+    def follows_lost_robots(self) -> bool:
+        """Whether a robot whose odometry stopped is followed with the lost model (module
+        docstring): the others' detections of it are then worth fusing."""
+        return self.settings.odometry.lost_speed > 0
+
     # -- the contract ----------------------------------------------------------------------
 
     def advance(self, t: float, odometry: HeldOdometry) -> None:
@@ -854,6 +901,42 @@ class CooperativeEstimator(Silent):
         seconds = StaleIntervals.concatenate(parts).seconds(self.n_robots, self._t_start, self._t)
         return replace(self._counts, stale_odometry_s=seconds)
 
+    # -- a restarted agent rejoins the team's estimate ------------------------------------
+
+    def team_belief(self) -> tuple[float, Gaussian]:
+        """The joint belief of the whole team at the latest event time ``t``: ``N(X̂, P)`` of
+        dimension ``3n`` with the pending prediction applied (``X̂`` the propagated poses,
+        ``P = Φ P Φᵀ + Q``). It is computed on a copy, so this filter's arithmetic is untouched
+        (applying the motion here would cut its unicycle steps at ``t``)."""
+        if np.isnan(self._t):
+            raise ModelError("CooperativeEstimator.team_belief before the first advance")
+        probe = copy.deepcopy(self)
+        probe._apply_motion()
+        p = probe._pending
+        P = propagate_team_covariance(probe._filter.covariance(), probe._transition(), p.Q)
+        return probe._t, Gaussian(p.pose.reshape(-1), P)
+
+    def resumed(self, t: float, belief: Gaussian) -> CooperativeEstimator:
+        """A filter of these settings that starts at ``t`` from ``belief`` (a teammate's
+        :meth:`team_belief`). It continues as the teammate's filter would: ``X̂, P`` are what
+        that filter's next prediction starts from, the information form is ``P⁻¹`` again (the
+        same up to round-off). Row counts start from zero; with first-estimates or
+        observability-constrained Jacobians the first estimate is ``X̂`` (an approximation:
+        the teammate's is that of its last epoch)."""
+        if belief.dim != 3 * self.n_robots:
+            raise ConfigError(
+                f"resumed: belief of dimension {belief.dim}, the team needs {3 * self.n_robots}"
+            )
+        out = CooperativeEstimator(
+            self.robots,
+            belief,
+            self.settings,
+            self._landmarks,
+            record_updates=self._record_updates,
+        )
+        out.advance(t, HeldOdometry.still(self.n_robots))
+        return out
+
     # -- internals -------------------------------------------------------------------------
 
     def _check_indices(self, batch: Measurements) -> None:
@@ -901,10 +984,31 @@ class CooperativeEstimator(Silent):
         )
         if stale.robot.size:
             self._stale.append(stale)
+        if self.settings.odometry.lost_speed > 0:
+            self._add_lost_noise(held)
         self._in_force = held.stamp[-1]
         self._held.clear()
         self._held_t.clear()
         self._t_applied = self._t
+
+    def _add_lost_noise(self, held: HeldCommands) -> None:
+        """The variance of lost robots (module docstring) over the held intervals: per
+        interval ``(b_k, e_k]`` and robot, the growth of :meth:`OdometryModel.lost_variance`
+        between ``max(b_k, expiry)`` and ``e_k`` (the age counted from the expiry of the
+        command held over it)."""
+        model = self.settings.odometry
+        expiry = held.stamp + model.max_hold_s  # (K, n); NaN: no command yet (not lost)
+        lo = np.maximum(held.begin[:, None], expiry)
+        hi = np.maximum(held.end[:, None], lo)
+        ok = ~np.isnan(expiry)
+        pos_hi, yaw_hi = model.lost_variance(np.where(ok, hi - expiry, 0.0))
+        pos_lo, yaw_lo = model.lost_variance(np.where(ok, lo - expiry, 0.0))
+        d_pos = (pos_hi - pos_lo).sum(axis=0)
+        d_yaw = (yaw_hi - yaw_lo).sum(axis=0)
+        Q = self._pending.Q
+        Q[:, 0, 0] += d_pos
+        Q[:, 1, 1] += d_pos
+        Q[:, 2, 2] += d_yaw
 
     def _transition(self) -> Array:
         """The pending prediction's per-robot ``Φ_i (n, 3, 3)``: the accumulated one, or with

@@ -46,6 +46,8 @@ from relloc.experiments.sharma2013_team import (
     accuracy,
     agents_summary,
     compare_agents,
+    fault_phases,
+    rejoined,
     report_markdown,
 )
 from relloc.pipeline.output import prepare_out_dir, write_report, write_summary
@@ -201,6 +203,8 @@ def run_mrclam_team(s: MrclamTeamSettings) -> dict[str, Any]:
     run = {
         "run": 0,
         "fault_outcomes": outcomes_of(s.faults, got, rec),
+        "fault_phases": fault_phases(s.faults, got, ref, rec),
+        "rejoined": rejoined(s.faults, got, collected, rec),
         "wall_s": collected.wall_s,
         "window_s": [prepared.t_start, end],
         "in_process": accuracy(ref, rec),

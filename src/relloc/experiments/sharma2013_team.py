@@ -26,7 +26,17 @@ times), ``agents.<robot>`` (the same of that agent's estimates, its ``max_abs_me
 checkpoint or lost — and overdue windows), ``agreement``
 (worst over agents, ``within_tolerance``), ``cost_of_loss`` (per agent, RMSE − in-process
 RMSE), ``messages`` per run and robot, per run ``fault_outcomes`` (accuracy before / during /
-after each fault: :mod:`relloc.runtime.outcomes`).
+after each fault: :mod:`relloc.runtime.outcomes`), ``fault_phases`` (per kill or partition,
+every agent's and the in-process EIF's position RMSE before / during / after it) and
+``rejoined`` (per restart: the restarted agent's ``sync`` counters and its largest difference
+from every agent that stayed up).
+
+Faults. A restarted agent does not start from the t = 0 prior: it asks a teammate for the
+team belief and continues from it (:mod:`relloc.runtime.handoff`). While a teammate's process
+is gone its robot is *lost* to the others — still, with the variance of a robot driving at up
+to the scenario's speed (:attr:`relloc.estimators.cooperative.OdometryModel.lost_speed`) —
+and its readings, and those of it, are not fused. Late odometry is re-filtered from the
+checkpoints like late readings.
 """
 
 from __future__ import annotations
@@ -142,6 +152,8 @@ def run_sharma_team(s: SharmaTeamSettings) -> dict[str, Any]:
             {
                 "run": i,
                 "fault_outcomes": outcomes_of(s.faults, got, recording),
+                "fault_phases": fault_phases(s.faults, got, ref, recording),
+                "rejoined": rejoined(s.faults, got, collected, recording),
                 "wall_s": collected.wall_s,
                 "in_process": accuracy(ref, recording),
                 "agents": agents,
@@ -156,6 +168,78 @@ def run_sharma_team(s: SharmaTeamSettings) -> dict[str, Any]:
     return summary
 
 
+def _phase_rmse(estimates: Estimates, recording: Recording, t1: float, t2: float) -> dict[str, Any]:
+    """Position RMSE (m) over every robot of the records before ``t1``, in ``[t1, t2)``
+    and from ``t2`` on."""
+    evals = evaluate(estimates, recording)
+    out: dict[str, Any] = {}
+    for phase, pick in (
+        ("before", lambda t: t < t1),
+        ("during", lambda t: (t >= t1) & (t < t2)),
+        ("after", lambda t: t >= t2),
+    ):
+        e = [p.error[pick(p.t)] for p in evals]
+        sq = np.concatenate([x[:, 0] ** 2 + x[:, 1] ** 2 for x in e]) if e else np.zeros(0)
+        out[f"pos_rmse_{phase}_m"] = float(np.sqrt(np.mean(sq))) if sq.size else None
+    return out
+
+
+def fault_phases(
+    faults: FaultSettings, got: Estimates, ref: Estimates, recording: Recording
+) -> list[dict[str, Any]]:
+    """Per kill (restarted or not) and partition: every agent's position RMSE over the whole
+    team before, during and after it, beside the in-process EIF's (the fault-free run on the
+    same seed) over the same records."""
+    windows = [(f"partition {','.join(p.side)}", p.start_s, p.end_s) for p in faults.partitions]
+    for kill in faults.kills:
+        back = [r.at_s for r in faults.restarts if r.robot == kill.robot and r.at_s > kill.at_s]
+        windows.append((f"kill {kill.robot}", kill.at_s, min(back, default=recording.span[1])))
+    return [
+        {
+            "fault": name,
+            "window_s": [t1, t2],
+            "in_process": _phase_rmse(ref, recording, t1, t2),
+            "agents": {
+                robot: _phase_rmse(_of_owner(got, robot), recording, t1, t2)
+                for robot in recording.robots
+            },
+        }
+        for name, t1, t2 in windows
+    ]
+
+
+def rejoined(
+    faults: FaultSettings, got: Estimates, collected: Collected, recording: Recording
+) -> list[dict[str, Any]]:
+    """Per restart: how the restarted agent rejoined the team's estimate (its ``sync``
+    counters, :mod:`relloc.runtime.handoff`) and its largest difference from every agent that
+    stayed up, over their common record times (before the kill they agree to the
+    perfect-network tolerance; after the restart they filter the same events)."""
+    out = []
+    for restart in faults.restarts:
+        robot = restart.robot
+        mine = _of_owner(got, robot)
+        diffs = {}
+        for other in recording.robots:
+            if other == robot or any(k.robot == other for k in faults.kills):
+                continue
+            agree = agreement(mine, _of_owner(got, other, robot))
+            diffs[other] = max(agree["max_abs_mean_diff"], agree["max_abs_cov_diff"])
+        last = collected.stats.get(robot, [{}])[-1]
+        out.append(
+            {
+                "robot": robot,
+                "restart_s": restart.at_s,
+                "sync": {k.split(".", 1)[1]: v for k, v in last.items() if k.startswith("sync.")},
+                "first_record_s": min(
+                    (float(b.t[0]) for b in mine.beliefs if b.t.size), default=None
+                ),
+                "max_abs_diff_from_agents": diffs,
+            }
+        )
+    return out
+
+
 def _late_counts(counters: Mapping[str, int]) -> dict[str, int]:
     """An agent's late readings: arrived after their window was filtered, re-filtered from a
     checkpoint, or lost (older than every checkpoint); windows filtered overdue."""
@@ -163,6 +247,9 @@ def _late_counts(counters: Mapping[str, int]) -> dict[str, int]:
         "readings_late": counters.get("rows_late", 0),
         "readings_refiltered": counters.get("tracks.rows_refiltered", 0),
         "readings_late_lost": counters.get("tracks.rows_late_lost", 0),
+        "odometry_late": counters.get("late_samples", 0),
+        "odometry_refiltered": counters.get("tracks.odometry_refiltered", 0),
+        "odometry_late_lost": counters.get("tracks.odometry_late_lost", 0),
         "overdue_windows": counters.get("overdue_windows", 0),
     }
 
@@ -204,6 +291,10 @@ def agents_summary(runs: list[dict[str, Any]], faults: FaultSettings) -> dict[st
     }
 
 
+def _largest(values: Mapping[str, float]) -> float | None:
+    return max(values.values(), default=None)
+
+
 def _diff(a: float | None, b: float | None) -> float | None:
     return None if a is None or b is None else float(a) - float(b)
 
@@ -228,6 +319,13 @@ def report_markdown(summary: Mapping[str, Any]) -> str:
                 ]
             )
     agree = summary["agreement"]
+    rejoins = [
+        f"Run {r['run']}: agent {j['robot']} restarted at {j['restart_s']:g} s, rejoined "
+        f"({', '.join(f'{k} {v}' for k, v in sorted(j['sync'].items()))}); largest |Δ| from "
+        f"the agents that stayed up: {fmt(_largest(j['max_abs_diff_from_agents']))}."
+        for r in summary["per_run"]
+        for j in r["rejoined"]
+    ]
     return "\n".join(
         [
             f"# relloc team up — {summary['experiment']}, case {summary['case']} "
@@ -252,5 +350,6 @@ def report_markdown(summary: Mapping[str, Any]) -> str:
             f"{summary['tolerance']:g}), records missing: {agree['records_missing']}: "
             f"{'met' if agree['within_tolerance'] else 'not met'}"
             f"{'' if agree['perfect_network'] else ' — faults were injected, so not expected'}.",
+            *(["", *rejoins] if rejoins else []),
         ]
     )

@@ -17,11 +17,16 @@ very estimator the in-process reproduction gives that robot:
   (bearings of robots and landmarks, robot 1's GPS fixes) and runs the team EIF
   (:class:`~relloc.estimators.cooperative.CooperativeEstimator`, the settings of one case of
   :data:`relloc.experiments.sharma2013.CASES`) on all it received, recording every robot's
-  pose every 0.5 s; run ``i`` as above.
+  pose every 0.5 s; run ``i`` as above. A teammate whose odometry has stopped (its process
+  died) is *lost*: still, with the position and heading variance of a robot moving at up to
+  the scenario's speed and turn rate
+  (:attr:`~relloc.estimators.cooperative.OdometryModel.lost_speed`); on a perfect network no
+  robot is ever lost, so the in-process reference runs the same filter.
 """
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -137,6 +142,11 @@ def sharma_estimator(sim: Any, scenario: Any, case: str) -> Any:
         raise ConfigError(f"--case: {case!r} is not one of {sorted(CASES)}")
     rec = sim.recording
     settings = case_settings(scenario, case)
+    # a teammate whose process died keeps driving: lost at the platform's speed and turn rate
+    odometry = replace(
+        settings.odometry, lost_speed=scenario.speed, lost_turn_rate=scenario.max_turn_rate
+    )
+    settings = replace(settings, odometry=odometry)
     return CooperativeEstimator(
         rec.robots, sim.prior, settings, rec.landmarks, record_updates=False
     )

@@ -27,6 +27,9 @@ later are fused late — at the next event — and counted).
 Measurements of a teammate whose process is gone (its liveliness token vanished) are not fused —
 its motion can no longer be predicted — and are counted (``skipped_absent``); a track of it then
 expires and is re-created when the teammate is back and seen again (``recreated``, re-found).
+An estimator that follows lost robots (seed 001's team filter with its lost model:
+:attr:`relloc.estimators.cooperative.OdometryModel.lost_speed`) still fuses what the others
+measure *of* such a teammate; only the teammate's own readings are skipped.
 
 A :class:`~relloc.core.estimates.Recorder` collects what the estimator believed and did;
 :meth:`WindowDriver.take_new` returns only what is *new* since its last call (an
@@ -55,6 +58,7 @@ from relloc.core.contract import (
 )
 from relloc.core.estimates import Estimates, Recorder
 from relloc.core.events import TIME_TOL, run_events
+from relloc.core.gaussian import Gaussian
 from relloc.core.recording import Measurements
 from relloc.pipeline.replay import merge_times
 from relloc.runtime.teammates import ReceivedOdometry
@@ -115,6 +119,7 @@ class _Plan:
     stamps: Array
     rows: Measurements
     record: Array
+    inclusive: bool = False
     next: int = 0
     fed: int = 0
 
@@ -123,25 +128,10 @@ class _Plan:
         return self.next >= self.times.size
 
 
-def _with_rows(plan: _Plan, extra: Measurements) -> _Plan:
-    """``plan`` with readings added: their stamps become events, and the velocity held over a
-    step they split is that step's (no odometry stamp lies inside a planned step). A reading
-    stamped after the window's last planned event holds the last step's velocity — the one
-    reported at that event is not in the plan: an approximation, for that reading only."""
-    rows = Measurements.concatenate([plan.rows, extra])
+def _in_robot_order(rows: Measurements) -> Measurements:
+    """Readings in time order and, at one time, in robot order (as a node files them)."""
     order = np.lexsort((rows.observer, rows.t))
-    rows = rows.select(order) if np.any(np.diff(order) < 0) else rows
-    times = merge_times(plan.times, extra.t)
-    step = np.searchsorted(plan.times, times - TIME_TOL)  # the planned step each event ends
-    step = np.minimum(step, plan.times.size - 1)
-    return _Plan(
-        t1=plan.t1,
-        times=times,
-        held=plan.held[step],
-        stamps=plan.stamps[step],
-        rows=rows,
-        record=plan.record,
-    )
+    return rows.select(order) if np.any(np.diff(order) < 0) else rows
 
 
 class _Wired:
@@ -236,16 +226,50 @@ class WindowDriver:
             "rows_refiltered": 0,
             "rows_late_lost": 0,
             "rows_before_start": 0,
+            "odometry_refiltered": 0,
+            "odometry_late_lost": 0,
+            "rows_before_handoff": 0,
         }
         self._rows_not_used: dict[str, int] = {}
         self.checkpoint_windows = checkpoint_windows
         self.start = float(start)
         self._checkpoints: deque[_Checkpoint] = deque()
         self._talks = False
+        self._streams: list[ReceivedOdometry] = []
+        self._handed_at = -np.inf
 
     def mark_talking(self) -> None:
         """The estimator's messages go to teammates (no re-filtering: what it sent is out)."""
         self._talks = True
+
+    # ------------------------------------------------------------------ rejoining the team
+    @property
+    def hands_off(self) -> bool:
+        """Whether the estimator can hand its team belief to a restarted teammate and start
+        from one (optional ``team_belief() -> (t, Gaussian)`` and ``resumed(t, Gaussian)``:
+        seed 001's team filter)."""
+        return callable(getattr(self.estimator, "team_belief", None)) and callable(
+            getattr(self.estimator, "resumed", None)
+        )
+
+    @property
+    def time(self) -> float | None:
+        """The latest event the estimator processed (None before the first)."""
+        return self._t
+
+    def team_belief(self) -> tuple[float, Gaussian]:
+        """The estimator's belief of the whole team at its latest event (:attr:`hands_off`)."""
+        t, belief = self.estimator.team_belief()  # type: ignore[attr-defined]
+        return float(t), belief
+
+    def resume(self, t: float, belief: Gaussian) -> None:
+        """Continue from a teammate's team belief at its event ``t``: the estimator starts
+        there (``resumed``) and only what comes after ``t`` is filtered — readings at or
+        before ``t`` are in the belief already and are counted (``rows_before_handoff``)."""
+        assert not self.busy and not self._checkpoints, "resume: windows were filtered already"
+        self.estimator = self._wired.inner = self.estimator.resumed(t, belief)  # type: ignore[attr-defined]
+        self._t = self._handed_at = float(t)
+        self._window_end = float(t)
 
     # ------------------------------------------------------------------ windows
     @property
@@ -283,13 +307,28 @@ class WindowDriver:
         odometry as received (``streams`` in roster order) and the window's measurement rows;
         rows of a teammate that is not ``present`` are dropped and counted."""
         assert not self.busy, "start_window: the previous window is not finished"
+        self._streams = list(streams)
         live = self._live_rows(rows, present)
         early = live.t < self.start - TIME_TOL
         if early.any():
             self._counts["rows_before_start"] += int(early.sum())
             live = live.select(~early)
-        record = self.record_times(t0, t1, inclusive, live)
-        pieces = [record, live.t] + [s.stamps_between(t0, t1, inclusive) for s in streams]
+        handed = live.t <= self._handed_at + TIME_TOL
+        if handed.any():
+            self._counts["rows_before_handoff"] += int(handed.sum())
+            live = live.select(~handed)
+        self._plan = self._make_plan(t0, t1, live, inclusive)
+        self._checkpoint(t0)
+        if not self._plan.times.size:
+            self._window_end = t1
+
+    def _make_plan(self, t0: float, t1: float, rows: Measurements, inclusive: bool) -> _Plan:
+        """The events of ``[t0, t1)`` (``[t0, t1]``) after the estimator's current time: the
+        record times, the readings' stamps and every robot's odometry stamps in
+        :attr:`_streams`, with the velocity (and its stamp) each robot holds up to each event."""
+        record = self.record_times(t0, t1, inclusive, rows)
+        streams = self._streams
+        pieces = [record, rows.t] + [s.stamps_between(t0, t1, inclusive) for s in streams]
         times = merge_times(*pieces)
         times = times[times >= self.start - TIME_TOL]
         record = record[record >= self.start - TIME_TOL]
@@ -302,10 +341,7 @@ class WindowDriver:
         before = np.concatenate([start, times[:-1]]) + TIME_TOL
         held = np.stack([s.held_at(before) for s in streams], axis=1)
         stamps = np.stack([s.stamp_at(before) for s in streams], axis=1)
-        self._plan = _Plan(t1=t1, times=times, held=held, stamps=stamps, rows=live, record=record)
-        self._checkpoint(t0)
-        if not times.size:
-            self._window_end = t1
+        return _Plan(t1, times, held, stamps, rows, record, inclusive)
 
     def run(self, until: float | None = None) -> bool:
         """Process the planned events at or before ``until`` (every one if None); True once
@@ -342,18 +378,28 @@ class WindowDriver:
         while len(self._checkpoints) > self.checkpoint_windows:
             self._checkpoints.popleft()
 
-    def refilter(self, late: Measurements) -> int:
-        """Fuse readings that arrived after their window was filtered at their own time stamps:
-        go back to the checkpoint of the earliest window they belong to and filter every window
-        since again, with them (re-recording the beliefs of those windows: the collector keeps
-        the latest belief of each time). Returns the readings that could not be fused (older
-        than every checkpoint, or the estimator talks to teammates: what it sent is out); they
-        are counted (``rows_late_lost``), the fused ones too (``rows_refiltered``)."""
-        if late.size == 0:
+    def refilter(self, late: Measurements, *, odometry: Array | None = None) -> int:
+        """Fuse what arrived after its window was filtered at its own time stamps: readings
+        ``late`` and odometry samples stamped ``odometry`` (already filed in the streams the
+        driver was given: :meth:`ReceivedOdometry.file_late`). Go back to the checkpoint of
+        the earliest window they belong to and plan and filter every window since again
+        (re-recording the beliefs of those windows: the collector keeps the latest belief of
+        each time). Returns the readings that could not be fused (older than every
+        checkpoint, or the estimator talks to teammates: what it sent is out); they are
+        counted (``rows_late_lost``, samples ``odometry_late_lost``), the fused ones too
+        (``rows_refiltered``, ``odometry_refiltered``)."""
+        samples = np.zeros(0) if odometry is None else np.asarray(odometry, dtype=float)
+        handed = late.t <= self._handed_at + TIME_TOL  # in the belief handed over already
+        if handed.any():
+            self._counts["rows_before_handoff"] += int(handed.sum())
+            late = late.select(~handed)
+        if late.size == 0 and samples.size == 0:
             return 0
-        fits = [k for k, c in enumerate(self._checkpoints) if c.t0 <= late.t.min() + TIME_TOL]
+        earliest = float(np.min(np.concatenate([late.t, samples])))
+        fits = [k for k, c in enumerate(self._checkpoints) if c.t0 <= earliest + TIME_TOL]
         if self.busy or self.sent or self._talks or not fits:
             self._counts["rows_late_lost"] += late.size
+            self._counts["odometry_late_lost"] += samples.size
             return late.size
         first = fits[-1]
         again = list(self._checkpoints)[first:]
@@ -365,29 +411,39 @@ class WindowDriver:
         for i, c in enumerate(again):
             t_next = again[i + 1].t0 if i + 1 < len(again) else np.inf
             mine = late.select((late.t >= c.t0 - TIME_TOL) & (late.t < t_next - TIME_TOL))
-            plan = _with_rows(c.plan, mine) if mine.size else c.plan
-            self._plan = _Plan(
-                t1=plan.t1,
-                times=plan.times,
-                held=plan.held,
-                stamps=plan.stamps,
-                rows=plan.rows,
-                record=plan.record,
-            )
+            rows = _in_robot_order(Measurements.concatenate([c.plan.rows, mine]))
+            self._plan = self._make_plan(c.t0, c.plan.t1, rows, c.plan.inclusive)
             self._checkpoint(c.t0)
+            if not self._plan.times.size:
+                self._window_end = c.plan.t1
             self.run()
         self._counts["rows_refiltered"] += late.size
+        self._counts["odometry_refiltered"] += samples.size
         return 0
 
+    @property
+    def history_from(self) -> float:
+        """The earliest time re-filtering may plan from again (the estimator's time at the
+        oldest checkpoint): the streams must keep the samples held since then."""
+        if not self._checkpoints:
+            return np.inf
+        c = self._checkpoints[0]
+        return c.t0 if c.t is None else c.t
+
     def _live_rows(self, rows: Measurements, present: set[str]) -> Measurements:
-        """``rows`` without those of (or about) a teammate that is not present."""
+        """``rows`` without those of (or about) a teammate that is not present — the rows
+        about it are kept where the estimator follows lost robots (optional
+        ``follows_lost_robots``: seed 001's team filter, whose lost model predicts such a
+        robot's motion, loosely)."""
         if rows.size == 0:
             return rows
         absent = np.array(
             [r not in present and r != self.robot for r in self.roster] + [False], dtype=bool
         )
-        # index −1 (no target robot: a landmark, a bearing of unknown origin) maps to False
-        dead = absent[np.where(rows.target >= 0, rows.target, -1)] | absent[rows.observer]
+        dead = absent[rows.observer]
+        if not getattr(self.estimator, "follows_lost_robots", False):
+            # index −1 (no target robot: a landmark, a bearing of unknown origin) maps to False
+            dead |= absent[np.where(rows.target >= 0, rows.target, -1)]
         self._counts["skipped_absent"] += int(dead.sum())
         return rows.select(~dead) if dead.any() else rows
 

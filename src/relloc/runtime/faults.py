@@ -36,7 +36,7 @@ import numpy as np
 from relloc.errors import ConfigError
 from relloc.runtime.keys import check_id
 
-FAULTED_KINDS = frozenset({"odom", "meas", "rows", "eqm", "mail"})
+FAULTED_KINDS = frozenset({"odom", "meas", "rows", "eqm", "mail", "sync"})
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -7,6 +7,7 @@
 | ``relloc/<team>/robot/<id>/eqm``        | ``eqm``: its belief of a teammate (1 Hz broadcast) |
 | ``relloc/<team>/robot/<id>/rows``       | ``rows``: its readings, shared (seed 001) |
 | ``relloc/<team>/robot/<id>/mail``       | ``mail``: its estimator's messages to teammates |
+| ``relloc/<team>/robot/<id>/sync``       | ``sync``: team belief asked for / handed over |
 | ``relloc/<team>/robot/<id>/est``        | ``est``: its estimates, for the collector    |
 | ``relloc/<team>/robot/<id>/evt``        | ``evt``: its track events, for the collector |
 | ``relloc/<team>/robot/<id>/stats``      | ``stats``: its message and estimate counters |
@@ -26,7 +27,7 @@ import re
 
 from relloc.errors import ConfigError
 
-ROBOT_KINDS = ("odom", "meas", "rows", "eqm", "mail", "est", "evt", "stats", "ack")
+ROBOT_KINDS = ("odom", "meas", "rows", "eqm", "mail", "sync", "est", "evt", "stats", "ack")
 _ID = re.compile(r"^[A-Za-z0-9_-]{1,64}$")
 
 

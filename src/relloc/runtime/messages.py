@@ -22,6 +22,10 @@ checked against their declared shape, ``-1`` meaning "any length". Kinds:
 - ``mail`` — what the sender's estimator sends its teammates' estimators (seed 002's equivalent
   measurements, stamped with the event that produced them) and the sender's ``progress``; see
   :mod:`relloc.runtime.mail`.
+- ``sync`` — a restarted agent asks a teammate (``target``) for the team belief from
+  ``stamp`` on (empty ``mean`` / ``cov``), or the teammate answers the asker (``target``) with
+  its belief of the whole team at its event ``stamp``: ``mean`` (d,), ``cov`` (d, d); see
+  :mod:`relloc.runtime.handoff`.
 - ``est`` — the sender's new estimates of one ``target`` (its track ``track``, ``""`` for the
   one track) for the collector (monitoring, not fusion): one increment of a
   :class:`~relloc.core.estimates.BeliefSeries` — beliefs in ``frame`` (a frame of
@@ -109,6 +113,7 @@ SCHEMA: dict[str, dict[str, str | Shape]] = {
         "prior_covs": (-1, STATE_DIM, STATE_DIM),
         "weights": (-1,),
     },
+    "sync": {"target": "str", "stamp": "float", "mean": (-1,), "cov": (-1, -1)},
     "est": {
         "target": "str",
         "track": "str",
@@ -378,6 +383,8 @@ def _check_consistency(kind: str, body: dict[str, Any]) -> None:
             raise MessageRejected("shape", "mail: track arrays of different lengths")
         if np.any(body["weights"] < 0):
             raise MessageRejected("malformed", "mail: negative weights")
+    elif kind == "sync" and body["cov"].shape != (body["mean"].shape[0],) * 2:
+        raise MessageRejected("shape", "sync: cov is not (d, d) for a mean of d")
     elif kind == "evt":
         if not (len(body["targets"]) == len(body["kinds"]) == body["stamps"].shape[0]):
             raise MessageRejected("shape", "evt: batch lengths differ")
@@ -392,7 +399,7 @@ def _check_consistency(kind: str, body: dict[str, Any]) -> None:
         covs = body["covs"]
     elif kind == "mail":
         covs = np.concatenate([body["covs"], body["prior_covs"]])
-    if covs is not None:
+    if covs is not None and np.size(covs):
         covs = np.asarray(covs)
         covs = covs.reshape(-1, *covs.shape[-2:])
         asym = np.abs(covs - np.swapaxes(covs, -1, -2)).max(initial=0.0)

@@ -9,7 +9,10 @@ Per clock tick ``k`` (simulated time ``t_k``; see :mod:`relloc.runtime.clock`) a
 
 1. releases what its :class:`~relloc.runtime.faults.LinkEmulator` holds for ``t_k``, files
    teammates' odometry and counts their measurements and equivalent measurements (duplicates
-   recognised by sequence number, late samples counted);
+   recognised by sequence number, late samples counted); where the estimator keeps
+   checkpoints (seed 001), readings and odometry samples that arrive after their window was
+   filtered are re-filtered from the checkpoint before them
+   (:meth:`~relloc.runtime.estimation.WindowDriver.refilter`);
 2. publishes its own odometry and measurements of the window ``[t_{k−1}, t_k)`` — one ``odom``
    and one ``meas`` batch per tick: the configured publication rate is the tick rate;
 3. filters every pending window whose inputs are in, through its estimator's
@@ -27,6 +30,11 @@ Per clock tick ``k`` (simulated time ``t_k``; see :mod:`relloc.runtime.clock`) a
    (``evt``) and counters (``stats``) to the collector; finally it acknowledges ``k``.
 
 The last tick's window is ``[t_{n−1}, t_n]``: it holds the run's last instant.
+
+A node that joins a running team (restarted: its first tick is not the first) and whose
+estimator runs the team's filter asks a teammate for its team belief (``sync``) and filters
+nothing until it continues from it (:mod:`relloc.runtime.handoff`); every node answers such
+requests once its estimator has reached the time asked for.
 
 Teammates appear and disappear through Zenoh liveliness. Measurements of a teammate that is gone
 are not fused (its motion cannot be predicted without its odometry), so its track expires after
@@ -46,13 +54,14 @@ from typing import Any
 
 import numpy as np
 
-from relloc.core.recording import Measurements, Recording
-from relloc.errors import ConfigError
+from relloc.core.recording import Measurements, Recording, empty_measurements
+from relloc.errors import ConfigError, DataError
 from relloc.estimators.relative import FRAME
 from relloc.runtime import keys
 from relloc.runtime.admission import SenderBudget, TickGuard, admit, check_not_future
 from relloc.runtime.estimation import WindowDriver
 from relloc.runtime.faults import FAULTED_KINDS, FaultSettings, LinkEmulator
+from relloc.runtime.handoff import Handoff
 from relloc.runtime.mail import mail_body, mail_items
 from relloc.runtime.messages import (
     DEFAULT_MAX_BYTES,
@@ -201,6 +210,7 @@ class RobotNode:
         self._ticks = TickGuard(end_s=getattr(source, "end_time", None))
         self._budget = SenderBudget.for_team(len(settings.roster))
         self._inbox: Inbox | None = None
+        self._handoff = Handoff(settings.robot, settings.roster, self.counters)
 
     # ------------------------------------------------------------------ process main loop
     def run(self) -> dict[str, int]:
@@ -209,7 +219,7 @@ class RobotNode:
         inbox = self._inbox = Inbox(max_message_bytes=s.max_bytes)
         try:
             if self.listens:
-                for kind in ("odom", "meas", "rows", "eqm", "mail"):
+                for kind in ("odom", "meas", "rows", "eqm", "mail", "sync"):
                     inbox.subscribe(session, keys.robot_wildcard(s.team, kind))
             inbox.subscribe(session, keys.clock_key(s.team, "tick"))
             inbox.subscribe(session, keys.clock_key(s.team, "ctl"))
@@ -339,6 +349,11 @@ class RobotNode:
         if self._window_start is None:  # first tick heard (a restarted node joins mid-run)
             self._window_start = self._filtered_until = t - self._dt
             self._next_eqm_s = self._next_report_s = t
+            if k > 1 and self.listens and self.estimator.hands_off:
+                self._handoff.begin(after=t)  # rejoin the team's estimate (module handoff)
+        request = self._handoff.request([r for r, m in self.teammates.items() if m.present])
+        if request is not None:
+            self._send("sync", request)
         self._deliver(self.link.release(t))
         # the run's last instant belongs to the last window
         final = self._last_tick_seen
@@ -362,6 +377,7 @@ class RobotNode:
         if self._done:
             return
         self._deliver(self.link.release(np.inf))
+        self._handoff.give_up()
         last = self._pending[-1] if self._pending else None
         if last is not None and not (last.final or last.started):
             # the clock left before its last tick: the last instant we have ends the run
@@ -372,6 +388,8 @@ class RobotNode:
         self._done = True
 
     def _deliver(self, messages: list[Message]) -> None:
+        late_rows: list[Measurements] = []
+        late_odometry: list[np.ndarray] = []
         for msg in messages:
             if not self._seen.is_new(msg.sender, msg.kind, msg.seq):
                 self.counters["duplicates"] += 1
@@ -382,7 +400,10 @@ class RobotNode:
                 continue
             self.counters[f"delivered.{msg.kind}"] += 1
             if msg.kind == "odom":
-                mate.odometry.add(msg.body["stamps"], msg.body["u"])
+                stamps, u = mate.odometry.add(msg.body["stamps"], msg.body["u"])
+                if stamps.size and self.estimator.checkpoint_windows:
+                    mate.odometry.file_late(stamps, u)  # re-filtered below
+                    late_odometry.append(stamps)
                 mate.heard_until_s = max(mate.heard_until_s or -np.inf, msg.t)
             elif msg.kind == "rows" and self.s.share_rows:
                 try:
@@ -395,7 +416,7 @@ class RobotNode:
                 late = rows.t < self._unstarted_from() - TIME_TOL
                 if late.any():  # its window is filtered: fuse it at its time stamp anyway
                     self.counters["rows_late"] += int(late.sum())
-                    self.estimator.refilter(rows.select(late))
+                    late_rows.append(rows.select(late))
                     rows = rows.select(~late)
                 mate.rows.append(rows)
             elif msg.kind == "mail" and self.talks:
@@ -408,6 +429,33 @@ class RobotNode:
                 mate.progress = max(mate.progress, float(msg.body["progress"]))
                 for stamp, items in parcels:
                     self.estimator.deliver(stamp, msg.sender, items)
+            elif msg.kind == "sync" and msg.body["target"] == self.s.robot:
+                self._on_sync(msg)
+        if late_rows or late_odometry:
+            self.estimator.refilter(
+                Measurements.concatenate(late_rows) if late_rows else empty_measurements(),
+                odometry=np.concatenate(late_odometry) if late_odometry else None,
+            )
+
+    def _on_sync(self, msg: Message) -> None:
+        """A teammate asks for the team belief, or answers this node's request
+        (:mod:`relloc.runtime.handoff`)."""
+        if msg.body["mean"].size == 0:
+            if self.estimator.hands_off:
+                self._handoff.note_request(msg.sender, msg.body)
+            return
+        handed = self._handoff.accept(msg.sender, msg.body, self._t, self._dt)
+        if handed is not None:
+            self.estimator.resume(*handed)
+            self._handoff.resumed()
+
+    def _send_replies(self) -> None:
+        """Answer the teammates whose requested time this node's estimator has reached."""
+        for body in self._handoff.replies(self.estimator):
+            try:
+                self._send("sync", body)
+            except DataError:  # a team too large for one message: the asker times out
+                self.counters["sync.too_large"] += 1
 
     def _unstarted_from(self) -> float:
         """Where the windows not yet started begin (readings before it are late)."""
@@ -474,8 +522,11 @@ class RobotNode:
         return rows
 
     def _filter_ready(self, *, force: bool) -> None:
-        """Filter what can be filtered (module docstring, step 3), then ship the progress."""
-        while self._pending:
+        """Filter what can be filtered (module docstring, step 3), then ship the progress. A
+        restarted node waiting for a teammate's team belief filters nothing."""
+        if force:
+            self._handoff.give_up()
+        while self._pending and not self._handoff.waiting:
             w = self._pending[0]
             overdue = self._t >= w.end + self.s.max_lag_ticks * self._dt - TIME_TOL
             if not w.started:
@@ -503,10 +554,12 @@ class RobotNode:
                 break
             self._pending.popleft()
             self._window_done(w)
+            keep = self.estimator.history_from  # the samples re-filtering may need
             for mate in self.teammates.values():
-                mate.odometry.consume_until(w.end)
-            self.own_odometry.consume_until(w.end)
+                mate.odometry.consume_until(w.end, keep)
+            self.own_odometry.consume_until(w.end, keep)
             self._filtered_until = w.end
+        self._send_replies()
         self._send_mail()
         self._send_due_acks()
 

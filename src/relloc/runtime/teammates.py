@@ -6,7 +6,8 @@ keeps the samples that arrived and answers zero-order-hold queries exactly like
 :meth:`relloc.core.recording.Odometry.held_at`: with a perfect network the node therefore feeds
 its filters the very same inputs as the in-process run. A lost sample means the previous one is
 held longer; a sample that arrives after the node has already propagated past its time is
-counted ``late`` and not used (the past is not re-filtered).
+counted ``late`` and handed back to the node, which files it only where it re-filters the past
+(seed 001's agents, :meth:`relloc.runtime.estimation.WindowDriver.refilter`).
 """
 
 from __future__ import annotations
@@ -32,17 +33,30 @@ class ReceivedOdometry:
         self.late = 0
         self.duplicate_samples = 0
 
-    def add(self, stamps: Array, u: Array) -> None:
-        for s, v in zip(stamps.tolist(), u, strict=True):
+    def add(self, stamps: Array, u: Array) -> tuple[Array, Array]:
+        """File the samples; return those that are late (stamped before what the node has
+        filtered) and were not filed: ``(stamps, u)``."""
+        late: list[int] = []
+        for k, (s, v) in enumerate(zip(stamps.tolist(), u, strict=True)):
             if s < self.consumed_until:
                 self.late += 1
+                late.append(k)
                 continue
-            i = bisect.bisect_left(self._t, s)
-            if i < len(self._t) and self._t[i] == s:
-                self.duplicate_samples += 1
-                continue
-            self._t.insert(i, s)
-            self._u.insert(i, np.asarray(v, dtype=float))
+            self._insert(s, v)
+        return np.asarray(stamps, dtype=float)[late], np.asarray(u, dtype=float)[late]
+
+    def file_late(self, stamps: Array, u: Array) -> None:
+        """File late samples after all (the node re-filters the windows they belong to)."""
+        for s, v in zip(stamps.tolist(), u, strict=True):
+            self._insert(s, v)
+
+    def _insert(self, s: float, v: Array) -> None:
+        i = bisect.bisect_left(self._t, s)
+        if i < len(self._t) and self._t[i] == s:
+            self.duplicate_samples += 1
+            return
+        self._t.insert(i, s)
+        self._u.insert(i, np.asarray(v, dtype=float))
 
     def held_at(self, t: Array) -> Array:
         """Zero-order hold at times ``t`` (zeros before the first sample), shape ``(len(t), 4)``."""
@@ -75,14 +89,16 @@ class ReceivedOdometry:
         upper = stamps <= t1 if inclusive else stamps < t1
         return stamps[(stamps >= t0) & upper]
 
-    def consume_until(self, t: float) -> None:
+    def consume_until(self, t: float, keep_from: float | None = None) -> None:
         """The node has filtered up to ``t`` (exclusive): later arrivals stamped before ``t`` are
-        late; samples older than the last one before ``t`` (the velocity still held at the
-        filter's current time) are no longer needed and are released."""
+        late; samples older than the last one before ``keep_from`` (default ``t``: the
+        velocity still held at the filter's current time; earlier where the node may
+        re-filter) are no longer needed and are released."""
         self.consumed_until = max(self.consumed_until, t)
-        keep_from = max(0, bisect.bisect_left(self._t, t) - 1)
-        del self._t[:keep_from]
-        del self._u[:keep_from]
+        keep = t if keep_from is None else min(t, keep_from)
+        keep_from_index = max(0, bisect.bisect_left(self._t, keep) - 1)
+        del self._t[:keep_from_index]
+        del self._u[:keep_from_index]
 
     @property
     def last_stamp(self) -> float | None:
