@@ -578,6 +578,11 @@ class AirGroundWorld:
             self._formation_error[k, i - 1] = (self.poses[0, :2] - self.poses[i, :2]) - desired
         self.k = k + 1
 
+    @property
+    def formation_error(self) -> Array:
+        """``(k, N, 2)`` the true ``r − r_des`` of every follower at the ticks stepped so far."""
+        return self._formation_error[: self.k]
+
     def commands_of(self, k: int) -> Array:
         """``(R, 4)`` every robot's command of tick ``k`` as body velocity (odometry)."""
         return self._commands[k].copy()
@@ -585,7 +590,7 @@ class AirGroundWorld:
     def recording(self) -> Recording:
         """Truth, commands and readings of the ticks stepped so far."""
         k = self.k
-        return _recording(
+        return airground_recording(
             self.sc,
             self.names,
             self.times[: k + 1],
@@ -600,7 +605,7 @@ class AirGroundWorld:
             recording=self.recording(),
             estimates=estimates,
             priors=self.priors,
-            formation_error=self._formation_error[: self.k],
+            formation_error=self.formation_error,
         )
 
 
@@ -674,7 +679,7 @@ def _uwb_ranges(
     )
 
 
-def _recording(
+def airground_recording(
     sc: AirGroundScenario,
     names: tuple[str, ...],
     times: Array,
@@ -682,6 +687,8 @@ def _recording(
     commands: Array,
     batches: list[Measurements],
 ) -> Recording:
+    """The run's :class:`Recording`: truth ``(K+1, R, 4)`` at ``times``, the commands
+    ``(K, R, 4)`` as odometry, the readings of every tick."""
     n_ugv = sc.n_followers + 1
     sv, sw = sc.velocity_noise
     sigma = [np.array([sv, 0.0, 0.0, sw])] * n_ugv + [np.zeros(4)] * sc.n_drones
