@@ -350,8 +350,13 @@ def reduce_run(
     scores = [accuracy_and_consistency([e], settle_s=0.0)["rmse"] for e in evals]
     leader = run.recording.robots[0]
     covs = [run.estimates.series(e.owner, leader).cov for e in evals]
+    each = [nees(e.error[:, :2], c[:, :2, :2]) for e, c in zip(evals, covs, strict=True)]
+    common = evals[0].t
+    for e in evals[1:]:
+        common = np.intersect1d(common, e.t)
+    # a follower whose process was killed has no beliefs for a while: the ticks all share
     nees_position = np.stack(
-        [nees(e.error[:, :2], c[:, :2, :2]) for e, c in zip(evals, covs, strict=True)], axis=1
+        [v[np.isin(e.t, common)] for v, e in zip(each, evals, strict=True)], axis=1
     )
     modes = np.concatenate([run.estimates.series(e.owner, leader).info["sw"] for e in evals])
     counts = run.estimates.counts

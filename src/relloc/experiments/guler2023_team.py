@@ -60,6 +60,7 @@ from relloc.experiments.guler2023 import (
     FilterFactory,
     RunSummary,
     build_cases,
+    follower_evaluations,
     reduce_run,
     simulate_case,
     summarise,
@@ -73,6 +74,7 @@ from relloc.runtime.airground import (
     Role,
     load_world,
 )
+from relloc.runtime.faults import FaultSettings
 from relloc.runtime.launcher import Collected, ProcessTeam, TeamLauncher
 from relloc.runtime.outcomes import outcomes_of
 from relloc.runtime.summary import agreement, assemble_estimates
@@ -311,6 +313,72 @@ def message_counts(
     }
 
 
+def fault_windows(faults: FaultSettings, end_s: float) -> list[tuple[str, float, float]]:
+    """``(name, T1, T2)`` of every fault with a time window (a partition; a kill to its
+    restart or the end of the run) and, for loss/delay/duplicates/reordering, the whole run."""
+    out = [
+        (f"partition {','.join(p.side)}@{p.start_s:g}-{p.end_s:g}", p.start_s, p.end_s)
+        for p in faults.partitions
+    ]
+    for kill in faults.kills:
+        later = [r.at_s for r in faults.restarts if r.robot == kill.robot and r.at_s > kill.at_s]
+        back = min(later) if later else end_s
+        out.append((f"kill {kill.robot}@{kill.at_s:g}, back @{back:g}", kill.at_s, back))
+    if faults.drop or faults.delay_ms or faults.jitter_ms or faults.duplicate or faults.reorder:
+        out.append(
+            (
+                f"network drop={faults.drop:g} delay={faults.delay_ms:g}ms "
+                f"jitter={faults.jitter_ms:g}ms duplicate={faults.duplicate:g} "
+                f"reorder={faults.reorder:g}",
+                0.0,
+                end_s,
+            )
+        )
+    return out
+
+
+def _window_rmse(run: AirGroundRun, t1: float, t2: float) -> dict[str, float | None]:
+    """Position RMSE of the followers' estimates of ``r`` and the true formation RMSE in
+    ``[t1, t2)`` (over the followers and the ticks there; None: no sample)."""
+    sq = [
+        np.sum(e.error[(e.t >= t1 - 1e-9) & (e.t < t2 - 1e-9), :2] ** 2, axis=1)
+        for e in follower_evaluations(run)
+    ]
+    est = np.concatenate(sq) if sq else np.zeros(0)
+    t = run.recording.truth[0].t[1 : run.formation_error.shape[0] + 1]
+    inside = (t >= t1 - 1e-9) & (t < t2 - 1e-9)
+    form = np.sum(run.formation_error[inside] ** 2, axis=2).reshape(-1)
+    return {
+        "estimate_rmse_m": float(np.sqrt(est.mean())) if est.size else None,
+        "formation_rmse_m": float(np.sqrt(form.mean())) if form.size else None,
+    }
+
+
+def fault_accuracy(
+    faults: FaultSettings, got: AirGroundRun, ref: AirGroundRun
+) -> list[dict[str, Any]]:
+    """Per fault: the followers' estimation RMSE and the true formation RMSE before, during and
+    after its window, distributed and in-process (fault-free) on the same seed."""
+    end = float(got.recording.truth[0].t[-1]) + 1e-6
+    out = []
+    for name, t1, t2 in fault_windows(faults, end):
+        spans = {"before": (0.0, t1), "during": (t1, t2), "after": (t2, end)}
+        out.append(
+            {
+                "fault": name,
+                "window_s": [t1, t2],
+                **{
+                    side: {
+                        "distributed": _window_rmse(got, a, b),
+                        "in_process": _window_rmse(ref, a, b),
+                    }
+                    for side, (a, b) in spans.items()
+                },
+            }
+        )
+    return out
+
+
 def _reduce(run: AirGroundRun) -> RunSummary:
     """The reproduction's reduction of a run whose filters' NIS sums are not at hand."""
     return reduce_run(
@@ -338,6 +406,7 @@ def run_guler_team(s: GulerTeamSettings) -> dict[str, Any]:
                 "run": i,
                 "ticks": int(got.formation_error.shape[0]),
                 "agreement": {k: agree[k] for k in ("max_abs_mean_diff", "max_abs_cov_diff")},
+                "fault_accuracy": fault_accuracy(s.faults, got, ref),
                 "fault_outcomes": outcomes_of(s.faults, got.estimates, got.recording),
                 "messages": message_counts(collected, got.recording.robots, world),
                 "world": {k: world[k] for k in ("ticks", "wall_s", "startup_wall_s", "events")},
