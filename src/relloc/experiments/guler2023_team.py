@@ -337,6 +337,13 @@ def fault_windows(faults: FaultSettings, end_s: float) -> list[tuple[str, float,
     return out
 
 
+def _tick_times(run: AirGroundRun) -> np.ndarray:
+    """The run's tick times (those of its truth)."""
+    truth = run.recording.truth
+    assert truth is not None  # a simulation always has it
+    return truth[0].t
+
+
 def _window_rmse(run: AirGroundRun, t1: float, t2: float) -> dict[str, float | None]:
     """Position RMSE of the followers' estimates of ``r`` and the true formation RMSE in
     ``[t1, t2)`` (over the followers and the ticks there; None: no sample)."""
@@ -345,7 +352,7 @@ def _window_rmse(run: AirGroundRun, t1: float, t2: float) -> dict[str, float | N
         for e in follower_evaluations(run)
     ]
     est = np.concatenate(sq) if sq else np.zeros(0)
-    t = run.recording.truth[0].t[1 : run.formation_error.shape[0] + 1]
+    t = _tick_times(run)[1 : run.formation_error.shape[0] + 1]
     inside = (t >= t1 - 1e-9) & (t < t2 - 1e-9)
     form = np.sum(run.formation_error[inside] ** 2, axis=2).reshape(-1)
     return {
@@ -359,7 +366,7 @@ def fault_accuracy(
 ) -> list[dict[str, Any]]:
     """Per fault: the followers' estimation RMSE and the true formation RMSE before, during and
     after its window, distributed and in-process (fault-free) on the same seed."""
-    end = float(got.recording.truth[0].t[-1]) + 1e-6
+    end = float(_tick_times(got)[-1]) + 1e-6
     out = []
     for name, t1, t2 in fault_windows(faults, end):
         spans = {"before": (0.0, t1), "during": (t1, t2), "after": (t2, end)}

@@ -6,8 +6,8 @@ state. Every check raises :class:`~relloc.runtime.messages.MessageRejected` with
 reason, which the receiver counts (``rejected_by_reason`` in the summary):
 
 - **roles** (:func:`admit`): a robot kind (``odom``, ``meas``, ``eqm``, ``est``, ``evt``,
-  ``stats``, ``ack``, ``cmd``) is accepted only on ``relloc/<team>/robot/<id>/<kind>`` of a roster robot
-  ``id`` and only from that robot; ``tick``, ``ctl`` and ``sense`` only on
+  ``stats``, ``ack``, ``cmd``) is accepted only on ``relloc/<team>/robot/<id>/<kind>`` of a
+  roster robot ``id`` and only from that robot; ``tick``, ``ctl`` and ``sense`` only on
   ``relloc/<team>/clock/<kind>``
   and only from the infrastructure sender ``clock``; the message type must be its key's kind
   (``unknown_key``, ``unknown_sender``, ``spoofed``, ``wrong_kind``). In ``--secure`` mode Zenoh's

@@ -303,6 +303,7 @@ def save_world(world: AirGroundWorld, path: Path) -> None:
     the world process is the only one that knows the truth)."""
     rec = world.recording()
     m = rec.measurements
+    assert rec.truth is not None  # a simulation always has it
     np.savez(
         path,
         truth=np.stack([g.pose for g in rec.truth], axis=1),

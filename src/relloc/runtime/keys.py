@@ -11,10 +11,10 @@
 | ``relloc/<team>/robot/<id>/evt``        | ``evt``: its track events, for the collector |
 | ``relloc/<team>/robot/<id>/stats``      | ``stats``: its message and estimate counters |
 | ``relloc/<team>/robot/<id>/ack``        | ``ack``: it finished a clock tick            |
-| ``relloc/<team>/robot/<id>/cmd``        | ``cmd``: its command to the world process (seed 003) |
+| ``relloc/<team>/robot/<id>/cmd``        | ``cmd``: its command to the world (seed 003) |
 | ``relloc/<team>/clock/tick``            | ``tick``: simulated time from the clock      |
 | ``relloc/<team>/clock/ctl``             | ``ctl``: kill / restart / end events         |
-| ``relloc/<team>/clock/sense``           | ``sense``: a robot's readings from the world process (seed 003) |
+| ``relloc/<team>/clock/sense``           | ``sense``: a robot's readings (seed 003)     |
 | ``relloc/<team>/alive/<id>`` (liveliness) | token held while the process lives          |
 | ``relloc/<team>/ready/<id>`` (liveliness) | held once the robot has seen every teammate |
 
