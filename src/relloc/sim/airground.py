@@ -1,44 +1,46 @@
 """Closed-loop simulator of the air-ground team of seed 003 (leader, N followers, M drones).
 
-:func:`simulate_airground` is given the followers' estimators (one per follower, each built by
-the caller's factory and driven through the estimator contract of
-:mod:`relloc.core.contract`) and their controller. Per tick ``k`` (period ``dt``, the
-filters' 20 Hz of the paper) it
+One run is a world and its robots. The **world** (:class:`AirGroundWorld`) holds the true
+motion and every sensor, and all the randomness; the **robots** hold only their own code and
+what they sensed or heard: the leader follows its path (constant arc, or an S-shaped curve with
+``ω_0(t) = ω̄ sin(2πt/T)``); each follower is a :class:`FollowerAgent` (its estimator, driven
+through the estimator contract of :mod:`relloc.core.contract`, and its command); each drone is
+a :class:`DroneGuidance`. :func:`simulate_airground` runs them all in one process; a team of
+processes (:mod:`relloc.runtime.airground`) runs the same objects, one robot per process, around
+the same world. Per tick ``k`` (period ``dt``, the filters' 20 Hz of the paper):
 
-1. **Commands.** The leader follows its path (constant arc, or an S-shaped curve with
-   ``ω_0(t) = ω̄ sin(2πt/T)``). Followers are either externally commanded to move rigidly with
-   the leader on the arc (``control="external"``) or commanded by the controller from *their
-   own estimates* (``control="formation"``, e.g.
-   :class:`relloc.control.formation.FormationController`).
-2. **Motion.** Every UGV moves with its commands perturbed by white velocity noise (slip,
-   actuation), :func:`relloc.models.unicycle.unicycle_step`. Each drone flies at a constant
-   heading (ψ̄ = 0, the x-axis of F_G) with :func:`relloc.models.airground.drone_step` toward
-   its commanded midpoint; its altitude wanders around the set altitude (Gauss–Markov).
-3. **Drone guidance.** A drone knows the formation layout and the leader's broadcast commands;
-   it keeps a track of the leader's pose from what its camera sees (the leader itself, or any
-   follower plus the layout) and dead-reckons it in between. Its commanded point is the scheduled
-   midpoint ``p_0 − r_des,i / 2`` (or the measured midpoint when both robots are in view), with the
-   leader's velocity as feed-forward.
-4. **Sensing** — the tick's readings, one :class:`~relloc.core.recording.Measurements` batch:
-   ``range`` rows between every pair of UGVs every ``uwb_every`` ticks (observer < target), with
-   errors from the fitted real-data model (:func:`relloc.models.uwb_noise.sample_range_errors`:
-   bias, correlated core, outliers); a camera frame every ``camera_every`` ticks: a drone
-   detects a pair ``{R_0, R_i}`` only if its altitude is inside the detection band and both
-   robots' markers lie inside the footprint (``|Δx| ≤ z tan(hfov/2) − margin``, same for y),
-   each with probability ``p_detect``; it then broadcasts a ``pair_sighting`` row (observer the
-   drone, target R_i): the bearing φ_i of ``p_0 − p_i`` in F_G and the headings θ_i, θ_0, with
-   white noise plus its own slowly varying heading-hold error (common to the three angles).
-5. **Estimation.** The estimators are driven through the contract by
-   :func:`relloc.core.events.run_events` over the one event at the end of the tick: advance
-   with the UGVs' commands as odometry ``(v, 0, 0, ω)`` (a drone's: its commanded planar
-   velocity ``(v_x, v_y, 0, 0)`` along F_G, its commanded heading), measure the batch, record
-   the beliefs. The simulator imports the contract, never an estimator.
+1. **Estimation** (``k ≥ 1``). Each follower's estimator processes the event at ``t_k``
+   (:func:`relloc.core.events.run_events`): advance with the commands of tick ``k − 1`` as
+   odometry ``(v, 0, 0, ω)`` (its own and the leader's), measure the readings taken at ``t_k``,
+   record the beliefs. The simulator imports the contract, never an estimator.
+2. **Commands.** The leader's path command; each follower's — rigidly on the leader's arc
+   (``control="external"``) or by the controller from *its own estimate* (``control="formation"``,
+   e.g. :class:`relloc.control.formation.FormationController`); each drone's: it knows the
+   formation layout and the leader's broadcast commands, keeps a track of the leader's pose from
+   what its camera saw (the leader itself, or any follower plus the layout: a
+   :class:`MarkerFix`) and dead-reckons it in between; its commanded point is the scheduled
+   midpoint ``p_0 − r_des,i / 2``, with the leader's velocity as feed-forward
+   (:func:`relloc.models.airground.drone_velocity`).
+3. **Motion.** Every UGV moves with its commands perturbed by white velocity noise (slip,
+   actuation), :func:`relloc.models.unicycle.unicycle_step`. Each drone flies its commanded
+   velocity at a constant heading (ψ̄ = 0, the x-axis of F_G); its altitude wanders around the
+   set altitude (Gauss–Markov).
+4. **Sensing** — the readings at ``t_{k+1}``, one :class:`~relloc.core.recording.Measurements`
+   batch: ``range`` rows between every pair of UGVs every ``uwb_every`` ticks (observer <
+   target), with errors from the fitted real-data model
+   (:func:`relloc.models.uwb_noise.sample_range_errors`: bias, correlated core, outliers); a
+   camera frame every ``camera_every`` ticks: a drone detects a pair ``{R_0, R_i}`` only if its
+   altitude is inside the detection band and both robots' markers lie inside the footprint
+   (``|Δx| ≤ z tan(hfov/2) − margin``, same for y), each with probability ``p_detect``; it then
+   broadcasts a ``pair_sighting`` row (observer the drone, target R_i): the bearing φ_i of
+   ``p_0 − p_i`` in F_G and the headings θ_i, θ_0, with white noise plus its own slowly varying
+   heading-hold error (common to the three angles); and each drone's marker fix.
 
 This tick loop is the closed-loop counterpart of :func:`relloc.pipeline.replay.replay`: the
 result's :class:`~relloc.core.recording.Recording` holds the truth, the commands as odometry and
 every reading, and replaying it through fresh estimators started from the same priors gives the
 same estimates (the controller only closes the loop; it reads nothing the recording lacks).
-All randomness comes from the generator passed in.
+All randomness comes from the generator passed in, drawn by the world in a fixed order.
 """
 
 from __future__ import annotations
