@@ -42,6 +42,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     world.add_argument("--world-out", type=Path, required=True, help="truth file (.npz)")
     world.add_argument("--report", type=Path, default=None, help="the world's report (JSON)")
     world.add_argument("--cmd-timeout", type=float, default=10.0, help="wall s per command wait")
+    world.add_argument("--realtime", type=float, default=0.0, metavar="FACTOR", help="pace ticks")
     world.add_argument("--kill", action="append", default=[], metavar="ROBOT@SECONDS")
     world.add_argument("--restart", action="append", default=[], metavar="ROBOT@SECONDS")
     world.set_defaults(func=run_world)
@@ -74,6 +75,7 @@ def run_world(args: argparse.Namespace) -> int:
         kills=tuple(parse_robot_event(k, "--kill") for k in args.kill),
         restarts=tuple(parse_robot_event(r, "--restart") for r in args.restart),
         cmd_timeout_s=args.cmd_timeout,
+        realtime_factor=args.realtime,
     )
     report = WorldProcess(settings, world).run()
     save_world(world, args.world_out)

@@ -207,6 +207,7 @@ class AirGroundLauncher(TeamLauncher):
         f = self.team.faults
         argv = ["airground", "world", *self._common(), "--world-out", str(self.world_file)]
         argv += ["--report", str(self.s.out_dir / "world.json")]
+        argv += ["--realtime", repr(self.team.realtime_factor)]
         for e in f.kills:
             argv += ["--kill", f"{e.robot}@{e.at_s!r}"]
         for e in f.restarts:
@@ -416,7 +417,10 @@ def run_guler_team(s: GulerTeamSettings) -> dict[str, Any]:
                 "fault_accuracy": fault_accuracy(s.faults, got, ref),
                 "fault_outcomes": outcomes_of(s.faults, got.estimates, got.recording),
                 "messages": message_counts(collected, got.recording.robots, world),
-                "world": {k: world[k] for k in ("ticks", "wall_s", "startup_wall_s", "events")},
+                "world": {
+                    k: world[k]
+                    for k in ("ticks", "wall_s", "startup_wall_s", "events", "max_tick_lag_s")
+                },
                 "exit_codes": collected.exit_codes,
                 "wall_s": collected.wall_s,
             }

@@ -104,9 +104,13 @@ class WorldSettings:
     restarts: tuple[RobotEvent, ...] = ()
     cmd_timeout_s: float = 10.0
     startup_timeout_s: float = 120.0
+    realtime_factor: float = 0.0
+    """Pace the ticks at this multiple of real time (0: as fast as the team goes)."""
 
     def __post_init__(self) -> None:
         keys.check_id(self.team, "world.team")
+        if not self.realtime_factor >= 0:
+            raise ConfigError(f"world.realtime_factor: {self.realtime_factor} < 0")
         for name in ("cmd_timeout_s", "startup_timeout_s"):
             if not getattr(self, name) > 0:
                 raise ConfigError(f"world.{name}: must be > 0")
@@ -128,6 +132,8 @@ class WorldReport:
     rejected: int = 0
     rejected_by_reason: dict[str, int] = field(default_factory=dict)
     events: list[dict[str, Any]] = field(default_factory=list)
+    max_tick_lag_s: float = 0.0
+    """On a paced run: how late the world got behind real time at worst."""
 
     def as_dict(self) -> dict[str, Any]:
         return dict(self.__dict__)
@@ -252,6 +258,11 @@ class WorldProcess:
             self._k = k
             while pending and pending[0][1].at_s <= self._t + TIME_TOL:
                 self._robot_event(inbox, *pending.pop(0))
+            if self.s.realtime_factor > 0:
+                lag = time.monotonic() - (start + self._t / self.s.realtime_factor)
+                self.report.max_tick_lag_s = max(self.report.max_tick_lag_s, lag)
+                if lag < 0:
+                    time.sleep(-lag)
             self._cmds = {}
             for r in range(len(self.roster)):
                 drone = r - n_ugv if r >= n_ugv else None
