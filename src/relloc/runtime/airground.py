@@ -545,6 +545,8 @@ class RobotProcess:
         )
         self.present: set[str] = set()
         self._clock_seen = False
+        self._clock_wall = 0.0
+        self._session: Any = None
         self._ready_token: Any = None
         self._seen = SeenSequences()
         self._arrived: dict[tuple[str, str], float] = {}
@@ -573,7 +575,6 @@ class RobotProcess:
             for kind in ("rows", "odom", "cmd", "est", "stats"):
                 self._pubs[kind] = declare_publisher(session, keys.robot_key(s.team, s.robot, kind))
             tokens.append(session.liveliness().declare_token(keys.alive_key(s.team, s.robot)))
-            self._started = time.monotonic()
             while not self._done:
                 item = inbox.get(timeout=0.1)
                 if item is not None:
