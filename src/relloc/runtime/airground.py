@@ -581,7 +581,8 @@ class RobotProcess:
                     self._handle(item)
                 self._declare_ready()
                 self._progress()
-                self._done = self._done or (self._ending and self._tick is None)
+                last = self._last_k == self.sc.n_steps
+                self._done = self._done or (self._ending and last and self._tick is None)
             self._report(final=True)
         finally:
             for token in [*tokens, self._ready_token]:
@@ -663,9 +664,9 @@ class RobotProcess:
     def _on_ctl(self, msg: Message) -> None:
         if msg.body["action"] != "end":
             return  # kills and restarts are the launcher's
-        if self._last_k is None or self._last_k < self.sc.n_steps:
-            raise MessageRejected("premature_end", f"ctl(end) at tick {self._last_k}")
-        self._ending = True  # done once the last tick is acted on
+        # ``sense`` and ``ctl`` are two streams: the end may overtake the last readings, so it
+        # is only noted here; the robot finishes once it has acted on the last tick
+        self._ending = True
 
     def _on_teammate(self, msg: Message) -> None:
         now = self._tick.t if self._tick is not None else self._last_t()
