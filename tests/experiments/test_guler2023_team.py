@@ -43,7 +43,7 @@ def test_air_ground_processes_in_closed_loop_equal_the_in_process_run(tmp_path):
     assert world["sent"]["sense"] == len(TEAM) * (ticks + 1)
     for robot, m in run["messages"]["robots"].items():
         assert m["rejected_by_reason"] == {} and m["rejected"] == 0, (robot, m)
-        assert m["input_timeouts"] == 0 and m["late_rows"] == 0, (robot, m)
+        assert m["input_timeouts"] == m["inputs_missing_at_end"] == m["late_rows"] == 0, (robot, m)
         assert m["sent"]["cmd"] == ticks and m["sent"]["rows"] == ticks + 1
         assert (m["sent"].get("odom", 0) > 0) == (robot == "R_0")
         assert m["estimates"] == (ticks if robot in ("R_1", "R_2", "R_3", "R_4") else 0)

@@ -293,6 +293,7 @@ def message_counts(
             "duplicates_dropped": c.get("duplicates", 0),
             "late_rows": c.get("late_rows", 0),
             "input_timeouts": c.get("input_timeouts", 0),
+            "inputs_missing_at_end": c.get("inputs_missing_at_end", 0),
             "faults": group("fault."),
             "estimates": c.get("estimates", 0),
             "ticks": c.get("ticks", 0),

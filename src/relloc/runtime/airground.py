@@ -440,7 +440,8 @@ class DroneRole:
         self.held = (0.0, 0.0)
 
     def inputs(self, k: int, roster: tuple[str, ...]) -> list[tuple[str, str]]:
-        return [(roster[0], "odom")]
+        """The leader's command of tick ``k`` (none at the last tick: nothing is commanded)."""
+        return [(roster[0], "odom")] if k < self.sc.n_steps else []
 
     def act(self, s: Sensed, heard: Received) -> np.ndarray | None:
         if self.guidance is None:  # a restarted drone has lost its leader track
@@ -486,8 +487,11 @@ class FollowerRole:
         self.held_u: tuple[float, float] = (0.0, 0.0)
 
     def inputs(self, k: int, roster: tuple[str, ...]) -> list[tuple[str, str]]:
+        """Every teammate's readings of tick ``k`` and the leader's command (none at the last
+        tick)."""
         me = roster[self.follower]
-        return [(roster[0], "odom")] + [(r, "rows") for r in roster if r != me]
+        command = [(roster[0], "odom")] if k < self.sc.n_steps else []
+        return command + [(r, "rows") for r in roster if r != me]
 
     def _start(self, k: int) -> FollowerAgent:
         prior = self.prior
@@ -546,6 +550,7 @@ class RobotProcess:
         self.present: set[str] = set()
         self._clock_seen = False
         self._clock_wall = 0.0
+        self._present_at_tick: set[str] = set()
         self._session: Any = None
         self._ready_token: Any = None
         self._seen = SeenSequences()
@@ -558,6 +563,7 @@ class RobotProcess:
         self._pubs: dict[str, Any] = {}
         self._done = False
         self._ending = False
+        self._world_gone = False
 
     # ------------------------------------------------------------------ main loop
     def run(self) -> dict[str, int]:
@@ -582,7 +588,8 @@ class RobotProcess:
                 self._declare_ready()
                 self._progress()
                 last = self._last_k == self.sc.n_steps
-                self._done = self._done or (self._ending and last and self._tick is None)
+                over = self._world_gone or (self._ending and last)
+                self._done = over and self._tick is None
             self._report(final=True)
         finally:
             for token in [*tokens, self._ready_token]:
@@ -609,7 +616,7 @@ class RobotProcess:
                 if item.presence == "joined" and not self._clock_seen:
                     self._clock_seen, self._clock_wall = True, time.monotonic()
                 elif item.presence == "left":
-                    self._done = True  # the world is gone: nothing more will come
+                    self._world_gone = True  # nothing more will come
             elif member in self.roster and member != self.s.robot:
                 if item.presence == "joined":
                     self.present.add(member)
@@ -652,6 +659,7 @@ class RobotProcess:
         readings = rows_from_body(b, self.roster, self.s.robot)
         t = float(self.times[k])
         self._tick = Sensed(k, t, readings, b["position"], fix)
+        self._present_at_tick = set(self.present)
         self._tick_wall = time.monotonic()
         self._send("rows", rows_body(readings, self.roster), t)
         if self.role.broadcasts_command and k < self.sc.n_steps:
@@ -700,8 +708,13 @@ class RobotProcess:
                 self.heard.rows.setdefault(msg.sender, []).append(rows)
 
     def _inputs_in(self, s: Sensed) -> bool:
+        """Every expected input of the tick has arrived: from the teammates present — and, at
+        the last tick, also from those present when it began (a teammate done with its last
+        tick exits, and its departure may overtake its last readings)."""
+        final = s.k >= self.sc.n_steps
         for sender, kind in self.role.inputs(s.k, self.roster):
-            if sender in self.present and self._arrived.get((sender, kind), -np.inf) < s.t - 1e-6:
+            expected = sender in self.present or (final and sender in self._present_at_tick)
+            if expected and self._arrived.get((sender, kind), -np.inf) < s.t - 1e-6:
                 return False
         return True
 
@@ -711,9 +724,12 @@ class RobotProcess:
         if s is None:
             return
         if not self._inputs_in(s):
-            if time.monotonic() - self._tick_wall < self.s.input_timeout_s:
+            if self._world_gone:  # what has come is all there will be
+                self.counters["inputs_missing_at_end"] += 1
+            elif time.monotonic() - self._tick_wall < self.s.input_timeout_s:
                 return
-            self.counters["input_timeouts"] += 1
+            else:
+                self.counters["input_timeouts"] += 1
         try:
             self._deliver(self.link.release(s.t), s.t)
         except MessageRejected as exc:
