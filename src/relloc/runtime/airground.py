@@ -26,7 +26,10 @@ Per tick ``k = 0 … K`` (``t_k = k dt``; key expressions in :mod:`relloc.runtim
 So a command acts on the very tick it was computed for: there is no command delay, and on a
 perfect network every follower's belief equals the in-process one (the same functions on the
 same numbers; msgpack carries float64 exactly). After ``sense(K)`` (the last event, no command)
-the world publishes ``ctl(end)``; every robot ships its last report and exits.
+the world publishes ``ctl(end)``; every robot acts on its last tick (a teammate that exits after
+its own is still awaited for it: its departure may overtake its last readings), ships its last
+report and exits; a robot whose world has gone acts on its pending tick with what came
+(``inputs_missing_at_end``).
 
 Robustness. Network faults (:class:`~relloc.runtime.faults.LinkEmulator`) act on the
 robot-to-robot streams (``rows``, ``odom``) at each receiver; a robot's own sensing
