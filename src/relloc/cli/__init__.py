@@ -30,6 +30,7 @@ SUBCOMMAND_MODULES = (
     "relloc.cli.bench",
     "relloc.cli.node",
     "relloc.cli.team",
+    "relloc.cli.airground",
     "relloc.cli.certs",
     "relloc.cli.bag",
 )

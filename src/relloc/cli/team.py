@@ -16,7 +16,10 @@ publish only under its own key prefix, only the launcher's certificate may send 
 A reproduction's team (``desilva2015``, ``desilva2015-kidnapped``: seed 002's leaders and pods,
 see :mod:`relloc.experiments.desilva2015_team`) runs ``--runs N`` Monte-Carlo runs of
 ``--duration S`` simulated seconds each and is scored beside the in-process reproduction on the
-same seeds.
+same seeds. ``guler2023`` (seed 003's air-ground team in closed loop: a world process, the
+leader, followers and drones as processes, ``--case`` one of its paper scenarios, default
+``two_drones``; see :mod:`relloc.experiments.guler2023_team`) takes the same flags; its tick is
+the scenario's 0.05 s, not ``--tick``.
 
 ``relloc team clock`` runs only the clock/simulator process (for robots started by hand).
 """
@@ -50,7 +53,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     up.add_argument(
         "scenario",
         help="scenario TOML file, 'default' (built-in team), an MRCLAM-layout dataset folder, "
-        "or a reproduction: desilva2015, desilva2015-kidnapped, sharma2013",
+        "or a reproduction: desilva2015, desilva2015-kidnapped, sharma2013, guler2023",
     )
     up.add_argument("--runs", type=int, default=1, help="a reproduction's Monte-Carlo runs")
     up.add_argument(
@@ -133,6 +136,10 @@ def _robot_events(args: argparse.Namespace) -> dict[str, tuple[object, ...]]:
 def run_up(args: argparse.Namespace) -> int:
     from relloc.runtime.scenario import REPRODUCTIONS
 
+    if args.scenario == "guler2023":
+        from relloc.cli.airground import run_team_up
+
+        return run_team_up(args, _reproduction_team_args(args))
     if args.scenario in REPRODUCTIONS:
         return run_reproduction(args)
     if args.estimator == "cooperative":

@@ -98,6 +98,18 @@ class FormationController:
             raise ConfigError("FormationController.offsets: need at least one follower")
         desired_relative(np.zeros(2), 0.0, self.frame)  # raises on an unknown frame
 
+    def command(
+        self, follower: int, estimate: Array, leader_u: tuple[float, float]
+    ) -> tuple[float, float]:
+        """Follower ``R_follower``'s command (``1 ≤ follower ≤ N``) from its own estimate
+        ``[r_x, r_y, θ_i, θ_0]`` (what its own process computes)."""
+        if not 1 <= follower <= len(self.offsets):
+            raise ConfigError(
+                f"FormationController: follower {follower} outside 1..{len(self.offsets)}"
+            )
+        off = np.array(self.offsets[follower - 1])
+        return formation_command(estimate, off, self.frame, leader_u, self.settings)
+
     def commands(self, estimates: Array, leader_u: tuple[float, float]) -> Array:
         """``(N, 2)`` commands ``(v_i, ω_i)`` from the followers' estimates ``(N, 4)``
         ``[r_x, r_y, θ_i, θ_0]`` and the leader's broadcast command ``(v_0, ω_0)``."""
@@ -107,9 +119,4 @@ class FormationController:
                 f"FormationController: estimates of shape {x.shape} for "
                 f"{len(self.offsets)} followers (expected ({len(self.offsets)}, 4))"
             )
-        return np.array(
-            [
-                formation_command(x[i], np.array(off), self.frame, leader_u, self.settings)
-                for i, off in enumerate(self.offsets)
-            ]
-        )
+        return np.array([self.command(i, x[i - 1], leader_u) for i in range(1, len(x) + 1)])

@@ -329,12 +329,34 @@ def run_scenario_once(
 ) -> RunSummary:
     """Monte-Carlo task: simulate one run and reduce it (top level, picklable)."""
     run, filters = simulate_case(case, np.random.default_rng(seed_seq))
+    return reduce_run(
+        run,
+        nis_sums={k: float(sum(f.diagnostics.nis_sum[k] for f in filters)) for k in BLOCKS},
+        refusal_examples=tuple(e for f in filters for e in f.diagnostics.refusal_examples)[:3],
+        keep_traces=keep_traces and run_index == 0,
+    )
+
+
+def reduce_run(
+    run: AirGroundRun,
+    *,
+    nis_sums: dict[str, float],
+    refusal_examples: tuple[str, ...],
+    keep_traces: bool,
+) -> RunSummary:
+    """One run's numbers: the estimates scored against the truth, the modes and block counts
+    from the estimates; ``nis_sums`` and ``refusal_examples`` from the filters' diagnostics."""
     evals = follower_evaluations(run)
     scores = [accuracy_and_consistency([e], settle_s=0.0)["rmse"] for e in evals]
     leader = run.recording.robots[0]
     covs = [run.estimates.series(e.owner, leader).cov for e in evals]
+    each = [nees(e.error[:, :2], c[:, :2, :2]) for e, c in zip(evals, covs, strict=True)]
+    common = evals[0].t
+    for e in evals[1:]:
+        common = np.intersect1d(common, e.t)
+    # a follower whose process was killed has no beliefs for a while: the ticks all share
     nees_position = np.stack(
-        [nees(e.error[:, :2], c[:, :2, :2]) for e, c in zip(evals, covs, strict=True)], axis=1
+        [v[np.isin(e.t, common)] for v, e in zip(each, evals, strict=True)], axis=1
     )
     modes = np.concatenate([run.estimates.series(e.owner, leader).info["sw"] for e in evals])
     counts = run.estimates.counts
@@ -346,10 +368,10 @@ def run_scenario_once(
         nees_position=nees_position,
         accepted={k: counts.get(f"{k}_applied", 0) for k in BLOCKS},
         rejected={k: counts.get(f"{k}_rejected", 0) for k in BLOCKS},
-        nis_sums={k: float(sum(f.diagnostics.nis_sum[k] for f in filters)) for k in BLOCKS},
+        nis_sums=nis_sums,
         triangle_refusals=counts.get("triangle_refusals", 0),
-        refusal_examples=tuple(e for f in filters for e in f.diagnostics.refusal_examples)[:3],
-        traces=run if (keep_traces and run_index == 0) else None,
+        refusal_examples=refusal_examples,
+        traces=run if keep_traces else None,
     )
 
 

@@ -138,6 +138,26 @@ def mode_measurement(x: Array, mode: Mode) -> tuple[Array, Array, tuple[bool, ..
     return z, H, angles
 
 
+def drone_velocity(
+    position: Array,
+    command: Array,
+    *,
+    gain: float,
+    v_max: float,
+    feedforward: Array | None = None,
+) -> Array:
+    """The planar drone's saturated P controller: ``v = sat_{v_max}(v_ff + k_p (p_cmd − p))``
+    (what the drone commands; :func:`drone_step` also moves it)."""
+    p = np.asarray(position, dtype=float)
+    v = gain * (np.asarray(command, dtype=float) - p)
+    if feedforward is not None:
+        v = v + np.asarray(feedforward, dtype=float)
+    speed = float(np.hypot(v[0], v[1]))
+    if speed > v_max > 0.0:
+        v = v * (v_max / speed)
+    return v
+
+
 def drone_step(
     position: Array,
     command: Array,
@@ -149,13 +169,7 @@ def drone_step(
 ) -> tuple[Array, Array]:
     """One step of the planar drone with constant heading and a saturated P controller.
 
-    ``v = sat_{v_max}(v_ff + k_p (p_cmd − p))``, ``p⁺ = p + v dt``. Returns ``(p⁺, v)``.
+    ``v`` of :func:`drone_velocity`, ``p⁺ = p + v dt``. Returns ``(p⁺, v)``.
     """
-    p = np.asarray(position, dtype=float)
-    v = gain * (np.asarray(command, dtype=float) - p)
-    if feedforward is not None:
-        v = v + np.asarray(feedforward, dtype=float)
-    speed = float(np.hypot(v[0], v[1]))
-    if speed > v_max > 0.0:
-        v = v * (v_max / speed)
-    return p + v * dt, v
+    v = drone_velocity(position, command, gain=gain, v_max=v_max, feedforward=feedforward)
+    return np.asarray(position, dtype=float) + v * dt, v

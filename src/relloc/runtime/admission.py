@@ -6,8 +6,9 @@ state. Every check raises :class:`~relloc.runtime.messages.MessageRejected` with
 reason, which the receiver counts (``rejected_by_reason`` in the summary):
 
 - **roles** (:func:`admit`): a robot kind (``odom``, ``meas``, ``eqm``, ``est``, ``evt``,
-  ``stats``, ``ack``) is accepted only on ``relloc/<team>/robot/<id>/<kind>`` of a roster robot
-  ``id`` and only from that robot; ``tick`` and ``ctl`` only on ``relloc/<team>/clock/<kind>``
+  ``stats``, ``ack``, ``cmd``) is accepted only on ``relloc/<team>/robot/<id>/<kind>`` of a
+  roster robot ``id`` and only from that robot; ``tick``, ``ctl`` and ``sense`` only on
+  ``relloc/<team>/clock/<kind>``
   and only from the infrastructure sender ``clock``; the message type must be its key's kind
   (``unknown_key``, ``unknown_sender``, ``spoofed``, ``wrong_kind``). In ``--secure`` mode Zenoh's
   access control enforces the same layout at the transport (a robot's certificate may publish
@@ -47,7 +48,8 @@ from relloc.runtime.messages import (
 
 CLOCK_SENDER = "clock"
 """The infrastructure sender of ``tick`` and ``ctl`` (the launcher's clock process)."""
-CLOCK_KINDS = frozenset({"tick", "ctl"})
+CLOCK_KINDS = frozenset(keys.CLOCK_KINDS)
+"""Kinds only the infrastructure sender may send (``sense``: the air-ground world process)."""
 MAX_TICK_S = 10.0
 """Longest tick accepted (s): the ``--tick`` limit of ``relloc team up``."""
 FUTURE_BOUND_S = 2.0

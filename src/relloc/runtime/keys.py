@@ -12,8 +12,10 @@
 | ``relloc/<team>/robot/<id>/evt``        | ``evt``: its track events, for the collector |
 | ``relloc/<team>/robot/<id>/stats``      | ``stats``: its message and estimate counters |
 | ``relloc/<team>/robot/<id>/ack``        | ``ack``: it finished a clock tick            |
+| ``relloc/<team>/robot/<id>/cmd``        | ``cmd``: its command to the world (seed 003) |
 | ``relloc/<team>/clock/tick``            | ``tick``: simulated time from the clock      |
 | ``relloc/<team>/clock/ctl``             | ``ctl``: kill / restart / end events         |
+| ``relloc/<team>/clock/sense``           | ``sense``: a robot's readings (seed 003)     |
 | ``relloc/<team>/alive/<id>`` (liveliness) | token held while the process lives          |
 | ``relloc/<team>/ready/<id>`` (liveliness) | held once the robot has seen every teammate |
 
@@ -27,7 +29,8 @@ import re
 
 from relloc.errors import ConfigError
 
-ROBOT_KINDS = ("odom", "meas", "rows", "eqm", "mail", "sync", "est", "evt", "stats", "ack")
+ROBOT_KINDS = ("odom", "meas", "rows", "eqm", "mail", "est", "evt", "stats", "ack", "cmd", "sync")
+CLOCK_KINDS = ("tick", "ctl", "sense")
 _ID = re.compile(r"^[A-Za-z0-9_-]{1,64}$")
 
 
@@ -51,8 +54,8 @@ def robot_wildcard(team: str, kind: str) -> str:
 
 
 def clock_key(team: str, kind: str) -> str:
-    """``relloc/<team>/clock/tick`` or ``relloc/<team>/clock/ctl``."""
-    if kind not in ("tick", "ctl"):
+    """``relloc/<team>/clock/<kind>`` for a kind of :data:`CLOCK_KINDS`."""
+    if kind not in CLOCK_KINDS:
         raise ConfigError(f"clock_key: unknown kind {kind!r}")
     return f"relloc/{team}/clock/{kind}"
 
@@ -90,10 +93,11 @@ def parse_robot_key(key: str) -> tuple[str, str] | None:
 
 
 def parse_clock_key(key: str) -> str | None:
-    """The kind (``tick`` or ``ctl``) of a clock key expression, or None if it is not one."""
+    """The kind (one of :data:`CLOCK_KINDS`) of a clock key expression, or None if it is not
+    one."""
     parts = key.split("/")
     if len(parts) == 4 and parts[0] == "relloc" and parts[2] == "clock":
-        if parts[3] in ("tick", "ctl"):
+        if parts[3] in CLOCK_KINDS:
             return parts[3]
     return None
 

@@ -43,6 +43,13 @@ checked against their declared shape, ``-1`` meaning "any length". Kinds:
 - ``ack`` — a node finished tick ``k``.
 - ``ctl`` — a control event from the clock process: ``action`` in ``{"kill", "restart",
   "end"}`` and the ``robot`` it concerns (``""`` for ``end``).
+- ``cmd`` — a robot's command of tick ``k`` to the world process that moves it (seed 003's
+  closed loop): body velocity ``u`` (4,) as in ``odom``.
+- ``sense`` — from the world process (sender ``clock``) to robot ``target``: tick ``k`` of
+  ``n`` (period ``dt``; header ``t`` is the time), the robot's readings taken at ``t`` (the
+  fields of ``rows``), a drone's own ``position`` (3,) (empty for a UGV) and its camera's
+  marker fix for its leader track (``fix_subject`` the robot seen, ``""`` for none; ``fix`` its
+  x, y and, for the leader, heading); see :mod:`relloc.runtime.airground`.
 
 :func:`decode` validates *everything* a receiver relies on — size limit before unpacking, map
 layout, version, kind, field types, array shapes, finite numbers, a symmetric covariance, and a
@@ -72,7 +79,8 @@ from relloc.pipeline.frames import FRAMES
 SCHEMA_VERSION = 3
 """Version 2: ``est`` carries ``frame``, ``track`` and the NIS degrees of freedom
 ``update_dofs``; version 3: ``est`` carries the beliefs' ``info`` in frames of any dimension,
-and ``rows`` and ``mail`` exist."""
+and ``rows`` and ``mail`` exist (``cmd`` and ``sense`` were added without a version change:
+no existing kind changed)."""
 DEFAULT_MAX_BYTES = 65_536
 """Default size limit of one encoded message (bytes); larger payloads are rejected unread."""
 
@@ -136,6 +144,23 @@ SCHEMA: dict[str, dict[str, str | Shape]] = {
     "tick": {"k": "int", "n": "int", "dt": "float"},
     "ack": {"k": "int"},
     "ctl": {"action": "str", "robot": "str"},
+    "cmd": {"k": "int", "u": (4,)},
+    "sense": {
+        "k": "int",
+        "n": "int",
+        "dt": "float",
+        "target": "str",
+        "position": (-1,),
+        "fix_subject": "str",
+        "fix": (-1,),
+        "stamps": (-1,),
+        "kinds": "strlist",
+        "subjects": "strlist",
+        "landmarks": (-1,),
+        "sensors": (-1,),
+        "values": (-1,),
+        "sigmas": (-1,),
+    },
 }
 """Fields of each kind: a type name or an array shape (``-1`` = any length)."""
 
@@ -260,6 +285,8 @@ def decode(
             raise MessageRejected("unknown_target", f"targets {unknown} are not on the roster")
     if kind == "ctl" and (body["robot"] == "") != (body["action"] == "end"):
         raise MessageRejected("malformed", "ctl: 'robot' is empty exactly for action 'end'")
+    if kind == "sense" and body["fix_subject"] and body["fix_subject"] not in roster:
+        raise MessageRejected("unknown_target", f"sense fix of {body['fix_subject']!r}")
     if kind == "ctl" and body["robot"] and body["robot"] not in roster:
         raise MessageRejected("unknown_target", f"ctl robot {body['robot']!r} is not on the roster")
     return Message(
@@ -394,6 +421,12 @@ def _check_consistency(kind: str, body: dict[str, Any]) -> None:
         raise MessageRejected("malformed", f"ctl: unknown action {body['action']!r}")
     elif kind == "tick" and not (1 <= body["k"] <= body["n"] and body["dt"] > 0):
         raise MessageRejected("malformed", "tick: need 1 ≤ k ≤ n and dt > 0")
+    elif kind == "sense" and not (body["k"] <= body["n"] and body["dt"] > 0):
+        raise MessageRejected("malformed", "sense: need 0 ≤ k ≤ n and dt > 0")
+    elif kind == "sense" and body["position"].size not in (0, 3):
+        raise MessageRejected("shape", "sense: position must hold 0 or 3 numbers")
+    elif kind == "sense" and body["fix"].size not in ((2, 3) if body["fix_subject"] else (0,)):
+        raise MessageRejected("shape", "sense: fix must hold x, y (and a heading) of its subject")
     covs = body.get("cov")
     if kind == "est":
         covs = body["covs"]

@@ -1,44 +1,46 @@
 """Closed-loop simulator of the air-ground team of seed 003 (leader, N followers, M drones).
 
-:func:`simulate_airground` is given the followers' estimators (one per follower, each built by
-the caller's factory and driven through the estimator contract of
-:mod:`relloc.core.contract`) and their controller. Per tick ``k`` (period ``dt``, the
-filters' 20 Hz of the paper) it
+One run is a world and its robots. The **world** (:class:`AirGroundWorld`) holds the true
+motion and every sensor, and all the randomness; the **robots** hold only their own code and
+what they sensed or heard: the leader follows its path (constant arc, or an S-shaped curve with
+``ω_0(t) = ω̄ sin(2πt/T)``); each follower is a :class:`FollowerAgent` (its estimator, driven
+through the estimator contract of :mod:`relloc.core.contract`, and its command); each drone is
+a :class:`DroneGuidance`. :func:`simulate_airground` runs them all in one process; a team of
+processes (:mod:`relloc.runtime.airground`) runs the same objects, one robot per process, around
+the same world. Per tick ``k`` (period ``dt``, the filters' 20 Hz of the paper):
 
-1. **Commands.** The leader follows its path (constant arc, or an S-shaped curve with
-   ``ω_0(t) = ω̄ sin(2πt/T)``). Followers are either externally commanded to move rigidly with
-   the leader on the arc (``control="external"``) or commanded by the controller from *their
-   own estimates* (``control="formation"``, e.g.
-   :class:`relloc.control.formation.FormationController`).
-2. **Motion.** Every UGV moves with its commands perturbed by white velocity noise (slip,
-   actuation), :func:`relloc.models.unicycle.unicycle_step`. Each drone flies at a constant
-   heading (ψ̄ = 0, the x-axis of F_G) with :func:`relloc.models.airground.drone_step` toward
-   its commanded midpoint; its altitude wanders around the set altitude (Gauss–Markov).
-3. **Drone guidance.** A drone knows the formation layout and the leader's broadcast commands;
-   it keeps a track of the leader's pose from what its camera sees (the leader itself, or any
-   follower plus the layout) and dead-reckons it in between. Its commanded point is the scheduled
-   midpoint ``p_0 − r_des,i / 2`` (or the measured midpoint when both robots are in view), with the
-   leader's velocity as feed-forward.
-4. **Sensing** — the tick's readings, one :class:`~relloc.core.recording.Measurements` batch:
-   ``range`` rows between every pair of UGVs every ``uwb_every`` ticks (observer < target), with
-   errors from the fitted real-data model (:func:`relloc.models.uwb_noise.sample_range_errors`:
-   bias, correlated core, outliers); a camera frame every ``camera_every`` ticks: a drone
-   detects a pair ``{R_0, R_i}`` only if its altitude is inside the detection band and both
-   robots' markers lie inside the footprint (``|Δx| ≤ z tan(hfov/2) − margin``, same for y),
-   each with probability ``p_detect``; it then broadcasts a ``pair_sighting`` row (observer the
-   drone, target R_i): the bearing φ_i of ``p_0 − p_i`` in F_G and the headings θ_i, θ_0, with
-   white noise plus its own slowly varying heading-hold error (common to the three angles).
-5. **Estimation.** The estimators are driven through the contract by
-   :func:`relloc.core.events.run_events` over the one event at the end of the tick: advance
-   with the UGVs' commands as odometry ``(v, 0, 0, ω)`` (a drone's: its commanded planar
-   velocity ``(v_x, v_y, 0, 0)`` along F_G, its commanded heading), measure the batch, record
-   the beliefs. The simulator imports the contract, never an estimator.
+1. **Estimation** (``k ≥ 1``). Each follower's estimator processes the event at ``t_k``
+   (:func:`relloc.core.events.run_events`): advance with the commands of tick ``k − 1`` as
+   odometry ``(v, 0, 0, ω)`` (its own and the leader's), measure the readings taken at ``t_k``,
+   record the beliefs. The simulator imports the contract, never an estimator.
+2. **Commands.** The leader's path command; each follower's — rigidly on the leader's arc
+   (``control="external"``) or by the controller from *its own estimate* (``control="formation"``,
+   e.g. :class:`relloc.control.formation.FormationController`); each drone's: it knows the
+   formation layout and the leader's broadcast commands, keeps a track of the leader's pose from
+   what its camera saw (the leader itself, or any follower plus the layout: a
+   :class:`MarkerFix`) and dead-reckons it in between; its commanded point is the scheduled
+   midpoint ``p_0 − r_des,i / 2``, with the leader's velocity as feed-forward
+   (:func:`relloc.models.airground.drone_velocity`).
+3. **Motion.** Every UGV moves with its commands perturbed by white velocity noise (slip,
+   actuation), :func:`relloc.models.unicycle.unicycle_step`. Each drone flies its commanded
+   velocity at a constant heading (ψ̄ = 0, the x-axis of F_G); its altitude wanders around the
+   set altitude (Gauss–Markov).
+4. **Sensing** — the readings at ``t_{k+1}``, one :class:`~relloc.core.recording.Measurements`
+   batch: ``range`` rows between every pair of UGVs every ``uwb_every`` ticks (observer <
+   target), with errors from the fitted real-data model
+   (:func:`relloc.models.uwb_noise.sample_range_errors`: bias, correlated core, outliers); a
+   camera frame every ``camera_every`` ticks: a drone detects a pair ``{R_0, R_i}`` only if its
+   altitude is inside the detection band and both robots' markers lie inside the footprint
+   (``|Δx| ≤ z tan(hfov/2) − margin``, same for y), each with probability ``p_detect``; it then
+   broadcasts a ``pair_sighting`` row (observer the drone, target R_i): the bearing φ_i of
+   ``p_0 − p_i`` in F_G and the headings θ_i, θ_0, with white noise plus its own slowly varying
+   heading-hold error (common to the three angles); and each drone's marker fix.
 
 This tick loop is the closed-loop counterpart of :func:`relloc.pipeline.replay.replay`: the
 result's :class:`~relloc.core.recording.Recording` holds the truth, the commands as odometry and
 every reading, and replaying it through fresh estimators started from the same priors gives the
 same estimates (the controller only closes the loop; it reads nothing the recording lacks).
-All randomness comes from the generator passed in.
+All randomness comes from the generator passed in, drawn by the world in a fixed order.
 """
 
 from __future__ import annotations
@@ -66,7 +68,7 @@ from relloc.core.recording import (
     measurement_rows,
 )
 from relloc.errors import ConfigError
-from relloc.models.airground import drone_step
+from relloc.models.airground import drone_velocity
 from relloc.models.unicycle import unicycle_step
 from relloc.models.uwb_noise import UwbNoiseModel, sample_range_errors
 
@@ -266,10 +268,12 @@ class AirGroundScenario:
 
 
 class FollowerController(Protocol):
-    """Commands ``(N, 2)`` ``(v_i, ω_i)`` of the followers from their estimates ``(N, 4)``
+    """Command ``(v_i, ω_i)`` of follower ``R_i`` (``1 ≤ i ≤ N``) from its own estimate
     ``[r_x, r_y, θ_i, θ_0]`` and the leader's broadcast command ``(v_0, ω_0)``."""
 
-    def commands(self, estimates: Array, leader_u: tuple[float, float]) -> Array: ...
+    def command(
+        self, follower: int, estimate: Array, leader_u: tuple[float, float]
+    ) -> tuple[float, float]: ...
 
 
 #: Builds follower ``owner``'s estimator from the team's robot names and its prior at t = 0.
@@ -299,7 +303,12 @@ def robot_names(sc: AirGroundScenario) -> tuple[str, ...]:
     return ugvs + tuple(f"D_{j}" for j in range(1, sc.n_drones + 1))
 
 
-def _initial_poses(sc: AirGroundScenario) -> Array:
+def tick_times(sc: AirGroundScenario) -> Array:
+    """``t_k = k dt`` for ``k = 0 … K`` (every process of a team uses these very numbers)."""
+    return np.arange(sc.n_steps + 1, dtype=np.float64) * sc.dt
+
+
+def initial_poses(sc: AirGroundScenario) -> Array:
     """Leader at the origin; followers at ``p_0 − r_des``; headings per the control mode."""
     th0 = sc.leader_start_heading
     poses = np.zeros((sc.n_followers + 1, 3))
@@ -316,17 +325,17 @@ def _initial_poses(sc: AirGroundScenario) -> Array:
     return poses
 
 
-def _rigid_commands(sc: AirGroundScenario, poses0: Array, v0: float, w0: float) -> Array:
-    """External commands that keep the initial layout rigid on the leader's arc."""
-    u = np.zeros((sc.n_followers, 2))
+def rigid_command(
+    sc: AirGroundScenario, follower: int, v0: float, w0: float
+) -> tuple[float, float]:
+    """External command of follower ``R_follower`` that keeps the initial layout rigid on the
+    leader's arc (``control="external"``)."""
+    poses0 = initial_poses(sc)
     if abs(w0) < 1e-9:
-        u[:, 0] = v0
-        return u
+        return v0, 0.0
     centre = poses0[0, :2] + np.array([-math.sin(poses0[0, 2]), math.cos(poses0[0, 2])]) * (v0 / w0)
-    for i in range(1, sc.n_followers + 1):
-        radius = float(np.hypot(*(poses0[i, :2] - centre)))
-        u[i - 1] = (abs(w0) * radius, w0)
-    return u
+    radius = float(np.hypot(*(poses0[follower, :2] - centre)))
+    return abs(w0) * radius, w0
 
 
 def _in_footprint(cam: CameraSettings, drone: Array, point: Array) -> bool:
@@ -344,18 +353,262 @@ def _check_controller(sc: AirGroundScenario, controller: FollowerController | No
         )
 
 
-def _follower_estimates(estimators: Sequence[Estimator], leader: str) -> Array:
-    """``(N, 4)`` means of the followers' beliefs of the leader (what the controller reads)."""
-    out = np.zeros((len(estimators), 4))
-    for i, est in enumerate(estimators):
-        found = [b for b in est.beliefs() if b.subject == leader and b.frame == FOLLOWER_FRAME]
+def own_velocities(n_robots: int, u: Mapping[int, Array]) -> Array:
+    """``(n_robots, 4)`` body velocities with the rows ``u`` known (robot index → velocity),
+    zero elsewhere (a follower's filter reads only its own and the leader's)."""
+    out = np.zeros((n_robots, 4))
+    for r, v in u.items():
+        out[r] = v
+    return out
+
+
+def ugv_velocity(v: float, w: float) -> Array:
+    """A UGV's command as body velocity ``(v, 0, 0, ω)`` (its odometry)."""
+    return np.array([v, 0.0, 0.0, w])
+
+
+class FollowerAgent:
+    """What runs on follower ``R_i``: its estimator (through the contract, one event per tick)
+    and its command — the controller's from its own belief of the leader, or the external
+    rigid command. The same object runs in :func:`simulate_airground` and in the follower's
+    own process."""
+
+    def __init__(
+        self,
+        sc: AirGroundScenario,
+        follower: int,
+        estimator: Estimator,
+        controller: FollowerController | None,
+    ) -> None:
+        self.sc = sc
+        self.follower = follower
+        self.estimator = estimator
+        self.controller = controller
+        self.leader = robot_names(sc)[0]
+
+    def estimate(
+        self, t_prev: float, t: float, velocities: Array, batch: Measurements, recorder: Recorder
+    ) -> None:
+        """The event at ``t``: advance with ``velocities (R, 4)`` held since ``t_prev``, fuse the
+        tick's ``batch``, record the beliefs (:func:`relloc.core.events.run_events`)."""
+        times = np.array([t])
+        run_events(
+            [self.estimator],
+            times,
+            velocities[None],
+            np.full((1, velocities.shape[0]), t_prev),
+            batch,
+            times,
+            recorder,
+        )
+
+    def belief_mean(self) -> Array:
+        """The mean of the estimator's belief of the leader (what the controller reads)."""
+        found = [
+            b
+            for b in self.estimator.beliefs()
+            if b.subject == self.leader and b.frame == FOLLOWER_FRAME
+        ]
         if not found:
             raise ConfigError(
-                f"simulate_airground: {est.owner}'s estimator holds no {FOLLOWER_FRAME} belief "
-                f"of {leader}"
+                f"simulate_airground: {self.estimator.owner}'s estimator holds no "
+                f"{FOLLOWER_FRAME} belief of {self.leader}"
             )
-        out[i] = found[0].mean
-    return out
+        return found[0].mean
+
+    def command(self, t: float, leader_u: tuple[float, float]) -> tuple[float, float]:
+        """``(v_i, ω_i)`` for the tick starting at ``t``."""
+        if self.controller is None:
+            return rigid_command(self.sc, self.follower, *leader_u)
+        return self.controller.command(self.follower, self.belief_mean(), leader_u)
+
+
+@dataclass(frozen=True)
+class MarkerFix:
+    """What a drone's camera tells its guidance in one frame: the position of robot
+    ``subject``'s marker (UGV index; 0 = the leader) in F_G and, for the leader, its heading."""
+
+    subject: int
+    position: Array
+    heading: float | None = None
+
+
+class DroneGuidance:
+    """What runs on drone ``D_j``: it keeps a track of the leader's pose — re-anchored on what
+    its camera sees (the leader itself, or a follower plus the formation layout), dead-reckoned
+    with the leader's broadcast command in between — and flies toward its scheduled midpoint
+    ``p_0 − r_des,i / 2`` with the leader's velocity as feed-forward. The same object runs in
+    :func:`simulate_airground` and in the drone's own process."""
+
+    def __init__(self, sc: AirGroundScenario, drone: int, leader_track: Array | None) -> None:
+        self.sc = sc
+        self.drone = drone
+        self.schedule = sc.schedule()
+        self.offsets = np.array(sc.offsets, dtype=float)
+        self.leader_track = None if leader_track is None else np.array(leader_track, dtype=float)
+
+    @staticmethod
+    def at_start(sc: AirGroundScenario, drone: int) -> DroneGuidance:
+        """Drone ``drone`` (0-based) at the start of a run: tracking the true leader."""
+        return DroneGuidance(sc, drone, initial_poses(sc)[0])
+
+    def apply_fix(self, fix: MarkerFix | None) -> None:
+        """Re-anchor the leader track on a camera fix (nothing seen: keep dead-reckoning)."""
+        if fix is None:
+            return
+        if fix.subject == 0:
+            assert fix.heading is not None
+            self.leader_track = np.array([fix.position[0], fix.position[1], fix.heading])
+        elif self.leader_track is not None:
+            track = self.leader_track
+            r = desired_relative(
+                self.offsets[fix.subject - 1], float(track[2]), self.sc.offset_frame
+            )
+            track[:2] = fix.position + r
+
+    def velocity(self, k: int, leader_u: tuple[float, float], position: Array) -> Array:
+        """The planar velocity command of tick ``k`` from the drone's position ``(2,)``
+        (zero while it has no leader track: a restarted drone hovers until it sees one)."""
+        if self.leader_track is None:
+            return np.zeros(2)
+        d = self.sc.drone
+        track = self.leader_track = unicycle_step(self.leader_track, np.array(leader_u), self.sc.dt)
+        target = self.schedule.targets(k)[self.drone]
+        r = desired_relative(self.offsets[target - 1], float(track[2]), self.sc.offset_frame)
+        command = track[:2] - 0.5 * r
+        ff = leader_u[0] * np.array([math.cos(track[2]), math.sin(track[2])])
+        return drone_velocity(position, command, gain=d.gain, v_max=d.v_max, feedforward=ff)
+
+
+class AirGroundWorld:
+    """The world of one run: the robots' true motion and every sensor (module docstring,
+    steps 2 and 4). :meth:`start` draws what is drawn before the first tick (the UWB errors,
+    the followers' initial guesses, the drones' heading-hold errors); :meth:`step` moves the
+    world one tick under the robots' commands and takes the readings at its end (``batch``, and
+    each drone's camera fix in ``fixes``). All randomness comes from the generator given to
+    :meth:`start`, drawn in a fixed order."""
+
+    def __init__(self, sc: AirGroundScenario, rng: np.random.Generator) -> None:
+        n, m, steps = sc.n_followers, sc.n_drones, sc.n_steps
+        self.sc = sc
+        self.rng = rng
+        self.names = robot_names(sc)
+        self.times = tick_times(sc)
+        self.offsets = np.array(sc.offsets, dtype=float)
+        self.poses = initial_poses(sc)
+        self.k = 0
+        # UWB links: every unordered UGV pair (a < b), errors drawn for every UWB epoch up front
+        self.links = [(a, b) for a in range(n + 1) for b in range(a + 1, n + 1)]
+        self.range_errors = sample_range_errors(
+            sc.uwb,
+            steps // sc.uwb_every + 1,
+            len(self.links),
+            sc.dt * sc.uwb_every,
+            rng,
+            link_bias=sc.uwb_link_bias,
+        )
+        self.priors = self._draw_priors()
+        self.drones = _Drones.start(sc, self.poses, self.offsets, rng)
+        self.batch = empty_measurements()
+        self.fixes: list[MarkerFix | None] = [None] * m
+        self._truth = np.zeros((steps + 1, n + 1 + m, 4))
+        self._truth[0] = _truth_row(self.poses, self.drones)
+        self._commands = np.zeros((steps, n + 1 + m, 4))
+        self._formation_error = np.zeros((steps, n, 2))
+        self._batches: list[Measurements] = []
+
+    @staticmethod
+    def start(sc: AirGroundScenario, rng: np.random.Generator) -> AirGroundWorld:
+        """The world at ``t = 0`` (its first draws made)."""
+        return AirGroundWorld(sc, rng)
+
+    def _draw_priors(self) -> dict[str, Gaussian]:
+        """Each follower's initial guess, drawn around the truth with the stated prior."""
+        sc, poses = self.sc, self.poses
+        p0_sig = np.array([sc.init_position_sigma] * 2 + [sc.init_heading_sigma] * 2)
+        priors: dict[str, Gaussian] = {}
+        for i in range(1, sc.n_followers + 1):
+            true_x = np.array([*(poses[0, :2] - poses[i, :2]), poses[i, 2], poses[0, 2]])
+            mean = true_x + p0_sig * self.rng.standard_normal(4)
+            priors[self.names[i]] = Gaussian(mean, np.diag(p0_sig**2))
+        return priors
+
+    @property
+    def done(self) -> bool:
+        return self.k >= self.sc.n_steps
+
+    def drone_position(self, drone: int) -> Array:
+        """Drone ``drone``'s position ``(x, y, z)`` now (it knows its own position)."""
+        return self.drones.position[drone].copy()
+
+    def readings_of(self, robot: int) -> Measurements:
+        """The readings robot ``robot`` took at the end of the last tick (its sensor slice)."""
+        return self.batch.select(self.batch.observer == robot)
+
+    def step(self, ugv_u: Array, drone_v: Array) -> None:
+        """Tick ``k → k + 1`` under the UGVs' commands ``(N + 1, 2)`` ``(v, ω)`` and the drones'
+        planar velocity commands ``(M, 2)``; then the readings at ``t_{k+1}``."""
+        sc, k = self.sc, self.k
+        n = sc.n_followers
+        if self.done:
+            raise ConfigError(f"AirGroundWorld.step: the run ended at tick {k}")
+        u_cmd = np.asarray(ugv_u, dtype=float)
+        # motion (actual = commanded + noise)
+        u_act = u_cmd + self.rng.standard_normal(u_cmd.shape) * np.array(sc.velocity_noise)
+        self.poses = unicycle_step(self.poses, u_act, sc.dt)
+        self.drones.fly(sc, np.asarray(drone_v, dtype=float), self.rng)
+        # sensing, stamped at the end of the tick
+        t1 = float(self.times[k + 1])
+        parts = []
+        if k % sc.uwb_every == 0:
+            parts.append(
+                _uwb_ranges(t1, self.poses, self.links, self.range_errors[k // sc.uwb_every])
+            )
+        self.fixes = [None] * sc.n_drones
+        if k % sc.camera_every == 0:
+            frame, self.fixes = self.drones.camera_frame(sc, t1, self.poses, self.rng)
+            parts.append(frame)
+        self.batch = Measurements.concatenate(parts) if parts else empty_measurements()
+        self._batches.append(self.batch)
+        # record
+        self._commands[k, : n + 1, 0] = u_cmd[:, 0]
+        self._commands[k, : n + 1, 3] = u_cmd[:, 1]
+        self._commands[k, n + 1 :, :2] = self.drones.velocity
+        self._truth[k + 1] = _truth_row(self.poses, self.drones)
+        for i in range(1, n + 1):
+            desired = desired_relative(self.offsets[i - 1], self.poses[0, 2], sc.offset_frame)
+            self._formation_error[k, i - 1] = (self.poses[0, :2] - self.poses[i, :2]) - desired
+        self.k = k + 1
+
+    @property
+    def formation_error(self) -> Array:
+        """``(k, N, 2)`` the true ``r − r_des`` of every follower at the ticks stepped so far."""
+        return self._formation_error[: self.k]
+
+    def commands_of(self, k: int) -> Array:
+        """``(R, 4)`` every robot's command of tick ``k`` as body velocity (odometry)."""
+        return self._commands[k].copy()
+
+    def recording(self) -> Recording:
+        """Truth, commands and readings of the ticks stepped so far."""
+        k = self.k
+        return airground_recording(
+            self.sc,
+            self.names,
+            self.times[: k + 1],
+            self._truth[: k + 1],
+            self._commands[:k],
+            self._batches,
+        )
+
+    def run(self, estimates: Estimates) -> AirGroundRun:
+        """The finished run with the followers' ``estimates``."""
+        return AirGroundRun(
+            recording=self.recording(),
+            estimates=estimates,
+            priors=self.priors,
+            formation_error=self.formation_error,
+        )
 
 
 def simulate_airground(
@@ -364,95 +617,44 @@ def simulate_airground(
     controller: FollowerController | None,
     rng: np.random.Generator,
 ) -> AirGroundRun:
-    """Run one closed-loop simulation (module docstring).
+    """Run one closed-loop simulation (module docstring) in this process.
 
     ``make_estimator(robots, owner, prior)`` builds each follower's estimator (called for
     ``R_1 … R_N`` in order); ``controller`` commands the followers when
-    ``sc.control == "formation"`` (``None`` for ``"external"``).
+    ``sc.control == "formation"`` (``None`` for ``"external"``). Per tick ``k``: the followers
+    estimate at ``t_k`` (``k ≥ 1``) with the commands of tick ``k − 1`` and the readings taken
+    at ``t_k``, then every robot commands tick ``k`` — the leader its path, each drone its
+    :class:`DroneGuidance`, each follower its :class:`FollowerAgent` — and the world steps.
+    A team of processes runs these very objects, one per process, and steps the same world.
     """
     _check_controller(sc, controller)
-    n, m, dt, steps = sc.n_followers, sc.n_drones, sc.dt, sc.n_steps
-    names = robot_names(sc)
-    schedule = sc.schedule()
-    offsets = np.array(sc.offsets, dtype=float)
-    poses = _initial_poses(sc)
-    poses0 = poses.copy()
-    # UWB links: every unordered UGV pair (a < b), errors drawn for every UWB epoch up front.
-    links = [(a, b) for a in range(n + 1) for b in range(a + 1, n + 1)]
-    n_epochs = steps // sc.uwb_every + 1
-    range_err = sample_range_errors(
-        sc.uwb, n_epochs, len(links), dt * sc.uwb_every, rng, link_bias=sc.uwb_link_bias
-    )
-    # Estimators, started from a guess drawn around the truth with the stated prior.
-    priors: dict[str, Gaussian] = {}
-    p0_sig = np.array([sc.init_position_sigma] * 2 + [sc.init_heading_sigma] * 2)
-    for i in range(1, n + 1):
-        true_x = np.array([*(poses[0, :2] - poses[i, :2]), poses[i, 2], poses[0, 2]])
-        mean = true_x + p0_sig * rng.standard_normal(4)
-        priors[names[i]] = Gaussian(mean, np.diag(p0_sig**2))
-    estimators = [make_estimator(names, owner, prior) for owner, prior in priors.items()]
-    for owner, est in zip(priors, estimators, strict=True):
+    world = AirGroundWorld.start(sc, rng)
+    names = world.names
+    followers = []
+    for i, (owner, prior) in enumerate(world.priors.items(), start=1):
+        est = make_estimator(names, owner, prior)
         if est.owner != owner:
             raise ConfigError(f"simulate_airground: the estimator for {owner} says {est.owner}")
-    drones = _Drones.start(sc, poses, offsets, rng)
-    times = np.arange(steps + 1, dtype=np.float64) * dt
-    truth = np.zeros((steps + 1, n + 1 + m, 4))
-    truth[0] = _truth_row(poses, drones)
-    commands = np.zeros((steps, n + 1 + m, 4))
-    formation_error = np.zeros((steps, n, 2))
-    batches: list[Measurements] = []
-    recorder = Recorder("+".join(sorted({e.name for e in estimators})))
-    sv, sw = sc.velocity_noise
-
-    for k in range(steps):
+        followers.append(FollowerAgent(sc, i, est, controller))
+    drones = [DroneGuidance.at_start(sc, j) for j in range(sc.n_drones)]
+    recorder = Recorder("+".join(sorted({f.estimator.name for f in followers})))
+    times = world.times
+    for k in range(sc.n_steps + 1):
         t = float(times[k])
-        v0, w0 = sc.leader.command(t)
-        # 1. commands
-        if controller is None:
-            u_f = _rigid_commands(sc, poses0, v0, w0)
-        else:
-            u_f = np.asarray(
-                controller.commands(_follower_estimates(estimators, names[0]), (v0, w0)),
-                dtype=float,
-            )
-        u_cmd = np.vstack([[v0, w0], u_f])
-        # 2. motion (actual = commanded + noise)
-        u_act = u_cmd + rng.standard_normal(u_cmd.shape) * np.array([sv, sw])
-        poses = unicycle_step(poses, u_act, dt)
-        drones.fly(sc, schedule.targets(k), (v0, w0), offsets, rng)
-        # 3.-4. sensing, stamped at the end of the tick
-        t1 = float(times[k + 1])
-        parts = []
-        if k % sc.uwb_every == 0:
-            parts.append(_uwb_ranges(t1, poses, links, range_err[k // sc.uwb_every]))
-        if k % sc.camera_every == 0:
-            parts.append(drones.camera_frame(sc, t1, poses, offsets, rng))
-        batch = Measurements.concatenate(parts) if parts else empty_measurements()
-        batches.append(batch)
-        # 5. estimation: the one event at the end of the tick
-        commands[k, : n + 1, 0] = u_cmd[:, 0]
-        commands[k, : n + 1, 3] = u_cmd[:, 1]
-        commands[k, n + 1 :, :2] = drones.velocity
-        run_events(
-            estimators,
-            times[k + 1 : k + 2],
-            commands[k][None],
-            np.full((1, n + 1 + m), t),
-            batch,
-            times[k + 1 : k + 2],
-            recorder,
-        )
-        # record
-        truth[k + 1] = _truth_row(poses, drones)
-        for i in range(1, n + 1):
-            desired = desired_relative(offsets[i - 1], poses[0, 2], sc.offset_frame)
-            formation_error[k, i - 1] = (poses[0, :2] - poses[i, :2]) - desired
-    return AirGroundRun(
-        recording=_recording(sc, names, times, truth, commands, batches),
-        estimates=recorder.results(),
-        priors=priors,
-        formation_error=formation_error,
-    )
+        if k >= 1:
+            held = world.commands_of(k - 1)
+            for f in followers:
+                f.estimate(float(times[k - 1]), t, held, world.batch, recorder)
+        if world.done:
+            break
+        leader_u = sc.leader.command(t)
+        ugv_u = np.array([leader_u, *(f.command(t, leader_u) for f in followers)], dtype=float)
+        drone_v = np.zeros((sc.n_drones, 2))
+        for j, guidance in enumerate(drones):
+            guidance.apply_fix(world.fixes[j])
+            drone_v[j] = guidance.velocity(k, leader_u, world.drone_position(j)[:2])
+        world.step(ugv_u, drone_v)
+    return world.run(recorder.results())
 
 
 def _truth_row(poses: Array, drones: _Drones) -> Array:
@@ -479,7 +681,7 @@ def _uwb_ranges(
     )
 
 
-def _recording(
+def airground_recording(
     sc: AirGroundScenario,
     names: tuple[str, ...],
     times: Array,
@@ -487,6 +689,8 @@ def _recording(
     commands: Array,
     batches: list[Measurements],
 ) -> Recording:
+    """The run's :class:`Recording`: truth ``(K+1, R, 4)`` at ``times``, the commands
+    ``(K, R, 4)`` as odometry, the readings of every tick."""
     n_ugv = sc.n_followers + 1
     sv, sw = sc.velocity_noise
     sigma = [np.array([sv, 0.0, 0.0, sw])] * n_ugv + [np.zeros(4)] * sc.n_drones
@@ -511,13 +715,12 @@ def _recording(
 
 @dataclass(kw_only=True)
 class _Drones:
-    """The drones' state: ``position (M, 3)`` (x, y, z), commanded planar ``velocity (M, 2)``,
-    each drone's ``leader_track (M, 3)`` (its estimate of the leader's pose), the altitude
-    deviation and the heading-hold error ``yaw_error (M,)`` (both Gauss–Markov)."""
+    """The drones' physical state: ``position (M, 3)`` (x, y, z), the planar ``velocity (M, 2)``
+    they fly, the altitude deviation and the heading-hold error ``yaw_error (M,)`` (both
+    Gauss–Markov)."""
 
     position: Array
     velocity: Array
-    leader_track: Array
     altitude_deviation: Array
     yaw_error: Array
 
@@ -525,7 +728,7 @@ class _Drones:
     def start(
         sc: AirGroundScenario, poses: Array, offsets: Array, rng: np.random.Generator
     ) -> _Drones:
-        """Hovering above their first midpoints at the set altitude, tracking the true leader."""
+        """Hovering above their first midpoints at the set altitude."""
         m = sc.n_drones
         position = np.zeros((m, 3))
         first = sc.schedule().targets(0)
@@ -536,35 +739,19 @@ class _Drones:
         return _Drones(
             position=position,
             velocity=np.zeros((m, 2)),
-            leader_track=np.tile(poses[0], (m, 1)),
             altitude_deviation=np.zeros(m),
             yaw_error=rng.normal(0.0, sc.drone.yaw_sigma, m),
         )
 
-    def fly(
-        self,
-        sc: AirGroundScenario,
-        targets: tuple[int, ...],
-        leader_u: tuple[float, float],
-        offsets: Array,
-        rng: np.random.Generator,
-    ) -> None:
-        """One tick: dead-reckon the leader track with the leader's broadcast command, fly
-        toward the scheduled midpoint ``p_0 − r_des / 2`` with the leader's velocity as
-        feed-forward, let altitude and heading-hold error wander."""
+    def fly(self, sc: AirGroundScenario, velocity: Array, rng: np.random.Generator) -> None:
+        """One tick: fly the commanded planar ``velocity (M, 2)``; altitude and heading-hold
+        error wander."""
         dt, d = sc.dt, sc.drone
         a_alt = math.exp(-dt / d.altitude_tau)
         a_yaw = math.exp(-dt / d.yaw_tau)
-        v0, _ = leader_u
         for j in range(sc.n_drones):
-            track = self.leader_track
-            track[j] = unicycle_step(track[j], np.array(leader_u), dt)
-            r = desired_relative(offsets[targets[j] - 1], float(track[j, 2]), sc.offset_frame)
-            command = track[j, :2] - 0.5 * r
-            ff = v0 * np.array([math.cos(track[j, 2]), math.sin(track[j, 2])])
-            self.position[j, :2], self.velocity[j] = drone_step(
-                self.position[j, :2], command, dt, gain=d.gain, v_max=d.v_max, feedforward=ff
-            )
+            self.velocity[j] = velocity[j]
+            self.position[j, :2] = self.position[j, :2] + velocity[j] * dt
             self.altitude_deviation[j] = (
                 a_alt * self.altitude_deviation[j]
                 + d.altitude_sigma * math.sqrt(1 - a_alt**2) * rng.standard_normal()
@@ -576,19 +763,16 @@ class _Drones:
             )
 
     def camera_frame(
-        self,
-        sc: AirGroundScenario,
-        t: float,
-        poses: Array,
-        offsets: Array,
-        rng: np.random.Generator,
-    ) -> Measurements:
+        self, sc: AirGroundScenario, t: float, poses: Array, rng: np.random.Generator
+    ) -> tuple[Measurements, list[MarkerFix | None]]:
         """One camera frame of every drone: a ``pair_sighting`` row per detected pair
-        {R_0, R_i} (the first drone that sees a pair reports it); re-anchors the leader tracks."""
+        {R_0, R_i} (the first drone that sees a pair reports it), and each drone's marker fix
+        for its leader track."""
         n, cam = sc.n_followers, sc.camera
         seen: list[int] = []
         observers: list[int] = []
         values: list[tuple[float, float, float]] = []
+        fixes: list[MarkerFix | None] = [None] * sc.n_drones
         for j in range(sc.n_drones):
             if not cam.min_altitude <= float(self.position[j, 2]) <= cam.max_altitude:
                 continue
@@ -598,7 +782,7 @@ class _Drones:
                 if _in_footprint(cam, self.position[j], poses[i, :2])
                 and rng.random() < cam.p_detect
             ]
-            self._update_leader_track(j, visible, poses, offsets, sc, rng)
+            fixes[j] = _marker_fix(visible, poses, sc, rng)
             if 0 not in visible:
                 continue
             yaw = self.yaw_error[j]
@@ -614,31 +798,28 @@ class _Drones:
                 heading_i = poses[i, 2] + yaw + cam.heading_sigma * rng.standard_normal()
                 heading_0 = poses[0, 2] + yaw + cam.heading_sigma * rng.standard_normal()
                 values.append((bearing, heading_i, heading_0))
-        return measurement_rows(
+        rows = measurement_rows(
             "pair_sighting",
             t=np.full(len(seen), t),
             observer=np.array(observers, dtype=np.int64),
             target=np.array(seen, dtype=np.int64),
             value=np.array(values, dtype=float).reshape(-1, 3),
         )
+        return rows, fixes
 
-    def _update_leader_track(
-        self,
-        j: int,
-        visible: list[int],
-        poses: Array,
-        offsets: Array,
-        sc: AirGroundScenario,
-        rng: np.random.Generator,
-    ) -> None:
-        """Re-anchor drone j's leader track on what its camera sees (leader first, else a
-        follower plus the formation layout); headings are read from the markers."""
-        track, sig = self.leader_track, sc.drone.midpoint_sigma
-        if 0 in visible:
-            track[j, :2] = poses[0, :2] + sig * rng.standard_normal(2)
-            track[j, 2] = poses[0, 2] + sc.camera.heading_sigma * rng.standard_normal()
-            return
-        if visible:
-            i = visible[0]
-            r = desired_relative(offsets[i - 1], float(track[j, 2]), sc.offset_frame)
-            track[j, :2] = poses[i, :2] + r + sig * rng.standard_normal(2)
+
+def _marker_fix(
+    visible: list[int], poses: Array, sc: AirGroundScenario, rng: np.random.Generator
+) -> MarkerFix | None:
+    """The marker a drone's guidance re-anchors on: the leader's pose if it is in view, else
+    the first visible follower's position (noise: ``midpoint_sigma`` per axis, the camera's
+    heading σ)."""
+    sig = sc.drone.midpoint_sigma
+    if 0 in visible:
+        position = poses[0, :2] + sig * rng.standard_normal(2)
+        heading = poses[0, 2] + sc.camera.heading_sigma * rng.standard_normal()
+        return MarkerFix(0, position, float(heading))
+    if visible:
+        i = visible[0]
+        return MarkerFix(i, poses[i, :2] + sig * rng.standard_normal(2))
+    return None

@@ -1,0 +1,209 @@
+"""The air-ground team's protocol (``sense`` from the world, ``cmd`` to it): admission by role,
+validation of every field, the world's and a robot's handling of bad messages, the truth file."""
+
+from __future__ import annotations
+
+import msgpack
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from relloc.core.recording import measurement_rows
+from relloc.errors import DataError
+from relloc.runtime import keys
+from relloc.runtime.admission import CLOCK_SENDER, admit
+from relloc.runtime.airground import (
+    LeaderRole,
+    Received,
+    RobotProcess,
+    RobotSettings,
+    WorldProcess,
+    WorldSettings,
+    load_world,
+    save_world,
+    sense_body,
+)
+from relloc.runtime.messages import MessageRejected, encode
+from relloc.runtime.transport import Incoming, TransportSettings
+from relloc.sim.airground import AirGroundScenario, AirGroundWorld, robot_names
+
+TEAM = "t"
+SC = AirGroundScenario(offsets=((0.5, 0.5), (-0.5, 0.5)), offset_frame="global", duration=0.5)
+ROSTER = robot_names(SC)  # R_0, R_1, R_2, D_1
+TRANSPORT = TransportSettings()
+
+
+def _world() -> AirGroundWorld:
+    world = AirGroundWorld.start(SC, np.random.default_rng(5))
+    for _ in range(3):  # a camera frame and UWB ranges at t = 0.05 and 0.15
+        world.step(np.tile([0.1, 0.0], (3, 1)), np.zeros((1, 2)))
+    return world
+
+
+def _sense(world: AirGroundWorld, robot: int, **changes: object) -> dict:
+    drone = robot - 3 if robot >= 3 else None
+    return sense_body(world, robot, world.k, drone=drone) | changes
+
+
+def _admit(kind: str, sender: str, body: dict, key: str, t: float = 0.15):
+    return admit(key, encode(kind, sender, 0, t, body), roster=ROSTER)
+
+
+def test_sense_and_cmd_round_trip_on_their_own_keys_only():
+    world = _world()
+    body = _sense(world, 3)
+    msg = _admit("sense", CLOCK_SENDER, body, keys.clock_key(TEAM, "sense"))
+    assert msg.body["target"] == "D_1" and msg.body["position"].shape == (3,)
+    np.testing.assert_array_equal(msg.body["position"], world.drone_position(0))
+    cmd = {"k": 3, "u": np.array([0.1, 0.0, 0.0, 0.02])}
+    assert _admit("cmd", "R_1", cmd, keys.robot_key(TEAM, "R_1", "cmd")).body["k"] == 3
+    cases = [
+        # a robot claiming the world's readings, on the world's key
+        ("sense", "R_1", body, keys.clock_key(TEAM, "sense"), "spoofed"),
+        # a command from the infrastructure sender, or under another robot's key
+        ("cmd", CLOCK_SENDER, cmd, keys.clock_key(TEAM, "ctl"), "wrong_kind"),
+        ("cmd", "R_2", cmd, keys.robot_key(TEAM, "R_1", "cmd"), "spoofed"),
+        (
+            "sense",
+            CLOCK_SENDER,
+            body | {"target": "nobody"},
+            keys.clock_key(TEAM, "sense"),
+            "unknown_target",
+        ),
+        (
+            "sense",
+            CLOCK_SENDER,
+            body | {"fix_subject": "nobody", "fix": np.zeros(2)},
+            keys.clock_key(TEAM, "sense"),
+            "unknown_target",
+        ),
+        (
+            "sense",
+            CLOCK_SENDER,
+            body | {"fix_subject": "R_0", "fix": np.zeros(1)},
+            keys.clock_key(TEAM, "sense"),
+            "shape",
+        ),
+        ("sense", CLOCK_SENDER, body | {"k": 99}, keys.clock_key(TEAM, "sense"), "malformed"),
+        (
+            "sense",
+            CLOCK_SENDER,
+            body | {"position": np.zeros(2)},
+            keys.clock_key(TEAM, "sense"),
+            "shape",
+        ),
+    ]
+    for kind, sender, b, key, reason in cases:
+        with pytest.raises(MessageRejected) as exc:
+            admit(key, encode(kind, sender, 0, 0.1, b, max_bytes=10**6), roster=ROSTER)
+        assert exc.value.reason == reason, (kind, sender, key)
+    with pytest.raises(MessageRejected) as exc:  # no such robot stream
+        admit(f"relloc/{TEAM}/robot/R_1/sense", encode("sense", "R_1", 0, 0.1, body), roster=ROSTER)
+    assert exc.value.reason == "unknown_key"
+
+
+@settings(derandomize=True, max_examples=60, deadline=None)
+@given(
+    k=st.integers(min_value=0, max_value=2**40),
+    dt=st.floats(allow_nan=True, allow_infinity=True),
+    fix=st.lists(st.floats(allow_nan=True), max_size=5),
+    subject=st.sampled_from(["", "R_0", "R_2", "D_1", "zz"]),
+    position=st.lists(st.floats(), max_size=4),
+)
+def test_any_sense_body_is_accepted_or_rejected_with_a_reason(k, dt, fix, subject, position):
+    body = _sense(_world(), 1) | {"k": k, "dt": dt, "fix_subject": subject}
+    body |= {"fix": fix, "position": position}
+    raw = {"v": 3, "type": "sense", "sender": CLOCK_SENDER, "seq": 0, "t": 0.1, "wall_ns": 1}
+    raw |= {n: (v.tolist() if isinstance(v, np.ndarray) else v) for n, v in body.items()}
+    payload = msgpack.packb(raw, use_bin_type=True)
+    try:
+        msg = admit(keys.clock_key(TEAM, "sense"), payload, roster=ROSTER)
+    except MessageRejected as exc:
+        assert exc.reason
+        return
+    assert msg.body["k"] <= msg.body["n"] and msg.body["fix"].size in (0, 2, 3)
+
+
+def test_the_world_counts_stale_spoofed_and_foreign_commands_and_keeps_the_good_one():
+    world = _world()
+    proc = WorldProcess(WorldSettings(team=TEAM, transport=TRANSPORT), world)
+    proc._k = 3
+    good = {"k": 3, "u": np.array([0.1, 0.0, 0.0, 0.02])}
+    items = [
+        (keys.robot_key(TEAM, "R_1", "cmd"), encode("cmd", "R_1", 0, 0.15, good)),
+        (keys.robot_key(TEAM, "R_2", "cmd"), encode("cmd", "R_2", 0, 0.1, good | {"k": 2})),
+        (keys.robot_key(TEAM, "R_0", "cmd"), encode("cmd", "R_1", 1, 0.15, good)),
+        (keys.robot_key(TEAM, "X", "cmd"), encode("cmd", "X", 0, 0.15, good)),
+        (
+            keys.robot_key(TEAM, "R_0", "odom"),
+            encode("odom", "R_0", 0, 0.15, {"stamps": [0.15], "u": [[0.1, 0, 0, 0]]}),
+        ),
+        (keys.robot_key(TEAM, "R_0", "cmd"), b"\x93garbage"),
+    ]
+    for key, payload in items:
+        proc._handle(Incoming(key, payload))
+    assert set(proc._cmds) == {"R_1"}
+    np.testing.assert_array_equal(proc._cmds["R_1"], good["u"])
+    assert proc.report.rejected_by_reason == {
+        "stale": 1,
+        "spoofed": 1,
+        "unknown_sender": 1,
+        "wrong_kind": 1,
+        "malformed": 1,
+    }
+
+
+def test_a_robot_rejects_a_sense_out_of_step_and_ignores_another_robots():
+    world = _world()
+    proc = RobotProcess(
+        RobotSettings(team=TEAM, robot="R_0", transport=TRANSPORT), SC, LeaderRole(SC)
+    )
+    key = keys.clock_key(TEAM, "sense")
+    t = float(world.times[world.k])
+    for robot, changes in ((1, {}), (0, {"n": 99}), (0, {"dt": 0.1})):
+        body = _sense(world, robot, **changes)
+        proc._handle(Incoming(key, encode("sense", CLOCK_SENDER, 0, t, body)))
+    assert proc.counters["rejected.bad_tick"] == 2 and proc._tick is None
+    # an end that overtakes the last readings is noted, not obeyed before the last tick
+    end = encode("ctl", CLOCK_SENDER, 0, t, {"action": "end", "robot": ""})
+    proc._handle(Incoming(keys.clock_key(TEAM, "ctl"), end))
+    assert proc._ending and not proc._done
+
+
+def test_received_readings_of_a_later_tick_are_kept_for_it():
+    heard = Received()
+    rows = measurement_rows(
+        "range",
+        t=np.array([0.1, 0.2]),
+        observer=np.array([0, 0]),
+        target=np.array([1, 1]),
+        value=np.array([1.0, 1.1]),
+    )
+    heard.rows["R_0"] = [rows]
+    now = heard.rows_at("R_0", 0.1)
+    assert [p.t.tolist() for p in now] == [[0.1]]
+    assert [p.t.tolist() for p in heard.rows_at("R_0", 0.2)] == [[0.2]]
+    assert heard.rows_at("R_0", 0.3) == []
+    heard.leader_u = [(0.0, (0.1, 0.0)), (0.1, (0.2, 0.01))]
+    assert heard.leader_command(0.05) == (0.1, 0.0)
+    assert heard.leader_command(0.1) == (0.2, 0.01)
+    assert Received().leader_command(1.0) is None
+
+
+def test_world_file_round_trip_and_bad_file(tmp_path):
+    world = _world()
+    path = tmp_path / "world.npz"
+    save_world(world, path)
+    recording, formation_error = load_world(path, SC)
+    expected = world.recording()
+    np.testing.assert_array_equal(formation_error, world.formation_error)
+    for a, b in zip(recording.truth, expected.truth, strict=True):
+        np.testing.assert_array_equal(a.pose, b.pose)
+    np.testing.assert_array_equal(recording.measurements.value, expected.measurements.value)
+    (tmp_path / "bad.npz").write_bytes(b"not a zip")
+    with pytest.raises(DataError, match=r"bad\.npz"):
+        load_world(tmp_path / "bad.npz", SC)
+    np.savez(tmp_path / "part.npz", truth=np.zeros(3))
+    with pytest.raises(DataError, match="missing"):
+        load_world(tmp_path / "part.npz", SC)
