@@ -1347,16 +1347,18 @@ def replay_text(s: dict[str, Any]) -> str:
                 if all(targets[c]["nees_ok"] for c in ("case1", "case3") if c in targets)
                 else "The odometry errors left after the calibration are correlated over "
                 "seconds to a minute (the fitted turn-rate σ grows with the window length), "
-                "which no equivalent white noise describes at every time scale; with the yaw "
-                "only weakly observable, the filter's yaw also absorbs the speed errors it does "
-                "not model. "
+                "which no equivalent white noise describes at every time scale (the inflation "
+                "fitted on the calibration window narrows the gap, it does not close it); with "
+                "the yaw only weakly observable, the filter's yaw also absorbs the speed errors "
+                "it does not model. "
             )
         )
     return (
         "- **Tables 3–4 (real data).** The paper used two Pioneer robots with laser map-based "
         "localisation as ground truth; we use two iRobot Create robots of MRCLAM with Vicon "
-        "truth and their recorded *commanded* odometry. Calibrating it (latency, scales and the "
-        "noise left after them, fitted after the scored window) changes the yaw RMSE from "
+        "truth and their recorded *commanded* odometry. Calibrating it (latency, lag, scales, the "
+        "noise left after them and that noise's inflation, all fitted after the scored window) "
+        "changes the yaw RMSE from "
         f"{span([raw[c]['phi']['rmse_mean'] for c in raw], ' rad')} (raw) to "
         f"{span([cal[c]['phi']['rmse_mean'] for c in cal], ' rad')} and the NEES beyond the bound "
         f"from {span([t4r[c]['nees_percent_beyond'] for c in t4r], ' %')} to "
