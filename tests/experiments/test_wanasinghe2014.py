@@ -31,6 +31,7 @@ from relloc.experiments.wanasinghe2014_mrclam import (
     TABLE2,
     ReplaySettings,
     prepare_replay,
+    prepare_replays,
     replay_recording,
 )
 from relloc.experiments.wanasinghe2014_sim import SimSettings, team_task
@@ -209,3 +210,62 @@ def test_a_replay_draw_is_four_sensors_of_the_observer(small_dataset: Path) -> N
         # noise-free readings would be the raised truth's range, azimuth and elevation
         truth = rec.relative_truth(0, 1, m.t[rows])
         np.testing.assert_allclose(m.value[rows], range_bearing(truth), atol=6 * max(s_r, s_b))
+
+
+def _short_replay(dataset: Path, **changes: object) -> ReplaySettings:
+    return dataclasses.replace(
+        ReplaySettings(
+            dataset=dataset, duration_s=10.0, min_duration_s=8.0, start_after_odometry_s=1.0
+        ),
+        **changes,
+    )
+
+
+def test_noise_inflation_is_fitted_on_the_calibration_window_only(small_dataset: Path) -> None:
+    """The factor on the calibrated σ comes from replays of stretches of the calibration window
+    (after the scored window, never overlapping it); it is the first factor of the grid that
+    meets the target, and the calibrated odometry carries exactly that factor. Seed root 8203
+    was not used while developing."""
+    settings = _short_replay(small_dataset)
+    data = prepare_replays(settings, steady_state_s=3.0, seed=8203, executor="serial", quiet=True)
+    cal = data["calibrated"]
+    fit = cal.inflation
+    assert fit is not None and cal.calibration is not None and data["raw"].inflation is None
+    window, scored = cal.calibration.calibration_window, cal.scored_window
+    assert fit.stretches[0].start_s >= scored.end_s
+    for a, b in zip(fit.stretches, fit.stretches[1:], strict=False):
+        assert a.end_s == b.start_s
+    for w in fit.stretches:
+        assert window.start_s <= w.start_s < w.end_s <= window.end_s
+        assert settings.min_duration_s <= w.duration_s <= settings.duration_s + 1e-9
+    tried = fit.yaw_percent_beyond
+    assert 1 <= len(tried) <= len(settings.inflation_grid) and fit.samples > 0
+    assert all(p > settings.inflation_target_percent for p in tried[:-1])
+    assert fit.met == (tried[-1] <= settings.inflation_target_percent)
+    assert fit.k == settings.inflation_grid[len(tried) - 1]
+    for od, label in zip(cal.odometry, ("observer", "observed"), strict=True):
+        f = cal.fits[label]
+        np.testing.assert_allclose(
+            od.sigma, fit.k * np.array([f.sigma_v, f.sigma_lateral, 0.0, f.sigma_w])
+        )
+    # a target every factor meets stops at the first one
+    lax = prepare_replays(
+        _short_replay(small_dataset, inflation_target_percent=99.99),
+        steady_state_s=3.0,
+        seed=8203,
+        executor="serial",
+        quiet=True,
+    )["calibrated"].inflation
+    assert lax is not None and lax.k == 1.0 and lax.met and len(lax.yaw_percent_beyond) == 1
+
+
+def test_noise_inflation_settings_are_checked(small_dataset: Path) -> None:
+    for bad in (
+        {"inflation_grid": (2.0, 1.0)},
+        {"inflation_grid": (0.5,)},
+        {"inflation_grid": ()},
+        {"inflation_draws": 0},
+        {"inflation_target_percent": 0.0},
+    ):
+        with pytest.raises(ConfigError, match="inflation"):
+            _short_replay(small_dataset, **bad)

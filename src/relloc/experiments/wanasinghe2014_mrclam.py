@@ -27,7 +27,16 @@ sensor settings. Here the same is done with two robots of any MRCLAM-layout data
     and the one with the largest σ_ω kept. The real errors are correlated over seconds, so an
     equivalent white noise is right at one time scale only; the relative yaw is corrected only
     through the observed robot's motion, slowly, so the filter must not be over-confident at any
-    time scale it bridges, and the largest σ is the conservative choice;
+    time scale it bridges, and the largest σ is the conservative choice. Even so a white-noise
+    filter reads the observed robot's heading from the direction of its apparent motion, and
+    errors that persist for seconds make that reading over-confident; so σ is then multiplied by
+    the smallest factor ``k`` of ``inflation_grid`` at which the same PLKF, replayed on
+    stretches of the *calibration window* (:func:`fit_noise_inflation`), keeps its relative-yaw
+    NEES beyond χ²(1, 0.95) at most ``inflation_target_percent`` of the steady-state updates
+    (pooled over the Table-2 settings, stretches and draws). The yaw part is the test because
+    it is what the odometry noise governs: the position part of the noisy 10 Hz setting is
+    over-confident even with the true velocities (the pseudo-linear bias, which the
+    bias-compensated PLKF removes), and no odometry noise repairs that;
   - **raw** (the earlier replay, kept beside): the recorded commands as they are, with the
     equivalent white noise over 1 s windows fitted over each robot's whole recording (the
     scored window included);
@@ -77,8 +86,10 @@ from relloc.estimators.initialisation import fully_unknown, pose_in_fov
 from relloc.estimators.relative_batch import TrackSpec
 from relloc.estimators.yaw_bank import YawBankSettings
 from relloc.experiments.wanasinghe2014_filters import run_filters
+from relloc.metrics.consistency import chi2_upper
 from relloc.models.measurement import range_bearing
 from relloc.pipeline.evaluation import SeriesEvaluation
+from relloc.pipeline.montecarlo import run_monte_carlo
 from relloc.sim.sensors import add_noise
 
 Array = NDArray[np.float64]
@@ -129,6 +140,9 @@ class ReplaySettings:
     rate_hz: float = 100.0
     noise_window_s: float = 1.0
     calibration_noise_windows_s: tuple[float, ...] = (1.0, 2.0, 5.0, 10.0, 20.0, 40.0)
+    inflation_grid: tuple[float, ...] = (1.0, 1.5, 2.0, 3.0, 4.0)
+    inflation_draws: int = 1
+    inflation_target_percent: float = 5.0
     init_range: tuple[float, float] = (0.3, 8.0)
 
     def __post_init__(self) -> None:
@@ -154,11 +168,67 @@ class ReplaySettings:
                 "ReplaySettings.calibration_noise_windows_s: positive window lengths, got "
                 f"{self.calibration_noise_windows_s}"
             )
+        grid = self.inflation_grid
+        if (
+            not grid
+            or any(not (math.isfinite(k) and k >= 1.0) for k in grid)
+            or list(grid) != sorted(grid)
+        ):
+            raise ConfigError(
+                f"ReplaySettings.inflation_grid: ascending factors ≥ 1, got {self.inflation_grid}"
+            )
+        if isinstance(self.inflation_draws, bool) or not (
+            isinstance(self.inflation_draws, int) and self.inflation_draws >= 1
+        ):
+            raise ConfigError(
+                f"ReplaySettings.inflation_draws: an integer ≥ 1, got {self.inflation_draws!r}"
+            )
+        if not 0.0 < self.inflation_target_percent < 100.0:
+            raise ConfigError(
+                "ReplaySettings.inflation_target_percent: in (0, 100), got "
+                f"{self.inflation_target_percent}"
+            )
         lo, hi = self.init_range
         if not 0 <= lo < hi:
             raise ConfigError(
                 f"ReplaySettings.init_range: need 0 ≤ min < max, got {self.init_range}"
             )
+
+
+@dataclass(frozen=True)
+class InflationFit:
+    """The factor ``k`` on the calibrated odometry noise σ and how it was chosen
+    (:func:`fit_noise_inflation`): ``stretches`` of the calibration window replayed, ``draws``
+    per stretch, ``seed`` of those draws, and per factor tried (``grid``, in order, up to the
+    first that met the target) the % of steady-state PLKF updates whose relative-yaw NEES is
+    beyond χ²(1, 0.95) (``yaw_percent_beyond``) over ``samples`` updates; ``met``: whether
+    ``k`` meets ``target_percent`` (else ``k`` is the grid's largest)."""
+
+    k: float
+    met: bool
+    target_percent: float
+    grid: tuple[float, ...]
+    yaw_percent_beyond: tuple[float, ...]
+    samples: int
+    stretches: tuple[CalibrationWindow, ...]
+    draws: int
+    seed: int
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready record."""
+        return {
+            "k": self.k,
+            "met": self.met,
+            "target_percent": self.target_percent,
+            "tried": [
+                {"k": k, "yaw_percent_beyond": p}
+                for k, p in zip(self.grid, self.yaw_percent_beyond, strict=False)
+            ],
+            "samples_per_factor": self.samples,
+            "stretches": [w.to_dict() for w in self.stretches],
+            "draws_per_stretch": self.draws,
+            "seed": self.seed,
+        }
 
 
 @dataclass(frozen=True)
@@ -170,7 +240,8 @@ class ReplayData:
     the grid times outside ground-truth gaps. Each draw builds its :class:`Recording` from
     these parts and its own readings (:meth:`recording`). ``odometry_kind`` is ``"calibrated"``
     or ``"raw"`` (module docstring); ``calibration`` is the team fit of the calibrated version
-    (``None`` for the raw one) and ``pair_scales`` the pair's ``(s_v, s_ω)`` from it.
+    (``None`` for the raw one), ``pair_scales`` the pair's ``(s_v, s_ω)`` from it and
+    ``inflation`` the factor its noise σ carries (:func:`fit_noise_inflation`).
     """
 
     source: str
@@ -185,6 +256,7 @@ class ReplayData:
     odometry_kind: str = "raw"
     calibration: OdometryModelFit | None = None
     pair_scales: tuple[tuple[float, float], ...] = ()
+    inflation: InflationFit | None = None
 
     @property
     def scored_window(self) -> CalibrationWindow:
@@ -238,12 +310,40 @@ def prepare_replay(settings: ReplaySettings) -> ReplayData:
     return _raw_replay(settings, load_mrclam(settings.dataset))
 
 
-def prepare_replays(settings: ReplaySettings) -> dict[str, ReplayData]:
+def prepare_replays(
+    settings: ReplaySettings,
+    *,
+    steady_state_s: float,
+    seed: int,
+    executor: str | None = None,
+    quiet: bool = False,
+) -> dict[str, ReplayData]:
     """``{"calibrated": …, "raw": …}``: the replay with calibrated and with raw odometry
-    (module docstring), from one load of the dataset."""
+    (module docstring), from one load of the dataset; the calibrated noise inflation is fitted
+    with draws of ``seed`` scored after ``steady_state_s`` (:func:`fit_noise_inflation`)."""
     ds = load_mrclam(settings.dataset)
     raw = _raw_replay(settings, ds)
-    return {"calibrated": _calibrated_replay(settings, ds, raw), "raw": raw}
+    calibrated = _calibrated_replay(settings, ds, raw)
+    inflation = fit_noise_inflation(
+        settings,
+        ds,
+        calibrated,
+        steady_state_s=steady_state_s,
+        seed=seed,
+        executor=executor,
+        quiet=quiet,
+    )
+    return {"calibrated": _inflated(calibrated, inflation), "raw": raw}
+
+
+def _pair_span(settings: ReplaySettings, recording: Recording) -> tuple[float, float]:
+    """First and last time both robots have odometry and ground truth."""
+    i, j = recording.index(str(settings.observer)), recording.index(str(settings.observed))
+    truth = recording.require_truth("the seed-000 replay")
+    od_l, od_c = recording.odometry[i], recording.odometry[j]
+    first = max(od_l.t[0], od_c.t[0])
+    last = min(truth[i].t[-1], truth[j].t[-1], od_l.t[-1], od_c.t[-1])
+    return float(first), float(last)
 
 
 def _raw_replay(settings: ReplaySettings, ds: MrclamDataset) -> ReplayData:
@@ -251,21 +351,15 @@ def _raw_replay(settings: ReplaySettings, ds: MrclamDataset) -> ReplayData:
     fit the odometry noise over each robot's whole recording."""
     obs, tgt = ds.robot(settings.observer), ds.robot(settings.observed)
     recording = to_recording(ds)
-    i, j = recording.index(str(settings.observer)), recording.index(str(settings.observed))
-    truth = recording.require_truth("the seed-000 replay")
-    od_l, od_c = recording.odometry[i], recording.odometry[j]
-    start = max(od_l.t[0], od_c.t[0]) + settings.start_after_odometry_s
-    end = min(start + settings.duration_s, truth[i].t[-1], truth[j].t[-1], od_l.t[-1], od_c.t[-1])
+    first, last = _pair_span(settings, recording)
+    start = first + settings.start_after_odometry_s
+    end = min(start + settings.duration_s, last)
     if end - start < settings.min_duration_s:
         raise DataError(
             f"{settings.dataset}: robots {settings.observer} and {settings.observed} share only "
             f"{max(end - start, 0.0):.1f} s of odometry and ground truth after the start; "
             f"need {settings.min_duration_s:g} s"
         )
-    dt = 1.0 / settings.rate_hz
-    n = math.floor((end - start) * settings.rate_hz + 1e-9)
-    t = start + dt * np.arange(n + 1)
-    valid = np.asarray(obs.groundtruth.at(t).valid & tgt.groundtruth.at(t).valid)
     fits = {
         label: fit_odometry_noise(
             robot,
@@ -275,6 +369,32 @@ def _raw_replay(settings: ReplaySettings, ds: MrclamDataset) -> ReplayData:
         )
         for label, robot in (("observer", obs), ("observed", tgt))
     }
+    i, j = recording.index(str(settings.observer)), recording.index(str(settings.observed))
+    return _cut(
+        settings, ds, recording, start, end, (recording.odometry[i], recording.odometry[j]), fits
+    )
+
+
+def _cut(
+    settings: ReplaySettings,
+    ds: MrclamDataset,
+    recording: Recording,
+    start: float,
+    end: float,
+    odometry: tuple[Odometry, Odometry],
+    fits: dict[str, OdometryNoiseFit],
+) -> ReplayData:
+    """The pair on the ``rate_hz`` grid of ``[start, end]``: ``odometry`` (observer's,
+    observed's) held on it with the noise of ``fits``, the observed plane raised, the epochs
+    in ground-truth gaps marked."""
+    obs, tgt = ds.robot(settings.observer), ds.robot(settings.observed)
+    i, j = recording.index(str(settings.observer)), recording.index(str(settings.observed))
+    truth = recording.require_truth("the seed-000 replay")
+    dt = 1.0 / settings.rate_hz
+    n = math.floor((end - start) * settings.rate_hz + 1e-9)
+    t = np.asarray(start + dt * np.arange(n + 1), dtype=np.float64)
+    valid = np.asarray(obs.groundtruth.at(t).valid & tgt.groundtruth.at(t).valid)
+    od_l, od_c = odometry
     return ReplayData(
         source=f"{ds.path} robots {settings.observer} → {settings.observed}",
         robots=(recording.robots[i], recording.robots[j]),
@@ -307,7 +427,8 @@ def calibration_window(ds: MrclamDataset, scored: CalibrationWindow) -> Calibrat
 
 
 def _calibrated_replay(settings: ReplaySettings, ds: MrclamDataset, raw: ReplayData) -> ReplayData:
-    """``raw`` with the odometry calibrated on :func:`calibration_window` (module docstring)."""
+    """``raw`` with the odometry calibrated on :func:`calibration_window` (module docstring),
+    its noise not yet inflated."""
     window = calibration_window(ds, raw.scored_window)
     lengths = [w for w in settings.calibration_noise_windows_s if 2 * w <= window.duration_s]
     if not lengths:
@@ -315,11 +436,10 @@ def _calibrated_replay(settings: ReplaySettings, ds: MrclamDataset, raw: ReplayD
             f"no noise window of {settings.calibration_noise_windows_s} s fits twice"
         )
     team = fit_odometry_model(ds, window, integration_s=min(lengths))
-    recording = to_recording(ds)
-    odometry, fits, scales = [], {}, []
+    fits, scales = {}, []
     for label, subject in (("observer", settings.observer), ("observed", settings.observed)):
         k = ds.robot_ids.index(subject)
-        latency, s_v, s_w = team.latency_s, team.scale_v[k], team.scale_w[k]
+        s_v, s_w = team.scale_v[k], team.scale_w[k]
         scales.append((s_v, s_w))
         candidates = [
             fit_odometry_noise(
@@ -327,7 +447,7 @@ def _calibrated_replay(settings: ReplaySettings, ds: MrclamDataset, raw: ReplayD
                 window,
                 rate_hz=settings.rate_hz,
                 window_s=length,
-                latency_s=latency,
+                latency_s=team.latency_s,
                 scale_v=s_v,
                 scale_w=s_w,
                 time_constant_s=team.time_constant_s,
@@ -335,22 +455,157 @@ def _calibrated_replay(settings: ReplaySettings, ds: MrclamDataset, raw: ReplayD
             for length in lengths
         ]
         fits[label] = max(candidates, key=lambda f: f.sigma_w)
-        od = calibrated_commands(
-            recording.odometry[recording.index(str(subject))],
-            latency,
-            s_v,
-            s_w,
-            team.time_constant_s,
-        )
-        odometry.append(_held(od, raw.t, _sigma(fits[label]), f"{od.where} on the grid"))
+    od_l, od_c = _calibrated_pair(settings, ds, team)
     return replace(
         raw,
-        odometry=(odometry[0], odometry[1]),
+        odometry=(
+            _held(od_l, raw.t, _sigma(fits["observer"]), f"{od_l.where} on the grid"),
+            _held(od_c, raw.t, _sigma(fits["observed"]), f"{od_c.where} on the grid"),
+        ),
         fits=fits,
         odometry_kind="calibrated",
         calibration=team,
         pair_scales=tuple(scales),
     )
+
+
+def _calibrated_pair(
+    settings: ReplaySettings, ds: MrclamDataset, team: OdometryModelFit
+) -> tuple[Odometry, Odometry]:
+    """The observer's and the observed robot's recorded odometry calibrated by ``team``
+    (:func:`relloc.calibration.odometry.calibrated_commands`)."""
+    recording = to_recording(ds)
+    out = []
+    for subject in (settings.observer, settings.observed):
+        k = ds.robot_ids.index(subject)
+        out.append(
+            calibrated_commands(
+                recording.odometry[recording.index(str(subject))],
+                team.latency_s,
+                team.scale_v[k],
+                team.scale_w[k],
+                team.time_constant_s,
+            )
+        )
+    return out[0], out[1]
+
+
+# ----------------------------------------------------------------------------------------------
+# Noise inflation fitted on the calibration window
+# ----------------------------------------------------------------------------------------------
+
+
+def calibration_stretches(
+    settings: ReplaySettings, ds: MrclamDataset, window: CalibrationWindow
+) -> tuple[CalibrationWindow, ...]:
+    """Consecutive stretches of ``duration_s`` (the last one shorter, kept when at least
+    ``min_duration_s``) of the part of ``window`` where both robots have odometry and ground
+    truth; at least one stretch of ``min_duration_s`` is needed."""
+    first, last = _pair_span(settings, to_recording(ds))
+    lo, hi = max(window.start_s, first), min(window.end_s, last)
+    out: list[CalibrationWindow] = []
+    start = lo
+    while hi - start >= settings.min_duration_s:
+        end = min(start + settings.duration_s, hi)
+        out.append(CalibrationWindow(start, end, f"{window.source}, stretch {len(out) + 1}"))
+        start = end
+    if not out:
+        raise window.too_little(
+            f"robots {settings.observer} and {settings.observed} share no "
+            f"{settings.min_duration_s:g} s of odometry and ground truth to fit the noise "
+            "inflation on"
+        )
+    return tuple(out)
+
+
+def fit_noise_inflation(
+    settings: ReplaySettings,
+    ds: MrclamDataset,
+    calibrated: ReplayData,
+    *,
+    steady_state_s: float,
+    seed: int,
+    executor: str | None = None,
+    quiet: bool = False,
+) -> InflationFit:
+    """The smallest factor ``k`` of ``settings.inflation_grid`` on the calibrated noise σ at
+    which the PLKF keeps its relative-yaw NEES ``(e_φ/σ_φ)²`` beyond χ²(1, 0.95) on at most
+    ``inflation_target_percent`` of its updates after ``steady_state_s``, replayed on
+    :func:`calibration_stretches` of the calibrated replay's calibration window with
+    ``inflation_draws`` draws each (the same draws for every ``k``), pooled over the Table-2
+    settings, stretches and draws. Only the calibration window is replayed: the scored
+    window plays no part. Without such a factor, the grid's largest (``met`` false)."""
+    team = calibrated.calibration
+    if team is None:
+        raise ConfigError("fit_noise_inflation: needs the calibrated replay")
+    recording = to_recording(ds)
+    pair = _calibrated_pair(settings, ds, team)
+    stretches = calibration_stretches(settings, ds, team.calibration_window)
+    parts = [
+        _cut(settings, ds, recording, w.start_s, w.end_s, pair, calibrated.fits) for w in stretches
+    ]
+    n = len(parts) * settings.inflation_draws
+    percents: list[float] = []
+    samples = 0
+    for k in settings.inflation_grid:
+        inflated = [_inflated_by(p, k) for p in parts]
+        counts = run_monte_carlo(
+            inflation_task,
+            n,
+            seed,
+            executor=executor,
+            task_args=(inflated, settings, steady_state_s),
+            description=f"seed 000: MRCLAM noise inflation x{k:g} (calibration window)",
+            quiet=quiet,
+        )
+        beyond, samples = sum(c[0] for c in counts), sum(c[1] for c in counts)
+        percents.append(100.0 * beyond / max(samples, 1))
+        if percents[-1] <= settings.inflation_target_percent:
+            break
+    met = percents[-1] <= settings.inflation_target_percent
+    return InflationFit(
+        k=settings.inflation_grid[len(percents) - 1],
+        met=met,
+        target_percent=settings.inflation_target_percent,
+        grid=settings.inflation_grid,
+        yaw_percent_beyond=tuple(percents),
+        samples=samples,
+        stretches=stretches,
+        draws=settings.inflation_draws,
+        seed=seed,
+    )
+
+
+def inflation_task(
+    seed: np.random.SeedSequence,
+    run_index: int,
+    parts: list[ReplayData],
+    settings: ReplaySettings,
+    steady_state_s: float,
+) -> tuple[int, int]:
+    """One draw of :func:`fit_noise_inflation` on stretch ``run_index mod len(parts)``: the
+    PLKF's steady-state updates with relative-yaw NEES beyond χ²(1, 0.95), and all of them."""
+    tracks = replay_task(seed, run_index, parts[run_index % len(parts)], settings, ("PLKF",))
+    bound = chi2_upper(1, 0.95)
+    beyond = total = 0
+    for case in tracks.values():
+        ev = case["PLKF"].evaluation
+        steady = ev.age >= steady_state_s
+        z = (ev.error[steady, 3] / ev.sigma[steady, 3]) ** 2
+        beyond += int(np.count_nonzero(z > bound))
+        total += int(z.size)
+    return beyond, total
+
+
+def _inflated_by(data: ReplayData, k: float) -> ReplayData:
+    """``data`` with its odometry noise σ multiplied by ``k``."""
+    odometry = tuple(replace(od, sigma=k * np.asarray(od.sigma)) for od in data.odometry)
+    return replace(data, odometry=(odometry[0], odometry[1]))
+
+
+def _inflated(data: ReplayData, fit: InflationFit) -> ReplayData:
+    """``data`` with the fitted inflation applied and recorded."""
+    return replace(_inflated_by(data, fit.k), inflation=fit)
 
 
 def _epochs(t: Array, rate_hz: float) -> NDArray[np.int64]:
@@ -393,9 +648,18 @@ class ReplayTrack:
 
 
 def replay_task(
-    seed: np.random.SeedSequence, run_index: int, data: ReplayData, settings: ReplaySettings
+    seed: np.random.SeedSequence,
+    run_index: int,
+    data: ReplayData,
+    settings: ReplaySettings,
+    names: tuple[str, ...] | None = None,
 ) -> dict[str, dict[str, ReplayTrack]]:
-    """One draw: ``{case: {filter: ReplayTrack}}`` (the filters of :func:`replay_filters`)."""
+    """One draw: ``{case: {filter: ReplayTrack}}`` (the filters ``names`` of
+    :data:`REPLAY_FILTERS`; default those of :func:`replay_filters`)."""
+
+    def filters(case: str) -> tuple[str, ...]:
+        return names if names is not None else replay_filters(case, data.odometry_kind)
+
     rng = np.random.default_rng(seed)
     recording = replay_recording(data, rng)
     guess = pose_in_fov(rng, fov_deg=360.0, range_limits=settings.init_range)
@@ -412,7 +676,7 @@ def replay_task(
             bank=name == "yaw bank",
         )
         for sensor, case in enumerate(TABLE2)
-        for name in replay_filters(case, data.odometry_kind)
+        for name in filters(case)
     ]
     scored = run_filters(
         recording,
@@ -425,7 +689,7 @@ def replay_task(
     out: dict[str, dict[str, ReplayTrack]] = {}
     for case in TABLE2:
         out[case] = {}
-        for name in replay_filters(case, data.odometry_kind):
+        for name in filters(case):
             ev = scored[(observed, f"{case}/{name}")]
             p_true = data.relative_truth(ev.t)[:, :3]
             p_est = p_true + ev.error[:, :3]
