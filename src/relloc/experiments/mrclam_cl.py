@@ -27,8 +27,9 @@ window is ``fit.calibration_window`` in summary.json) and checked on the second 
   variance rates ``q_v = q_v0 + k_v|v|`` and ``q_ω = q_ω0 + k_ω|ω| + k_ωv|v|``, the rates fitted
   over integration windows as long as the expected wait for the next landmark detection
   (:func:`relloc.calibration.camera.landmark_wait_s`, clipped to [0.5, 10] s);
-- camera (:func:`relloc.calibration.camera.fit_camera`): a per-robot bearing offset and ``σ_η``
-  (median, MAD), a range bias ``b(η, ρ) = c·(1, η, η², ρ, ρη²)`` and ``σ_r``;
+- camera (:func:`relloc.calibration.camera.fit_camera`): a per-robot bearing bias that depends
+  on where the target sits in the image, ``b_i(η) = c_i·(1, η, η²)``, and ``σ_η`` (MAD of what
+  it leaves), a range bias ``b(η, ρ) = c·(1, η, η², ρ, ρη²)`` and ``σ_r``;
 - correlation: consecutive residuals are strongly correlated (lag-correlations in
   ``fit.correlation``); a filter that treats N correlated readings as independent over-counts
   their information. We keep at most one range per (observer, target) pair every
@@ -44,7 +45,7 @@ summary.json keys: ``cases.<mode>/<anchors>``: ``pos_rmse_m`` and ``heading_rmse
 targets and whether each is met, judged on the held-out window; the whole-run figures under
 ``in_sample``), ``load_report`` (rows the loader
 and :func:`relloc.datasets.mrclam.to_recording` skipped, by reason). The fitted latency, scales
-and bearing offsets are applied to the recording before the replay (:func:`build_recording`).
+and bearing biases are applied to the recording before the replay (:func:`build_recording`).
 """
 
 from __future__ import annotations
@@ -210,9 +211,10 @@ def calibrated_odometry(recording: Recording, fit: FittedModels) -> tuple[Odomet
 
 
 def corrected_bearings(m: Measurements, fit: FittedModels) -> Measurements:
-    """The camera rows with each observer's fitted bearing offset removed."""
+    """The camera rows with each observer's fitted bearing bias ``b_i(η)`` removed
+    (:meth:`relloc.calibration.camera.CameraFit.bearing_bias`)."""
     value = np.array(m.value)
-    value[:, 1] -= np.asarray(fit.camera.bearing_offset)[m.observer]
+    value[:, 1] -= fit.camera.bearing_bias(m.observer, value[:, 1])
     return replace(m, value=value)
 
 

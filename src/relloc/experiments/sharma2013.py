@@ -253,7 +253,9 @@ def case_settings(
     scenario: Any, case: str, linearisation: Linearisation = "latest"
 ) -> CooperativeSettings:
     """The team EIF's settings of one case (:data:`CASES`) on the scenario's noise, with the
-    given linearisation (plain, first-estimates or observability-constrained Jacobians)."""
+    given linearisation (plain, first-estimates or observability-constrained Jacobians); the
+    observability-aware ones also carry the bearings' second-order terms
+    (:mod:`relloc.estimators.second_order`), the plain one is seed 001's filter."""
     from relloc.estimators.cooperative import CooperativeSettings, OdometryModel, SensorModel
 
     odometry = OdometryModel.from_discrete(scenario.sigma_v, scenario.sigma_w, scenario.dt)
@@ -263,6 +265,7 @@ def case_settings(
         sensor=sensor,
         filter="eif",
         linearisation=linearisation,
+        second_order=linearisation != "latest",
         **CASES[case],
     )
 
