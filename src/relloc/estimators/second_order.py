@@ -30,7 +30,10 @@ relative uncertainty is small against the distance (``s/ρ = 0.05`` adds 6·10�
 when it is not (``s/ρ = 1`` adds 1 rad²) — the row is then de-weighted by the amount its
 linearisation is wrong, with nothing to tune. The extra noise does not touch the Jacobian, so a
 row that annihilates the unobservable directions (:mod:`relloc.estimators.first_estimates`,
-:mod:`relloc.estimators.observability_constrained`) still does. The two rows of one
+:mod:`relloc.estimators.observability_constrained`) still does. This is the variance of the
+quadratic part alone; the fourth-order terms that pair first with third derivatives are left
+out (for a bearing they add about as much again, for a range they can reduce the variance:
+``tests/cooperative/test_second_order.py`` compares both with sampling). The two rows of one
 range-and-bearing detection also get a second-order cross term, ``½ tr(H_b P_d H_r P_d)``; it is
 zero for isotropic ``P_d`` and is left out (each row keeps its own noise).
 """
