@@ -548,6 +548,16 @@ def _figures(
     return figs
 
 
+def _bias_text(coeffs: list[float], limits: list[float]) -> str:
+    """Each robot's bearing-bias coefficients and the bearings they were fitted over."""
+    c = np.asarray(coeffs).reshape(-1, 3)
+    lim = np.asarray(limits).reshape(-1, 2)
+    return "; ".join(
+        f"({', '.join(f'{v:+.4f}' for v in ci)}) over [{lo:+.2f}, {hi:+.2f}] rad"
+        for ci, (lo, hi) in zip(c, lim, strict=True)
+    )
+
+
 def _heading_explanation(cases: dict[str, Any], fit: dict[str, Any]) -> str:
     """Where the bearing-only heading error comes from (measured, see
     :func:`heading_error_by_landmark_gap`)."""
@@ -645,7 +655,11 @@ def _report(summary: dict[str, Any], figures: list[tuple[str, str]]) -> str:
         f"turn-rate scales {', '.join(f'{s:.3f}' for s in f['scale_w'])}; variance rates over "
         f"{f['odometry_window_s']:.2f} s windows (the expected wait for the next landmark "
         f"detection): q_v0 {f['q_v0']:.2e} m²/s, k_v {f['k_v']:.2e} m, q_ω0 {f['q_w0']:.2e} "
-        f"rad²/s, k_ω {f['k_w']:.2e} rad, k_ωv {f['k_wv']:.2e} rad²/m. Bearings: σ "
+        f"rad²/s, k_ω {f['k_w']:.2e} rad, k_ωv {f['k_wv']:.2e} rad²/m. Bearings: a bias per "
+        "robot on (1, η, η²) = "
+        f"{_bias_text(f['bearing_bias_coeffs'], f['bearing_bias_limits'])} (removed before "
+        "the replay; constant offsets alone were "
+        f"{', '.join(f'{o:+.4f}' for o in f['bearing_offset'])} rad), σ "
         f"{f['sigma_bearing_raw']:.4f} rad (MAD) × √{f['bearing_inflation']:.1f} (correlation "
         f"inflation) = {f['sigma_bearing']:.4f} rad. Ranges: bias coefficients on (1, η, η², ρ, "
         f"ρη²) = ({', '.join(f'{c:.3f}' for c in f['range_bias_coeffs'])}), σ "
