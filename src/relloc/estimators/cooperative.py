@@ -116,6 +116,7 @@ from relloc.estimators.observability_constrained import (
     constrained_transition,
     unobservable_directions,
 )
+from relloc.estimators.second_order import second_order_rows
 from relloc.models.planar_measurement import (
     RANGE_BIAS_FEATURES,
     LinearisedRows,
@@ -269,7 +270,10 @@ class CooperativeSettings:
     or ``"first_estimates"`` (FEJ, :mod:`relloc.estimators.first_estimates`: the linearised team
     keeps the unobservable global translation/rotation unobservable) or
     ``"observability_constrained"`` (OC, :mod:`relloc.estimators.observability_constrained`: the
-    latest-estimate Jacobians changed least to keep that subspace).
+    latest-estimate Jacobians changed least to keep that subspace); ``second_order``: bearing
+    and range rows carry their second-order mean and variance under the prior
+    (:mod:`relloc.estimators.second_order`: a row whose linearisation fails over the prior's
+    spread is de-weighted by that much).
     """
 
     odometry: OdometryModel
@@ -282,6 +286,7 @@ class CooperativeSettings:
     p_gate: float | None = 0.999
     filter: Literal["eif", "ekf"] = "eif"
     linearisation: Linearisation = "latest"
+    second_order: bool = False
 
     def __post_init__(self) -> None:
         if self.filter not in ("eif", "ekf"):
@@ -1056,6 +1061,8 @@ class CooperativeEstimator(Silent):
             c.rejected_degenerate += int(np.unique(rows.group[degenerate]).size)
             rows = rows.select(~np.isin(rows.group, rows.group[degenerate]))
         lin = self._linearise(X, rows)
+        if s.second_order:
+            lin = second_order_rows(lin, rows, X, filt.covariance())
         used = 0
         if rows.size:
             groups = group_innovations(lin, filt.covariance())

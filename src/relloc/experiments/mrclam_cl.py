@@ -27,8 +27,9 @@ window is ``fit.calibration_window`` in summary.json) and checked on the second 
   variance rates ``q_v = q_v0 + k_v|v|`` and ``q_ω = q_ω0 + k_ω|ω| + k_ωv|v|``, the rates fitted
   over integration windows as long as the expected wait for the next landmark detection
   (:func:`relloc.calibration.camera.landmark_wait_s`, clipped to [0.5, 10] s);
-- camera (:func:`relloc.calibration.camera.fit_camera`): a per-robot bearing offset and ``σ_η``
-  (median, MAD), a range bias ``b(η, ρ) = c·(1, η, η², ρ, ρη²)`` and ``σ_r``;
+- camera (:func:`relloc.calibration.camera.fit_camera`): a per-robot bearing bias that depends
+  on where the target sits in the image, ``b_i(η) = c_i·(1, η, η²)``, and ``σ_η`` (MAD of what
+  it leaves), a range bias ``b(η, ρ) = c·(1, η, η², ρ, ρη²)`` and ``σ_r``;
 - correlation: consecutive residuals are strongly correlated (lag-correlations in
   ``fit.correlation``); a filter that treats N correlated readings as independent over-counts
   their information. We keep at most one range per (observer, target) pair every
@@ -44,7 +45,7 @@ summary.json keys: ``cases.<mode>/<anchors>``: ``pos_rmse_m`` and ``heading_rmse
 targets and whether each is met, judged on the held-out window; the whole-run figures under
 ``in_sample``), ``load_report`` (rows the loader
 and :func:`relloc.datasets.mrclam.to_recording` skipped, by reason). The fitted latency, scales
-and bearing offsets are applied to the recording before the replay (:func:`build_recording`).
+and bearing biases are applied to the recording before the replay (:func:`build_recording`).
 """
 
 from __future__ import annotations
@@ -210,9 +211,10 @@ def calibrated_odometry(recording: Recording, fit: FittedModels) -> tuple[Odomet
 
 
 def corrected_bearings(m: Measurements, fit: FittedModels) -> Measurements:
-    """The camera rows with each observer's fitted bearing offset removed."""
+    """The camera rows with each observer's fitted bearing bias ``b_i(η)`` removed
+    (:meth:`relloc.calibration.camera.CameraFit.bearing_bias`)."""
     value = np.array(m.value)
-    value[:, 1] -= np.asarray(fit.camera.bearing_offset)[m.observer]
+    value[:, 1] -= fit.camera.bearing_bias(m.observer, value[:, 1])
     return replace(m, value=value)
 
 
@@ -546,6 +548,16 @@ def _figures(
     return figs
 
 
+def _bias_text(coeffs: list[float], limits: list[float]) -> str:
+    """Each robot's bearing-bias coefficients and the bearings they were fitted over."""
+    c = np.asarray(coeffs).reshape(-1, 3)
+    lim = np.asarray(limits).reshape(-1, 2)
+    return "; ".join(
+        f"({', '.join(f'{v:+.4f}' for v in ci)}) over [{lo:+.2f}, {hi:+.2f}] rad"
+        for ci, (lo, hi) in zip(c, lim, strict=True)
+    )
+
+
 def _heading_explanation(cases: dict[str, Any], fit: dict[str, Any]) -> str:
     """Where the bearing-only heading error comes from (measured, see
     :func:`heading_error_by_landmark_gap`)."""
@@ -643,7 +655,11 @@ def _report(summary: dict[str, Any], figures: list[tuple[str, str]]) -> str:
         f"turn-rate scales {', '.join(f'{s:.3f}' for s in f['scale_w'])}; variance rates over "
         f"{f['odometry_window_s']:.2f} s windows (the expected wait for the next landmark "
         f"detection): q_v0 {f['q_v0']:.2e} m²/s, k_v {f['k_v']:.2e} m, q_ω0 {f['q_w0']:.2e} "
-        f"rad²/s, k_ω {f['k_w']:.2e} rad, k_ωv {f['k_wv']:.2e} rad²/m. Bearings: σ "
+        f"rad²/s, k_ω {f['k_w']:.2e} rad, k_ωv {f['k_wv']:.2e} rad²/m. Bearings: a bias per "
+        "robot on (1, η, η²) = "
+        f"{_bias_text(f['bearing_bias_coeffs'], f['bearing_bias_limits'])} (removed before "
+        "the replay; constant offsets alone were "
+        f"{', '.join(f'{o:+.4f}' for o in f['bearing_offset'])} rad), σ "
         f"{f['sigma_bearing_raw']:.4f} rad (MAD) × √{f['bearing_inflation']:.1f} (correlation "
         f"inflation) = {f['sigma_bearing']:.4f} rad. Ranges: bias coefficients on (1, η, η², ρ, "
         f"ρη²) = ({', '.join(f'{c:.3f}' for c in f['range_bias_coeffs'])}), σ "
