@@ -210,6 +210,7 @@ def run_mrclam_team(s: MrclamTeamSettings) -> dict[str, Any]:
     }
     summary = agents_summary([run], s.faults) | {
         "experiment": f"cooperative on {s.folder}",
+        "secure": s.secure,
         "case": s.case,
         "seed": s.seed,
         "runs": 1,

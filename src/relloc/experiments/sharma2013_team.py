@@ -25,8 +25,9 @@ times), ``agents.<robot>`` (the same of that agent's estimates, its ``max_abs_me
 ``max_abs_cov_diff`` against the in-process EIF, its late readings — re-filtered from a
 checkpoint or lost — and overdue windows), ``agreement``
 (worst over agents, ``within_tolerance``), ``cost_of_loss`` (per agent, RMSE − in-process
-RMSE), ``messages`` per run and robot, per run ``fault_outcomes`` (accuracy before / during /
-after each fault: :mod:`relloc.runtime.outcomes`).
+RMSE), ``secure`` (mutual TLS and access control: ``--secure``), ``messages`` per run and
+robot, per run ``fault_outcomes`` (accuracy before / during / after each fault:
+:mod:`relloc.runtime.outcomes`).
 """
 
 from __future__ import annotations
@@ -170,6 +171,7 @@ def _late_counts(counters: Mapping[str, int]) -> dict[str, int]:
 def _summary(s: SharmaTeamSettings, runs: list[dict[str, Any]]) -> dict[str, Any]:
     return agents_summary(runs, s.faults) | {
         "experiment": "sharma2013",
+        "secure": s.secure,
         "case": s.case,
         "seed": s.seed,
         "runs": s.runs,

@@ -211,14 +211,22 @@ inherited across fork)."""
 @dataclass(frozen=True, kw_only=True)
 class ProcessTeam:
     """How a reproduction's team runs as robot processes: the clock step, the faults, the team
-    name, the wall-time limit and the pacing (0: as fast as the team goes). Settings of a
-    reproduction's team extend it with what the reproduction needs."""
+    name, the wall-time limit, the pacing (0: as fast as the team goes) and the network's
+    security (``secure``: mutual TLS and access control, certificates from ``certs_dir`` or
+    made in each run's folder). Settings of a reproduction's team extend it with what the
+    reproduction needs."""
 
     tick_s: float = 0.1
     faults: FaultSettings = field(default_factory=FaultSettings)
     team: str = "team"
     wall_timeout_s: float = 300.0
     realtime_factor: float = 0.0
+    secure: bool = False
+    certs_dir: Path | None = None
+
+    def __post_init__(self) -> None:
+        if self.certs_dir is not None and not self.secure:
+            raise ConfigError("--certs: only with --secure")
 
     def launch(
         self,
@@ -239,6 +247,8 @@ class ProcessTeam:
             faults=self.faults,
             wall_timeout_s=self.wall_timeout_s,
             realtime_factor=self.realtime_factor,
+            secure=self.secure,
+            certs_dir=self.certs_dir,
             preload=preload,
             node_args=node_args,
         )
