@@ -9,7 +9,9 @@ Per clock tick ``k`` (simulated time ``t_k``; see :mod:`relloc.runtime.clock`) a
 
 1. releases what its :class:`~relloc.runtime.faults.LinkEmulator` holds for ``t_k``, files
    teammates' odometry and counts their measurements and equivalent measurements (duplicates
-   recognised by sequence number, late samples counted);
+   recognised by sequence number, a sequence number that jumps further ahead than the sender's
+   rate allows rejected as ``seq_jump``: :class:`~relloc.runtime.teammates.SeenSequences`;
+   late samples counted);
 2. publishes its own odometry and measurements of the window ``[t_{k−1}, t_k)`` — one ``odom``
    and one ``meas`` batch per tick: the configured publication rate is the tick rate;
 3. filters every pending window whose inputs are in, through its estimator's
@@ -179,7 +181,6 @@ class RobotNode:
         self.counters: Counter[str] = Counter()
         self.teammates = {r: Teammate(r) for r in settings.roster if r != settings.robot}
         self.own_odometry = ReceivedOdometry()
-        self._seen = SeenSequences()
         ss = np.random.SeedSequence([settings.fault_seed, settings.roster.index(settings.robot)])
         self.link = LinkEmulator(settings.robot, settings.faults, np.random.default_rng(ss))
         self._latency_us: list[float] = []
@@ -200,6 +201,7 @@ class RobotNode:
         self._last_tick_seen = False
         self._ticks = TickGuard(end_s=getattr(source, "end_time", None))
         self._budget = SenderBudget.for_team(len(settings.roster))
+        self._seen = SeenSequences(per_tick=self._budget.capacity)
         self._inbox: Inbox | None = None
 
     # ------------------------------------------------------------------ process main loop
@@ -266,8 +268,7 @@ class RobotNode:
                 check_not_future(msg, self._t)
                 self._budget.take(msg.sender)
         except MessageRejected as exc:
-            self.counters[f"rejected.{exc.reason}"] += 1
-            self.counters["rejected"] += 1
+            self._count_rejected(exc)
             return
         if msg.kind == "tick":
             self._on_tick(msg)
@@ -373,7 +374,12 @@ class RobotNode:
 
     def _deliver(self, messages: list[Message]) -> None:
         for msg in messages:
-            if not self._seen.is_new(msg.sender, msg.kind, msg.seq):
+            try:
+                new = self._seen.is_new(msg.sender, msg.kind, msg.seq, self._ticks.k or 0)
+            except MessageRejected as exc:
+                self._count_rejected(exc)
+                continue
+            if not new:
                 self.counters["duplicates"] += 1
                 continue
             mate = self.teammates[msg.sender]
@@ -388,8 +394,7 @@ class RobotNode:
                 try:
                     rows = rows_from_body(msg.body, self.s.roster, msg.sender)
                 except MessageRejected as exc:
-                    self.counters[f"rejected.{exc.reason}"] += 1
-                    self.counters["rejected"] += 1
+                    self._count_rejected(exc)
                     continue
                 mate.rows_until = max(mate.rows_until, msg.t)
                 late = rows.t < self._unstarted_from() - TIME_TOL
@@ -402,12 +407,15 @@ class RobotNode:
                 try:
                     parcels = mail_items(msg.body, self.s.roster, msg.sender)
                 except MessageRejected as exc:
-                    self.counters[f"rejected.{exc.reason}"] += 1
-                    self.counters["rejected"] += 1
+                    self._count_rejected(exc)
                     continue
                 mate.progress = max(mate.progress, float(msg.body["progress"]))
                 for stamp, items in parcels:
                     self.estimator.deliver(stamp, msg.sender, items)
+
+    def _count_rejected(self, exc: MessageRejected) -> None:
+        self.counters[f"rejected.{exc.reason}"] += 1
+        self.counters["rejected"] += 1
 
     def _unstarted_from(self) -> float:
         """Where the windows not yet started begin (readings before it are late)."""
