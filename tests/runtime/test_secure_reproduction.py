@@ -42,6 +42,7 @@ def test_sharma_team_on_the_secure_network_equals_the_plain_run(tmp_path):
     )
     assert _agents(secure) == _agents(plain)
     assert secure["agreement"]["within_tolerance"], secure["agreement"]
+    assert secure["per_run"][0]["collector_rejected_by_reason"] == {}
     for robot, m in secure["per_run"][0]["messages"].items():
         assert m["rejected"] == 0, robot
         assert m["sent"] == plain["per_run"][0]["messages"][robot]["sent"], robot

@@ -17,7 +17,8 @@ and the same runs are replayed in-process
 run); for the kidnapped team ``kidnapped`` (``refound_rate``, ``time_to_refind_s`` and
 ``tracked_last_second``, distributed and in-process);
 ``secure`` (mutual TLS and access control: ``--secure``); ``messages`` per robot and per run
-(sent, received, rejected by reason); per run ``fault_outcomes`` (accuracy before / during /
+(sent, received, rejected by reason) and what the collector rejected
+(``collector_rejected_by_reason``); per run ``fault_outcomes`` (accuracy before / during /
 after each fault, tracks kept, deleted and re-found: :mod:`relloc.runtime.outcomes`);
 ``wall_s``.
 
@@ -104,6 +105,7 @@ def run_desilva_team(s: DeSilvaTeamSettings) -> dict[str, Any]:
                 "wall_s": collected.wall_s,
                 "agreement": {k: agree[k] for k in ("max_abs_mean_diff", "max_abs_cov_diff")},
                 "messages": robot_messages(collected, recording.robots),
+                "collector_rejected_by_reason": dict(collected.rejected_by_reason),
                 "exit_codes": collected.exit_codes,
             }
         )

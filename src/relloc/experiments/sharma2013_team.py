@@ -26,8 +26,8 @@ times), ``agents.<robot>`` (the same of that agent's estimates, its ``max_abs_me
 checkpoint or lost — and overdue windows), ``agreement``
 (worst over agents, ``within_tolerance``), ``cost_of_loss`` (per agent, RMSE − in-process
 RMSE), ``secure`` (mutual TLS and access control: ``--secure``), ``messages`` per run and
-robot, per run ``fault_outcomes`` (accuracy before / during / after each fault:
-:mod:`relloc.runtime.outcomes`).
+robot and what the collector rejected (``collector_rejected_by_reason``), per run
+``fault_outcomes`` (accuracy before / during / after each fault: :mod:`relloc.runtime.outcomes`).
 """
 
 from __future__ import annotations
@@ -147,6 +147,7 @@ def run_sharma_team(s: SharmaTeamSettings) -> dict[str, Any]:
                 "in_process": accuracy(ref, recording),
                 "agents": agents,
                 "messages": messages,
+                "collector_rejected_by_reason": dict(collected.rejected_by_reason),
                 "exit_codes": collected.exit_codes,
             }
         )
