@@ -87,10 +87,17 @@ def mail_items(
     body: Mapping[str, Any], roster: Sequence[str], sender: str
 ) -> list[tuple[float, list[EquivalentMeasurement]]]:
     """The messages of a validated ``mail`` body, grouped by stamp (in order). A body whose
-    messages cannot be rebuilt (e.g. a subject that is the sender) raises
+    messages cannot be rebuilt — a subject off the roster (``unknown_target``) or that is the
+    sender, a covariance that is not positive definite (``bad_covariance``) — raises
     :class:`~relloc.runtime.messages.MessageRejected`."""
     from relloc.runtime.messages import MessageRejected
 
+    unknown = sorted(set(body["subjects"]) - set(roster))
+    if unknown:
+        raise MessageRejected("unknown_target", f"mail: subjects {unknown} are not on the roster")
+    covs = np.concatenate([body["covs"], body["prior_covs"]])
+    if covs.size and not np.all(np.linalg.eigvalsh(covs) > 0):
+        raise MessageRejected("bad_covariance", "mail: a covariance is not positive definite")
     ends = np.cumsum(body["sizes"].astype(np.int64))
     starts = ends - body["sizes"].astype(np.int64)
     out: list[tuple[float, EquivalentMeasurement]] = []

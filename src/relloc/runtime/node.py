@@ -193,6 +193,8 @@ class RobotNode:
         self._dt = 0.0
         self._pending: deque[_Window] = deque()
         self._window_start: float | None = None
+        self._start_s: float | None = None
+        """Where this process' first window starts (set at its first tick)."""
         self._filtered_until: float | None = None
         self._next_eqm_s = 0.0
         self._next_report_s = 0.0
@@ -338,7 +340,7 @@ class RobotNode:
         self.counters["ticks"] += 1
         self._last_tick_seen = k >= n
         if self._window_start is None:  # first tick heard (a restarted node joins mid-run)
-            self._window_start = self._filtered_until = t - self._dt
+            self._window_start = self._filtered_until = self._start_s = t - self._dt
             self._next_eqm_s = self._next_report_s = t
         self._deliver(self.link.release(t))
         # the run's last instant belongs to the last window
@@ -392,7 +394,12 @@ class RobotNode:
                 mate.heard_until_s = max(mate.heard_until_s or -np.inf, msg.t)
             elif msg.kind == "rows" and self.s.share_rows:
                 try:
-                    rows = rows_from_body(msg.body, self.s.roster, msg.sender)
+                    rows = rows_from_body(
+                        msg.body,
+                        self.s.roster,
+                        msg.sender,
+                        getattr(self.source, "landmark_count", None),
+                    )
                 except MessageRejected as exc:
                     self._count_rejected(exc)
                     continue
@@ -410,7 +417,13 @@ class RobotNode:
                     self._count_rejected(exc)
                     continue
                 mate.progress = max(mate.progress, float(msg.body["progress"]))
+                # what was sent before this process started cannot reach its estimator,
+                # which had no state then (a restarted node; or a hostile stamp)
+                start = np.inf if self._start_s is None else self._start_s
                 for stamp, items in parcels:
+                    if stamp < start - TIME_TOL:
+                        self.counters["mail_before_start"] += len(items)
+                        continue
                     self.estimator.deliver(stamp, msg.sender, items)
 
     def _count_rejected(self, exc: MessageRejected) -> None:

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.core.events import TIME_TOL
 from relloc.core.recording import Measurements
 from relloc.runtime.messages import MessageRejected
 
@@ -111,11 +112,14 @@ class Teammate:
 
     def take_rows(self, t0: float, t1: float, *, inclusive: bool = False) -> list[Measurements]:
         """The shared readings stamped in ``[t0, t1)`` (``[t0, t1]``); earlier ones are
-        dropped (their window is filtered already) and counted in :attr:`late_rows`."""
+        dropped (their window is filtered already) and counted in :attr:`late_rows`. Both
+        bounds are taken to :data:`~relloc.core.events.TIME_TOL`, as the event loop merges
+        times: a reading that close below ``t1`` is at the next window's first event."""
         taken, kept = [], []
         for part in self.rows:
-            before = part.t < t0
-            inside = ~before & ((part.t <= t1) if inclusive else (part.t < t1))
+            before = part.t < t0 - TIME_TOL
+            upper = (part.t <= t1 + TIME_TOL) if inclusive else (part.t < t1 - TIME_TOL)
+            inside = ~before & upper
             self.late_rows += int(before.sum())
             if inside.any():
                 taken.append(part.select(inside))
