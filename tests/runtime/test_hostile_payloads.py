@@ -8,7 +8,8 @@ inbox would: decode, admission (roles, time bound, rate), sequence numbers, the 
 re-filters the past for late readings). Hypothesis draws payloads that decode — any kind, any
 subject and landmark or sensor index, extreme and tiny values and σ, absurd and unsorted
 stamps, non-positive-definite covariances, wrong lengths — and the node must count each as
-rejected or use it, never raise, and keep filtering to the end of the run.
+rejected or use it, never raise, and keep filtering to the end of the run (run with
+``-W error::RuntimeWarning`` these tests also show that no overflow reaches a filter).
 """
 
 from __future__ import annotations
