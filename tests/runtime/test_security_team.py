@@ -11,8 +11,9 @@ loopback Zenoh, and an outside session attacks while the team runs.
 - ``--secure`` (mutual TLS + access control): an intruder without a certificate, one with a
   certificate of another CA, and one with a valid certificate of another robot (``rover``) try
   the attacks: the first two never see the team (no link), the third is confined by Zenoh's
-  access control to rover's own key prefix — only the one malformed message it sends there
-  reaches relloc, where it is counted — and the estimates again equal the in-process ones.
+  access control to rover's own key prefix — only what it sends there reaches relloc: a
+  malformed message and rover's odometry with a huge sequence number (which would make the
+  genuine stream look old), both counted — and the estimates again equal the in-process ones.
 
 Each run: 3 robots, 5 s simulated, paced at 2.5x real time so the attack lands mid-run.
 """
@@ -211,7 +212,11 @@ def _confined_attacks(session: Any) -> None:
     token = session.liveliness().declare_token(keys.alive_key(TEAM, "flyer"))
     time.sleep(0.2)
     token.undeclare()
-    _put(session, keys.robot_key(TEAM, "rover", "odom"), b"\xc1")
+    rover_odom = keys.robot_key(TEAM, "rover", "odom")
+    _put(session, rover_odom, b"\xc1")
+    # rover's own stream with a huge sequence number: before the jump bound, every genuine
+    # odometry message of rover after it was dropped as an old duplicate
+    _put(session, rover_odom, encode("odom", "rover", 10**9, 0.1, ODOM))
 
 
 def test_secure_team_keeps_out_intruders_and_confines_a_stolen_certificate(trio_scenario, tmp_path):
@@ -262,7 +267,7 @@ def test_secure_team_keeps_out_intruders_and_confines_a_stolen_certificate(trio_
     per_robot = robot_messages(collected, roster)
     for robot, m in per_robot.items():
         assert m["processes"] == 1 and m["final_report"] and m["ticks"] == 50, (robot, m)
-        expected = {} if robot == "rover" else {"malformed": 1}
+        expected = {} if robot == "rover" else {"malformed": 1, "seq_jump": 1}
         assert m["rejected_by_reason"] == expected, (robot, m["rejected_by_reason"])
         assert m["teammate_joins_seen"] == 2 and m["teammate_departures_seen"] == 0
     assert collected.kills == [] and dict(collected.rejected_by_reason) == {}

@@ -77,8 +77,8 @@ def test_received_odometry_holds_like_the_recording_and_counts_late_and_duplicat
 
 
 def test_seen_sequences_filters_duplicates_and_forgets_restarted_senders():
-    seen = SeenSequences(window=4)
-    assert [seen.is_new("a", "odom", s) for s in (0, 1, 1, 3, 2, 0)] == [
+    seen = SeenSequences(per_tick=8, window=4)
+    assert [seen.is_new("a", "odom", s, tick=1) for s in (0, 1, 1, 3, 2, 0)] == [
         True,
         True,
         False,
@@ -86,6 +86,6 @@ def test_seen_sequences_filters_duplicates_and_forgets_restarted_senders():
         True,
         False,
     ]
-    assert seen.is_new("a", "meas", 1)  # per kind
+    assert seen.is_new("a", "meas", 1, tick=1)  # per kind
     seen.forget("a")
-    assert seen.is_new("a", "odom", 0)
+    assert seen.is_new("a", "odom", 0, tick=2)

@@ -11,7 +11,9 @@ robot's estimates and writes ``summary.json`` and ``report.md`` (see
 
 ``--secure`` runs every process with mutual TLS only and Zenoh access control: each robot may
 publish only under its own key prefix, only the launcher's certificate may send ``tick``/``ctl``
-(certificates from ``--certs DIR``, see ``relloc certs``, or made in ``OUT/certs``).
+(certificates from ``--certs DIR``, see ``relloc certs``, or made in ``OUT/certs``; a
+reproduction's team makes them in each run's folder ``OUT/runI/certs``). Every target takes it:
+a scenario, ``default``, a dataset folder and every reproduction.
 
 A reproduction's team (``desilva2015``, ``desilva2015-kidnapped``: seed 002's leaders and pods,
 see :mod:`relloc.experiments.desilva2015_team`) runs ``--runs N`` Monte-Carlo runs of
@@ -191,13 +193,15 @@ def run_clock(args: argparse.Namespace) -> int:
 
 def _reproduction_team_args(args: argparse.Namespace) -> dict[str, Any]:
     """The settings every reproduction's team takes from the command line (clock step, faults,
-    team name, wall-time limit, pacing)."""
+    team name, wall-time limit, pacing, ``--secure`` and ``--certs``)."""
     return {
         "tick_s": args.tick,
         "faults": network_faults_from_args(args, **_robot_events(args)),
         "team": args.team,
         "wall_timeout_s": args.timeout,
         "realtime_factor": args.realtime,
+        "secure": args.secure,
+        "certs_dir": args.certs,
     }
 
 

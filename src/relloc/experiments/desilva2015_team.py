@@ -16,9 +16,11 @@ and the same runs are replayed in-process
 ``agreement`` (largest |Δ| of any belief mean / covariance entry at common record times, per
 run); for the kidnapped team ``kidnapped`` (``refound_rate``, ``time_to_refind_s`` and
 ``tracked_last_second``, distributed and in-process);
-``messages`` per robot and per run (sent, received, rejected by reason); per run
-``fault_outcomes`` (accuracy before / during / after each fault, tracks kept, deleted and
-re-found: :mod:`relloc.runtime.outcomes`); ``wall_s``.
+``secure`` (mutual TLS and access control: ``--secure``); ``messages`` per robot and per run
+(sent, received, rejected by reason) and what the collector rejected
+(``collector_rejected_by_reason``); per run ``fault_outcomes`` (accuracy before / during /
+after each fault, tracks kept, deleted and re-found: :mod:`relloc.runtime.outcomes`);
+``wall_s``.
 
 Tolerance. On a perfect network every leader processes the in-process event sequence and fuses
 each equivalent measurement at the event the in-process loop does (see
@@ -103,6 +105,7 @@ def run_desilva_team(s: DeSilvaTeamSettings) -> dict[str, Any]:
                 "wall_s": collected.wall_s,
                 "agreement": {k: agree[k] for k in ("max_abs_mean_diff", "max_abs_cov_diff")},
                 "messages": robot_messages(collected, recording.robots),
+                "collector_rejected_by_reason": dict(collected.rejected_by_reason),
                 "exit_codes": collected.exit_codes,
             }
         )
@@ -153,6 +156,7 @@ def _summary(
         "duration_s": duration_s,
         "processes_per_run": {"leaders": 2, "pods": 3, "clock": 1},
         "faults": s.faults.to_dict(),
+        "secure": s.secure,
         "distributed": ours,
         "in_process": ref,
         "difference": diff,

@@ -210,10 +210,12 @@ def run_mrclam_team(s: MrclamTeamSettings) -> dict[str, Any]:
         "in_process": accuracy(ref, rec),
         "agents": compare_agents(got, ref, rec, collected),
         "messages": robot_messages(collected, rec.robots),
+        "collector_rejected_by_reason": dict(collected.rejected_by_reason),
         "exit_codes": collected.exit_codes,
     }
     summary = agents_summary([run], s.faults) | {
         "experiment": f"cooperative on {s.folder}",
+        "secure": s.secure,
         "case": s.case,
         "seed": s.seed,
         "runs": 1,

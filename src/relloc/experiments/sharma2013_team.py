@@ -25,17 +25,18 @@ times), ``agents.<robot>`` (the same of that agent's estimates, its ``max_abs_me
 ``max_abs_cov_diff`` against the in-process EIF, its late readings — re-filtered from a
 checkpoint or lost — and overdue windows), ``agreement``
 (worst over agents, ``within_tolerance``), ``cost_of_loss`` (per agent, RMSE − in-process
-RMSE), ``messages`` per run and robot, per run ``fault_outcomes`` (accuracy before / during /
-after each fault: :mod:`relloc.runtime.outcomes`), ``fault_phases`` (per kill or partition,
-every agent's and the in-process EIF's position RMSE before / during / after it) and
-``rejoined`` (per restart: the restarted agent's ``sync`` counters and its largest difference
-from every agent that stayed up).
+RMSE), ``secure`` (mutual TLS and access control: ``--secure``), ``messages`` per run and
+robot and what the collector rejected (``collector_rejected_by_reason``), per run
+``fault_outcomes`` (accuracy before / during / after each fault: :mod:`relloc.runtime.outcomes`),
+``fault_phases`` (per kill or partition, every agent's and the in-process EIF's position RMSE
+before / during / after it) and ``rejoined`` (per restart: the restarted agent's ``sync``
+counters and its largest difference from every agent that stayed up).
 
 Faults. A restarted agent does not start from the t = 0 prior: it asks a teammate for the
 team belief and continues from it (:mod:`relloc.runtime.handoff`). While a teammate's process
 is gone its robot is *lost* to the others — still, with the variance of a robot driving at up
 to the scenario's speed (:attr:`relloc.estimators.cooperative.OdometryModel.lost_speed`) —
-and its readings, and those of it, are not fused. Late odometry is re-filtered from the
+and the others' readings of it are still fused (its own stopped with its process). Late odometry is re-filtered from the
 checkpoints like late readings.
 """
 
@@ -158,6 +159,7 @@ def run_sharma_team(s: SharmaTeamSettings) -> dict[str, Any]:
                 "in_process": accuracy(ref, recording),
                 "agents": agents,
                 "messages": messages,
+                "collector_rejected_by_reason": dict(collected.rejected_by_reason),
                 "exit_codes": collected.exit_codes,
             }
         )
@@ -257,6 +259,7 @@ def _late_counts(counters: Mapping[str, int]) -> dict[str, int]:
 def _summary(s: SharmaTeamSettings, runs: list[dict[str, Any]]) -> dict[str, Any]:
     return agents_summary(runs, s.faults) | {
         "experiment": "sharma2013",
+        "secure": s.secure,
         "case": s.case,
         "seed": s.seed,
         "runs": s.runs,

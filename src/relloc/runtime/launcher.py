@@ -9,7 +9,8 @@ with one certificate per robot and one for the launcher and clock, and Zenoh acc
 - starts ``relloc team clock`` (the clock/simulator process) and one ``relloc node`` per robot,
   each robot simulating the same seeded scenario and reading only its own sensor slice;
 - collects every robot's ``est`` batches and ``stats`` counters, and watches liveliness (only
-  messages that pass :func:`relloc.runtime.admission.admit`; rejections counted by reason);
+  messages that pass :func:`relloc.runtime.admission.admit`, and reports within each sender's
+  memory quota, :mod:`relloc.runtime.quota`; rejections counted by reason);
 - executes the clock's ``kill`` events with a real ``SIGKILL`` of the robot's process and its
   ``restart`` events by starting the robot again (it rejoins mid-run at the current tick) —
   only events of its own fault schedule, each once;
@@ -43,6 +44,7 @@ from relloc.runtime.access import SecureTeam, secure_team
 from relloc.runtime.admission import admit
 from relloc.runtime.faults import FaultSettings, RobotEvent
 from relloc.runtime.messages import DEFAULT_MAX_BYTES, MessageRejected
+from relloc.runtime.quota import ReportQuota
 from relloc.runtime.scenario import check_source
 from relloc.runtime.transport import (
     DEFAULT_LISTEN,
@@ -105,7 +107,7 @@ class Collected:
     rejected: int = 0
     rejected_by_reason: Counter[str] = field(default_factory=Counter)
     """What the collector rejected (:mod:`relloc.runtime.admission` reasons, ``unscheduled``
-    control events)."""
+    control events, ``report_quota``: :mod:`relloc.runtime.quota`)."""
     presence: list[dict[str, Any]] = field(default_factory=list)
     kills: list[dict[str, Any]] = field(default_factory=list)
     restarts: list[dict[str, Any]] = field(default_factory=list)
@@ -211,14 +213,22 @@ inherited across fork)."""
 @dataclass(frozen=True, kw_only=True)
 class ProcessTeam:
     """How a reproduction's team runs as robot processes: the clock step, the faults, the team
-    name, the wall-time limit and the pacing (0: as fast as the team goes). Settings of a
-    reproduction's team extend it with what the reproduction needs."""
+    name, the wall-time limit, the pacing (0: as fast as the team goes) and the network's
+    security (``secure``: mutual TLS and access control, certificates from ``certs_dir`` or
+    made in each run's folder). Settings of a reproduction's team extend it with what the
+    reproduction needs."""
 
     tick_s: float = 0.1
     faults: FaultSettings = field(default_factory=FaultSettings)
     team: str = "team"
     wall_timeout_s: float = 300.0
     realtime_factor: float = 0.0
+    secure: bool = False
+    certs_dir: Path | None = None
+
+    def __post_init__(self) -> None:
+        if self.certs_dir is not None and not self.secure:
+            raise ConfigError("--certs: only with --secure")
 
     def launch(
         self,
@@ -239,6 +249,8 @@ class ProcessTeam:
             faults=self.faults,
             wall_timeout_s=self.wall_timeout_s,
             realtime_factor=self.realtime_factor,
+            secure=self.secure,
+            certs_dir=self.certs_dir,
             preload=preload,
             node_args=node_args,
         )
@@ -289,6 +301,7 @@ class TeamLauncher:
             "restart": sorted(settings.faults.restarts, key=lambda e: e.at_s),
         }
         self.secure: SecureTeam | None = None
+        self._quota = ReportQuota(len(roster), duration_s)
         self.context = _fork_context(settings.preload)
 
     def _spawn(self, name: str, argv: list[str]) -> Any:
@@ -412,10 +425,12 @@ class TeamLauncher:
             if msg.kind == "ctl":
                 self._on_control(msg.body["action"], msg.body["robot"], msg.t)
                 return
+            self._received[(msg.sender, msg.kind)] += 1
+            if msg.kind in ("est", "evt"):
+                self._quota.take(msg, len(item.payload))
         except MessageRejected as exc:
             self._reject(exc.reason)
             return
-        self._received[(msg.sender, msg.kind)] += 1
         if msg.kind == "est":
             self.collected.estimates.append((msg.sender, msg.body))
         elif msg.kind == "evt":

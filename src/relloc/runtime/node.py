@@ -9,10 +9,11 @@ Per clock tick ``k`` (simulated time ``t_k``; see :mod:`relloc.runtime.clock`) a
 
 1. releases what its :class:`~relloc.runtime.faults.LinkEmulator` holds for ``t_k``, files
    teammates' odometry and counts their measurements and equivalent measurements (duplicates
-   recognised by sequence number, late samples counted); where the estimator keeps
-   checkpoints (seed 001), readings and odometry samples that arrive after their window was
-   filtered are re-filtered from the checkpoint before them
-   (:meth:`~relloc.runtime.estimation.WindowDriver.refilter`);
+   recognised by sequence number, a sequence number that jumps further ahead than the sender's
+   rate allows rejected as ``seq_jump``: :class:`~relloc.runtime.teammates.SeenSequences`;
+   late samples counted); where the estimator keeps checkpoints (seed 001), readings and
+   odometry samples that arrive after their window was filtered are re-filtered from the
+   checkpoint before them (:meth:`~relloc.runtime.estimation.WindowDriver.refilter`);
 2. publishes its own odometry and measurements of the window ``[t_{k−1}, t_k)`` — one ``odom``
    and one ``meas`` batch per tick: the configured publication rate is the tick rate;
 3. filters every pending window whose inputs are in, through its estimator's
@@ -188,7 +189,6 @@ class RobotNode:
         self.counters: Counter[str] = Counter()
         self.teammates = {r: Teammate(r) for r in settings.roster if r != settings.robot}
         self.own_odometry = ReceivedOdometry()
-        self._seen = SeenSequences()
         ss = np.random.SeedSequence([settings.fault_seed, settings.roster.index(settings.robot)])
         self.link = LinkEmulator(settings.robot, settings.faults, np.random.default_rng(ss))
         self._latency_us: list[float] = []
@@ -201,6 +201,8 @@ class RobotNode:
         self._dt = 0.0
         self._pending: deque[_Window] = deque()
         self._window_start: float | None = None
+        self._start_s: float | None = None
+        """Where this process' first window starts (set at its first tick)."""
         self._filtered_until: float | None = None
         self._next_eqm_s = 0.0
         self._next_report_s = 0.0
@@ -209,6 +211,7 @@ class RobotNode:
         self._last_tick_seen = False
         self._ticks = TickGuard(end_s=getattr(source, "end_time", None))
         self._budget = SenderBudget.for_team(len(settings.roster))
+        self._seen = SeenSequences(per_tick=self._budget.capacity)
         self._inbox: Inbox | None = None
         self._handoff = Handoff(settings.robot, settings.roster, self.counters)
 
@@ -276,8 +279,7 @@ class RobotNode:
                 check_not_future(msg, self._t)
                 self._budget.take(msg.sender)
         except MessageRejected as exc:
-            self.counters[f"rejected.{exc.reason}"] += 1
-            self.counters["rejected"] += 1
+            self._count_rejected(exc)
             return
         if msg.kind == "tick":
             self._on_tick(msg)
@@ -347,7 +349,7 @@ class RobotNode:
         self.counters["ticks"] += 1
         self._last_tick_seen = k >= n
         if self._window_start is None:  # first tick heard (a restarted node joins mid-run)
-            self._window_start = self._filtered_until = t - self._dt
+            self._window_start = self._filtered_until = self._start_s = t - self._dt
             self._next_eqm_s = self._next_report_s = t
             if k > 1 and self.listens and self.estimator.hands_off:
                 self._handoff.begin(after=t)  # rejoin the team's estimate (module handoff)
@@ -391,7 +393,12 @@ class RobotNode:
         late_rows: list[Measurements] = []
         late_odometry: list[np.ndarray] = []
         for msg in messages:
-            if not self._seen.is_new(msg.sender, msg.kind, msg.seq):
+            try:
+                new = self._seen.is_new(msg.sender, msg.kind, msg.seq, self._ticks.k or 0)
+            except MessageRejected as exc:
+                self._count_rejected(exc)
+                continue
+            if not new:
                 self.counters["duplicates"] += 1
                 continue
             mate = self.teammates[msg.sender]
@@ -407,10 +414,14 @@ class RobotNode:
                 mate.heard_until_s = max(mate.heard_until_s or -np.inf, msg.t)
             elif msg.kind == "rows" and self.s.share_rows:
                 try:
-                    rows = rows_from_body(msg.body, self.s.roster, msg.sender)
+                    rows = rows_from_body(
+                        msg.body,
+                        self.s.roster,
+                        msg.sender,
+                        getattr(self.source, "landmark_count", None),
+                    )
                 except MessageRejected as exc:
-                    self.counters[f"rejected.{exc.reason}"] += 1
-                    self.counters["rejected"] += 1
+                    self._count_rejected(exc)
                     continue
                 mate.rows_until = max(mate.rows_until, msg.t)
                 late = rows.t < self._unstarted_from() - TIME_TOL
@@ -423,11 +434,16 @@ class RobotNode:
                 try:
                     parcels = mail_items(msg.body, self.s.roster, msg.sender)
                 except MessageRejected as exc:
-                    self.counters[f"rejected.{exc.reason}"] += 1
-                    self.counters["rejected"] += 1
+                    self._count_rejected(exc)
                     continue
                 mate.progress = max(mate.progress, float(msg.body["progress"]))
+                # what was sent before this process started cannot reach its estimator,
+                # which had no state then (a restarted node; or a hostile stamp)
+                start = np.inf if self._start_s is None else self._start_s
                 for stamp, items in parcels:
+                    if stamp < start - TIME_TOL:
+                        self.counters["mail_before_start"] += len(items)
+                        continue
                     self.estimator.deliver(stamp, msg.sender, items)
             elif msg.kind == "sync" and msg.body["target"] == self.s.robot:
                 self._on_sync(msg)
@@ -456,6 +472,10 @@ class RobotNode:
                 self._send("sync", body)
             except DataError:  # a team too large for one message: the asker times out
                 self.counters["sync.too_large"] += 1
+
+    def _count_rejected(self, exc: MessageRejected) -> None:
+        self.counters[f"rejected.{exc.reason}"] += 1
+        self.counters["rejected"] += 1
 
     def _unstarted_from(self) -> float:
         """Where the windows not yet started begin (readings before it are late)."""

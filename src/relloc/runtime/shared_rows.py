@@ -23,6 +23,8 @@ from relloc.errors import DataError
 from relloc.runtime.messages import MessageRejected
 
 UNSTATED_SIGMA = -1.0
+MAX_INDEX = 2**31 - 1
+"""Largest landmark or sensor index a body may carry (they travel as numbers)."""
 
 
 def rows_body(rows: Measurements, roster: Sequence[str]) -> dict[str, Any]:
@@ -42,9 +44,13 @@ def rows_body(rows: Measurements, roster: Sequence[str]) -> dict[str, Any]:
     }
 
 
-def rows_from_body(body: Mapping[str, Any], roster: Sequence[str], sender: str) -> Measurements:
+def rows_from_body(
+    body: Mapping[str, Any], roster: Sequence[str], sender: str, landmarks: int | None = None
+) -> Measurements:
     """The readings of a validated ``rows`` body from ``sender``; anything that does not make
-    a valid table raises :class:`~relloc.runtime.messages.MessageRejected`."""
+    a valid table raises :class:`~relloc.runtime.messages.MessageRejected`, and so does a
+    landmark index beyond the receiver's map of ``landmarks`` (``unknown_landmark``; None: the
+    receiver has no map to check against)."""
     m = body["stamps"].shape[0]
     if not (len(body["kinds"]) == len(body["subjects"]) == m):
         raise MessageRejected("shape", "rows: per-row lengths differ")
@@ -60,8 +66,14 @@ def rows_from_body(body: Mapping[str, Any], roster: Sequence[str], sender: str) 
     if body["values"].shape[0] != widths.sum() or body["sigmas"].shape[0] != widths.sum():
         raise MessageRejected("shape", "rows: values and sigmas do not match the kinds' widths")
     ints = np.concatenate([body["landmarks"], body["sensors"]])
-    if np.any(ints != np.round(ints)) or np.any(body["landmarks"] < NO_TARGET):
+    if (
+        np.any(ints != np.round(ints))
+        or np.any(body["landmarks"] < NO_TARGET)
+        or np.any(np.abs(ints) > MAX_INDEX)
+    ):
         raise MessageRejected("malformed", "rows: landmarks and sensors must be integers")
+    if landmarks is not None and np.any(body["landmarks"] >= landmarks):
+        raise MessageRejected("unknown_landmark", f"rows: a landmark beyond the map's {landmarks}")
     sig = body["sigmas"]
     if np.any((sig <= 0) & (sig != UNSTATED_SIGMA)):
         raise MessageRejected("malformed", "rows: sigma must be > 0 (or −1: not stated)")

@@ -86,6 +86,8 @@ class RecordingSource:
     def __init__(self, recording: Recording, robot: str, *, all_readings: bool = False) -> None:
         self.robot = robot
         self._index = recording.index(robot)
+        self.landmark_count = int(recording.landmarks.shape[0])
+        """Landmarks of the team's map (a teammate's reading of another is refused)."""
         odo = recording.odometry[self._index]
         self._odo_t, self._odo_u = odo.t, odo.velocity
         self.odometry_sigma: Array = np.asarray(odo.sigma, dtype=float)

@@ -18,7 +18,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.core.events import TIME_TOL
 from relloc.core.recording import Measurements
+from relloc.runtime.messages import MessageRejected
 
 Array = NDArray[np.float64]
 
@@ -126,11 +128,14 @@ class Teammate:
 
     def take_rows(self, t0: float, t1: float, *, inclusive: bool = False) -> list[Measurements]:
         """The shared readings stamped in ``[t0, t1)`` (``[t0, t1]``); earlier ones are
-        dropped (their window is filtered already) and counted in :attr:`late_rows`."""
+        dropped (their window is filtered already) and counted in :attr:`late_rows`. Both
+        bounds are taken to :data:`~relloc.core.events.TIME_TOL`, as the event loop merges
+        times: a reading that close below ``t1`` is at the next window's first event."""
         taken, kept = [], []
         for part in self.rows:
-            before = part.t < t0
-            inside = ~before & ((part.t <= t1) if inclusive else (part.t < t1))
+            before = part.t < t0 - TIME_TOL
+            upper = (part.t <= t1 + TIME_TOL) if inclusive else (part.t < t1 - TIME_TOL)
+            inside = ~before & upper
             self.late_rows += int(before.sum())
             if inside.any():
                 taken.append(part.select(inside))
@@ -144,28 +149,56 @@ class Teammate:
 
 
 class SeenSequences:
-    """Per (sender, kind) duplicate filter on message sequence numbers (bounded memory)."""
+    """Per (sender, kind): duplicate messages and implausible jumps of sequence numbers.
 
-    def __init__(self, window: int = 4096) -> None:
+    - **duplicates**: a seq among the last ``window`` accepted from that sender and kind (the
+      link's copies arrive within a few ticks; memory stays bounded). How far a seq lies below
+      the largest one accepted does not matter: judged that way, one message with a huge seq
+      — sent by anyone holding the sender's certificate — would make every later genuine one
+      look old and be dropped.
+    - **jumps** (``seq_jump``): a sender publishes at most ``per_tick`` data messages between
+      two of the receiver's ticks (the rate budget,
+      :class:`relloc.runtime.admission.SenderBudget`), so after the largest accepted seq
+      ``s`` (at receiver tick ``k_s``; ``s = −1`` at tick 0 for a sender not yet heard) a
+      genuine seq at tick ``k`` is at most ``s + per_tick·(k − k_s + 2)`` (the 2: a teammate is
+      up to one tick ahead, and one tick of slack). A larger one is rejected and leaves the
+      state unchanged. Losses and partitions stay within the bound: the seqs missed were
+      sent in the ticks that passed.
+
+    A restarted sender counts from 0 again: below its old largest seq, so not a jump, and new
+    once :meth:`forget` has cleared the old incarnation's seqs (the node calls it when the
+    sender's liveliness token goes).
+    """
+
+    def __init__(self, per_tick: int, window: int = 4096) -> None:
+        self.per_tick = per_tick
         self.window = window
-        self._seen: dict[tuple[str, str], set[int]] = {}
-        self._top: dict[tuple[str, str], int] = {}
+        self._recent: dict[tuple[str, str], dict[int, None]] = {}
+        self._top: dict[tuple[str, str], tuple[int, int]] = {}
 
-    def is_new(self, sender: str, kind: str, seq: int) -> bool:
+    def is_new(self, sender: str, kind: str, seq: int, tick: int) -> bool:
+        """True for a new message (remembered), False for a duplicate; ``seq_jump``
+        (:class:`~relloc.runtime.messages.MessageRejected`) beyond the bound. ``tick``: the
+        receiver's latest tick index (0 before the first)."""
         key = (sender, kind)
-        seen = self._seen.setdefault(key, set())
-        top = self._top.get(key, -1)
-        if seq in seen or seq <= top - self.window:
+        recent = self._recent.setdefault(key, {})
+        if seq in recent:
             return False
-        seen.add(seq)
+        top, top_tick = self._top.get(key, (-1, 0))
+        allowed = top + self.per_tick * (max(tick - top_tick, 0) + 2)
+        if seq > allowed:
+            raise MessageRejected(
+                "seq_jump", f"{kind} seq {seq} from {sender!r}: at most {allowed} at tick {tick}"
+            )
+        recent[seq] = None
+        if len(recent) > self.window:
+            del recent[next(iter(recent))]
         if seq > top:
-            self._top[key] = seq
-            if len(seen) > 2 * self.window:
-                self._seen[key] = {s for s in seen if s > seq - self.window}
+            self._top[key] = (seq, tick)
         return True
 
     def forget(self, sender: str) -> None:
         """A restarted sender counts from 0 again."""
-        for key in [k for k in self._seen if k[0] == sender]:
-            del self._seen[key]
+        for key in [k for k in self._recent if k[0] == sender]:
+            del self._recent[key]
             self._top.pop(key, None)

@@ -1,0 +1,221 @@
+"""Hostile ``rows`` and ``mail`` payloads through a robot node's whole receive path.
+
+A real :class:`~relloc.runtime.node.RobotNode` — seed 001's agent (sharing ``rows``) and seed
+002's leader (exchanging ``mail``) — with its estimator and a real, unconnected Zenoh session
+for its publications, is handed the clock's ticks and a teammate's messages exactly as its
+inbox would: decode, admission (roles, time bound, rate), sequence numbers, the link, the
+``rows``/``mail`` decoders, and the estimator, which filters the windows they land in (or
+re-filters the past for late readings). Hypothesis draws payloads that decode — any kind, any
+subject and landmark or sensor index, extreme and tiny values and σ, absurd and unsorted
+stamps, non-positive-definite covariances, wrong lengths — and the node must count each as
+rejected or use it, never raise, and keep filtering to the end of the run (run with
+``-W error::RuntimeWarning`` these tests also show that no overflow reaches a filter).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import msgpack
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from relloc.core.recording import KIND_NAMES, KINDS
+from relloc.experiments.team_sources import named_node_parts, sharma_node_parts
+from relloc.runtime import keys
+from relloc.runtime.messages import SCHEMA, SCHEMA_VERSION, encode
+from relloc.runtime.node import NodeSettings, RobotNode
+from relloc.runtime.transport import Incoming, TransportSettings, declare_publisher, open_session
+
+TEAM = "team"
+DT = 0.1
+TICKS = 20
+DURATION_S = DT * TICKS
+
+EXTREME = [0.0, -0.0, 1.0, -1.0, 1e-300, -1e-300, 1e300, -1e300, 2.0**63, 1e12, -1e12, 0.5]
+numbers = st.one_of(st.sampled_from(EXTREME), st.floats(-1e3, 1e3, allow_nan=False))
+offsets = st.one_of(
+    st.sampled_from([-1e12, -1.0, -0.7, -0.1, -0.05, 0.0, 0.05, 0.1, 1e12]),
+    st.floats(-1.5, 2.5, allow_nan=False),
+)
+"""Stamps as offsets from the tick they are sent at."""
+SHARED_FIELDS = tuple(SCHEMA["rows"])
+
+
+@pytest.fixture(scope="module")
+def session():
+    s = open_session(TransportSettings())
+    yield s
+    s.close()
+
+
+def _node(parts: Any, robot: str, session: Any, **extra: Any) -> RobotNode:
+    s = NodeSettings(
+        team=TEAM,
+        robot=robot,
+        roster=parts.roster,
+        transport=TransportSettings(),
+        **extra,
+    )
+    node = RobotNode(s, parts.source, parts.driver)
+    node._session = session
+    for kind in keys.ROBOT_KINDS:
+        node._pubs[kind] = declare_publisher(session, keys.robot_key(TEAM, f"fuzz{robot}", kind))
+    node._on_presence("clock", True)
+    for mate in parts.roster:
+        if mate != robot:
+            node._on_presence(mate, True)
+    return node
+
+
+def _tick(node: RobotNode, k: int) -> None:
+    body = {"k": k, "n": TICKS, "dt": DT}
+    node._on_incoming(
+        Incoming(keys.clock_key(TEAM, "tick"), encode("tick", "clock", k, k * DT, body))
+    )
+
+
+def _raw(kind: str, sender: str, seq: int, t: float, body: dict[str, Any]) -> bytes:
+    """A payload as a hostile sender packs it (no validation on the way out)."""
+    header = {"v": SCHEMA_VERSION, "type": kind, "sender": sender, "seq": seq, "t": t, "wall_ns": 1}
+    return msgpack.packb(header | body, use_bin_type=True)
+
+
+def _run(node: RobotNode, sender: str, kind: str, drawn: list[tuple[dict, int, float]]) -> None:
+    """Ticks 1..n; after each of the first ticks ``k``, one hostile payload ``(body, seq,
+    header time offset)`` whose stamps are offsets from ``t_k`` (so that they land in past,
+    pending and future windows): each is rejected (counted) or taken in; every window is
+    filtered by the end (overdue ones too: the teammates send nothing else)."""
+    key = keys.robot_key(TEAM, sender, kind)
+    for k in range(1, TICKS + 1):
+        _tick(node, k)
+        if k <= len(drawn):
+            body, seq, offset = drawn[k - 1]
+            body = body | {"stamps": [k * DT + s for s in body["stamps"]]}
+            if "progress" in body:
+                body["progress"] = k * DT + body["progress"]
+            payload = _raw(kind, sender, seq, max(0.0, k * DT + offset), body)
+            before = (node.counters["rejected"], node.counters[f"wire.{kind}"])
+            node._on_incoming(Incoming(key, payload))
+            after = (node.counters["rejected"], node.counters[f"wire.{kind}"])
+            assert after != before, dict(node.counters)
+    node._finish()
+    assert node.counters["final"] == 1 and not node._pending
+    assert node.counters["ticks"] == TICKS
+
+
+@st.composite
+def valid_rows(draw: Any, roster: tuple[str, ...]) -> dict[str, Any]:
+    """Readings a well-formed sender could send, with extreme values and σ, any robot or
+    landmark (known or not) as subject, stamps around the current tick."""
+    times = sorted(draw(st.lists(offsets, min_size=1, max_size=4, unique=True)))
+    out: dict[str, list[Any]] = {name: [] for name in SHARED_FIELDS}
+    for t in times:
+        kind = draw(st.sampled_from(("bearing", "bearing", "pose", "range_bearing", "range")))
+        landmark = draw(st.sampled_from([-1.0, -1.0, 0.0, 1.0, 7.0, 1e6]))
+        subject = "" if landmark >= 0 else draw(st.sampled_from([*roster, ""]))
+        dim = KINDS[kind].dim
+        values = draw(st.lists(numbers, min_size=dim, max_size=dim))
+        if kind in ("range", "range_bearing"):
+            values[0] = abs(values[0]) or 1.0
+        out["stamps"].append(t)
+        out["kinds"].append(kind)
+        out["subjects"].append(subject)
+        out["landmarks"].append(landmark)
+        out["sensors"].append(draw(st.sampled_from([0.0, 0.0, 3.0, 1e6])))
+        out["values"] += values
+        sigma = st.sampled_from([0.01, 0.1, -1.0, 1e-300, 1e-9, 1e300])
+        out["sigmas"] += draw(st.lists(sigma, min_size=dim, max_size=dim))
+    return out
+
+
+@st.composite
+def rows_bodies(draw: Any, roster: tuple[str, ...]) -> dict[str, Any]:
+    """A valid body, perhaps with one field replaced by hostile content."""
+    body = draw(valid_rows(roster))
+    if draw(st.booleans()):
+        name = draw(st.sampled_from(SHARED_FIELDS))
+        strings = st.lists(st.sampled_from([*roster, "", "x", *KIND_NAMES]), max_size=5)
+        junk = st.lists(
+            st.one_of(numbers, st.sampled_from([-2.0, 0.5, 1e300, 2.0**62])), max_size=9
+        )
+        body[name] = draw(strings if name in ("kinds", "subjects") else junk)
+    return body
+
+
+@settings(
+    derandomize=True,
+    max_examples=25,
+    deadline=None,
+    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
+)
+@given(data=st.data())
+def test_hostile_rows_are_counted_or_fused_and_never_crash_an_agent(session, data):
+    parts = sharma_node_parts("1", 5, 0, DURATION_S, "two_landmarks")
+    node = _node(parts, "1", session, share_rows=True)
+    drawn = data.draw(
+        st.lists(
+            st.tuples(rows_bodies(parts.roster), st.integers(0, 40), offsets),
+            min_size=1,
+            max_size=8,
+        )
+    )
+    _run(node, "2", "rows", drawn)
+
+
+def _matrix(kind: str, scale: float) -> list[list[float]]:
+    """A 4×4 symmetric matrix with non-negative diagonal: positive definite, singular, or
+    indefinite (what decode lets through)."""
+    m = np.eye(4) * scale
+    if kind == "singular":
+        m[0, 0] = 0.0
+    elif kind == "indefinite":
+        m[0, 1] = m[1, 0] = 2.0 * scale
+    return m.tolist()
+
+
+@st.composite
+def mail_bodies(draw: Any, roster: tuple[str, ...]) -> dict[str, Any]:
+    """A mail of 1–3 equivalent measurements with extreme means, covariances that need not be
+    positive definite, any subject and absurd progress."""
+    m = draw(st.integers(1, 3))
+    sizes = draw(st.lists(st.integers(1, 2), min_size=m, max_size=m))
+    k = sum(sizes)
+    shape = draw(st.sampled_from(["pd", "pd", "pd", "singular", "indefinite"]))
+    matrices = st.builds(_matrix, st.just(shape), st.sampled_from([1e-300, 1e-6, 1.0, 1e300]))
+    vectors = st.lists(numbers, min_size=4, max_size=4)
+    return {
+        "progress": draw(st.one_of(offsets, st.sampled_from([1e300, -1e300]))),
+        "stamps": sorted(draw(st.lists(offsets, min_size=m, max_size=m))),
+        "subjects": draw(st.lists(st.sampled_from([*roster, "x"]), min_size=m, max_size=m)),
+        "sizes": [float(s) for s in sizes],
+        "means": draw(st.lists(vectors, min_size=k, max_size=k)),
+        "covs": draw(st.lists(matrices, min_size=k, max_size=k)),
+        "prior_means": draw(st.lists(vectors, min_size=k, max_size=k)),
+        "prior_covs": draw(st.lists(matrices, min_size=k, max_size=k)),
+        "weights": draw(
+            st.lists(st.sampled_from([0.0, 1e-300, 0.5, 1.0, 1e300]), min_size=k, max_size=k)
+        ),
+    }
+
+
+@settings(
+    derandomize=True,
+    max_examples=15,
+    deadline=None,
+    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
+)
+@given(data=st.data())
+def test_hostile_mail_is_counted_or_fused_and_never_crashes_a_leader(session, data):
+    parts = named_node_parts("desilva2015", "L1", 5, 0, DURATION_S)
+    node = _node(parts, "L1", session, talkers=parts.talkers)
+    drawn = data.draw(
+        st.lists(
+            st.tuples(mail_bodies(parts.roster), st.integers(0, 40), offsets),
+            min_size=1,
+            max_size=8,
+        )
+    )
+    _run(node, "L2", "mail", drawn)
