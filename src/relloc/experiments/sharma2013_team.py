@@ -36,8 +36,8 @@ Faults. A restarted agent does not start from the t = 0 prior: it asks a teammat
 team belief and continues from it (:mod:`relloc.runtime.handoff`). While a teammate's process
 is gone its robot is *lost* to the others — still, with the variance of a robot driving at up
 to the scenario's speed (:attr:`relloc.estimators.cooperative.OdometryModel.lost_speed`) —
-and the others' readings of it are still fused (its own stopped with its process). Late odometry is re-filtered from the
-checkpoints like late readings.
+and the others' readings of it are still fused (its own stopped with its process). Late
+odometry is re-filtered from the checkpoints like late readings.
 """
 
 from __future__ import annotations
