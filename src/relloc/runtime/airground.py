@@ -556,9 +556,9 @@ class RobotProcess:
         self._present_at_tick: set[str] = set()
         self._session: Any = None
         self._ready_token: Any = None
-        self._seen = SeenSequences()
         self._arrived: dict[tuple[str, str], float] = {}
         self._budget = SenderBudget.for_team(len(self.roster))
+        self._seen = SeenSequences(per_tick=self._budget.capacity)
         self._tick: Sensed | None = None
         self._tick_wall = 0.0
         self._last_k: int | None = None
@@ -692,23 +692,32 @@ class RobotProcess:
         return 0.0 if self._last_k is None else float(self.times[self._last_k])
 
     def _deliver(self, messages: list[Message], t: float) -> None:
+        """File the released teammates' messages of the tick at ``t``; one rejected message
+        (counted by reason) does not hold back the others."""
         for msg in messages:
-            if not self._seen.is_new(msg.sender, msg.kind, msg.seq):
-                self.counters["duplicates"] += 1
-                continue
-            self.counters[f"delivered.{msg.kind}"] += 1
-            if msg.kind == "odom" and msg.sender == self.roster[0]:
-                stamps, u = msg.body["stamps"], msg.body["u"]
-                for stamp, row in zip(stamps.tolist(), u, strict=True):
-                    self.heard.leader_u.append((stamp, (float(row[0]), float(row[3]))))
-                self.heard.leader_u = self.heard.leader_u[-8:]
-            elif msg.kind == "rows":
-                rows = rows_from_body(msg.body, self.roster, msg.sender)
-                late = rows.t < t - TIME_TOL
-                if late.any():
-                    self.counters["late_rows"] += int(late.sum())
-                    rows = rows.select(~late)
-                self.heard.rows.setdefault(msg.sender, []).append(rows)
+            try:
+                self._deliver_one(msg, t)
+            except MessageRejected as exc:
+                self.counters["rejected"] += 1
+                self.counters[f"rejected.{exc.reason}"] += 1
+
+    def _deliver_one(self, msg: Message, t: float) -> None:
+        if not self._seen.is_new(msg.sender, msg.kind, msg.seq, self._last_k or 0):
+            self.counters["duplicates"] += 1
+            return
+        self.counters[f"delivered.{msg.kind}"] += 1
+        if msg.kind == "odom" and msg.sender == self.roster[0]:
+            stamps, u = msg.body["stamps"], msg.body["u"]
+            for stamp, row in zip(stamps.tolist(), u, strict=True):
+                self.heard.leader_u.append((stamp, (float(row[0]), float(row[3]))))
+            self.heard.leader_u = self.heard.leader_u[-8:]
+        elif msg.kind == "rows":
+            rows = rows_from_body(msg.body, self.roster, msg.sender)
+            late = rows.t < t - TIME_TOL
+            if late.any():
+                self.counters["late_rows"] += int(late.sum())
+                rows = rows.select(~late)
+            self.heard.rows.setdefault(msg.sender, []).append(rows)
 
     def _inputs_in(self, s: Sensed) -> bool:
         """Every expected input of the tick has arrived: from the teammates present — and, at
@@ -733,11 +742,7 @@ class RobotProcess:
                 return
             else:
                 self.counters["input_timeouts"] += 1
-        try:
-            self._deliver(self.link.release(s.t), s.t)
-        except MessageRejected as exc:
-            self.counters["rejected"] += 1
-            self.counters[f"rejected.{exc.reason}"] += 1
+        self._deliver(self.link.release(s.t), s.t)
         u = self.role.act(s, self.heard)
         if u is not None:
             self._send("cmd", {"k": s.k, "u": u}, s.t)
