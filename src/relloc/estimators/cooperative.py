@@ -86,7 +86,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from relloc.association.gating import mahalanobis_batch
-from relloc.core.contract import Belief, HeldOdometry, Silent, UpdateRecord
+from relloc.core.contract import BeliefStack, HeldOdometry, Silent, UpdateRecord
 from relloc.core.gaussian import Gaussian
 from relloc.core.kalman import chi2_threshold
 from relloc.core.recording import NO_TARGET, Measurements, kind_code
@@ -809,9 +809,9 @@ class CooperativeEstimator(Silent):
         if rows.size:
             self._update(rows)
 
-    def beliefs(self) -> list[Belief]:
-        """Every robot's marginal ``(x, y, ψ)`` now: the pending prediction applied to its
-        block, ``Φ_i P_ii Φ_iᵀ + Q_i``."""
+    def beliefs(self) -> BeliefStack:
+        """Every robot's marginal ``(x, y, ψ)`` now, stacked: the pending prediction applied to
+        its block, ``Φ_i P_ii Φ_iᵀ + Q_i``."""
         if not np.isnan(self._t):
             self._apply_motion()
         n = self.n_robots
@@ -827,10 +827,7 @@ class CooperativeEstimator(Silent):
         if not np.isfinite(cov.sum() + p.pose.sum()):
             raise ModelError("cooperative filter produced non-finite estimates")
         age = 0.0 if np.isnan(self._t) else self._t - self._t_start
-        return [
-            Belief(name, FRAME, mean, P, age)
-            for name, mean, P in zip(self.robots, p.pose, cov, strict=True)
-        ]
+        return BeliefStack(self.robots, FRAME, p.pose, cov, age)
 
     def take_updates(self) -> list[UpdateRecord]:
         out, self._updates = self._updates, []

@@ -25,7 +25,6 @@ blocks (observer and observed robot), so the joint Jacobian ``H`` (m × 3n) is s
 from __future__ import annotations
 
 from dataclasses import dataclass
-from enum import IntEnum
 
 import numpy as np
 from numpy.typing import NDArray
@@ -39,8 +38,10 @@ IntArray = NDArray[np.int64]
 _MIN_SEPARATION_SQ = 1e-12
 
 
-class RowKind(IntEnum):
-    """What a scalar measurement row observes."""
+class RowKind:
+    """What a scalar measurement row observes: plain ``int`` codes (not an ``IntEnum``: numpy
+    compares an array with a plain int several times faster, and the filters compare row kinds
+    at every epoch)."""
 
     BEARING = 0
     RANGE = 1
