@@ -16,7 +16,9 @@ from relloc.errors import ModelError
 Array = NDArray[np.float64]
 
 
-def _as_state(mean: Array, cov: Array, what: str, *, symmetric: bool = False) -> tuple[Array, Array]:
+def _as_state(
+    mean: Array, cov: Array, what: str, *, symmetric: bool = False
+) -> tuple[Array, Array]:
     """``(mean (n,), cov (n, n))`` checked for shape and finiteness, ``cov`` symmetrised unless
     ``symmetric`` says it is exactly symmetric already."""
     m = np.asarray(mean, dtype=float).reshape(-1)
