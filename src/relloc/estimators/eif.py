@@ -63,9 +63,13 @@ class TeamInformation:
 
 
 def _inverse_spd(A: Array, where: str) -> Array:
-    """``A⁻¹`` (symmetrised) of an exactly symmetric positive definite ``A``."""
+    """``A⁻¹`` (symmetrised) of an exactly symmetric positive definite ``A``: LAPACK ``potrs``
+    on its Cholesky factor and the identity (what ``scipy.linalg.cho_solve`` calls, without
+    its per-call argument handling)."""
     L = cholesky(A, where=where, symmetric=True)
-    inv = scipy.linalg.cho_solve((L, True), np.eye(A.shape[0]), check_finite=False)
+    inv, info = scipy.linalg.lapack.dpotrs(L, np.eye(A.shape[0]), lower=1)
+    if info != 0:
+        raise ModelError(f"{where}: LAPACK potrs failed (info {info})")
     return symmetrise(inv)
 
 
