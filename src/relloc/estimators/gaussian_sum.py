@@ -74,7 +74,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field, fields
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -306,7 +306,7 @@ class Tracks(GaussianMixture):
         i = np.asarray(idx, dtype=np.int64)
         return Tracks(**{name: array[i] for name, array in vars(self).items()})
 
-    def with_arrays(self, **changes: Array) -> Tracks:
+    def with_arrays(self, **changes: NDArray[Any]) -> Tracks:
         """These tracks with some arrays replaced (``dataclasses.replace`` without its per-call
         look-up of the fields; the fuser does this several times per scan)."""
         return Tracks(**{**vars(self), **changes})
