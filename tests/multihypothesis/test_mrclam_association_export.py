@@ -8,17 +8,22 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from test_mrclam_association import _synthetic_folder
 
 from relloc.cli import main
+from relloc.experiments import mrclam_association
 
 pytest.importorskip("mcap", reason="extra 'ros' is not installed")
 
 
 @pytest.mark.slow
 def test_mrclam_association_exports_every_robots_tracks(
-    tmp_path: Path, short_association: Path
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    folder = short_association
+    folder = _synthetic_folder(tmp_path / "data", np.random.default_rng(0))
+    monkeypatch.setattr(mrclam_association, "CALIBRATION_S", 5.0)
+    monkeypatch.setattr(mrclam_association, "EVAL_S", 14.0)
+    monkeypatch.setattr(mrclam_association, "WARMUP_S", 6.0)
     out = tmp_path / "out"
     code = main(
         ["reproduce", "mrclam-association", "--out", str(out), "--dataset", str(folder),
