@@ -13,7 +13,9 @@ the network). At every event time ``t`` the loop calls, in this order,
    seed 002 equivalent measurements); the loop hands every message to every other estimator's
    :meth:`Estimator.receive`;
 4. at record times, :meth:`Estimator.beliefs` — what it currently believes, one
-   :class:`Belief` per subject, each in a named frame of :mod:`relloc.pipeline.frames`.
+   :class:`Belief` per subject, each in a named frame of :mod:`relloc.pipeline.frames` (an
+   estimator of many subjects in one frame may return them as one :class:`BeliefStack`, which
+   the recorder stores without building a :class:`Belief` per subject).
 
 After the loop (and whenever a node ships a report), :meth:`Estimator.take_updates` and
 :meth:`Estimator.take_events` hand over the per-update diagnostics (NIS, conditioning of ``R``
@@ -28,9 +30,9 @@ Estimators keep no reference to the truth and never read :attr:`Measurements.ori
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Literal, Protocol, runtime_checkable
+from typing import Any, Literal, Protocol, overload, runtime_checkable
 
 import numpy as np
 from numpy.typing import NDArray
@@ -88,6 +90,48 @@ class Belief:
             )
         object.__setattr__(self, "mean", mean)
         object.__setattr__(self, "cov", cov)
+
+
+class BeliefStack(Sequence[Belief]):
+    """The beliefs of ``subjects`` (``m`` of them) in one ``frame``, all of one ``age``, as
+    stacked arrays ``mean (m, d)`` and ``cov (m, d, d)`` — what a centralised filter holds for
+    its team. It is a sequence of :class:`Belief` (each built when it is read), and
+    :meth:`relloc.core.estimates.Recorder.record` stores it as it is."""
+
+    __slots__ = ("age", "cov", "frame", "mean", "subjects")
+
+    def __init__(
+        self, subjects: Sequence[str], frame: str, mean: Array, cov: Array, age: float = 0.0
+    ) -> None:
+        self.subjects = tuple(subjects)
+        self.frame = frame
+        self.mean = np.asarray(mean, dtype=float)
+        self.cov = np.asarray(cov, dtype=float)
+        self.age = float(age)
+        m = len(self.subjects)
+        if self.mean.ndim != 2 or self.mean.shape[0] != m:
+            raise DataError(f"belief stack: mean {self.mean.shape} for {m} subjects")
+        d = self.mean.shape[1]
+        if self.cov.shape != (m, d, d):
+            raise DataError(f"belief stack: covariance {self.cov.shape} for means {(m, d)}")
+
+    def __len__(self) -> int:
+        return len(self.subjects)
+
+    @overload
+    def __getitem__(self, index: int) -> Belief: ...
+
+    @overload
+    def __getitem__(self, index: slice) -> list[Belief]: ...
+
+    def __getitem__(self, index: int | slice) -> Belief | list[Belief]:
+        if isinstance(index, slice):
+            return [self[i] for i in range(len(self))[index]]
+        i = range(len(self))[index]  # (IndexError outside, negative indices from the end)
+        return Belief(self.subjects[i], self.frame, self.mean[i], self.cov[i], self.age)
+
+    def __iter__(self) -> Iterator[Belief]:
+        return (self[i] for i in range(len(self)))
 
 
 @dataclass(frozen=True)

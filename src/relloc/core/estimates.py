@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from relloc.core.contract import Belief, TrackEvent, UpdateRecord
+from relloc.core.contract import Belief, BeliefStack, TrackEvent, UpdateRecord
 from relloc.errors import ConfigError
 
 Array = NDArray[np.float64]
@@ -188,25 +188,44 @@ class Recorder:
         self._sent_events = 0
 
     def record(self, t: float, owner: str, beliefs: Iterable[Belief]) -> None:
-        """Store ``owner``'s ``beliefs`` at time ``t``."""
+        """Store ``owner``'s ``beliefs`` at time ``t`` (a :class:`BeliefStack` as one copy of
+        its arrays, without a :class:`Belief` per subject)."""
+        t = float(t)
+        if isinstance(beliefs, BeliefStack):
+            mean, cov = beliefs.mean.copy(), beliefs.cov.copy()
+            for i, subject in enumerate(beliefs.subjects):
+                self._append((owner, subject, ""), beliefs.frame, t, mean[i], cov[i], beliefs.age)
+            return
         for b in beliefs:
             key = (owner, b.subject, b.track)
-            rows = self._beliefs.get(key)
-            if rows is None:  # (not setdefault: that would build new rows at every call)
-                rows = self._beliefs[key] = _Rows(frame=b.frame)
-            if rows.frame != b.frame:
-                raise ConfigError(
-                    f"{series_label(key)}: frame changed from {rows.frame} to {b.frame}"
-                )
-            rows.dim = b.mean.size
-            rows.t.append(float(t))
-            rows.mean.append(b.mean.copy())
-            rows.cov.append(b.cov.copy())
-            rows.age.append(float(b.age))
-            if rows.info or b.info:  # (most estimators report no diagnostics)
-                for name in set(rows.info) | set(b.info):
-                    col = rows.info.setdefault(name, [np.nan] * (len(rows.t) - 1))
-                    col.append(float(b.info.get(name, np.nan)))
+            self._append(key, b.frame, t, b.mean.copy(), b.cov.copy(), float(b.age), b.info)
+
+    def _append(
+        self,
+        key: SeriesKey,
+        frame: str,
+        t: float,
+        mean: Array,
+        cov: Array,
+        age: float,
+        info: Mapping[str, float] | None = None,
+    ) -> None:
+        """One recorded belief of the series ``key`` (``mean`` and ``cov`` kept as given)."""
+        rows = self._beliefs.get(key)
+        if rows is None:  # (not setdefault: that would build new rows at every call)
+            rows = self._beliefs[key] = _Rows(frame=frame)
+        if rows.frame != frame:
+            raise ConfigError(f"{series_label(key)}: frame changed from {rows.frame} to {frame}")
+        rows.dim = mean.size
+        rows.t.append(t)
+        rows.mean.append(mean)
+        rows.cov.append(cov)
+        rows.age.append(age)
+        if rows.info or info:  # (most estimators report no diagnostics)
+            info = info or {}
+            for name in set(rows.info) | set(info):
+                col = rows.info.setdefault(name, [np.nan] * (len(rows.t) - 1))
+                col.append(float(info.get(name, np.nan)))
 
     def add_updates(self, owner: str, updates: Iterable[UpdateRecord]) -> None:
         for u in updates:

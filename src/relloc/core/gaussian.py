@@ -16,14 +16,18 @@ from relloc.errors import ModelError
 Array = NDArray[np.float64]
 
 
-def _as_state(mean: Array, cov: Array, what: str) -> tuple[Array, Array]:
+def _as_state(
+    mean: Array, cov: Array, what: str, *, symmetric: bool = False
+) -> tuple[Array, Array]:
+    """``(mean (n,), cov (n, n))`` checked for shape and finiteness, ``cov`` symmetrised unless
+    ``symmetric`` says it is exactly symmetric already."""
     m = np.asarray(mean, dtype=float).reshape(-1)
     P = np.asarray(cov, dtype=float)
     if P.shape != (m.size, m.size):
         raise ModelError(f"{what}: covariance shape {P.shape} does not match state size {m.size}")
     if not (np.all(np.isfinite(m)) and np.all(np.isfinite(P))):
         raise ModelError(f"{what}: non-finite mean or covariance")
-    return m, symmetrise(P)
+    return m, (P if symmetric else symmetrise(P))
 
 
 @dataclass(frozen=True)
@@ -59,6 +63,17 @@ class InformationState:
         y, Y = _as_state(self.info_vector, self.info_matrix, "InformationState")
         object.__setattr__(self, "info_vector", y)
         object.__setattr__(self, "info_matrix", Y)
+
+    @staticmethod
+    def from_symmetric(info_vector: Array, info_matrix: Array) -> InformationState:
+        """The state of an ``info_matrix`` that is exactly symmetric already (the output of
+        :func:`~relloc.core.linalg.symmetrise`): checked like the constructor, not symmetrised
+        again (the team filter's ``3n × 3n`` matrices, every epoch)."""
+        y, Y = _as_state(info_vector, info_matrix, "InformationState", symmetric=True)
+        state = object.__new__(InformationState)
+        object.__setattr__(state, "info_vector", y)
+        object.__setattr__(state, "info_matrix", Y)
+        return state
 
     @property
     def dim(self) -> int:

@@ -14,14 +14,21 @@ Array = NDArray[np.float64]
 
 
 def symmetrise(P: Array) -> Array:
-    """Return ``(P + Pᵀ)/2`` (works on a stack ``(..., n, n)``)."""
-    return np.asarray(0.5 * (P + np.swapaxes(P, -1, -2)), dtype=float)
+    """Return ``(P + Pᵀ)/2`` (works on a stack ``(..., n, n)``). An exactly symmetric ``P``
+    comes back unchanged (``(a + a)/2 = a`` in floating point)."""
+    S = np.asarray(P + np.swapaxes(P, -1, -2), dtype=float)
+    S *= 0.5  # (in place: one temporary less than 0.5 * (P + Pᵀ), the same numbers)
+    return S
 
 
-def cholesky(P: Array, *, where: str = "") -> Array:
-    """Lower Cholesky factor of ``P``; raises :class:`ModelError` naming ``where`` if not PD."""
+def cholesky(P: Array, *, where: str = "", symmetric: bool = False) -> Array:
+    """Lower Cholesky factor of ``P``; raises :class:`ModelError` naming ``where`` if not PD.
+
+    ``P`` is symmetrised first unless ``symmetric`` says it is exactly symmetric already (the
+    output of :func:`symmetrise`, whose symmetrisation would change nothing).
+    """
     try:
-        return np.asarray(np.linalg.cholesky(symmetrise(P)), dtype=float)
+        return np.asarray(np.linalg.cholesky(P if symmetric else symmetrise(P)), dtype=float)
     except np.linalg.LinAlgError as exc:
         eig = np.linalg.eigvalsh(symmetrise(P)) if np.all(np.isfinite(P)) else "non-finite"
         raise ModelError(

@@ -103,7 +103,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from relloc.association.gating import mahalanobis_batch
-from relloc.core.contract import Belief, HeldOdometry, Silent, UpdateRecord
+from relloc.core.contract import BeliefStack, HeldOdometry, Silent, UpdateRecord
 from relloc.core.gaussian import Gaussian
 from relloc.core.kalman import chi2_threshold
 from relloc.core.recording import NO_TARGET, Measurements, kind_code
@@ -382,7 +382,7 @@ def command_timeline(
     by the command after it.
     """
     hold = model.max_hold_s
-    before = np.vstack([held.in_force[None], held.stamp[:-1]])
+    before = np.concatenate([held.in_force[None], held.stamp[:-1]])
     fresh = ~np.isnan(held.stamp) & (held.stamp != before)  # (K, n): a new command
     expiry = held.stamp + hold
     inside = (expiry >= held.begin[:, None]) & (expiry < held.end[:, None])
@@ -467,15 +467,16 @@ def accumulate_prediction(
     F, G = unicycle_jacobians(prev, incr, 1.0)
     a, b = F[..., 0, 2], F[..., 1, 2]
     # Φ_{k+1:K}: suffix sums of the (0,2), (1,2) entries.
-    A = a.sum(axis=0) - np.cumsum(a, axis=0)
-    B = b.sum(axis=0) - np.cumsum(b, axis=0)
+    a_sum, b_sum = a.sum(axis=0), b.sum(axis=0)
+    A = a_sum - np.cumsum(a, axis=0)
+    B = b_sum - np.cumsum(b, axis=0)
     PhiG = G.copy()
     PhiG[..., 0, :] += A[..., None] * G[..., 2, :]
     PhiG[..., 1, :] += B[..., None] * G[..., 2, :]
     q = np.stack([qv * dt, qw * dt], axis=-1)
     Qseg = np.einsum("knai,kni,knbi->nab", PhiG, q, PhiG)
-    F_seg = np.tile(np.eye(3), (pending.pose.shape[0], 1, 1))
-    F_seg[:, 0, 2], F_seg[:, 1, 2] = a.sum(axis=0), b.sum(axis=0)
+    F_seg = np.broadcast_to(np.eye(3), (pending.pose.shape[0], 3, 3)).copy()
+    F_seg[:, 0, 2], F_seg[:, 1, 2] = a_sum, b_sum
     pending.pose = pending.pose + step.sum(axis=0)
     pending.F = F_seg @ pending.F
     pending.Q = F_seg @ pending.Q @ np.swapaxes(F_seg, -1, -2) + Qseg
@@ -547,8 +548,9 @@ def detection_rows(
     assert batch.landmark is not None
     landmark = batch.landmark[idx]
     is_lm = landmark >= 0
-    not_anchor = is_lm & ~np.isin(landmark, np.asarray(settings.anchors, dtype=np.int64))
-    counts.ignored_not_anchor += int(not_anchor.sum())
+    anchor = (landmark[:, None] == np.asarray(settings.anchors, dtype=np.int64)).any(axis=1)
+    not_anchor = is_lm & ~anchor
+    counts.ignored_not_anchor += int(np.count_nonzero(not_anchor))
     keep = ~not_anchor
     if not settings.use_robot_detections:
         counts.ignored_robot_detection += int((~is_lm).sum())
@@ -839,10 +841,12 @@ class CooperativeEstimator(Silent):
         known = detection & ((batch.target != NO_TARGET) | (batch.landmark != NO_TARGET))
         fix = kind == POSE
         c = self._counts
-        c.ignored_unmodelled += int(np.sum(~(known | fix)))
+        c.ignored_unmodelled += batch.size - int(np.count_nonzero(known | fix))
         det_idx = np.flatnonzero(known) if s.uses_detections else np.zeros(0, dtype=np.int64)
         fix_idx = np.flatnonzero(fix) if s.use_fixes else np.zeros(0, dtype=np.int64)
-        c.ignored_unused += int(known.sum()) - det_idx.size + int(fix.sum()) - fix_idx.size
+        c.ignored_unused += (
+            int(np.count_nonzero(known)) - det_idx.size + int(np.count_nonzero(fix)) - fix_idx.size
+        )
         if det_idx.size == 0 and fix_idx.size == 0:
             return
         self._apply_motion()
@@ -861,9 +865,9 @@ class CooperativeEstimator(Silent):
         if rows.size:
             self._update(rows)
 
-    def beliefs(self) -> list[Belief]:
-        """Every robot's marginal ``(x, y, ψ)`` now: the pending prediction applied to its
-        block, ``Φ_i P_ii Φ_iᵀ + Q_i``."""
+    def beliefs(self) -> BeliefStack:
+        """Every robot's marginal ``(x, y, ψ)`` now, stacked: the pending prediction applied to
+        its block, ``Φ_i P_ii Φ_iᵀ + Q_i``."""
         if not np.isnan(self._t):
             self._apply_motion()
         n = self.n_robots
@@ -879,10 +883,7 @@ class CooperativeEstimator(Silent):
         if not np.isfinite(cov.sum() + p.pose.sum()):
             raise ModelError("cooperative filter produced non-finite estimates")
         age = 0.0 if np.isnan(self._t) else self._t - self._t_start
-        return [
-            Belief(name, FRAME, mean, P, age)
-            for name, mean, P in zip(self.robots, p.pose, cov, strict=True)
-        ]
+        return BeliefStack(self.robots, FRAME, p.pose, cov, age)
 
     def take_updates(self) -> list[UpdateRecord]:
         out, self._updates = self._updates, []
@@ -962,7 +963,7 @@ class CooperativeEstimator(Silent):
         """What the loop held since the last applied time."""
         stamp = np.array([h.stamp for h in self._held])
         velocity = np.array([h.velocity for h in self._held])
-        if np.any(velocity[..., 1:3]):
+        if velocity[..., 1:3].any():
             k, i = np.argwhere(velocity[..., 1:3] != 0)[0][:2]
             raise DataError(
                 f"odometry of {self.robots[i]} at t={self._held_t[k]:.6g} has lateral or vertical "

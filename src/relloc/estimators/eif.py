@@ -63,8 +63,13 @@ class TeamInformation:
 
 
 def _inverse_spd(A: Array, where: str) -> Array:
-    L = cholesky(A, where=where)
-    inv = scipy.linalg.cho_solve((L, True), np.eye(A.shape[0]))
+    """``A⁻¹`` (symmetrised) of an exactly symmetric positive definite ``A``: LAPACK ``potrs``
+    on its Cholesky factor and the identity (what ``scipy.linalg.cho_solve`` calls, without
+    its per-call argument handling)."""
+    L = cholesky(A, where=where, symmetric=True)
+    inv, info = scipy.linalg.lapack.dpotrs(L, np.eye(A.shape[0]), lower=1)
+    if info != 0:
+        raise ModelError(f"{where}: LAPACK potrs failed (info {info})")
     return symmetrise(inv)
 
 
@@ -76,7 +81,7 @@ def eif_predict(
     check_blocks(n, mean_pred, F_blocks, Q_blocks)
     P_pred = propagate_team_covariance(belief.cov, F_blocks, Q_blocks)
     Y_pred = _inverse_spd(P_pred, "EIF prediction F Y⁻¹ Fᵀ + B Q Bᵀ")
-    info = InformationState(info_vector=Y_pred @ mean_pred, info_matrix=Y_pred)
+    info = InformationState.from_symmetric(Y_pred @ mean_pred, Y_pred)
     return TeamInformation(info=info, mean=np.array(mean_pred, dtype=float), cov=P_pred)
 
 
@@ -107,12 +112,11 @@ def eif_update(belief: TeamInformation, rows: LinearisedRows) -> TeamInformation
     dY, dy = information_increment(rows, belief.mean, n)
     Y = symmetrise(belief.info.info_matrix + dY)
     y = belief.info.info_vector + dy
-    L = cholesky(Y, where="EIF information matrix after update")
-    P = symmetrise(scipy.linalg.cho_solve((L, True), np.eye(Y.shape[0])))
+    P = _inverse_spd(Y, "EIF information matrix after update")
     mean = P @ y
     if not np.isfinite(mean).all():
         raise ModelError("EIF update produced a non-finite mean")
-    return TeamInformation(info=InformationState(info_vector=y, info_matrix=Y), mean=mean, cov=P)
+    return TeamInformation(info=InformationState.from_symmetric(y, Y), mean=mean, cov=P)
 
 
 @dataclass

@@ -73,8 +73,8 @@ robot's own direct information (what was fused from others is never sent back to
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field, fields, replace
-from typing import Literal
+from dataclasses import dataclass, field, fields
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -304,7 +304,12 @@ class Tracks(GaussianMixture):
     def take(self, idx: ArrayLike) -> Tracks:
         """Sub-set (or repetition) of tracks by index."""
         i = np.asarray(idx, dtype=np.int64)
-        return Tracks(**{name: getattr(self, name)[i] for name in _TRACK_FIELDS})
+        return Tracks(**{name: array[i] for name, array in vars(self).items()})
+
+    def with_arrays(self, **changes: NDArray[Any]) -> Tracks:
+        """These tracks with some arrays replaced (``dataclasses.replace`` without its per-call
+        look-up of the fields; the fuser does this several times per scan)."""
+        return Tracks(**{**vars(self), **changes})
 
     @staticmethod
     def concat(parts: Sequence[Tracks]) -> Tracks:
@@ -416,7 +421,7 @@ class GaussianSumFuser:
         t = self.tracks
         if t.size == 0:
             return
-        self.tracks = replace(t, weights=t.normalised_weights())
+        self.tracks = t.with_arrays(weights=t.normalised_weights())
 
     def _per_teammate(self, values: ArrayLike, what: str) -> Array:
         arr = np.asarray(values, dtype=float).reshape(-1)
@@ -483,8 +488,8 @@ class GaussianSumFuser:
 
     def _set_predicted(self, m: Array, P: Array) -> None:
         k = self.tracks.size
-        self.tracks = replace(
-            self.tracks, means=m[:k], prior_means=m[k:], covs=P[:k], prior_covs=P[k:]
+        self.tracks = self.tracks.with_arrays(
+            means=m[:k], prior_means=m[k:], covs=P[:k], prior_covs=P[k:]
         )
 
     # ------------------------------------------------------------------ direct fusion
@@ -513,7 +518,7 @@ class GaussianSumFuser:
         means[sel] = np.where(inside[:, None], new_m, mean)
         covs[sel] = np.where(inside[:, None, None], new_P, cov)
         weights[sel] = t.weights[sel] * (valid + outlier)
-        self.tracks = replace(t, means=means, covs=covs, weights=weights)
+        self.tracks = t.with_arrays(means=means, covs=covs, weights=weights)
 
     def _known_density(
         self, kind: Literal["height", "range"], z: Array, mean: Array, cov: Array
@@ -578,8 +583,7 @@ class GaussianSumFuser:
             w_fa, w_det = formation_weights(
                 t.weights, lik, gated, st.formation, kappa[t.groups], p_detect=p_track
             )
-            fa = replace(
-                t,
+            fa = t.with_arrays(
                 weights=w_fa,
                 assoc=np.full(k, -1, dtype=np.int64),
                 history=branch(t.history, np.arange(k), self._ids(k)),
@@ -613,7 +617,7 @@ class GaussianSumFuser:
             weights = t.weights
             if st.field_of_view is not None:
                 weights = weights * (1.0 - self._track_detection(p_det) * st.formation.p_gate)
-            self.tracks = replace(t, weights=weights, assoc=np.full(k, -1, dtype=np.int64))
+            self.tracks = t.with_arrays(weights=weights, assoc=np.full(k, -1, dtype=np.int64))
             return
         if m:
             if not k:
@@ -871,7 +875,7 @@ class GaussianSumFuser:
                     weights=t.weights[sel],
                 )
             )
-        self.tracks = replace(t, prior_means=t.means.copy(), prior_covs=t.covs.copy())
+        self.tracks = t.with_arrays(prior_means=t.means.copy(), prior_covs=t.covs.copy())
         return out
 
     def fuse(self, msg: EquivalentMeasurement) -> str:
@@ -976,8 +980,7 @@ class GaussianSumFuser:
             paired = np.where(gated, weights[None, :] * dens, 0.0)
             evidence = unpaired + paired.sum(axis=1)  # Σ_k λ_hk
             share = 1.0 / evidence
-            keep = replace(
-                local,
+            keep = local.with_arrays(
                 weights=local.weights * unpaired * share,
                 history=branch(local.history, np.arange(n_loc), self._ids(n_loc)),
             )
@@ -1002,8 +1005,7 @@ class GaussianSumFuser:
                         prior_means[b],
                         prior_covs[b],
                     )
-                fused = replace(
-                    fused,
+                fused = fused.with_arrays(
                     weights=local.weights[hi] * paired[hi, ri] * share[hi],
                     history=branch(local.history, hi, self._ids(hi.size)),
                 )

@@ -60,6 +60,9 @@ BoolArray = NDArray[np.bool_]
 NO_BEARING = -1
 _HEIGHT = kind_code("height")
 _RANGE = kind_code("range")
+#: The count names of rows used and of rows repeated within a scan, by kind code.
+_USED_KEY = {code: f"rows_used:{name}" for code, name in enumerate(KIND_NAMES)}
+_REPEATED_KEY = {code: f"rows_repeated_in_a_scan:{name}" for code, name in enumerate(KIND_NAMES)}
 
 
 def bearing_kind(settings: GaussianSumSettings) -> str:
@@ -141,6 +144,7 @@ class GaussianSumEstimator:
         self._pending: list[EquivalentMeasurement] = []
         self._scan_t = float("nan")
         self._since: dict[int, float] = {}
+        self._has_tracks = np.zeros(self._team.size, dtype=bool)
         self._ever: set[int] = set()
         self._events: list[TrackEvent] = []
         self._counts: dict[str, int] = {}
@@ -177,11 +181,19 @@ class GaussianSumEstimator:
             )
         used = mine & _modelled_mask(batch, self._bearing_code)
         ignored = batch.kind[mine & ~used]
-        for code in np.unique(ignored):
-            self._add(f"rows_not_modelled:{KIND_NAMES[code]}", int(np.sum(ignored == code)))
+        if ignored.size:
+            per_kind = np.bincount(ignored)
+            for code in np.flatnonzero(per_kind):
+                self._add(f"rows_not_modelled:{KIND_NAMES[code]}", int(per_kind[code]))
         rows = np.flatnonzero(used)
-        for stamp in np.unique(batch.t[rows]):
-            self._scan(batch, rows[batch.t[rows] == stamp], float(stamp))
+        if rows.size == 0:
+            return
+        stamps = batch.t[rows]
+        if (stamps == stamps[0]).all():  # (the common case: one scan in the batch)
+            self._scan(batch, rows, float(stamps[0]))
+            return
+        for stamp in np.unique(stamps):
+            self._scan(batch, rows[stamps == stamp], float(stamp))
 
     def outbox(self) -> list[Any]:
         """Every filter's equivalent measurements, each ``fusion_period`` (Eq. 8)."""
@@ -262,13 +274,16 @@ class GaussianSumEstimator:
             values = np.full(n_team, np.nan)
             sel = np.flatnonzero((kind == code) & (target >= 0))
             local = self._local[target[sel]]
-            first = np.unique(local, return_index=True)[1]
+            if np.bincount(local + 1).max(initial=0) > 1:  # keep the first row per teammate
+                first = np.unique(local, return_index=True)[1]
+            else:
+                first = np.arange(local.size)
             values[local[first]] = batch.value[rows[sel[first]], 0]
-            self._add(f"rows_used:{KIND_NAMES[code]}", first.size)
-            self._add(f"rows_repeated_in_a_scan:{KIND_NAMES[code]}", sel.size - first.size)
+            self._add(_USED_KEY[code], first.size)
+            self._add(_REPEATED_KEY[code], sel.size - first.size)
             known[code] = values
         bearings = batch.value[rows[kind == self._bearing_code], : self._n_bearing]
-        self._add(f"rows_used:{KIND_NAMES[self._bearing_code]}", bearings.shape[0])
+        self._add(_USED_KEY[self._bearing_code], bearings.shape[0])
         self.fuser.direct_scan(known[_HEIGHT], known[_RANGE], bearings)
         self._scan_t = stamp
         self._note_tracks(stamp)
@@ -284,6 +299,9 @@ class GaussianSumEstimator:
         """Track the start time of every filter's tracks and record its events."""
         has = np.zeros(self._team.size, dtype=bool)
         has[self.fuser.tracks.groups] = True
+        if np.array_equal(has, self._has_tracks):
+            return  # (no filter gained its first track or lost its last)
+        self._has_tracks = has
         for local, j in enumerate(self._team.tolist()):
             if has[local] and j not in self._since:
                 self._since[j] = t

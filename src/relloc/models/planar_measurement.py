@@ -25,7 +25,6 @@ blocks (observer and observed robot), so the joint Jacobian ``H`` (m × 3n) is s
 from __future__ import annotations
 
 from dataclasses import dataclass
-from enum import IntEnum
 
 import numpy as np
 from numpy.typing import NDArray
@@ -39,8 +38,10 @@ IntArray = NDArray[np.int64]
 _MIN_SEPARATION_SQ = 1e-12
 
 
-class RowKind(IntEnum):
-    """What a scalar measurement row observes."""
+class RowKind:
+    """What a scalar measurement row observes: plain ``int`` codes (not an ``IntEnum``: numpy
+    compares an array with a plain int several times faster, and the filters compare row kinds
+    at every epoch)."""
 
     BEARING = 0
     RANGE = 1
@@ -58,7 +59,7 @@ def _deltas(observer: Array, target_xy: Array) -> tuple[Array, Array, Array]:
     dx = target_xy[..., 0] - observer[..., 0]
     dy = target_xy[..., 1] - observer[..., 1]
     q = dx * dx + dy * dy
-    if np.any(q < _MIN_SEPARATION_SQ):
+    if (q < _MIN_SEPARATION_SQ).any():
         raise ModelError("planar measurement: observer and target coincide (bearing undefined)")
     return dx, dy, q
 
@@ -151,7 +152,7 @@ class ScalarRows:
                 raise ModelError(f"ScalarRows.{name}: expected shape ({m},)")
         if np.asarray(self.landmark_xy).shape != (m, 2):
             raise ModelError(f"ScalarRows.landmark_xy: expected shape ({m}, 2)")
-        if not np.all(np.isfinite(self.z)) or not np.all(np.asarray(self.sigma) > 0):
+        if not np.isfinite(self.z).all() or not (np.asarray(self.sigma) > 0).all():
             raise ModelError("ScalarRows: z must be finite and sigma > 0")
 
     @property
@@ -243,17 +244,20 @@ def linearise_rows(X: Array, rows: ScalarRows) -> LinearisedRows:
     block_index[:, 0] = rows.observer
 
     rel = (kind == RowKind.BEARING) | (kind == RowKind.RANGE)
-    if np.any(rel):
-        o, t = obs[rel], tgt_xy[rel]
-        is_b = kind[rel] == RowKind.BEARING
-        Bo, Bt = bearing_jacobians(o, t)
-        Ro, Rt = range_jacobians(o, t)
-        h[rel] = np.where(is_b, bearing(o, t), planar_range(o, t))
-        blocks[rel, 0, :] = np.where(is_b[:, None], Bo, Ro)
-        tgt_block = np.zeros((int(rel.sum()), 3))
-        tgt_block[:, :2] = np.where(is_b[:, None], Bt, Rt)
-        blocks[rel, 1, :] = tgt_block
+    if rel.any():
         block_index[rel, 1] = np.where(robot_target[rel], rows.target[rel], -1)
+    # each relative kind evaluated on its own rows only (most epochs carry one kind)
+    for k, value, jacobians in (
+        (RowKind.BEARING, bearing, bearing_jacobians),
+        (RowKind.RANGE, planar_range, range_jacobians),
+    ):
+        sel = kind == k
+        if sel.any():
+            o, t = obs[sel], tgt_xy[sel]
+            h[sel] = value(o, t)
+            H_obs, H_tgt = jacobians(o, t)
+            blocks[sel, 0, :] = H_obs
+            blocks[sel, 1, :2] = H_tgt
     for k, col in ((RowKind.POSE_X, 0), (RowKind.POSE_Y, 1), (RowKind.POSE_HEADING, 2)):
         sel = kind == k
         h[sel] = obs[sel, col]
