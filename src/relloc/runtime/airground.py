@@ -209,15 +209,7 @@ class WorldProcess:
         self.report.cmd_received[msg.sender] = self.report.cmd_received.get(msg.sender, 0) + 1
 
     def _wait(self, inbox: Inbox, done: Callable[[], bool], timeout_s: float) -> bool:
-        deadline = time.monotonic() + timeout_s
-        while not done():
-            left = deadline - time.monotonic()
-            if left <= 0:
-                return False
-            item = inbox.get(timeout=min(left, 0.5))
-            if item is not None:
-                self._handle(item)
-        return True
+        return inbox.wait_until(done, self._handle, timeout_s)
 
     def run(self) -> WorldReport:
         s = self.s

@@ -135,15 +135,7 @@ class Clock:
             self._acks.add(msg.sender)
 
     def _wait(self, inbox: Inbox, done: Any, timeout_s: float, waiting_k: int | None) -> bool:
-        deadline = time.monotonic() + timeout_s
-        while not done():
-            left = deadline - time.monotonic()
-            if left <= 0:
-                return False
-            item = inbox.get(timeout=min(left, 0.5))
-            if item is not None:
-                self._handle(item, waiting_k)
-        return True
+        return inbox.wait_until(done, lambda item: self._handle(item, waiting_k), timeout_s)
 
     def run(self) -> ClockReport:
         s = self.s

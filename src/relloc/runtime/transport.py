@@ -30,6 +30,7 @@ import json
 import queue
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
@@ -235,6 +236,21 @@ class Inbox:
             return self._taken(self._queue.get(timeout=timeout))
         except queue.Empty:
             return None
+
+    def wait_until(
+        self, done: Callable[[], bool], handle: Callable[[Incoming], None], timeout_s: float
+    ) -> bool:
+        """Pass each record to ``handle`` until ``done()`` holds (True) or ``timeout_s`` of
+        wall time has passed (False); ``done`` is checked before the first wait."""
+        deadline = time.monotonic() + timeout_s
+        while not done():
+            left = deadline - time.monotonic()
+            if left <= 0:
+                return False
+            item = self.get(timeout=min(left, 0.5))
+            if item is not None:
+                handle(item)
+        return True
 
     def drain(self) -> list[Incoming]:
         """Every record waiting now, without blocking."""
