@@ -83,6 +83,23 @@ def test_air_ground_team_survives_loss_a_partition_and_a_follower_killed_and_res
     assert r2["estimates"] >= 15
 
 
+@pytest.mark.slow
+def test_secure_air_ground_team_equals_the_in_process_run(tmp_path):
+    """``--secure``: every process on mutual TLS with its own certificate (the world as the
+    launcher identity, the only one allowed under ``clock/``); the arithmetic is unchanged."""
+    out = tmp_path / "out"
+    argv = ["team", "up", "guler2023", "--out", str(out), "--duration", "1", "--seed", "4"]
+    assert main([*argv, "--secure", "--quiet"]) == 0
+    s = _summary(out)
+    assert s["secure"] is True
+    assert s["agreement"]["max_abs_diff"] == 0.0 and s["distributed"] == s["in_process"]
+    run = s["per_run"][0]
+    assert run["messages"]["world"]["cmd_received"] == dict.fromkeys(TEAM, run["ticks"])
+    assert all(m["rejected"] == 0 for m in run["messages"]["robots"].values())
+    certs = {p.name for p in (out / "run0" / "certs").iterdir()}
+    assert {f"{r}.pem" for r in TEAM} | {"launcher.pem"} <= certs
+
+
 def test_largest_difference_compares_nested_figures():
     a = {"x": {"R1": 0.5, "R2": 1.0}, "v": "consistent", "n": None, "l": [1, 2]}
     assert largest_difference(a, a) == 0.0

@@ -113,12 +113,9 @@ def run_robot(args: argparse.Namespace) -> int:
 
 def run_team_up(args: argparse.Namespace, team_args: dict[str, object]) -> int:
     """``relloc team up guler2023``: the runs, scored beside the in-process reproduction."""
-    from relloc.errors import ConfigError
     from relloc.experiments.guler2023_team import DEFAULT_CASE, GulerTeamSettings, run_guler_team
     from relloc.pipeline.output import fmt
 
-    if args.secure:
-        raise ConfigError("team up guler2023: --secure is not supported for this team yet")
     summary = run_guler_team(
         GulerTeamSettings(
             out_dir=args.out,

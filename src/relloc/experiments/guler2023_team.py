@@ -75,10 +75,9 @@ from relloc.runtime.airground import (
     load_world,
 )
 from relloc.runtime.faults import FaultSettings
-from relloc.runtime.launcher import Collected, ProcessTeam, TeamLauncher
+from relloc.runtime.launcher import Collected, ProcessTeam, TeamLauncher, transport_arguments
 from relloc.runtime.outcomes import outcomes_of
 from relloc.runtime.summary import agreement, assemble_estimates
-from relloc.runtime.transport import DEFAULT_LISTEN
 from relloc.sim.airground import AirGroundRun, AirGroundWorld, FollowerAgent, robot_names
 
 CASES = ("one_drone", "two_drones", "formation")
@@ -195,17 +194,20 @@ class AirGroundLauncher(TeamLauncher):
         settings = dataclasses.replace(settings, tick_s=sc.dt, preload=(__name__,))
         super().__init__(settings, robot_names(sc), sc.duration)
 
-    def _common(self) -> list[str]:
+    def _common(self, member: str) -> list[str]:
+        """The run's and the transport's arguments of ``member`` (the world speaks as the
+        launcher identity, as the clock does: only it may publish under ``clock/``)."""
         s = self.team
         args = ["--case", s.case, "--seed", str(s.seed), "--run", str(self.run_index)]
         if s.duration_s is not None:
             args += ["--duration", repr(s.duration_s)]
-        return [*args, "--team", s.team, "--connect", self.endpoint, "--listen", DEFAULT_LISTEN]
+        return [*args, "--team", s.team, *transport_arguments(self.endpoint, self.secure, member)]
 
     def world_argv(self) -> list[str]:
         """``relloc airground world ...``."""
         f = self.team.faults
-        argv = ["airground", "world", *self._common(), "--world-out", str(self.world_file)]
+        argv = ["airground", "world", *self._common("launcher")]
+        argv += ["--world-out", str(self.world_file)]
         argv += ["--report", str(self.s.out_dir / "world.json")]
         argv += ["--realtime", repr(self.team.realtime_factor)]
         for e in f.kills:
@@ -217,7 +219,7 @@ class AirGroundLauncher(TeamLauncher):
     def robot_argv(self, robot: str) -> list[str]:
         """``relloc airground robot --robot ROBOT ...`` with the network faults."""
         f = self.team.faults
-        argv = ["airground", "robot", "--robot", robot, *self._common()]
+        argv = ["airground", "robot", "--robot", robot, *self._common(robot)]
         argv += ["--drop", repr(f.drop), "--delay", repr(f.delay_ms), "--jitter", repr(f.jitter_ms)]
         argv += ["--duplicate", repr(f.duplicate), "--reorder", repr(f.reorder)]
         for p in f.partitions:
@@ -487,6 +489,7 @@ def _summary(
             "drones": sc.n_drones,
         },
         "faults": s.faults.to_dict(),
+        "secure": s.secure,
         "distributed": _headline(ours),
         "in_process": _headline(ref),
         "difference": diff,

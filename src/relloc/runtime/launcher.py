@@ -116,7 +116,7 @@ class Collected:
     wall_s: float = 0.0
 
 
-def _transport_arguments(endpoint: str, secure: SecureTeam | None, member: str) -> list[str]:
+def transport_arguments(endpoint: str, secure: SecureTeam | None, member: str) -> list[str]:
     """Connect to the launcher; listen on loopback only (TLS only when secure)."""
     if secure is None:
         return ["--connect", endpoint, "--listen", DEFAULT_LISTEN]
@@ -138,7 +138,7 @@ def node_command(
         str(settings.seed),
         "--team",
         settings.team,
-        *_transport_arguments(endpoint, secure, robot),
+        *transport_arguments(endpoint, secure, robot),
         "--filter",
         settings.filter_kind,
         "--drop",
@@ -181,7 +181,7 @@ def clock_command(
         repr(duration_s),
         "--realtime",
         repr(settings.realtime_factor),
-        *_transport_arguments(endpoint, secure, "launcher"),
+        *transport_arguments(endpoint, secure, "launcher"),
         "--report",
         str(report),
     ]
