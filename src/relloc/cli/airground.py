@@ -89,22 +89,16 @@ def run_robot(args: argparse.Namespace) -> int:
 
     from relloc.experiments.guler2023_team import role_of, run_seed, team_case
     from relloc.runtime.airground import RobotProcess, RobotSettings
-    from relloc.sim.airground import robot_names
 
     case = team_case(args.case, args.duration)
     seed_seq = run_seed(args.seed, args.case, args.run)
-    names = robot_names(case.scenario)
     role = role_of(case, args.robot, seed_seq)
     settings = RobotSettings(
         team=args.team,
         robot=args.robot,
         transport=transport_from_args(args),
         faults=network_faults_from_args(args),
-        fault_seed=int(
-            np.random.SeedSequence([args.seed, args.run, names.index(args.robot)]).generate_state(
-                1
-            )[0]
-        ),
+        fault_seed=int(np.random.SeedSequence([args.seed, args.run]).generate_state(1)[0]),
         input_timeout_s=args.input_timeout,
     )
     RobotProcess(settings, case.scenario, role).run()

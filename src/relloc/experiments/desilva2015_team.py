@@ -51,7 +51,7 @@ from relloc.experiments.desilva2015 import (
 from relloc.experiments.team_sources import desilva_recording, desilva_scenario
 from relloc.pipeline.output import fmt, markdown_table, prepare_out_dir, write_report, write_summary
 from relloc.runtime.launcher import ProcessTeam, TeamLauncher
-from relloc.runtime.outcomes import outcomes_of
+from relloc.runtime.outcomes import figure_agreement, outcomes_of
 from relloc.runtime.summary import agreement, assemble_estimates, robot_messages
 
 AGREEMENT_TOLERANCE = 1e-6
@@ -161,14 +161,13 @@ def _summary(
         "in_process": ref,
         "difference": diff,
         "tolerance": {"belief_entry": AGREEMENT_TOLERANCE, "figure": FIGURE_TOLERANCE},
-        "agreement": {
-            "max_abs_diff": worst,
-            "perfect_network": perfect,
-            "within_tolerance": bool(
-                worst <= AGREEMENT_TOLERANCE
-                and all(d is None or abs(d) <= FIGURE_TOLERANCE for d in diff.values())
-            ),
-        },
+        "agreement": figure_agreement(
+            worst,
+            perfect,
+            diff,
+            belief_tolerance=AGREEMENT_TOLERANCE,
+            figure_tolerance=FIGURE_TOLERANCE,
+        ),
         "per_run": runs,
     }
 

@@ -76,7 +76,7 @@ from relloc.runtime.airground import (
 )
 from relloc.runtime.faults import FaultSettings
 from relloc.runtime.launcher import Collected, ProcessTeam, TeamLauncher, transport_arguments
-from relloc.runtime.outcomes import outcomes_of
+from relloc.runtime.outcomes import figure_agreement, outcomes_of
 from relloc.runtime.summary import agreement, assemble_estimates
 from relloc.sim.airground import AirGroundRun, AirGroundWorld, FollowerAgent, robot_names
 
@@ -494,14 +494,13 @@ def _summary(
         "in_process": _headline(ref),
         "difference": diff,
         "tolerance": {"belief_entry": AGREEMENT_TOLERANCE, "figure": FIGURE_TOLERANCE},
-        "agreement": {
-            "max_abs_diff": worst,
-            "perfect_network": perfect,
-            "within_tolerance": bool(
-                worst <= AGREEMENT_TOLERANCE
-                and all(d is None or d <= FIGURE_TOLERANCE for d in diff.values())
-            ),
-        },
+        "agreement": figure_agreement(
+            worst,
+            perfect,
+            diff,
+            belief_tolerance=AGREEMENT_TOLERANCE,
+            figure_tolerance=FIGURE_TOLERANCE,
+        ),
         "per_run": runs,
     }
 

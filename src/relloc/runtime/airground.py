@@ -539,8 +539,8 @@ class RobotProcess:
         self.times = tick_times(sc)
         self.counters: Counter[str] = Counter()
         self.heard = Received()
-        self.link = LinkEmulator(
-            settings.robot, settings.faults, np.random.default_rng(settings.fault_seed)
+        self.link = LinkEmulator.of_member(
+            settings.robot, settings.faults, settings.fault_seed, self.roster
         )
         self.present: set[str] = set()
         self._clock_seen = False

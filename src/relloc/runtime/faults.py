@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import heapq
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -205,6 +206,15 @@ class LinkEmulator:
         self._heap: list[_Pending] = []
         self._held: dict[str, tuple[float, Any]] = {}
         self._order = 0
+
+    @classmethod
+    def of_member(
+        cls, owner: str, settings: FaultSettings, seed: int, roster: Sequence[str]
+    ) -> LinkEmulator:
+        """The link of roster member ``owner``: its own stream of the team's fault ``seed``
+        (``SeedSequence([seed, roster index])``), so members draw independently."""
+        ss = np.random.SeedSequence([seed, list(roster).index(owner)])
+        return cls(owner, settings, np.random.default_rng(ss))
 
     def admit(self, payload: Any, sender: str, now_s: float) -> None:
         s = self.settings

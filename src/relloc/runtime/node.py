@@ -189,8 +189,9 @@ class RobotNode:
         self.counters: Counter[str] = Counter()
         self.teammates = {r: Teammate(r) for r in settings.roster if r != settings.robot}
         self.own_odometry = ReceivedOdometry()
-        ss = np.random.SeedSequence([settings.fault_seed, settings.roster.index(settings.robot)])
-        self.link = LinkEmulator(settings.robot, settings.faults, np.random.default_rng(ss))
+        self.link = LinkEmulator.of_member(
+            settings.robot, settings.faults, settings.fault_seed, settings.roster
+        )
         self._latency_us: list[float] = []
         self._session: Any = None
         self._pubs: dict[str, Any] = {}

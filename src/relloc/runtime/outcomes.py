@@ -20,7 +20,7 @@ for the whole run against the fault-free in-process run on the same seed.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -159,3 +159,23 @@ def outcomes_of(
 
     result = RunResult(evaluations=evaluate(estimates, recording), events=estimates.events)
     return fault_outcomes(faults, result, estimates, recording)
+
+
+def figure_agreement(
+    worst: float,
+    perfect: bool,
+    differences: Mapping[str, float | None],
+    *,
+    belief_tolerance: float,
+    figure_tolerance: float,
+) -> dict[str, Any]:
+    """The ``agreement`` block of a reproduction's team: the largest belief-entry difference
+    ``worst`` from the in-process run, whether the network was perfect, and whether both the
+    beliefs and every headline figure (``|difference|``; None: nothing to compare) are within
+    their tolerance."""
+    figures_ok = all(d is None or abs(d) <= figure_tolerance for d in differences.values())
+    return {
+        "max_abs_diff": worst,
+        "perfect_network": perfect,
+        "within_tolerance": bool(worst <= belief_tolerance and figures_ok),
+    }
