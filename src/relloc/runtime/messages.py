@@ -97,19 +97,21 @@ HEADER: dict[str, str] = {
     "t": "float",
     "wall_ns": "int",
 }
+ROWS: dict[str, str | Shape] = {
+    "stamps": (-1,),
+    "kinds": "strlist",
+    "subjects": "strlist",
+    "landmarks": (-1,),
+    "sensors": (-1,),
+    "values": (-1,),
+    "sigmas": (-1,),
+}
+"""Fields of a table of readings (``rows``; also inside ``sense``), one entry per row."""
 SCHEMA: dict[str, dict[str, str | Shape]] = {
     "odom": {"stamps": (-1,), "u": (-1, 4)},
     "meas": {"stamps": (-1,), "targets": "strlist", "z": (-1, 3), "sigma": (-1, 3)},
     "eqm": {"target": "str", "mean": (STATE_DIM,), "cov": (STATE_DIM, STATE_DIM)},
-    "rows": {
-        "stamps": (-1,),
-        "kinds": "strlist",
-        "subjects": "strlist",
-        "landmarks": (-1,),
-        "sensors": (-1,),
-        "values": (-1,),
-        "sigmas": (-1,),
-    },
+    "rows": ROWS,
     "mail": {
         "progress": "float",
         "stamps": (-1,),
@@ -153,13 +155,7 @@ SCHEMA: dict[str, dict[str, str | Shape]] = {
         "position": (-1,),
         "fix_subject": "str",
         "fix": (-1,),
-        "stamps": (-1,),
-        "kinds": "strlist",
-        "subjects": "strlist",
-        "landmarks": (-1,),
-        "sensors": (-1,),
-        "values": (-1,),
-        "sigmas": (-1,),
+        **ROWS,
     },
 }
 """Fields of each kind: a type name or an array shape (``-1`` = any length)."""
