@@ -60,14 +60,19 @@ def _synthetic_folder(folder: Path, rng: np.random.Generator) -> Path:
     return folder
 
 
+def short_windows(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Calibration, scoring and warm-up windows that fit the synthetic folder's 40 s."""
+    monkeypatch.setattr(mrclam_association, "CALIBRATION_S", 5.0)
+    monkeypatch.setattr(mrclam_association, "EVAL_S", 14.0)
+    monkeypatch.setattr(mrclam_association, "WARMUP_S", 6.0)
+
+
 @pytest.mark.slow
 def test_mrclam_association_on_any_mrclam_folder(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     folder = _synthetic_folder(tmp_path / "data", np.random.default_rng(0))
-    monkeypatch.setattr(mrclam_association, "CALIBRATION_S", 5.0)
-    monkeypatch.setattr(mrclam_association, "EVAL_S", 14.0)
-    monkeypatch.setattr(mrclam_association, "WARMUP_S", 6.0)
+    short_windows(monkeypatch)
     out = tmp_path / "out"
     code = main(
         [

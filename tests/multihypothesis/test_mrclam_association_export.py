@@ -8,10 +8,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_mrclam_association import _synthetic_folder
+from test_mrclam_association import _synthetic_folder, short_windows
 
 from relloc.cli import main
-from relloc.experiments import mrclam_association
 
 pytest.importorskip("mcap", reason="extra 'ros' is not installed")
 
@@ -21,9 +20,7 @@ def test_mrclam_association_exports_every_robots_tracks(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     folder = _synthetic_folder(tmp_path / "data", np.random.default_rng(0))
-    monkeypatch.setattr(mrclam_association, "CALIBRATION_S", 5.0)
-    monkeypatch.setattr(mrclam_association, "EVAL_S", 14.0)
-    monkeypatch.setattr(mrclam_association, "WARMUP_S", 6.0)
+    short_windows(monkeypatch)
     out = tmp_path / "out"
     code = main(
         ["reproduce", "mrclam-association", "--out", str(out), "--dataset", str(folder),
