@@ -307,7 +307,8 @@ def _sigma(fit: OdometryNoiseFit) -> Array:
 
 def prepare_replay(settings: ReplaySettings) -> ReplayData:
     """The raw replay only (:func:`prepare_replays`)."""
-    return _raw_replay(settings, load_mrclam(settings.dataset))
+    ds = load_mrclam(settings.dataset)
+    return _raw_replay(settings, ds, to_recording(ds))
 
 
 def prepare_replays(
@@ -322,11 +323,13 @@ def prepare_replays(
     (module docstring), from one load of the dataset; the calibrated noise inflation is fitted
     with draws of ``seed`` scored after ``steady_state_s`` (:func:`fit_noise_inflation`)."""
     ds = load_mrclam(settings.dataset)
-    raw = _raw_replay(settings, ds)
-    calibrated = _calibrated_replay(settings, ds, raw)
+    recording = to_recording(ds)
+    raw = _raw_replay(settings, ds, recording)
+    calibrated = _calibrated_replay(settings, ds, recording, raw)
     inflation = fit_noise_inflation(
         settings,
         ds,
+        recording,
         calibrated,
         steady_state_s=steady_state_s,
         seed=seed,
@@ -346,11 +349,10 @@ def _pair_span(settings: ReplaySettings, recording: Recording) -> tuple[float, f
     return float(first), float(last)
 
 
-def _raw_replay(settings: ReplaySettings, ds: MrclamDataset) -> ReplayData:
+def _raw_replay(settings: ReplaySettings, ds: MrclamDataset, recording: Recording) -> ReplayData:
     """Cut the window, hold the recorded odometry on the grid, raise the observed robot's plane,
     fit the odometry noise over each robot's whole recording."""
     obs, tgt = ds.robot(settings.observer), ds.robot(settings.observed)
-    recording = to_recording(ds)
     first, last = _pair_span(settings, recording)
     start = first + settings.start_after_odometry_s
     end = min(start + settings.duration_s, last)
@@ -426,7 +428,9 @@ def calibration_window(ds: MrclamDataset, scored: CalibrationWindow) -> Calibrat
     return CalibrationWindow(scored.end_s, end, f"{ds.path} after the scored window")
 
 
-def _calibrated_replay(settings: ReplaySettings, ds: MrclamDataset, raw: ReplayData) -> ReplayData:
+def _calibrated_replay(
+    settings: ReplaySettings, ds: MrclamDataset, recording: Recording, raw: ReplayData
+) -> ReplayData:
     """``raw`` with the odometry calibrated on :func:`calibration_window` (module docstring),
     its noise not yet inflated."""
     window = calibration_window(ds, raw.scored_window)
@@ -455,7 +459,7 @@ def _calibrated_replay(settings: ReplaySettings, ds: MrclamDataset, raw: ReplayD
             for length in lengths
         ]
         fits[label] = max(candidates, key=lambda f: f.sigma_w)
-    od_l, od_c = _calibrated_pair(settings, ds, team)
+    od_l, od_c = _calibrated_pair(settings, ds, recording, team)
     return replace(
         raw,
         odometry=(
@@ -470,11 +474,10 @@ def _calibrated_replay(settings: ReplaySettings, ds: MrclamDataset, raw: ReplayD
 
 
 def _calibrated_pair(
-    settings: ReplaySettings, ds: MrclamDataset, team: OdometryModelFit
+    settings: ReplaySettings, ds: MrclamDataset, recording: Recording, team: OdometryModelFit
 ) -> tuple[Odometry, Odometry]:
     """The observer's and the observed robot's recorded odometry calibrated by ``team``
     (:func:`relloc.calibration.odometry.calibrated_commands`)."""
-    recording = to_recording(ds)
     out = []
     for subject in (settings.observer, settings.observed):
         k = ds.robot_ids.index(subject)
@@ -496,12 +499,12 @@ def _calibrated_pair(
 
 
 def calibration_stretches(
-    settings: ReplaySettings, ds: MrclamDataset, window: CalibrationWindow
+    settings: ReplaySettings, recording: Recording, window: CalibrationWindow
 ) -> tuple[CalibrationWindow, ...]:
     """Consecutive stretches of ``duration_s`` (the last one shorter, kept when at least
     ``min_duration_s``) of the part of ``window`` where both robots have odometry and ground
     truth; at least one stretch of ``min_duration_s`` is needed."""
-    first, last = _pair_span(settings, to_recording(ds))
+    first, last = _pair_span(settings, recording)
     lo, hi = max(window.start_s, first), min(window.end_s, last)
     out: list[CalibrationWindow] = []
     start = lo
@@ -521,6 +524,7 @@ def calibration_stretches(
 def fit_noise_inflation(
     settings: ReplaySettings,
     ds: MrclamDataset,
+    recording: Recording,
     calibrated: ReplayData,
     *,
     steady_state_s: float,
@@ -538,9 +542,8 @@ def fit_noise_inflation(
     team = calibrated.calibration
     if team is None:
         raise ConfigError("fit_noise_inflation: needs the calibrated replay")
-    recording = to_recording(ds)
-    pair = _calibrated_pair(settings, ds, team)
-    stretches = calibration_stretches(settings, ds, team.calibration_window)
+    pair = _calibrated_pair(settings, ds, recording, team)
+    stretches = calibration_stretches(settings, recording, team.calibration_window)
     parts = [
         _cut(settings, ds, recording, w.start_s, w.end_s, pair, calibrated.fits) for w in stretches
     ]
