@@ -1518,7 +1518,7 @@ def odometry_floor_text(s: dict[str, Any]) -> str:
         f"{_span(yaw_cal, ' rad')}) with "
         f"{_span([t4[c]['nees_percent_beyond'] for c in t4], ' %')} of the NEES beyond the bound. "
         "The calibrated commands' turn-rate residual is correlated over seconds: for the "
-        f"relative yaw (robot {tr['relative']}) its std is "
+        f"relative yaw ({tr['relative']}) its std is "
         f"{rel['scored']['calibrated']['std']:.3f} rad/s on the scored window, yet its {B:g} s "
         f"means still spread by {block('calibrated')}; the best linear filter of the commands, "
         f"fitted on the calibration window, leaves {block('fir')} — nothing more in the commands "
