@@ -8,7 +8,10 @@ own.
 
 - :mod:`~relloc.calibration.window` — the window type and how a window is chosen;
 - :mod:`~relloc.calibration.odometry` — odometry latency, scales and variance rates of a team,
-  and the equivalent white noise of one robot;
+  the equivalent white noise of one robot, the best linear filter of the commands and the
+  ground truth's own velocities as odometry;
+- :mod:`~relloc.calibration.turn_rate` — the turn-rate residual calibrated commands leave and
+  the yaw random walk it implies;
 - :mod:`~relloc.calibration.camera` — bearing offsets and noise, range bias and noise, their
   time correlation, the detection probability and the field of view of the MRCLAM camera;
 - :mod:`~relloc.calibration.uwb` — UWB bias, link-to-link bias spread, core spread, outliers

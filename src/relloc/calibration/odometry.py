@@ -29,6 +29,18 @@ forward speed and turn rate by central differences (:func:`ground_truth_velociti
    ``W`` sets the time scale the rates are right at: the real errors are correlated over
    seconds, so the caller picks the horizon its filter must bridge.
 
+**Velocities from the ground truth** (:func:`ground_truth_odometry`,
+:func:`truth_velocity_dataset`): the central differences of :func:`ground_truth_velocities`
+re-recorded as if they were a robot's odometry — an oracle no robot has, for measuring how much
+of an error budget the odometry is.
+
+**Best linear filter of the commands** (:func:`fit_command_fir`): the true turn rate regressed,
+by least squares on a window, on the commands at a set of lags (a finite impulse response, FIR,
+acausal lags included) plus a constant,
+``ω(t) ≈ Σ_k a_k c_ω(t − ℓ_k) + Σ_k b_k c_v(t − ℓ'_k) + c₀``: every latency, lag, scale and
+speed-to-turn coupling any linear time-invariant calibration of the commands could model, so the
+residual it leaves is what no such calibration can explain.
+
 :func:`calibrated_commands` applies a fit to a recording's odometry: the modelled response
 ``c_τ,T`` (re-stamped by when it acts, ``t + τ``; lagged, on a ``GRID_DT_S`` grid, when
 ``T > 0``) scaled (``s_v v``, ``s_ω ω``).
@@ -45,6 +57,7 @@ windowed error — bias included, which makes the fit conservative; the bias its
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, replace
 
@@ -55,6 +68,7 @@ from relloc.calibration.window import CalibrationWindow
 from relloc.core.angles import wrap_angle
 from relloc.core.recording import Odometry
 from relloc.datasets.mrclam import GroundTruth, MrclamDataset, RobotData
+from relloc.datasets.mrclam import Odometry as Commands
 from relloc.errors import ConfigError
 
 Array = NDArray[np.float64]
@@ -124,6 +138,35 @@ def ground_truth_velocities(
     v = (np.cos(qm.theta) * (q1.x - q0.x) + np.sin(qm.theta) * (q1.y - q0.y)) / (2 * h)
     w = np.asarray(wrap_angle(q1.theta - q0.theta)) / (2 * h)
     return v, w, q0.valid & q1.valid & qm.valid
+
+
+def ground_truth_odometry(robot: RobotData, dt: float = GRID_DT_S) -> Commands:
+    """``robot``'s ground-truth forward speed and turn rate recorded like its commands: on a
+    ``dt`` grid over the span of its commands (first to last record, the last stamp kept), the
+    value held over ``[t_k, t_{k+1})`` the central difference (:func:`ground_truth_velocities`)
+    at the step's middle ``t_k + dt/2``. Across a ground-truth gap the differences are those of
+    the interpolated track (straight-line motion); outside the ground truth the track is held,
+    so the velocity is 0. A robot without commands gets none."""
+    if not (math.isfinite(dt) and dt > 0):
+        raise ConfigError(f"ground_truth_odometry: dt must be > 0, got {dt}")
+    od = robot.odometry
+    if len(od.t) == 0 or len(robot.groundtruth.t) < 2:
+        return Commands(t=np.zeros(0), v=np.zeros(0), omega=np.zeros(0))
+    first, last = float(od.t[0]), float(od.t[-1])
+    t = np.asarray(first + dt * np.arange(max(math.ceil((last - first) / dt), 1)), np.float64)
+    if t[-1] < last:
+        t = np.append(t, last)
+    v, w, _ = ground_truth_velocities(robot.groundtruth, t + 0.5 * dt)
+    return Commands(t=t, v=v, omega=w)
+
+
+def truth_velocity_dataset(ds: MrclamDataset, dt: float = GRID_DT_S) -> MrclamDataset:
+    """``ds`` with every robot's odometry replaced by :func:`ground_truth_odometry` (ground
+    truth, camera readings and the time span unchanged)."""
+    robots = {
+        rid: replace(r, odometry=ground_truth_odometry(r, dt)) for rid, r in ds.robots.items()
+    }
+    return replace(ds, robots=robots)
 
 
 def _robot_samples(
@@ -315,6 +358,111 @@ def calibrated_commands(
     velocity[:, 0] *= scale_v
     velocity[:, 3] *= scale_w
     return replace(od, t=od.t + latency_s, velocity=velocity, where=f"{od.where} calibrated")
+
+
+# ----------------------------------------------------------------------------------------------
+# Best linear filter of the commands (what no calibration of them can explain)
+# ----------------------------------------------------------------------------------------------
+
+#: Lags (s) of the turn-rate commands in :func:`fit_command_fir`: from −0.2 s (commands after
+#: the motion) to 1.18 s every ``GRID_DT_S`` — past every latency and lag the fit searches.
+FIR_LAGS_S: tuple[float, ...] = tuple(round(GRID_DT_S * k, 10) for k in range(-10, 60))
+#: Lags (s) of the speed commands (every fifth turn-rate lag).
+FIR_SPEED_LAGS_S: tuple[float, ...] = FIR_LAGS_S[::5]
+
+
+@dataclass(frozen=True)
+class CommandFir:
+    """The turn-rate model ``ω(t) ≈ Σ_k a_k c_ω(t − ℓ_k) + Σ_k b_k c_v(t − ℓ'_k) + c₀`` of one
+    robot (module docstring), fitted on ``calibration_window`` over ``samples`` grid times:
+    ``lags_w_s`` ``ℓ`` with ``coef_w`` ``a`` (dimensionless), ``lags_v_s`` ``ℓ'`` with ``coef_v``
+    ``b`` (rad/m), ``constant`` ``c₀`` (rad/s)."""
+
+    lags_w_s: tuple[float, ...]
+    coef_w: tuple[float, ...]
+    lags_v_s: tuple[float, ...]
+    coef_v: tuple[float, ...]
+    constant: float
+    calibration_window: CalibrationWindow
+    samples: int
+
+    @property
+    def dc_gain(self) -> float:
+        """``Σ a_k``: the turn the filter makes of a steady turn-rate command."""
+        return float(sum(self.coef_w))
+
+    @property
+    def centroid_lag_s(self) -> float:
+        """``Σ a_k ℓ_k / Σ a_k``: the filter's mean delay (s)."""
+        return float(np.dot(self.coef_w, self.lags_w_s)) / self.dc_gain
+
+    def predict(self, commands: Commands, t: Array) -> Array:
+        """The modelled turn rate at times ``t`` of ``commands`` (zero-order hold)."""
+        coef = np.concatenate([self.coef_w, self.coef_v, [self.constant]])
+        return _fir_design(commands, np.asarray(t, dtype=np.float64), self) @ coef
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON-ready summary (the taps by their sum and centroid, not one by one)."""
+        return {
+            "turn_rate_taps": len(self.lags_w_s),
+            "turn_rate_lags_s": [self.lags_w_s[0], self.lags_w_s[-1]],
+            "speed_taps": len(self.lags_v_s),
+            "dc_gain": self.dc_gain,
+            "centroid_lag_s": self.centroid_lag_s,
+            "speed_gain_rad_per_m": float(sum(self.coef_v)),
+            "constant_rad_s": self.constant,
+            "samples": self.samples,
+            "calibration_window": self.calibration_window.to_dict(),
+        }
+
+
+def _fir_design(
+    commands: Commands,
+    t: Array,
+    lags: CommandFir | tuple[tuple[float, ...], tuple[float, ...]],
+) -> Array:
+    """Columns ``c_ω(t − ℓ_k)``, ``c_v(t − ℓ'_k)`` and 1 of the FIR regression."""
+    lags_w, lags_v = (lags.lags_w_s, lags.lags_v_s) if isinstance(lags, CommandFir) else lags
+    cols = [commands.at(t - lag)[1] for lag in lags_w]
+    cols += [commands.at(t - lag)[0] for lag in lags_v]
+    cols.append(np.ones_like(t))
+    return np.column_stack(cols)
+
+
+def fit_command_fir(
+    robot: RobotData,
+    window: CalibrationWindow,
+    *,
+    lags_w_s: tuple[float, ...] = FIR_LAGS_S,
+    lags_v_s: tuple[float, ...] = FIR_SPEED_LAGS_S,
+) -> CommandFir:
+    """The least-squares :class:`CommandFir` of ``robot``'s true turn rate (central
+    differences, :func:`ground_truth_velocities`) on its commands inside ``window`` (the
+    ``GRID_DT_S`` grid of :func:`fit_odometry_model`, ground-truth gaps left out): minimises
+    ``Σ_t (ω(t) − x(t)·β)²`` over ``β = (a, b, c₀)`` with ``x(t)`` the lagged commands and 1.
+    Collinear lags (commands held longer than a grid step) get the minimum-norm solution, which
+    leaves the fitted values — and so the residual — unchanged."""
+    if not lags_w_s:
+        raise ConfigError("fit_command_fir: needs at least one turn-rate lag")
+    s = _robot_samples(robot, window, GRID_DT_S)
+    n_coef = len(lags_w_s) + len(lags_v_s) + 1
+    if s.t.size < 10 * n_coef:
+        raise window.too_little(
+            f"robot {robot.subject}: {s.t.size} ground-truth samples for {n_coef} FIR coefficients"
+        )
+    beta, *_ = np.linalg.lstsq(
+        _fir_design(robot.odometry, s.t, (lags_w_s, lags_v_s)), s.w, rcond=None
+    )
+    nw = len(lags_w_s)
+    return CommandFir(
+        lags_w_s=tuple(float(x) for x in lags_w_s),
+        coef_w=tuple(float(x) for x in beta[:nw]),
+        lags_v_s=tuple(float(x) for x in lags_v_s),
+        coef_v=tuple(float(x) for x in beta[nw:-1]),
+        constant=float(beta[-1]),
+        calibration_window=window,
+        samples=int(s.t.size),
+    )
 
 
 # ----------------------------------------------------------------------------------------------

@@ -12,7 +12,8 @@ sensor settings. Here the same is done with two robots of any MRCLAM-layout data
 * the **truth** is the Vicon pose of both robots (interpolated at the record times, yaw on the
   circle), the observed robot's plane raised by ``height``; measurement epochs falling in a
   ground-truth gap are skipped (counted);
-* the odometry comes in two versions, both replayed (:func:`prepare_replays`):
+* the odometry comes in three versions, all replayed with the same draws
+  (:func:`prepare_replays`):
 
   - **calibrated** (the headline): fitted on the *calibration window* — the rest of the
     recording after the scored window, so the two are disjoint — by
@@ -40,6 +41,16 @@ sensor settings. Here the same is done with two robots of any MRCLAM-layout data
   - **raw** (the earlier replay, kept beside): the recorded commands as they are, with the
     equivalent white noise over 1 s windows fitted over each robot's whole recording (the
     scored window included);
+  - **truth_velocity** (a diagnostic, not a result: no robot has these velocities): the
+    ground truth's own forward speed and turn rate (Vicon central differences,
+    :func:`relloc.calibration.odometry.truth_velocity_dataset`) in place of the commands, the
+    identity response (no latency, lag or scale), and the equivalent white noise and its
+    inflation fitted exactly as for the calibrated version on the same calibration window
+    (the same :func:`_fitted_replay` and :func:`fit_noise_inflation`). It is the odometry
+    floor: what the same filters reach when the velocities are as good as the ground truth;
+    the gap to the calibrated version is the commands' error, measured by the turn-rate
+    residual (:func:`relloc.calibration.turn_rate.pair_turn_rate_residual`, attached to the
+    calibrated version);
 
   the windows are stated with each fit (``calibration_window``) and the scored window beside;
 * each Monte-Carlo draw adds fresh readings for the four Table-2 settings — four sensors of
@@ -70,7 +81,9 @@ from relloc.calibration.odometry import (
     calibrated_commands,
     fit_odometry_model,
     fit_odometry_noise,
+    truth_velocity_dataset,
 )
+from relloc.calibration.turn_rate import PairTurnRateResidual, pair_turn_rate_residual
 from relloc.calibration.window import CalibrationWindow, odometry_and_truth
 from relloc.core.recording import (
     GroundTruth,
@@ -119,9 +132,14 @@ BC_CASES: tuple[str, ...] = ("case2", "case4")
 TABLE_FILTERS: tuple[str, ...] = ("PLKF", "yaw bank")
 
 
+#: The odometry versions replayed (module docstring), in the order they are prepared.
+ODOMETRY_KINDS: tuple[str, ...] = ("calibrated", "raw", "truth_velocity")
+
+
 def replay_filters(case: str, odometry_kind: str = "calibrated") -> tuple[str, ...]:
-    """Filters replayed for a Table-2 case with ``odometry_kind`` odometry."""
-    if odometry_kind == "raw":
+    """Filters replayed for a Table-2 case with ``odometry_kind`` odometry (the raw and the
+    truth-velocity replays run those of Tables 3–4 only)."""
+    if odometry_kind != "calibrated":
         return TABLE_FILTERS
     return tuple(f for f in REPLAY_FILTERS if f != "BC-PLKF" or case in BC_CASES)
 
@@ -232,16 +250,49 @@ class InflationFit:
 
 
 @dataclass(frozen=True)
+class PairResponse:
+    """What the replay does to the pair's recorded velocities before the filters get them, and
+    where their noise is fitted: the latency ``τ`` (s), the first-order time constant ``T`` (s)
+    and the ``(s_v, s_ω)`` of the observer and of the observed robot
+    (:func:`relloc.calibration.odometry.calibrated_commands`), and the window the equivalent
+    white noise and its inflation are fitted on. The default response is the identity."""
+
+    window: CalibrationWindow
+    latency_s: float = 0.0
+    time_constant_s: float = 0.0
+    scales: tuple[tuple[float, float], tuple[float, float]] = ((1.0, 1.0), (1.0, 1.0))
+
+    @classmethod
+    def of_team(
+        cls, team: OdometryModelFit, ds: MrclamDataset, settings: ReplaySettings
+    ) -> PairResponse:
+        """The pair's part of a team fit (its calibration window, latency, lag and scales)."""
+        k = [ds.robot_ids.index(r) for r in (settings.observer, settings.observed)]
+        return cls(
+            window=team.calibration_window,
+            latency_s=team.latency_s,
+            time_constant_s=team.time_constant_s,
+            scales=(
+                (team.scale_v[k[0]], team.scale_w[k[0]]),
+                (team.scale_v[k[1]], team.scale_w[k[1]]),
+            ),
+        )
+
+
+@dataclass(frozen=True)
 class ReplayData:
     """The deterministic part of the replay, built once and shared by every draw.
 
     The pair ``robots = (observer, observed)`` on the window's grid ``t``: ``odometry`` held on
     the grid with the fitted noise σ, ``truth`` with the observed plane raised; ``valid`` marks
     the grid times outside ground-truth gaps. Each draw builds its :class:`Recording` from
-    these parts and its own readings (:meth:`recording`). ``odometry_kind`` is ``"calibrated"``
-    or ``"raw"`` (module docstring); ``calibration`` is the team fit of the calibrated version
-    (``None`` for the raw one), ``pair_scales`` the pair's ``(s_v, s_ω)`` from it and
-    ``inflation`` the factor its noise σ carries (:func:`fit_noise_inflation`).
+    these parts and its own readings (:meth:`recording`). ``odometry_kind`` is one of
+    :data:`ODOMETRY_KINDS` (module docstring); ``response`` what was done to the recorded
+    velocities (``None`` for the raw version), ``calibration`` the team fit behind it (the
+    calibrated version only), ``pair_scales`` the pair's ``(s_v, s_ω)`` and ``inflation`` the
+    factor its noise σ carries (:func:`fit_noise_inflation`); ``turn_rate`` the calibrated
+    commands' turn-rate residual on the calibration and the scored window
+    (:func:`relloc.calibration.turn_rate.pair_turn_rate_residual`; calibrated version only).
     """
 
     source: str
@@ -257,6 +308,8 @@ class ReplayData:
     calibration: OdometryModelFit | None = None
     pair_scales: tuple[tuple[float, float], ...] = ()
     inflation: InflationFit | None = None
+    response: PairResponse | None = None
+    turn_rate: PairTurnRateResidual | None = None
 
     @property
     def scored_window(self) -> CalibrationWindow:
@@ -319,24 +372,42 @@ def prepare_replays(
     executor: str | None = None,
     quiet: bool = False,
 ) -> dict[str, ReplayData]:
-    """``{"calibrated": …, "raw": …}``: the replay with calibrated and with raw odometry
-    (module docstring), from one load of the dataset; the calibrated noise inflation is fitted
-    with draws of ``seed`` scored after ``steady_state_s`` (:func:`fit_noise_inflation`)."""
+    """``{"calibrated": …, "raw": …, "truth_velocity": …}``: the replay with calibrated, raw
+    and ground-truth odometry (module docstring), from one load of the dataset; the noise
+    inflation of the calibrated and of the truth-velocity odometry is fitted with the same draws
+    of ``seed`` scored after ``steady_state_s`` (:func:`fit_noise_inflation`)."""
     ds = load_mrclam(settings.dataset)
     recording = to_recording(ds)
     raw = _raw_replay(settings, ds, recording)
-    calibrated = _calibrated_replay(settings, ds, recording, raw)
-    inflation = fit_noise_inflation(
-        settings,
+    window = calibration_window(ds, raw.scored_window)
+    team = fit_odometry_model(ds, window, integration_s=min(_noise_lengths(settings, window)))
+    truth_ds = truth_velocity_dataset(ds)
+    sources = {
+        "calibrated": (ds, recording, PairResponse.of_team(team, ds, settings)),
+        "truth_velocity": (truth_ds, to_recording(truth_ds), PairResponse(window)),
+    }
+    out = {"raw": raw}
+    for kind, (source, source_recording, response) in sources.items():
+        fitted = _fitted_replay(settings, source, source_recording, raw, response, kind)
+        inflation = fit_noise_inflation(
+            settings,
+            source,
+            source_recording,
+            fitted,
+            steady_state_s=steady_state_s,
+            seed=seed,
+            executor=executor,
+            quiet=quiet,
+        )
+        out[kind] = _inflated(fitted, inflation)
+    turn_rate = pair_turn_rate_residual(
         ds,
-        recording,
-        calibrated,
-        steady_state_s=steady_state_s,
-        seed=seed,
-        executor=executor,
-        quiet=quiet,
+        (settings.observer, settings.observed),
+        team,
+        {"calibration": window, "scored": raw.scored_window},
     )
-    return {"calibrated": _inflated(calibrated, inflation), "raw": raw}
+    out["calibrated"] = replace(out["calibrated"], calibration=team, turn_rate=turn_rate)
+    return {kind: out[kind] for kind in ODOMETRY_KINDS}
 
 
 def _pair_span(settings: ReplaySettings, recording: Recording) -> tuple[float, float]:
@@ -428,38 +499,50 @@ def calibration_window(ds: MrclamDataset, scored: CalibrationWindow) -> Calibrat
     return CalibrationWindow(scored.end_s, end, f"{ds.path} after the scored window")
 
 
-def _calibrated_replay(
-    settings: ReplaySettings, ds: MrclamDataset, recording: Recording, raw: ReplayData
-) -> ReplayData:
-    """``raw`` with the odometry calibrated on :func:`calibration_window` (module docstring),
-    its noise not yet inflated."""
-    window = calibration_window(ds, raw.scored_window)
+def _noise_lengths(settings: ReplaySettings, window: CalibrationWindow) -> list[float]:
+    """The ``calibration_noise_windows_s`` that fit twice into ``window``."""
     lengths = [w for w in settings.calibration_noise_windows_s if 2 * w <= window.duration_s]
     if not lengths:
         raise window.too_little(
             f"no noise window of {settings.calibration_noise_windows_s} s fits twice"
         )
-    team = fit_odometry_model(ds, window, integration_s=min(lengths))
-    fits, scales = {}, []
-    for label, subject in (("observer", settings.observer), ("observed", settings.observed)):
-        k = ds.robot_ids.index(subject)
-        s_v, s_w = team.scale_v[k], team.scale_w[k]
-        scales.append((s_v, s_w))
+    return lengths
+
+
+def _fitted_replay(
+    settings: ReplaySettings,
+    ds: MrclamDataset,
+    recording: Recording,
+    raw: ReplayData,
+    response: PairResponse,
+    kind: str,
+) -> ReplayData:
+    """``raw`` with the velocities of ``ds`` (its recorded commands, or those of
+    :func:`relloc.calibration.odometry.truth_velocity_dataset`) mapped by ``response`` and the
+    equivalent white noise left after it fitted on ``response.window`` (module docstring: the
+    largest σ_ω over the noise-window lengths), its noise not yet inflated."""
+    fits = {}
+    for label, subject, (s_v, s_w) in zip(
+        ("observer", "observed"),
+        (settings.observer, settings.observed),
+        response.scales,
+        strict=True,
+    ):
         candidates = [
             fit_odometry_noise(
                 ds.robot(subject),
-                window,
+                response.window,
                 rate_hz=settings.rate_hz,
                 window_s=length,
-                latency_s=team.latency_s,
+                latency_s=response.latency_s,
                 scale_v=s_v,
                 scale_w=s_w,
-                time_constant_s=team.time_constant_s,
+                time_constant_s=response.time_constant_s,
             )
-            for length in lengths
+            for length in _noise_lengths(settings, response.window)
         ]
         fits[label] = max(candidates, key=lambda f: f.sigma_w)
-    od_l, od_c = _calibrated_pair(settings, ds, recording, team)
+    od_l, od_c = _response_pair(settings, recording, response)
     return replace(
         raw,
         odometry=(
@@ -467,27 +550,28 @@ def _calibrated_replay(
             _held(od_c, raw.t, _sigma(fits["observed"]), f"{od_c.where} on the grid"),
         ),
         fits=fits,
-        odometry_kind="calibrated",
-        calibration=team,
-        pair_scales=tuple(scales),
+        odometry_kind=kind,
+        pair_scales=response.scales,
+        response=response,
     )
 
 
-def _calibrated_pair(
-    settings: ReplaySettings, ds: MrclamDataset, recording: Recording, team: OdometryModelFit
+def _response_pair(
+    settings: ReplaySettings, recording: Recording, response: PairResponse
 ) -> tuple[Odometry, Odometry]:
-    """The observer's and the observed robot's recorded odometry calibrated by ``team``
-    (:func:`relloc.calibration.odometry.calibrated_commands`)."""
+    """The observer's and the observed robot's odometry of ``recording`` mapped by
+    ``response`` (:func:`relloc.calibration.odometry.calibrated_commands`)."""
     out = []
-    for subject in (settings.observer, settings.observed):
-        k = ds.robot_ids.index(subject)
+    for subject, (s_v, s_w) in zip(
+        (settings.observer, settings.observed), response.scales, strict=True
+    ):
         out.append(
             calibrated_commands(
                 recording.odometry[recording.index(str(subject))],
-                team.latency_s,
-                team.scale_v[k],
-                team.scale_w[k],
-                team.time_constant_s,
+                response.latency_s,
+                s_v,
+                s_w,
+                response.time_constant_s,
             )
         )
     return out[0], out[1]
@@ -525,27 +609,28 @@ def fit_noise_inflation(
     settings: ReplaySettings,
     ds: MrclamDataset,
     recording: Recording,
-    calibrated: ReplayData,
+    fitted: ReplayData,
     *,
     steady_state_s: float,
     seed: int,
     executor: str | None = None,
     quiet: bool = False,
 ) -> InflationFit:
-    """The smallest factor ``k`` of ``settings.inflation_grid`` on the calibrated noise σ at
+    """The smallest factor ``k`` of ``settings.inflation_grid`` on the fitted noise σ at
     which the PLKF keeps its relative-yaw NEES ``(e_φ/σ_φ)²`` beyond χ²(1, 0.95) on at most
     ``inflation_target_percent`` of its updates after ``steady_state_s``, replayed on
-    :func:`calibration_stretches` of the calibrated replay's calibration window with
-    ``inflation_draws`` draws each (the same draws for every ``k``), pooled over the Table-2
-    settings, stretches and draws. Only the calibration window is replayed: the scored
-    window plays no part. Without such a factor, the grid's largest (``met`` false)."""
-    team = calibrated.calibration
-    if team is None:
-        raise ConfigError("fit_noise_inflation: needs the calibrated replay")
-    pair = _calibrated_pair(settings, ds, recording, team)
-    stretches = calibration_stretches(settings, recording, team.calibration_window)
+    :func:`calibration_stretches` of the response's window with ``inflation_draws`` draws
+    each (the same draws for every ``k``), pooled over the Table-2 settings, stretches and
+    draws; ``fitted`` is a replay of :func:`_fitted_replay` and ``ds``, ``recording`` the source
+    of its velocities. Only the calibration window is replayed: the scored window plays no
+    part. Without such a factor, the grid's largest (``met`` false)."""
+    response = fitted.response
+    if response is None:
+        raise ConfigError("fit_noise_inflation: needs a fitted (calibrated or truth) replay")
+    pair = _response_pair(settings, recording, response)
+    stretches = calibration_stretches(settings, recording, response.window)
     parts = [
-        _cut(settings, ds, recording, w.start_s, w.end_s, pair, calibrated.fits) for w in stretches
+        _cut(settings, ds, recording, w.start_s, w.end_s, pair, fitted.fits) for w in stretches
     ]
     n = len(parts) * settings.inflation_draws
     percents: list[float] = []
@@ -558,7 +643,10 @@ def fit_noise_inflation(
             seed,
             executor=executor,
             task_args=(inflated, settings, steady_state_s),
-            description=f"seed 000: MRCLAM noise inflation x{k:g} (calibration window)",
+            description=(
+                f"seed 000: MRCLAM noise inflation x{k:g}, {fitted.odometry_kind} odometry "
+                "(calibration window)"
+            ),
             quiet=quiet,
         )
         beyond, samples = sum(c[0] for c in counts), sum(c[1] for c in counts)
