@@ -24,7 +24,7 @@ from relloc.runtime.airground import (
     save_world,
     sense_body,
 )
-from relloc.runtime.messages import MessageRejected, encode
+from relloc.runtime.messages import SCHEMA_VERSION, MessageRejected, encode
 from relloc.runtime.transport import Incoming, TransportSettings
 from relloc.sim.airground import AirGroundScenario, AirGroundWorld, robot_names
 
@@ -114,7 +114,14 @@ def test_sense_and_cmd_round_trip_on_their_own_keys_only():
 def test_any_sense_body_is_accepted_or_rejected_with_a_reason(k, dt, fix, subject, position):
     body = _sense(_world(), 1) | {"k": k, "dt": dt, "fix_subject": subject}
     body |= {"fix": fix, "position": position}
-    raw = {"v": 3, "type": "sense", "sender": CLOCK_SENDER, "seq": 0, "t": 0.1, "wall_ns": 1}
+    raw = {
+        "v": SCHEMA_VERSION,
+        "type": "sense",
+        "sender": CLOCK_SENDER,
+        "seq": 0,
+        "t": 0.1,
+        "wall_ns": 1,
+    }
     raw |= {n: (v.tolist() if isinstance(v, np.ndarray) else v) for n, v in body.items()}
     payload = msgpack.packb(raw, use_bin_type=True)
     try:
@@ -152,6 +159,64 @@ def test_the_world_counts_stale_spoofed_and_foreign_commands_and_keeps_the_good_
         "wrong_kind": 1,
         "malformed": 1,
     }
+
+
+def test_a_robot_the_world_counts_ready_is_present_whichever_token_arrives_first():
+    """``ready`` and ``alive`` come through two liveliness subscribers in no set order: a
+    restarted robot whose ``ready`` is seen first is already among the robots whose command the
+    world waits for (its first tick is not stepped over with a zero command counted nowhere),
+    and a robot whose ``alive`` token left is not ready even if its ``ready`` token's departure
+    comes later (a restart is not taken as done on a dead process' token)."""
+    proc = WorldProcess(WorldSettings(team=TEAM, transport=TRANSPORT), _world())
+
+    def token(kind: str, robot: str, presence: str) -> None:
+        key = f"relloc/{TEAM}/{kind}/{robot}"
+        proc._handle(Incoming(key, b"", presence))  # type: ignore[arg-type]
+
+    token("ready", "R_2", "joined")
+    assert proc.roll.ready == proc.roll.present == {"R_2"}
+    token("alive", "R_2", "joined")
+    token("alive", "R_2", "left")  # killed
+    assert not proc.roll.ready and not proc.roll.present
+    token("ready", "R_2", "left")  # its ready token's departure, late
+    token("ready", "R_2", "joined")  # restarted
+    assert proc.roll.ready == proc.roll.present == {"R_2"}
+    token("ready", "R_2", "left")
+    assert proc.roll.present == {"R_2"} and not proc.roll.ready
+    token("alive", "intruder", "joined")
+    assert proc.roll.present == {"R_2"}
+
+
+def test_a_follower_builds_its_filter_before_it_joins_and_a_restarted_one_starts_broad():
+    """:meth:`FollowerRole.prepare` (called before the robot declares ready) builds the filter
+    of a start at tick 0 with its gate quantiles; the first tick keeps it, and a follower whose
+    first tick is a later one (restarted) replaces it with the broad-prior filter."""
+    from relloc.core.kalman import chi2_threshold
+    from relloc.core.recording import empty_measurements
+    from relloc.experiments.guler2023_team import role_of, run_seed, team_case
+    from relloc.runtime.airground import RESTART_SIGMAS, FollowerRole, Sensed
+
+    case = team_case("two_drones", 0.5)
+    seed = run_seed(0, "two_drones", 0)
+    chi2_threshold.cache_clear()
+    start = role_of(case, "R_1", seed)
+    assert isinstance(start, FollowerRole)
+    start.prepare()
+    assert start.agent is not None and chi2_threshold.cache_info().currsize == 3
+    prepared = start.agent
+    sensed = Sensed(0, 0.0, empty_measurements(), np.zeros(0), None)
+    start.act(sensed, Received())
+    assert start.agent is prepared and start.first_k == 0
+    np.testing.assert_array_equal(prepared.estimator.belief.cov, start.prior.cov)
+
+    restarted = role_of(case, "R_1", seed)
+    assert isinstance(restarted, FollowerRole)
+    restarted.prepare()
+    t = float(restarted.times[5])
+    restarted.act(Sensed(5, t, empty_measurements(), np.zeros(0), None), Received())
+    assert restarted.agent is not None and restarted.first_k == 5
+    belief = restarted.agent.estimator.belief
+    assert np.all(np.diag(belief.cov) > np.square(RESTART_SIGMAS) - 1e-9)
 
 
 def test_a_robot_rejects_a_sense_out_of_step_and_ignores_another_robots():

@@ -76,7 +76,7 @@ def test_round_trip_every_kind():
             "weights": [0.5, 0.5],
         },
     }
-    assert SCHEMA_VERSION == 3
+    assert SCHEMA_VERSION == 4
     for kind, body in bodies.items():
         sender = "clock" if kind in ("tick", "ctl") else "obs"
         msg = decode(encode(kind, sender, 7, 1.5, body), roster=ROSTER, key_sender=sender)
@@ -103,12 +103,26 @@ def _raw(**overrides):
     return msgpack.packb(payload, use_bin_type=True)
 
 
+def test_a_message_of_an_older_schema_is_refused_naming_what_changed_since():
+    """Version 4 added ``sync``, ``cmd`` and ``sense``: a version-3 process's messages are
+    refused, with an error that says which side is older and what it lacks."""
+    with pytest.raises(MessageRejected) as old:
+        decode(_raw(v=3), roster=ROSTER)
+    assert old.value.reason == "version"
+    assert "version 3 is older than this process' 4" in str(old.value)
+    assert "sync, cmd and sense" in str(old.value)
+    with pytest.raises(MessageRejected) as new:
+        decode(_raw(v=SCHEMA_VERSION + 1), roster=ROSTER)
+    assert "is newer than this process'" in str(new.value)
+
+
 @pytest.mark.parametrize(
     ("data", "reason"),
     [
         (b"\xc1\x00garbage", "malformed"),
         (msgpack.packb([1, 2, 3]), "malformed"),
         (_raw(v=99), "version"),
+        (_raw(v=3), "version"),
         (_raw(type="teleport"), "unknown_type"),
         (_raw(sender="mallory"), "unknown_sender"),
         (_raw(target="ghost"), "unknown_target"),

@@ -14,7 +14,7 @@ from relloc.cli import main
 from relloc.core.gaussian import Gaussian
 from relloc.experiments.sharma2013_team import AGREEMENT_TOLERANCE
 from relloc.experiments.team_sources import sharma_estimator, sharma_sim
-from relloc.runtime.messages import MessageRejected, decode, encode
+from relloc.runtime.messages import SCHEMA_VERSION, MessageRejected, decode, encode
 
 REJOIN_TOLERANCE = 1e-6
 """Largest |difference| of a restarted agent's belief entry from an agent that stayed up: after
@@ -96,7 +96,14 @@ def test_sync_messages_are_shape_checked():
     import msgpack
 
     for body, reason in bad:
-        payload = {"v": 3, "type": "sync", "sender": "1", "seq": 0, "t": 1.0, "wall_ns": 0}
+        payload = {
+            "v": SCHEMA_VERSION,
+            "type": "sync",
+            "sender": "1",
+            "seq": 0,
+            "t": 1.0,
+            "wall_ns": 0,
+        }
         payload |= {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in body.items()}
         with pytest.raises(MessageRejected) as exc:
             decode(msgpack.packb(payload), roster=roster)

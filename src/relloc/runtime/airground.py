@@ -7,6 +7,17 @@ motion and every sensor — and plays the clock. The **robot processes** run the
 drone its :class:`~relloc.sim.airground.DroneGuidance`, each follower its
 :class:`~relloc.sim.airground.FollowerAgent` (switching EKF and formation controller).
 
+Start-up. A robot process first prepares its role — everything it does once: a follower builds
+its filter, whose χ² gate quantiles are computed then (the first computation imports
+scipy.stats, about half a second of CPU) — and only then joins: it declares its subscribers,
+its ``alive`` token and, once it has seen the world's and every teammate's, its ``ready`` token
+(:func:`relloc.runtime.keys.ready_key`, as a node does for the clock). The world starts when
+every robot is ready, and resumes after a restart once the restarted robot is ready again (a
+robot counted ready is counted present: :class:`~relloc.runtime.transport.Roll`, so the
+restarted robot's first tick is awaited); so the world's wait for a command (``cmd_timeout_s``)
+covers one tick's work, never a robot's one-off set-up (which, under load, could take longer
+than the timeout).
+
 Per tick ``k = 0 … K`` (``t_k = k dt``; key expressions in :mod:`relloc.runtime.keys`):
 
 1. the world publishes ``sense(k)`` to every robot: the readings it took at ``t_k`` (a UGV's
@@ -74,7 +85,13 @@ from relloc.runtime.faults import FaultSettings, LinkEmulator, RobotEvent
 from relloc.runtime.messages import DEFAULT_MAX_BYTES, Message, MessageRejected, encode, est_bodies
 from relloc.runtime.shared_rows import rows_body, rows_from_body
 from relloc.runtime.teammates import SeenSequences
-from relloc.runtime.transport import Inbox, TransportSettings, declare_publisher, open_session
+from relloc.runtime.transport import (
+    Inbox,
+    Roll,
+    TransportSettings,
+    declare_publisher,
+    open_session,
+)
 from relloc.sim.airground import (
     AirGroundScenario,
     AirGroundWorld,
@@ -173,8 +190,7 @@ class WorldProcess:
         self.world = world
         self.roster = world.names
         self.report = WorldReport()
-        self.present: set[str] = set()
-        self.ready: set[str] = set()
+        self.roll = Roll(self.roster)
         self._cmds: dict[str, np.ndarray] = {}
         self._k = 0
         self._seq: Counter[str] = Counter()
@@ -187,12 +203,7 @@ class WorldProcess:
 
     def _handle(self, item: Any) -> None:
         if item.presence != "data":
-            token, member = keys.parse_presence_key(item.key)
-            if member not in self.roster:
-                return
-            joined = item.presence == "joined"
-            group = self.ready if token == "ready" else self.present
-            (group.add if joined else group.discard)(member)
+            self.roll.update(item)
             return
         try:
             msg = admit(item.key, item.payload, roster=self.roster)
@@ -224,13 +235,13 @@ class WorldProcess:
             token = session.liveliness().declare_token(keys.alive_key(s.team, CLOCK_SENDER))
             start = time.monotonic()
             everyone = set(self.roster)
-            if not self._wait(inbox, lambda: everyone <= self.ready, s.startup_timeout_s):
-                missing = sorted(everyone - self.ready)
+            if not self._wait(inbox, lambda: everyone <= self.roll.ready, s.startup_timeout_s):
+                missing = sorted(everyone - self.roll.ready)
                 raise RellocError(f"world: robots {missing} did not start within the timeout")
             self.report.startup_wall_s = time.monotonic() - start
             self._loop(inbox)
             self._publish("ctl", {"action": "end", "robot": ""}, self._t)
-            self._wait(inbox, lambda: not self.present, s.cmd_timeout_s)
+            self._wait(inbox, lambda: not self.roll.present, s.cmd_timeout_s)
             token.undeclare()
         finally:
             inbox.close()
@@ -265,19 +276,19 @@ class WorldProcess:
             self.report.ticks = k
             if world.done:
                 break
-            expected = set(self.present)
+            expected = set(self.roll.present)
 
             def all_in(e: set[str] = expected) -> bool:
-                return e & self.present <= set(self._cmds)
+                return e & self.roll.present <= set(self._cmds)
 
             if not self._wait(inbox, all_in, self.s.cmd_timeout_s):
-                for robot in sorted((expected & self.present) - set(self._cmds)):
+                for robot in sorted((expected & self.roll.present) - set(self._cmds)):
                     self.report.cmd_missing[robot] = self.report.cmd_missing.get(robot, 0) + 1
             u = np.zeros((len(self.roster), 4))
             for r, name in enumerate(self.roster):
                 if name in self._cmds:
                     u[r] = self._cmds[name]
-                elif name not in self.present:
+                elif name not in self.roll.present:
                     self.report.cmd_absent[name] = self.report.cmd_absent.get(name, 0) + 1
             world.step(u[:n_ugv][:, [0, 3]], u[n_ugv:, :2])
         self.report.wall_s = time.monotonic() - start
@@ -287,9 +298,9 @@ class WorldProcess:
         wall = time.monotonic()
         self._publish("ctl", {"action": action, "robot": event.robot}, self._t)
         if action == "kill":
-            ok = self._wait(inbox, lambda: event.robot not in self.present, 30.0)
+            ok = self._wait(inbox, lambda: event.robot not in self.roll.present, 30.0)
         else:
-            ok = self._wait(inbox, lambda: event.robot in self.ready, 60.0)
+            ok = self._wait(inbox, lambda: event.robot in self.roll.ready, 60.0)
         self.report.events.append(
             {
                 "action": action,
@@ -410,6 +421,9 @@ class LeaderRole:
     def __init__(self, sc: AirGroundScenario) -> None:
         self.sc = sc
 
+    def prepare(self) -> None:
+        """Nothing is done once."""
+
     def inputs(self, k: int, roster: tuple[str, ...]) -> list[tuple[str, str]]:
         return []
 
@@ -433,6 +447,9 @@ class DroneRole:
         self.drone = drone
         self.guidance: DroneGuidance | None = None
         self.held = (0.0, 0.0)
+
+    def prepare(self) -> None:
+        """Nothing is done once (the guidance is cheap, and a restarted drone's differs)."""
 
     def inputs(self, k: int, roster: tuple[str, ...]) -> list[tuple[str, str]]:
         """The leader's command of tick ``k`` (none at the last tick: nothing is commanded)."""
@@ -476,10 +493,18 @@ class FollowerRole:
         self.prior = prior
         self.agent: FollowerAgent | None = None
         self.recorder: Recorder | None = None
+        self.first_k: int | None = None
+        """The first tick this process acted on (0, or later for a restarted follower)."""
         self.times = tick_times(sc)
         self.roster = robot_names(sc)
         self.own_u = np.zeros(4)
         self.held_u: tuple[float, float] = (0.0, 0.0)
+
+    def prepare(self) -> None:
+        """Build the filter of a start at tick 0 (its gate quantiles with it): the one-off work
+        is done before the process declares ready. A follower restarted mid-run replaces it
+        with a broad-prior one at its first tick (:meth:`act`), then at a tick's cost."""
+        self.agent = self._start(0)
 
     def inputs(self, k: int, roster: tuple[str, ...]) -> list[tuple[str, str]]:
         """Every teammate's readings of tick ``k`` and the leader's command (none at the last
@@ -497,9 +522,11 @@ class FollowerRole:
         return agent
 
     def act(self, s: Sensed, heard: Received) -> np.ndarray | None:
-        if self.agent is None:
-            self.agent = self._start(s.k)
-        assert self.recorder is not None
+        if self.first_k is None:
+            self.first_k = s.k
+            if self.agent is None or s.k > 0:
+                self.agent = self._start(s.k)
+        assert self.agent is not None and self.recorder is not None
         if s.k >= 1:
             parts = []
             for r, name in enumerate(self.roster):
@@ -563,6 +590,7 @@ class RobotProcess:
     # ------------------------------------------------------------------ main loop
     def run(self) -> dict[str, int]:
         s = self.s
+        self.role.prepare()  # before the process joins: ready means able to act at a tick's cost
         session = open_session(s.transport)
         inbox = Inbox(max_message_bytes=s.max_bytes)
         self._session = session

@@ -36,7 +36,13 @@ from relloc.runtime import keys
 from relloc.runtime.admission import CLOCK_SENDER, admit
 from relloc.runtime.faults import RobotEvent
 from relloc.runtime.messages import DEFAULT_MAX_BYTES, MessageRejected, encode
-from relloc.runtime.transport import Inbox, TransportSettings, declare_publisher, open_session
+from relloc.runtime.transport import (
+    Inbox,
+    Roll,
+    TransportSettings,
+    declare_publisher,
+    open_session,
+)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -99,8 +105,7 @@ class Clock:
     def __init__(self, settings: ClockSettings) -> None:
         self.s = settings
         self.report = ClockReport()
-        self.present: set[str] = set()
-        self.ready: set[str] = set()
+        self.roll = Roll(settings.roster)
         self._acks: set[str] = set()
         self._seq = 0
         self._t = 0.0
@@ -111,18 +116,11 @@ class Clock:
 
     def _handle(self, item: Any, waiting_k: int | None) -> None:
         if item.presence != "data":
-            token, member = keys.parse_presence_key(item.key)
-            if member not in self.s.roster:
-                return
-            joined = item.presence == "joined"
-            if token == "ready":
-                (self.ready.add if joined else self.ready.discard)(member)
-            elif joined:
-                self.present.add(member)
-                self.report.arrivals.append({"robot": member, "t": self._t})
-            else:
-                self.present.discard(member)
-                self.report.departures.append({"robot": member, "t": self._t})
+            change = self.roll.update(item)
+            if change is not None and change[0] == "alive":
+                _, member, joined = change
+                record = self.report.arrivals if joined else self.report.departures
+                record.append({"robot": member, "t": self._t})
             return
         try:
             msg = admit(item.key, item.payload, roster=self.s.roster)
@@ -150,13 +148,15 @@ class Clock:
             token = session.liveliness().declare_token(keys.alive_key(s.team, "clock"))
             start = time.monotonic()
             everyone = set(s.roster)
-            if not self._wait(inbox, lambda: everyone <= self.ready, s.startup_timeout_s, None):
-                missing = sorted(everyone - self.ready)
+            if not self._wait(
+                inbox, lambda: everyone <= self.roll.ready, s.startup_timeout_s, None
+            ):
+                missing = sorted(everyone - self.roll.ready)
                 raise RellocError(f"clock: robots {missing} did not start within the timeout")
             self.report.startup_wall_s = time.monotonic() - start
             self._loop(inbox, tick_pub, ctl_pub)
             self._publish(ctl_pub, "ctl", {"action": "end", "robot": ""})
-            self._wait(inbox, lambda: not self.present, s.ack_timeout_s, None)
+            self._wait(inbox, lambda: not self.roll.present, s.ack_timeout_s, None)
             token.undeclare()
         finally:
             inbox.close()
@@ -182,13 +182,13 @@ class Clock:
                 if lag < 0:
                     time.sleep(-lag)
             self._acks = set()
-            expected = set(self.present)
+            expected = set(self.roll.present)
             self._publish(tick_pub, "tick", {"k": k, "n": s.n_ticks, "dt": s.tick_s})
             acked = self._wait(
-                inbox, lambda e=expected: e & self.present <= self._acks, s.ack_timeout_s, k
+                inbox, lambda e=expected: e & self.roll.present <= self._acks, s.ack_timeout_s, k
             )
             if not acked:
-                for robot in sorted((expected & self.present) - self._acks):
+                for robot in sorted((expected & self.roll.present) - self._acks):
                     self.report.ack_timeouts[robot] = self.report.ack_timeouts.get(robot, 0) + 1
             self.report.ticks = k
         self.report.wall_s = time.monotonic() - start
@@ -197,9 +197,9 @@ class Clock:
         wall = time.monotonic()
         self._publish(ctl_pub, "ctl", {"action": action, "robot": event.robot})
         if action == "kill":
-            ok = self._wait(inbox, lambda: event.robot not in self.present, 30.0, None)
+            ok = self._wait(inbox, lambda: event.robot not in self.roll.present, 30.0, None)
         else:
-            ok = self._wait(inbox, lambda: event.robot in self.ready, 60.0, None)
+            ok = self._wait(inbox, lambda: event.robot in self.roll.ready, 60.0, None)
         self.report.events.append(
             {
                 "action": action,

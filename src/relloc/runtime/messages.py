@@ -76,11 +76,15 @@ from relloc.core.estimates import BeliefSeries, Estimates, SeriesKey, UpdateSeri
 from relloc.errors import DataError
 from relloc.pipeline.frames import FRAMES
 
-SCHEMA_VERSION = 3
-"""Version 2: ``est`` carries ``frame``, ``track`` and the NIS degrees of freedom
-``update_dofs``; version 3: ``est`` carries the beliefs' ``info`` in frames of any dimension,
-and ``rows`` and ``mail`` exist (``cmd`` and ``sense`` were added without a version change:
-no existing kind changed)."""
+SCHEMA_VERSION = 4
+"""The wire layout's version (what each one introduced: :data:`VERSION_CHANGES`). A message of
+any other version is rejected (``version``): every process of a team speaks one version."""
+VERSION_CHANGES = {
+    2: "est carries frame, track and the NIS degrees of freedom update_dofs",
+    3: "est carries the beliefs' info in frames of any dimension; rows and mail exist",
+    4: "sync, cmd and sense exist",
+}
+"""What each schema version introduced over the one before."""
 DEFAULT_MAX_BYTES = 65_536
 """Default size limit of one encoded message (bytes); larger payloads are rejected unread."""
 
@@ -107,6 +111,23 @@ ROWS: dict[str, str | Shape] = {
     "sigmas": (-1,),
 }
 """Fields of a table of readings (``rows``; also inside ``sense``), one entry per row."""
+
+
+def version_mismatch(v: int) -> str:
+    """Why a message of schema version ``v`` (not :data:`SCHEMA_VERSION`) is refused: which
+    side is older and what the versions between them changed."""
+    if v < SCHEMA_VERSION:
+        since = "; ".join(f"v{n}: {what}" for n, what in VERSION_CHANGES.items() if n > v)
+        return (
+            f"schema version {v} is older than this process' {SCHEMA_VERSION} (since then "
+            f"{since}): run every process of the team from the same relloc"
+        )
+    return (
+        f"schema version {v} is newer than this process' {SCHEMA_VERSION}: run every process "
+        "of the team from the same relloc"
+    )
+
+
 SCHEMA: dict[str, dict[str, str | Shape]] = {
     "odom": {"stamps": (-1,), "u": (-1, 4)},
     "meas": {"stamps": (-1,), "targets": "strlist", "z": (-1, 3), "sigma": (-1, 3)},
@@ -259,9 +280,7 @@ def decode(
             raise MessageRejected("malformed", f"header field {name!r} missing")
         _check_scalar(payload[name], kind_name, name)
     if payload["v"] != SCHEMA_VERSION:
-        raise MessageRejected(
-            "version", f"schema version {payload['v']} (this node speaks {SCHEMA_VERSION})"
-        )
+        raise MessageRejected("version", version_mismatch(payload["v"]))
     kind = payload["type"]
     if kind not in SCHEMA:
         raise MessageRejected("unknown_type", f"message type {kind!r}")

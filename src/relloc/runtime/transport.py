@@ -21,7 +21,8 @@ record and counts it (``overflow``) instead of blocking Zenoh or growing without
 Presence: each member declares a liveliness token ``relloc/<team>/alive/<id>``; a liveliness
 subscriber with ``history=True`` reports the members already there and then every appearance
 and disappearance (a killed process' token vanishes when its transport closes or its lease
-expires). No home-made discovery.
+expires). No home-made discovery. A process that drives a team (the clock, the air-ground
+world) keeps who is present and who is ready in one :class:`Roll`.
 """
 
 from __future__ import annotations
@@ -30,12 +31,13 @@ import json
 import queue
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
 from relloc.errors import ConfigError, require
+from relloc.runtime import keys
 
 Mode = Literal["peer", "client", "router"]
 DEFAULT_LISTEN = "tcp/127.0.0.1:0"
@@ -266,3 +268,39 @@ class Inbox:
         for handle in self._handles:
             handle.undeclare()
         self._handles.clear()
+
+
+class Roll:
+    """Who of a roster is *present* (holds its ``alive`` token) and who is *ready* (holds its
+    ``ready`` token, :func:`relloc.runtime.keys.ready_key`), from the presence records of
+    :meth:`Inbox.watch_presence`.
+
+    A member declares ``ready`` after ``alive``, but the two tokens reach a watcher through two
+    liveliness subscribers with no order between them. So ``ready ⊆ present`` is kept: a
+    ``ready`` that arrives first makes its member present too, and an ``alive`` that leaves
+    takes the member's readiness with it (its ``ready`` token died with it). A driver that
+    resumes once a restarted member is ready therefore finds it among the present members its
+    barrier waits for — the member's first tick is awaited, not stepped over.
+    """
+
+    def __init__(self, roster: Sequence[str]) -> None:
+        self.roster = frozenset(roster)
+        self.present: set[str] = set()
+        self.ready: set[str] = set()
+
+    def update(self, item: Incoming) -> tuple[str, str, bool] | None:
+        """Apply one presence record: ``(token kind, member, joined)``, or None for a member
+        off the roster (ignored)."""
+        token, member = keys.parse_presence_key(item.key)
+        if member not in self.roster:
+            return None
+        joined = item.presence == "joined"
+        if joined:
+            self.present.add(member)
+            if token == "ready":
+                self.ready.add(member)
+        else:
+            self.ready.discard(member)
+            if token != "ready":
+                self.present.discard(member)
+        return token, member, joined
