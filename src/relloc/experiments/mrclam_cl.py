@@ -15,8 +15,8 @@ Modes × anchors (``cases`` keys ``<mode>/<anchors>``):
   are one run), ``bearing`` (bearings only), ``range_bearing`` (ranges and bearings);
 - anchors: ``none`` (robot→robot detections only), ``2_landmarks`` (plus the two most-detected
   landmarks of different clusters), ``all_landmarks`` (all landmarks), ``gps_robot1``
-  (robot→robot detections plus robot 1's ground-truth pose with N(0, diag(0.1 m, 0.1 m,
-  0.03 rad)²) noise at 1 Hz while its ground truth lasts).
+  (robot→robot detections plus the first robot's — robot 1 on run 6 — ground-truth pose with
+  N(0, diag(0.1 m, 0.1 m, 0.03 rad)²) noise at 1 Hz while its ground truth lasts).
 
 Error models, fitted by :mod:`relloc.calibration` on one side of the same run and checked on
 the other (``heldout`` entries). ``--calibration-window``
@@ -706,7 +706,8 @@ def _report(summary: dict[str, Any], figures: list[tuple[str, str]]) -> str:
     parts = [
         "# MRCLAM cooperative localization (seed 001 EIF on real data)",
         f"Dataset `{summary['dataset']}`, robots {summary['robots']}, seed {summary['seed']} (only "
-        "robot 1's GPS noise is random). Regenerate: `relloc reproduce mrclam-cl --out DIR "
+        f"the GPS noise of robot {summary['robots'][0]}, the first, is random). Regenerate: "
+        f"`relloc reproduce mrclam-cl --out DIR --dataset {summary['dataset']} "
         f"--seed {summary['seed']} --calibration-window {summary['calibration_window_choice']}`.",
         "## Targets (all landmarks), judged on the held-out window",
         f"Scored on [{held['start_s']:.0f}, {held['end_s']:.0f}] s, the part of the run outside "
