@@ -11,6 +11,7 @@ from relloc.calibration.window import (
     leading_fraction,
     odometry_and_truth,
     spanning,
+    split_span,
 )
 from relloc.datasets.mrclam import GroundTruth, Odometry
 from relloc.errors import ConfigError, DataError
@@ -65,3 +66,46 @@ def test_odometry_and_truth_is_where_a_robot_has_both(synthetic):
     empty = Odometry(t=np.zeros(0), v=np.zeros(0), omega=np.zeros(0))
     with pytest.raises(DataError, match="robot 1 lacks odometry"):
         odometry_and_truth(synthetic.robot(1, gt, empty), "run6")
+
+
+def test_split_span_fits_on_one_side_and_scores_on_the_other():
+    assert split_span("first-half", 10.0, 30.0, "r") == (
+        CalibrationWindow(10.0, 20.0, "r"),
+        CalibrationWindow(20.0, 30.0, "r"),
+    )
+    assert split_span("second-half", 10.0, 30.0, "r") == (
+        CalibrationWindow(20.0, 30.0, "r"),
+        CalibrationWindow(10.0, 20.0, "r"),
+    )
+    assert split_span(":12.5", 10.0, 30.0, "r") == (
+        CalibrationWindow(10.0, 12.5, "r"),
+        CalibrationWindow(12.5, 30.0, "r"),
+    )
+    assert split_span("25:", 10.0, 30.0, "r") == (
+        CalibrationWindow(25.0, 30.0, "r"),
+        CalibrationWindow(10.0, 25.0, "r"),
+    )
+    # the default is the first half, the same window leading_fraction gives
+    assert split_span("first-half", 0.015, 899.5, "r")[0] == leading_fraction(
+        0.015, 899.5, 0.5, "r"
+    )
+
+
+@pytest.mark.parametrize(
+    ("spec", "match"),
+    [
+        ("middle", "expected one of first-half, second-half"),
+        ("5:20", "expected one of"),
+        (":", "expected one of"),
+        ("12", "expected one of"),
+        (":abc", "'abc' is not a time"),
+        ("nan:", "strictly inside"),
+        (":10", "strictly inside"),
+        ("30:", "strictly inside"),
+        (":45", r"strictly inside the run's span \[10.00, 30.00\] s of r"),
+    ],
+)
+def test_split_span_refuses_bad_values_naming_the_flag(spec, match):
+    with pytest.raises(ConfigError, match=match) as err:
+        split_span(spec, 10.0, 30.0, "r", flag="--calibration-window")
+    assert str(err.value).startswith(f"--calibration-window {spec!r}")

@@ -96,6 +96,35 @@ def test_odometry_model_recovers_latency_scales_and_noise_rate(synthetic):
     assert set(fit.to_dict()) >= {"latency_s", "scale_v", "q_v0", "calibration_window"}
 
 
+def test_rates_over_long_windows_of_a_turning_robot_are_the_true_rates(synthetic):
+    """Windows of 8 s of a robot turning at up to 0.5 rad/s: it turns up to 4 rad in one, so the
+    chord between a window's ends falls well short of its path and the wrapped end-to-end
+    heading difference is off by 2π; the path length and total turn along the ground truth are
+    exact, and the fitted rates are the white input noise's."""
+    rng = np.random.default_rng(3)
+    q_v, q_w = 1e-4, 4e-4  # variance rates (m²/s, rad²/s) of the white input noise
+    dt = 0.01
+    robots = [
+        synthetic.commanded_robot(
+            subject,
+            rng,
+            duration=600.0,
+            sigma_v=np.sqrt(q_v / dt),
+            sigma_w=np.sqrt(q_w / dt),
+            dt=dt,
+            command_period=8.0,
+        )
+        for subject in (1, 2, 3)
+    ]
+    fit = fit_odometry_model(
+        synthetic.dataset(robots), CalibrationWindow(0.0, 600.0, "synthetic"), integration_s=8.0
+    )
+    rate_v = fit.q_v0 + fit.k_v * 0.25
+    rate_w = fit.q_w0 + fit.k_w * 0.25 + fit.k_wv * 0.25
+    assert rate_v == pytest.approx(q_v, rel=0.3)
+    assert rate_w == pytest.approx(q_w, rel=0.3)
+
+
 def test_odometry_model_recovers_a_first_order_lag(synthetic):
     """A robot that follows its delayed commands through a 0.2 s lag: the fit finds the delay,
     the lag and the scales of the steady motion (a pure delay would shrink the scales)."""

@@ -71,6 +71,62 @@ def test_mrclam_cl_cli_on_a_synthetic_mrclam_folder(
     assert "judged on the held-out window" in (out / "report.md").read_text()
 
 
+def test_mrclam_cl_calibrated_on_the_second_half_scores_the_first(synthetic_mrclam, tmp_path):
+    out = tmp_path / "out"
+    args = ["reproduce", "mrclam-cl", "--out", str(out), "--dataset", str(synthetic_mrclam)]
+    assert (
+        main([*args, "--executor", "serial", "--quiet", "--calibration-window", "second-half"]) == 0
+    )
+    summary = json.loads((out / "summary.json").read_text())
+    held, fitted = summary["scored_on"], summary["fit"]["calibration_window"]
+    assert summary["calibration_window_choice"] == "second-half"
+    assert held["end_s"] == fitted["start_s"] and held["start_s"] < held["end_s"]
+    assert fitted["end_s"] > fitted["start_s"]
+    report = (out / "report.md").read_text()
+    assert f"Scored on [{held['start_s']:.0f}, {held['end_s']:.0f}] s" in report
+    assert "--calibration-window second-half" in report
+    for mode in ("range_bearing", "bearing"):
+        case = summary["cases"][f"{mode}/all_landmarks"]
+        assert np.isfinite(case["heldout"]["pos_rmse_m"])
+        # the held-out figure is over the first half only, so it differs from the whole run's
+        assert case["heldout"]["pos_rmse_m"] != case["pos_rmse_m"]["mean"]
+
+
+def test_mrclam_cl_bad_calibration_window_is_a_config_error(synthetic_mrclam, tmp_path, capsys):
+    args = ["reproduce", "mrclam-cl", "--out", str(tmp_path / "o"), "--dataset"]
+    code = main([*args, str(synthetic_mrclam), "--quiet", "--calibration-window", "500:"])
+    assert code == 2
+    err = capsys.readouterr().err
+    assert "--calibration-window '500:'" in err and "strictly inside" in err
+
+
+@pytest.mark.parametrize("split", ["first-half", "second-half"])
+def test_mrclam_cl_on_a_cut_of_run6_states_its_windows(mrclam_run6_cut, tmp_path, split):
+    """Another run of the same layout: three of run 6's robots, its first 120 s."""
+    folder = mrclam_run6_cut(tmp_path / "cut", robots=(2, 4, 5), keep_s=120.0)
+    out = tmp_path / "out"
+    args = ["reproduce", "mrclam-cl", "--out", str(out), "--dataset", str(folder)]
+    assert main([*args, "--executor", "serial", "--quiet", "--calibration-window", split]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["robots"] == [2, 4, 5]
+    held, fitted = summary["scored_on"], summary["fit"]["calibration_window"]
+    assert (
+        0.0 <= min(held["start_s"], fitted["start_s"])
+        and max(held["end_s"], fitted["end_s"]) <= 120.5
+    )
+    cut_at = fitted["end_s"] if split == "first-half" else fitted["start_s"]
+    assert cut_at == pytest.approx(60.0, abs=1.0)
+    assert (held["start_s"] if split == "first-half" else held["end_s"]) == cut_at
+    for case in summary["cases"].values():
+        assert set(case["pos_rmse_m"]) == {"2", "4", "5", "mean"}
+        assert all(np.isfinite(v) for v in case["heldout"].values())
+    for target in summary["targets"].values():
+        assert np.isfinite(target["pos_rmse_m"]) and np.isfinite(target["nees_pct_beyond"])
+    report = (out / "report.md").read_text()
+    assert f"Scored on [{held['start_s']:.0f}, {held['end_s']:.0f}] s" in report
+    assert f"calibration window [{fitted['start_s']:.0f}, {fitted['end_s']:.0f}] s" in report
+
+
 def test_mrclam_missing_file_is_a_data_error(synthetic_mrclam, tmp_path, capsys):
     broken = tmp_path / "broken"
     broken.mkdir()

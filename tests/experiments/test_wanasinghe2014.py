@@ -17,7 +17,6 @@ import pytest
 
 from relloc.calibration.odometry import ground_truth_velocities
 from relloc.datasets.mrclam import load_mrclam
-from relloc.datasets.paths import default_mrclam_dataset
 from relloc.errors import ConfigError, DataError
 from relloc.experiments.registry import ReproduceArgs
 from relloc.experiments.wanasinghe2014 import (
@@ -41,45 +40,17 @@ from relloc.experiments.wanasinghe2014_sim import SimSettings, team_task
 from relloc.models.measurement import range_bearing
 from relloc.sim.scenario import default_scenario
 
-KEEP_SECONDS = 45.0
 
-
-def _truncated_copy(
-    src: Path, dst: Path, robots: tuple[int, ...] = (1, 2, 3), keep_s: float = KEEP_SECONDS
-) -> Path:
-    """Barcodes, landmarks and the first ``keep_s`` seconds of three robots, same file names."""
-    dst.mkdir()
-    for name in ("Barcodes.dat", "Landmark_Groundtruth.dat"):
-        (dst / name).write_text((src / name).read_text())
-    first = None
-    for n in robots:
-        for kind in ("Groundtruth", "Odometry", "Measurement"):
-            lines = (src / f"Robot{n}_{kind}.dat").read_text().splitlines()
-            header = [ln for ln in lines if ln.startswith("#")]
-            rows = [ln for ln in lines if ln.strip() and not ln.startswith("#")]
-            if first is None:
-                first = float(rows[0].split()[0])
-            kept = [ln for ln in rows if float(ln.split()[0]) < first + keep_s]
-            (dst / f"Robot{n}_{kind}.dat").write_text("\n".join(header + kept) + "\n")
-    return dst
+@pytest.fixture(scope="module")
+def small_dataset(tmp_path_factory: pytest.TempPathFactory, mrclam_run6_cut) -> Path:
+    """Barcodes, landmarks and the first 45 s of robots 1-3 of run 6."""
+    return mrclam_run6_cut(tmp_path_factory.mktemp("mrclam") / "MRCLAM_short")
 
 
 @pytest.fixture(scope="module")
-def small_dataset(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    src = default_mrclam_dataset()
-    if not (src / "Barcodes.dat").is_file():
-        pytest.skip(f"MRCLAM run 6 not found at {src} (shared data absent)")
-    return _truncated_copy(src, tmp_path_factory.mktemp("mrclam") / "MRCLAM_short")
-
-
-@pytest.fixture(scope="module")
-def medium_dataset(tmp_path_factory: pytest.TempPathFactory) -> Path:
+def medium_dataset(tmp_path_factory: pytest.TempPathFactory, mrclam_run6_cut) -> Path:
     """The first 200 s: a 60 s scored window and the rest to calibrate on."""
-    src = default_mrclam_dataset()
-    if not (src / "Barcodes.dat").is_file():
-        pytest.skip(f"MRCLAM run 6 not found at {src} (shared data absent)")
-    dst = tmp_path_factory.mktemp("mrclam") / "MRCLAM_200s"
-    return _truncated_copy(src, dst, keep_s=200.0)
+    return mrclam_run6_cut(tmp_path_factory.mktemp("mrclam") / "MRCLAM_200s", keep_s=200.0)
 
 
 def _small_config(dataset: Path) -> Wanasinghe2014Config:

@@ -19,9 +19,15 @@ forward speed and turn rate by central differences (:func:`ground_truth_velociti
 2. *Scales* ``s_v, s_ω`` per robot: ``s = m·c / c·c`` at that ``(τ, T)`` (1 for a robot with
    no samples in the window).
 3. *Variance rates*: the calibrated commands are integrated over consecutive windows of
-   ``integration_s = W`` seconds and compared with the ground-truth displacement (no
-   differentiation noise): ``D_v = Δs_fwd − Σ s_v c_v dt``, ``D_ω = Δθ − Σ s_ω c_ω dt`` (``c``
-   the modelled command ``c_τ,T``).
+   ``integration_s = W`` seconds and compared with the ground truth's path over the window:
+   ``D_v = s_path − Σ s_v c_v dt``, ``D_ω = Δθ − Σ s_ω c_ω dt`` (``c`` the modelled command
+   ``c_τ,T``), with ``s_path = Σ_k (cos θ̄_k Δx_k + sin θ̄_k Δy_k)`` the forward components of the
+   ``GRID_DT_S`` steps of the ground truth at their mid headings ``θ̄_k = θ_k + Δθ_k/2`` and
+   ``Δθ = Σ_k wrap(θ_{k+1} − θ_k)`` the total turn (both sums telescope, so the ground truth's
+   noise is not amplified). Both are exact however far the robot turns within a window; the
+   end-to-end chord would fall short of the path by ``≈ s Δθ²/24`` (a deterministic error
+   that grows with ``W`` and would be fitted as noise) and a wrapped end-to-end heading
+   difference is off by 2π once the robot turns more than π.
    White input noise of variance rate ``q`` accumulates ``E[D²] = q W``, and the rates are
    modelled as ``q_v = q_v0 + k_v |v|``, ``q_ω = q_ω0 + k_ω |ω| + k_ωv |v|`` (mean |command| over
    the window), fitted by non-negative least squares on ``D²/W`` (rates cannot be negative).
@@ -268,23 +274,25 @@ class _RateRows:
 def _rate_rows(
     s: _RobotSamples, tau: float, lag: float, sv: float, sw: float, integration_s: float
 ) -> _RateRows:
-    """Windowed integrated errors of the calibrated commands against the ground-truth
-    displacement over contiguous, valid windows of ``integration_s`` (module doc, step 3)."""
+    """Windowed integrated errors of the calibrated commands against the ground truth's path
+    length and total turn over contiguous, valid windows of ``integration_s`` (module doc,
+    step 3)."""
     steps = max(round(integration_s / GRID_DT_S), 1)
     n_win = s.t.size // steps
     tw = s.t[: n_win * steps].reshape(n_win, steps)
     contiguous = np.isclose(tw[:, -1] - tw[:, 0], (steps - 1) * GRID_DT_S)
-    t0, t1 = tw[:, 0], tw[:, -1] + GRID_DT_S
-    g0, g1 = s.robot.groundtruth.at(t0), s.robot.groundtruth.at(t1)
-    ok = contiguous & g0.valid & g1.valid
+    edges = np.concatenate([tw, tw[:, -1:] + GRID_DT_S], axis=1)
+    g = s.robot.groundtruth.at(edges.reshape(-1))
+    x, y, theta = (np.reshape(a, (n_win, steps + 1)) for a in (g.x, g.y, g.theta))
+    ok = contiguous & g.valid.reshape(n_win, steps + 1).all(axis=1)
     vcw, wcw = command_response(s.robot.odometry.at, tw.reshape(-1), tau, lag)
     vcw = sv * vcw.reshape(n_win, steps)
     wcw = sw * wcw.reshape(n_win, steps)
-    dtheta = np.asarray(wrap_angle(g1.theta - g0.theta))
-    mid = g0.theta + 0.5 * dtheta
-    fwd = np.cos(mid) * (g1.x - g0.x) + np.sin(mid) * (g1.y - g0.y)
-    d_v = fwd - vcw.sum(axis=1) * GRID_DT_S
-    d_w = dtheta - wcw.sum(axis=1) * GRID_DT_S
+    turns = np.asarray(wrap_angle(np.diff(theta, axis=1)))
+    mid = theta[:, :-1] + 0.5 * turns
+    path = np.sum(np.cos(mid) * np.diff(x, axis=1) + np.sin(mid) * np.diff(y, axis=1), axis=1)
+    d_v = path - vcw.sum(axis=1) * GRID_DT_S
+    d_w = turns.sum(axis=1) - wcw.sum(axis=1) * GRID_DT_S
     speed, turn = np.abs(vcw).mean(axis=1), np.abs(wcw).mean(axis=1)
     W = GRID_DT_S * steps
     return _RateRows(

@@ -11,8 +11,11 @@ on a time grid use grid points inside it.
 How the experiments choose their windows (one function each, so the choice reads as a
 sentence where it is made):
 
-- :func:`leading_fraction` — the first ``fraction`` of a span (mrclam-cl: the first half of
-  the run; the second half is the held-out check);
+- :func:`leading_fraction` — the first ``fraction`` of a span;
+- :func:`split_span` — a span cut in two at one instant, one side to fit on and the other
+  to score on, chosen by a user's ``first-half`` / ``second-half`` / ``:T`` / ``T:``
+  (mrclam-cl's ``--calibration-window``; by default the first half of the run is fitted on and
+  the second half is the held-out check);
 - :func:`following` — ``length_s`` seconds from a start (mrclam-association: the first
   minute after every robot has started moving; the evaluation starts where it ends);
 - :func:`spanning` — from the first to the last time of a recording (a separate calibration
@@ -88,6 +91,50 @@ def leading_fraction(
     if not 0.0 < fraction <= 1.0:
         raise ConfigError(f"leading_fraction: fraction must be in (0, 1], got {fraction}")
     return CalibrationWindow(start_s, start_s + fraction * (end_s - start_s), source)
+
+
+#: The named choices of :func:`split_span` (the first is the default).
+SPLIT_CHOICES = ("first-half", "second-half")
+
+
+def split_span(
+    spec: str, start_s: float, end_s: float, source: str, flag: str = "--calibration-window"
+) -> tuple[CalibrationWindow, CalibrationWindow]:
+    """``(fitted on, scored on)``: the span ``[start_s, end_s]`` cut at one instant ``c``.
+
+    ``spec`` (as a user types it; ``flag`` names it in errors):
+
+    - ``first-half``: ``c = start_s + (end_s − start_s)/2``, fit on ``[start_s, c]``, score
+      ``[c, end_s]``;
+    - ``second-half``: the same ``c``, fit on ``[c, end_s]``, score ``[start_s, c]``;
+    - ``:T``: ``c = T``, fit on ``[start_s, T]``, score ``[T, end_s]``;
+    - ``T:``: ``c = T``, fit on ``[T, end_s]``, score ``[start_s, T]``;
+
+    ``T`` in seconds on the recording's clock (the one the summaries state windows in), strictly
+    inside the span. Anything else is a :class:`ConfigError` naming ``flag``."""
+    if spec in SPLIT_CHOICES:
+        cut, fit_first = start_s + 0.5 * (end_s - start_s), spec == "first-half"
+    else:
+        head, colon, tail = spec.partition(":")
+        if not colon or bool(head.strip()) == bool(tail.strip()):
+            raise ConfigError(
+                f"{flag} {spec!r}: expected one of {', '.join(SPLIT_CHOICES)}, ':T' (fit up to "
+                "T s, score after) or 'T:' (fit from T s, score before)"
+            )
+        try:
+            cut = float(head or tail)
+        except ValueError:
+            raise ConfigError(
+                f"{flag} {spec!r}: {head or tail!r} is not a time in seconds"
+            ) from None
+        fit_first = not head.strip()
+        if not (math.isfinite(cut) and start_s < cut < end_s):
+            raise ConfigError(
+                f"{flag} {spec!r}: the cut must lie strictly inside the run's span "
+                f"[{start_s:.2f}, {end_s:.2f}] s of {source}"
+            )
+    before, after = CalibrationWindow(start_s, cut, source), CalibrationWindow(cut, end_s, source)
+    return (before, after) if fit_first else (after, before)
 
 
 def following(start_s: float, length_s: float, source: str) -> CalibrationWindow:

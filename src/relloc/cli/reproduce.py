@@ -1,5 +1,6 @@
 """``relloc reproduce NAME --out DIR [--runs N] [--seed S] [--dataset PATH] [--executor E]
-[--mcap FILE] [--tum DIR]`` (the last two: one representative run's estimates, where the
+[--calibration-window SPLIT] [--mcap FILE] [--tum DIR]`` (``--calibration-window``: mrclam-cl's
+calibration and scoring windows; the last two: one representative run's estimates, where the
 experiment states one — :func:`relloc.experiments.registry.exported_run`).
 
 Prints the seed and run counts, the report's ours-vs-paper tables laid out for the terminal
@@ -40,6 +41,13 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         default=None,
         help="another bag of the same hardware to calibrate on",
     )
+    p.add_argument(
+        "--calibration-window",
+        default=None,
+        metavar="SPLIT",
+        help="mrclam-cl: fit the error models on 'first-half' (default) or 'second-half' of the "
+        "run, ':T' (up to T s) or 'T:' (from T s), and score on the rest",
+    )
     p.add_argument("--quiet", action="store_true", help="no progress display")
     add_export_arguments(p, "one representative run's estimates (where the experiment has any)")
     p.set_defaults(func=run)
@@ -68,6 +76,7 @@ def run(args: argparse.Namespace) -> int:
             bag=args.bag,
             map=args.map,
             calibrate_on=args.calibrate_on,
+            calibration_window=args.calibration_window,
         )
     )
     if not args.quiet:

@@ -44,7 +44,9 @@ class ReproduceArgs:
     ``export`` the ``--mcap``/``--tum`` request (module docstring), ``None`` when not asked.
 
     ``bag``, ``map`` and ``calibrate_on`` are read by the experiments on ROS 2 bags (a bag, its
-    topic mapping, and another bag of the same hardware to calibrate on)."""
+    topic mapping, and another bag of the same hardware to calibrate on);
+    ``calibration_window`` by mrclam-cl (which side of the run its error models are fitted on,
+    :func:`relloc.calibration.window.split_span`; ``None``: the experiment's default)."""
 
     out_dir: Path
     runs: int | None = None
@@ -56,6 +58,7 @@ class ReproduceArgs:
     bag: Path | None = None
     map: Path | None = None
     calibrate_on: Path | None = None
+    calibration_window: str | None = None
 
     def __post_init__(self) -> None:
         if self.runs is not None and self.runs < 1:
