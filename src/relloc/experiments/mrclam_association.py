@@ -80,12 +80,15 @@ height reference's (:func:`planar_formation`), not Eq. 13's 0.05 m².
 Calibrating the commands and the camera (against the raw held commands, uncorrected camera rows
 and the hand-set σ 0.2 m / 0.03 rad before) changed little on run 6 (seed 2026, 5 runs;
 calibration window 15.94–75.94 s, scored 75.94–315.94 s): association accuracy 0.612 → 0.608,
-tracked 0.352 → 0.348, position RMSE 2.12 → 2.12 m, median 0.73 → 0.66 m, yaw RMSE
-0.96 → 1.00 rad, wrong: clutter 0.193 → 0.169, another robot 0.195 → 0.223 (each within the
-other's min–max over the runs); the camera model's tracked fraction fell from 0.43 to 0.28
-(median error 0.48 → 0.93 m) and the truth-placed bound with clutter from 0.868 to 0.852, both
-with the fitted, correlation-inflated range σ (0.38 m against 0.2 m). The tracks are lost
-to drift that a better dead reckoning does not remove (report.md, "Why tracks are lost").
+tracked 0.352 → 0.348, position RMSE 2.12 → 2.12 m, median 0.73 → 0.66 m, yaw RMSE 0.96 → 1.00
+rad, wrong: clutter 0.193 → 0.169, another robot 0.195 → 0.223 (each but the clutter share
+within the other's min–max over the runs); the camera model's tracked fraction fell from 0.43 to
+0.28 (median error 0.48 → 0.93 m) and the truth-placed bound with clutter from 0.868 to 0.852,
+both with the fitted, correlation-inflated range σ (0.38 m against 0.2 m): with the calibration
+but σ 0.2 m / 0.03 rad (run 0's recording only) the camera model tracked 0.45 and the bound was
+0.866, so those two losses are the range σ's (the price of a white-noise filter fed every
+reading of a correlated error, :mod:`relloc.calibration.inflation`). The tracks are lost to
+drift that a better dead reckoning does not remove (report.md, "Why tracks are lost").
 
 What a filter could score (``association_bound``): the fuser's own bearing step with one track
 per teammate at its true relative pose (:mod:`relloc.experiments.association_bound`), on run
