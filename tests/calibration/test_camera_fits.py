@@ -6,6 +6,7 @@ import pytest
 
 from relloc.calibration.camera import (
     camera_residuals,
+    corrected_readings,
     fit_camera,
     fit_detection_in_view,
     fit_detection_probability,
@@ -14,6 +15,7 @@ from relloc.calibration.camera import (
     landmark_wait_s,
 )
 from relloc.calibration.window import CalibrationWindow
+from relloc.core.recording import Measurements, measurement_rows
 from relloc.errors import ConfigError, DataError
 from relloc.models.planar_measurement import range_bias_features
 
@@ -105,6 +107,40 @@ def test_camera_fit_recovers_a_bearing_bias_across_the_image(synthetic):
     edge = fit.bearing_bias(np.zeros(2, dtype=np.int64), np.array([lo, hi]))
     far = fit.bearing_bias(np.zeros(2, dtype=np.int64), np.array([lo - 1.0, hi + 1.0]))
     assert far == pytest.approx(edge)
+
+
+def test_corrected_readings_remove_the_fitted_biases(synthetic):
+    """The camera rows, corrected with the fit, read the truth up to the white noise; rows of
+    other kinds are left alone, and without ``ranges`` so are the ranges."""
+    ds = _camera_dataset(synthetic, np.random.default_rng(13))
+    window = CalibrationWindow(0.0, DURATION, "synthetic")
+    fit = fit_camera(ds, window, range_interval_s=1.0)
+    res = camera_residuals(ds, window)
+    order = np.argsort(res.t, kind="stable")
+    camera = measurement_rows(
+        "range_bearing",
+        t=res.t[order],
+        observer=res.observer[order],
+        target=np.where(res.subject[order] == 2, 1, -1),
+        landmark=np.where(res.subject[order] >= 10, res.subject[order] - 10, -1),
+        value=np.column_stack([res.range, res.bearing])[order],
+    )
+    heights = measurement_rows("height", t=np.arange(5.0), observer=0, target=1, value=np.ones(5))
+    m = Measurements.concatenate([camera, heights])
+    out = corrected_readings(m, fit, ranges=True)
+    rows = m.kind == camera.kind[0]
+    range_error = out.value[rows, 0] - (res.range - res.range_error)[order]
+    bearing_error = out.value[rows, 1] - (res.bearing - res.bearing_error)[order]
+    # the raw ranges are biased by BIAS (up to 0.2 m), the corrected ones only noisy
+    assert np.sqrt(np.mean(res.range_error**2)) > 3 * SIGMA_R
+    assert np.sqrt(np.mean(range_error**2)) == pytest.approx(SIGMA_R, rel=0.15)
+    # the per-robot offsets are gone from the bearings
+    assert abs(np.median(bearing_error[m.observer[rows] == 0])) < 2e-3
+    assert abs(np.median(bearing_error[m.observer[rows] == 1])) < 2e-3
+    np.testing.assert_array_equal(out.value[~rows], m.value[~rows])
+    plain = corrected_readings(m, fit)
+    np.testing.assert_array_equal(plain.value[rows, 0], m.value[rows, 0])
+    np.testing.assert_array_equal(plain.value[rows, 1], out.value[rows, 1])
 
 
 def test_lag_correlation_of_a_lone_pair_is_zero_without_enough_pairs(synthetic):

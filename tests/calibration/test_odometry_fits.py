@@ -5,7 +5,9 @@ import numpy as np
 import pytest
 
 from relloc.calibration.odometry import (
+    OdometryModelFit,
     calibrated_commands,
+    calibrated_team,
     fit_odometry_model,
     fit_odometry_noise,
 )
@@ -168,6 +170,37 @@ def test_calibrated_commands_follow_the_fitted_response():
     plain = calibrated_commands(od, latency_s=0.1, scale_v=0.5, scale_w=0.25)
     np.testing.assert_array_equal(plain.t, od.t + 0.1)
     np.testing.assert_array_equal(plain.velocity[1], [0.5, 0, 0, 0.5])
+
+
+def test_calibrated_team_gives_each_robot_its_own_scales():
+    """The team's latency and lag for every robot, robot i's scales for robot i."""
+    od = BodyOdometry(
+        t=np.array([0.0, 10.0]),
+        velocity=np.array([[0, 0, 0, 0], [1.0, 0, 0, 2.0]]),
+        sigma=np.zeros(4),
+    )
+    fit = OdometryModelFit(
+        calibration_window=CalibrationWindow(0.0, 10.0, "synthetic"),
+        latency_s=0.1,
+        time_constant_s=0.2,
+        scale_v=(0.5, 0.8),
+        scale_w=(0.25, 1.2),
+        q_v0=1e-4,
+        k_v=0.0,
+        q_w0=1e-4,
+        k_w=0.0,
+        k_wv=0.0,
+        odometry_window_s=1.0,
+    )
+    team = calibrated_team((od, od), fit)
+    late = np.array([30.0])
+    np.testing.assert_allclose(team[0].held_at(late)[0, [0, 3]], [0.5, 0.5], atol=1e-3)
+    np.testing.assert_allclose(team[1].held_at(late)[0, [0, 3]], [0.8, 2.4], atol=1e-3)
+    one = calibrated_commands(od, 0.1, 0.8, 1.2, 0.2)
+    np.testing.assert_array_equal(team[1].t, one.t)
+    np.testing.assert_array_equal(team[1].velocity, one.velocity)
+    with pytest.raises(ConfigError, match="3 robots' odometry, 2 fitted scales"):
+        calibrated_team((od, od, od), fit)
 
 
 def test_odometry_model_refuses_a_window_without_ground_truth(synthetic):

@@ -19,8 +19,16 @@ def _write(folder: Path, name: str, rows: list[str]) -> None:
     (folder / name).write_text(HEADER + "\n".join(rows) + "\n")
 
 
-def _synthetic_folder(folder: Path, rng: np.random.Generator) -> Path:
-    """Three robots circling in an arena and one landmark; camera rows at 5 Hz."""
+def _synthetic_folder(
+    folder: Path,
+    rng: np.random.Generator,
+    *,
+    command_scale: float = 1.0,
+    range_offset: float = 0.0,
+) -> Path:
+    """Three robots circling in an arena and one landmark; camera rows at 5 Hz. The odometry
+    reports ``command_scale`` times the true speed and turn rate, the camera ranges read
+    ``range_offset`` long."""
     folder.mkdir(parents=True, exist_ok=True)
     barcodes = {1: 5, 2: 14, 3: 41, 4: 63}
     _write(folder, "Barcodes.dat", [f"{s} {b}" for s, b in barcodes.items()])
@@ -41,7 +49,8 @@ def _synthetic_folder(folder: Path, rng: np.random.Generator) -> Path:
             for ti, xi, yi, ti_ in zip(t, x, y, th, strict=True)
         ]
         _write(folder, f"Robot{n}_Groundtruth.dat", gt)
-        odo = [f"{T0 + ti:.3f} {v:.3f} {w:.3f}" for ti in t[::5]]
+        k = command_scale
+        odo = [f"{T0 + ti:.3f} {k * v:.4f} {k * w:.4f}" for ti in t[::5]]
         _write(folder, f"Robot{n}_Odometry.dat", odo)
     for n in poses:
         rows = []
@@ -50,7 +59,7 @@ def _synthetic_folder(folder: Path, rng: np.random.Generator) -> Path:
             targets = [(m, poses[m][0][k], poses[m][1][k]) for m in poses if m != n]
             targets.append((4, 0.5, 0.5))
             for m, xm, ym in targets:
-                r = np.hypot(xm - xo, ym - yo) + 0.05 * rng.normal()
+                r = np.hypot(xm - xo, ym - yo) + range_offset + 0.05 * rng.normal()
                 b = (
                     np.angle(np.exp(1j * (np.arctan2(ym - yo, xm - xo) - tho)))
                     + 0.02 * rng.normal()
@@ -103,6 +112,10 @@ def test_mrclam_association_on_any_mrclam_folder(
     assert s["calibration_window"]["end_s"] <= s["scored_on"]["start_s"]
     fit = s["odometry_noise"]["p_detect_in_view"]
     assert fit["calibration_window"] == s["calibration_window"]
+    # the odometry and camera models are stated, and the filters' σ are the camera fit's
+    assert {"latency_s", "time_constant_s", "scale_v", "scale_w"} <= set(s["odometry_model"])
+    assert s["sigma_range_m"] == s["camera_model"]["sigma_range"]
+    assert s["sigma_bearing_rad"] == s["camera_model"]["sigma_bearing"]
     # the shared-fusion variant and the camera model are run on the same data, beside it
     for other in ("unknown_shared", "unknown_no_clutter", "camera"):
         assert {"association_accuracy", "pos_rmse_m", "tracked_fraction"} <= set(s[other])
@@ -110,6 +123,41 @@ def test_mrclam_association_on_any_mrclam_folder(
     assert lo == -hi and 0.0 < hi <= np.pi
     assert s["bearings"]["landmark_skipped"] > 0 and s["bearings"]["robot"] > 0
     assert (out / s["figures"]["errors"]).is_file()
+
+
+def test_the_calibration_window_fits_calibrate_the_recording(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Commands that over-report speed and turn rate by 10 % and ranges that read 0.15 m long:
+    the odometry and camera models fitted on the calibration window undo both on the scoring
+    window, and the filters take their σ from the camera fit."""
+    from relloc.datasets.mrclam import load_mrclam, to_recording
+
+    folder = _synthetic_folder(
+        tmp_path / "data", np.random.default_rng(4), command_scale=1.1, range_offset=0.15
+    )
+    short_windows(monkeypatch)
+    w = mrclam_association._windows(folder)
+    fit = w.models.odometry
+    assert fit.calibration_window == w.calibration == w.models.camera_fit.calibration_window
+    assert fit.scale_v == pytest.approx((1 / 1.1,) * 3, rel=0.01)
+    assert fit.scale_w == pytest.approx((1 / 1.1,) * 3, rel=0.01)
+    scored = np.arange(w.t_start, w.t_end, 0.5)
+    for od, (v, om) in zip(w.raw.odometry, ((0.25, 0.15), (0.2, -0.2), (0.3, 0.1)), strict=True):
+        np.testing.assert_allclose(
+            od.held_at(scored)[:, [0, 3]], [[v, om]] * scored.size, rtol=0.01
+        )
+    raw = to_recording(load_mrclam(folder)).measurements.of_kind("range_bearing")
+    cal = w.raw.measurements.of_kind("range_bearing")
+    rows = (raw.t >= w.t_start) & (raw.t < w.t_end) & (raw.target >= 0)
+    shift = raw.value[rows, 0] - cal.value[rows, 0]
+    assert np.mean(shift) == pytest.approx(0.15, abs=0.02)
+    for settings in (w.models.unknown, w.models.camera):
+        assert settings.sigma_range == w.models.camera_fit.sigma_range
+        assert settings.sigma_azimuth == w.models.camera_fit.sigma_bearing
+    # the raw ranges' own noise (0.05 m) is what is left for the filter, give or take the
+    # correlation inflation
+    assert 0.04 < w.models.camera_fit.sigma_range_raw < 0.07
 
 
 def test_mrclam_association_names_a_missing_folder(tmp_path: Path) -> None:

@@ -31,6 +31,11 @@ observer's and target's ground truth are valid (a landmark's position is known) 
   the filter keeps one range per pair per interval), summed up to the longest measured lag,
   gives the σ the filter should assume, ``σ·√f``.
 
+**Correction** (:func:`corrected_readings`): a recording's camera rows with the fitted bearing
+bias ``b_i(η̃)`` removed from every bearing and, when asked, the fitted range bias
+``b(η̃, ρ̃)`` (:meth:`CameraFit.range_bias`) from every range, both evaluated at the measured
+reading as they were fitted.
+
 **Detection probability** (:func:`fit_detection_probability`): ``P_D`` = the share of (camera
 frame, other robot) pairs in which that robot is detected — the camera's narrow field of view
 makes this far below the 0.95 often assumed, and assuming 0.95 would make every frame without
@@ -49,7 +54,7 @@ robot's next landmark detection, the horizon over which odometry must carry the 
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -57,6 +62,7 @@ from numpy.typing import NDArray
 from relloc.calibration.inflation import autocorrelation_inflation
 from relloc.calibration.window import CalibrationWindow
 from relloc.core.angles import wrap_angle
+from relloc.core.recording import Measurements, kind_code
 from relloc.datasets.mrclam import MrclamDataset
 from relloc.errors import ConfigError
 from relloc.models.planar_measurement import range_bias_features
@@ -228,6 +234,25 @@ class CameraFit:
             observer,
             bearing,
         )
+
+    def range_bias(self, bearing: Array, rng: Array) -> Array:
+        """The fitted range bias ``b(η, ρ) = c·(1, η, η², ρ, ρη²)`` at the measured bearings
+        and ranges (:func:`~relloc.models.planar_measurement.range_bias_features`)."""
+        c = np.asarray(self.range_bias_coeffs, dtype=float)
+        return np.asarray(range_bias_features(bearing, rng)[..., : c.size] @ c, dtype=np.float64)
+
+
+def corrected_readings(m: Measurements, fit: CameraFit, *, ranges: bool = False) -> Measurements:
+    """``m``'s ``range_bearing`` rows with the bearing bias ``b_i(η̃)`` of each row's observer
+    removed from the bearing and, with ``ranges``, the range bias ``b(η̃, ρ̃)`` from the range,
+    both at the measured ``(ρ̃, η̃)`` (the fits' regressors); other rows unchanged."""
+    rows = m.kind == kind_code("range_bearing")
+    value = np.array(m.value)
+    rho, eta = value[rows, 0], value[rows, 1]
+    if ranges:
+        value[rows, 0] = rho - fit.range_bias(eta, rho)
+    value[rows, 1] = eta - fit.bearing_bias(m.observer[rows], eta)
+    return replace(m, value=value)
 
 
 def evaluate_bearing_bias(

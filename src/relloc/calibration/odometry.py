@@ -49,7 +49,8 @@ residual it leaves is what no such calibration can explain.
 
 :func:`calibrated_commands` applies a fit to a recording's odometry: the modelled response
 ``c_τ,T`` (re-stamped by when it acts, ``t + τ``; lagged, on a ``GRID_DT_S`` grid, when
-``T > 0``) scaled (``s_v v``, ``s_ω ω``).
+``T > 0``) scaled (``s_v v``, ``s_ω ω``); :func:`calibrated_team` does so for every robot of a
+team with its own scales.
 
 **Equivalent white noise** (:func:`fit_odometry_noise`, one robot, used where the filter's
 input noise is one σ per channel and propagation step). On a ``rate_hz`` grid the held commands
@@ -64,7 +65,7 @@ windowed error — bias included, which makes the fit conservative; the bias its
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, replace
 
 import numpy as np
@@ -366,6 +367,20 @@ def calibrated_commands(
     velocity[:, 0] *= scale_v
     velocity[:, 3] *= scale_w
     return replace(od, t=od.t + latency_s, velocity=velocity, where=f"{od.where} calibrated")
+
+
+def calibrated_team(odometry: Sequence[Odometry], fit: OdometryModelFit) -> tuple[Odometry, ...]:
+    """Every robot's commands calibrated with ``fit`` (:func:`calibrated_commands`): the team's
+    latency and time constant, robot ``i``'s scales ``fit.scale_v[i]``, ``fit.scale_w[i]``
+    (``odometry`` in the ``ds.robot_ids`` order the fit was made in)."""
+    if len(odometry) != len(fit.scale_v):
+        raise ConfigError(
+            f"calibrated_team: {len(odometry)} robots' odometry, {len(fit.scale_v)} fitted scales"
+        )
+    return tuple(
+        calibrated_commands(od, fit.latency_s, fit.scale_v[i], fit.scale_w[i], fit.time_constant_s)
+        for i, od in enumerate(odometry)
+    )
 
 
 # ----------------------------------------------------------------------------------------------

@@ -15,10 +15,11 @@ filter's clutter density is set to match). Landmark rows are not used (counted i
 ``bearings.landmark_skipped``): the camera sees the static landmarks far more often than the
 robots (about 3 : 1 in run 6), and as static, persistent false bearings they are a different
 problem (mapping) from the uniform clutter of seed 002. The robots are planar: the bearing
-sensor is azimuth-only and the height difference is a known 0 ± 1 cm. Odometry (commanded v,
-ω, held) drives the prediction on a 20 Hz filter clock (:func:`relloc.pipeline.replay.replay`
-with ``clock``): the frames stamped since the previous tick are fused at a tick, each as its
-own scan, and the beliefs are recorded at the ticks that fused a frame of their robot.
+sensor is azimuth-only and the height difference is a known 0 ± 1 cm. Odometry (the commanded
+v, ω, calibrated as below) drives the prediction on a 20 Hz filter clock
+(:func:`relloc.pipeline.replay.replay` with ``clock``): the frames stamped since the previous
+tick are fused at a tick, each as its own scan, and the beliefs are recorded at the ticks that
+fused a frame of their robot.
 
 Sensor models (both on the same data):
 
@@ -49,20 +50,45 @@ model's accuracy from 0.918 to 0.887). The unknown-correspondence model therefor
 mean, with the min and max and every run in ``spread``. The other two models run once, on run
 0's recording.
 
-Noise models: the detection probabilities and the odometry noise are fitted
-(:mod:`relloc.calibration`: ``fit_detection_in_view``, ``fit_detection_probability``,
-``fit_odometry_noise`` over 1-s windows) on a calibration window — the first
-``CALIBRATION_S`` seconds after every robot has started moving (``calibration_window``) — and
-the scoring uses the next ``EVAL_S`` seconds (``scored_on``), so nothing is fitted on the data
-it is scored on. The field of view, which sets where the injected clutter falls and where the
-camera can see, is the widest bearing in the calibration window too (``field_of_view_window``).
+Error models, all fitted (:mod:`relloc.calibration`, the fits mrclam-cl uses) on a
+calibration window — the first ``CALIBRATION_S`` seconds after every robot has started moving
+(``calibration_window``) — while the scoring uses the next ``EVAL_S`` seconds (``scored_on``),
+so nothing is fitted on the data it is scored on:
+
+- odometry (``fit_odometry_model``, ``odometry_model``): one latency ``τ`` and first-order lag
+  ``T`` for the team (the robot follows its command ``c(t − τ)`` through ``ẏ = (c(t − τ) −
+  y)/T``) and per-robot scales ``s_v, s_ω``; the filter is driven by the calibrated commands
+  ``s · c_τ,T`` (``calibrated_team``), and its white input noise is the equivalent σ that
+  they leave over ``ODOMETRY_WINDOW_S`` windows (``fit_odometry_noise`` with the same τ, T,
+  s; ``odometry_noise``), the RMS over robots, floored;
+- camera (``fit_camera``, ``camera_model``): every camera row has the per-robot bearing bias
+  ``b_i(η̃) = c_i·(1, η̃, η̃²)`` removed from its bearing and the range bias
+  ``b(η̃, ρ̃) = c·(1, η̃, η̃², ρ̃, ρ̃η̃²)`` from its range (``corrected_readings``, at the
+  measured reading, as fitted) before the bearings lose their barcodes; the filter's bearing
+  and range σ (``sigma_bearing_rad``, ``sigma_range_m``) are the MAD of what the biases leave,
+  inflated by the Bartlett factor ``1 + 2 Σ ρ(kΔ)`` of the residuals' measured correlation at
+  the readings' spacing (the filter fuses every range: ``RANGE_INTERVAL_S`` = 0);
+- the detection probabilities (``fit_detection_in_view``, ``fit_detection_probability``).
+
+The field of view, which sets where the injected clutter falls and where the camera can see,
+is the widest (measured) bearing in the calibration window too (``field_of_view_window``).
 So is the range span of the filters (``max_range``, ``RANGE_MARGIN`` times the widest robot
 range of the window): the uniform prior of a new track's range is over the ranges the sensor
 gives, not over a fixed 20 m. The robots being planar, a new track's height variance is the
-height reference's (:func:`planar_formation`), not Eq. 13's 0.05 m². Range σ 0.2 m and
-bearing σ 0.03 rad follow the dataset's documented error levels (range error bias
-−0.25 … +0.2 m depending on bearing, strongly correlated; bearings 0.01–0.02 rad with rare
-outliers).
+height reference's (:func:`planar_formation`), not Eq. 13's 0.05 m².
+
+Calibrating the commands and the camera (against the raw held commands, uncorrected camera rows
+and the hand-set σ 0.2 m / 0.03 rad before) changed little on run 6 (seed 2026, 5 runs;
+calibration window 15.94–75.94 s, scored 75.94–315.94 s): association accuracy 0.612 → 0.608,
+tracked 0.352 → 0.348, position RMSE 2.12 → 2.12 m, median 0.73 → 0.66 m, yaw RMSE 0.96 → 1.00
+rad, wrong: clutter 0.193 → 0.169, another robot 0.195 → 0.223 (each but the clutter share
+within the other's min–max over the runs); the camera model's tracked fraction fell from 0.43 to
+0.28 (median error 0.48 → 0.93 m) and the truth-placed bound with clutter from 0.868 to 0.852,
+both with the fitted, correlation-inflated range σ (0.38 m against 0.2 m): with the calibration
+but σ 0.2 m / 0.03 rad (run 0's recording only) the camera model tracked 0.45 and the bound was
+0.866, so those two losses are the range σ's (the price of a white-noise filter fed every
+reading of a correlated error, :mod:`relloc.calibration.inflation`). The tracks are lost to
+drift that a better dead reckoning does not remove (report.md, "Why tracks are lost").
 
 What a filter could score (``association_bound``): the fuser's own bearing step with one track
 per teammate at its true relative pose (:mod:`relloc.experiments.association_bound`), on run
@@ -72,7 +98,9 @@ under the definition of ``association_accuracy`` (report.md, "Definitions").
 summary.json keys: ``experiment, seed, runs, dataset, window_s, scored_on,
 calibration_window_s, calibration_window, clutter_per_scan, field_of_view_rad,
 field_of_view_window, odometry_noise`` (fitted σ, the detection-probability fits, the widest
-range of the window and the range span), ``association_accuracy`` (fraction of the bearings
+range of the window and the range span), ``odometry_model`` and ``camera_model`` (the fitted
+odometry and camera models; their window is ``calibration_window``), ``sigma_range_m``,
+``sigma_bearing_rad`` (the filters' σ), ``association_accuracy`` (fraction of the bearings
 used by the dominant track of a filter that really came from that robot, after its first
 confirmation), ``association_accuracy_joint`` (of the fuser's one-to-one decision),
 ``wrong_clutter`` and ``wrong_robot`` (shares of those bearings that were injected clutter or
@@ -101,11 +129,19 @@ from numpy.typing import NDArray
 
 from relloc.association.hypotheses import FormationSettings
 from relloc.calibration.camera import (
+    CameraFit,
+    corrected_readings,
+    fit_camera,
     fit_detection_in_view,
     fit_detection_probability,
     fit_field_of_view,
 )
-from relloc.calibration.odometry import fit_odometry_noise
+from relloc.calibration.odometry import (
+    OdometryModelFit,
+    calibrated_team,
+    fit_odometry_model,
+    fit_odometry_noise,
+)
 from relloc.calibration.window import CalibrationWindow, following
 from relloc.core.estimates import Estimates
 from relloc.core.recording import (
@@ -141,9 +177,13 @@ FILTER_RATE = 20.0
 CALIBRATION_S = 60.0
 EVAL_S = 240.0
 CLUTTER_PER_SCAN = 1.0
-SIGMA_RANGE = 0.2
-SIGMA_BEARING = 0.03
 SIGMA_HEIGHT = 0.01
+#: integration window (s) of the odometry fits: the variance rates of ``fit_odometry_model``
+#: (reported, not used by the filter) and the equivalent white σ of ``fit_odometry_noise``
+ODOMETRY_WINDOW_S = 1.0
+#: the filter fuses every range (none is thinned), so ``fit_camera`` inflates the range σ for
+#: the correlation at the readings' own spacing
+RANGE_INTERVAL_S = 0.0
 WARMUP_S = 10.0
 #: floors of the fitted odometry noise (a perfect fit would leave the filter no process noise)
 MIN_SIGMA_V = 0.02
@@ -294,6 +334,8 @@ class _Models:
     unknown: GaussianSumSettings
     camera: GaussianSumSettings
     fits: dict[str, Any]
+    odometry: OdometryModelFit
+    camera_fit: CameraFit
 
 
 def _widest_range(ds: MrclamDataset, window: CalibrationWindow) -> float | None:
@@ -321,12 +363,28 @@ def planar_formation(sigma_height: float) -> FormationSettings:
 
 
 def _settings(ds: MrclamDataset, window: CalibrationWindow, fov: float) -> _Models:
-    """Filter settings of both sensor models (module docstring): the odometry noise (RMS over
-    robots of the fitted σ, floored), the clutter density matching the injected clutter and,
-    for the unknown-correspondence model, the field of view and ``P_D`` inside it fitted on
-    ``window``; both models take the range span from ``window`` (:func:`_widest_range`) and
-    the planar birth of :func:`planar_formation`."""
-    fits = [fit_odometry_noise(ds.robot(s), window, rate_hz=FILTER_RATE) for s in ds.robot_ids]
+    """Filter settings of both sensor models (module docstring), all fitted on ``window``: the
+    odometry model (latency, lag, per-robot scales; :func:`fit_odometry_model`) and the
+    equivalent white noise the calibrated commands leave (RMS over robots of the fitted σ,
+    floored), the camera's range and bearing σ (:func:`fit_camera`, correlation-inflated), the
+    clutter density matching the injected clutter and, for the unknown-correspondence model,
+    the field of view and ``P_D`` inside it; both models take the range span from ``window``
+    (:func:`_widest_range`) and the planar birth of :func:`planar_formation`."""
+    odometry = fit_odometry_model(ds, window, ODOMETRY_WINDOW_S)
+    camera_fit = fit_camera(ds, window, range_interval_s=RANGE_INTERVAL_S)
+    fits = [
+        fit_odometry_noise(
+            ds.robot(s),
+            window,
+            rate_hz=FILTER_RATE,
+            window_s=ODOMETRY_WINDOW_S,
+            latency_s=odometry.latency_s,
+            scale_v=odometry.scale_v[i],
+            scale_w=odometry.scale_w[i],
+            time_constant_s=odometry.time_constant_s,
+        )
+        for i, s in enumerate(ds.robot_ids)
+    ]
     sv = max(float(np.sqrt(np.mean([f.sigma_v**2 for f in fits]))), MIN_SIGMA_V)
     sl = max(float(np.sqrt(np.mean([f.sigma_lateral**2 for f in fits]))), MIN_SIGMA_V)
     sw = max(float(np.sqrt(np.mean([f.sigma_w**2 for f in fits]))), MIN_SIGMA_W)
@@ -336,9 +394,9 @@ def _settings(ds: MrclamDataset, window: CalibrationWindow, fov: float) -> _Mode
     base = GaussianSumSettings(
         velocity_noise=VelocityNoise(observer=sig, observed=sig),
         sigma_height=SIGMA_HEIGHT,
-        sigma_range=SIGMA_RANGE,
-        sigma_azimuth=SIGMA_BEARING,
-        sigma_elevation=SIGMA_BEARING,
+        sigma_range=camera_fit.sigma_range,
+        sigma_azimuth=camera_fit.sigma_bearing,
+        sigma_elevation=camera_fit.sigma_bearing,
         use_elevation=False,
         expected_clutter=CLUTTER_PER_SCAN * np.pi / fov,
         formation=planar_formation(SIGMA_HEIGHT),
@@ -364,13 +422,27 @@ def _settings(ds: MrclamDataset, window: CalibrationWindow, fov: float) -> _Mode
             "widest_range_m": widest,
             "range_span_m": base.max_range,
         },
+        odometry=odometry,
+        camera_fit=camera_fit,
+    )
+
+
+def calibrated_recording(ds: MrclamDataset, models: _Models) -> Recording:
+    """The dataset as a Recording (:func:`relloc.datasets.mrclam.to_recording`) with the fitted
+    models applied: every robot's commands calibrated (:func:`calibrated_team`) and the camera
+    rows' bearing and range biases removed (:func:`corrected_readings`)."""
+    raw = to_recording(ds)
+    return replace(
+        raw,
+        odometry=calibrated_team(raw.odometry, models.odometry),
+        measurements=corrected_readings(raw.measurements, models.camera_fit, ranges=True),
     )
 
 
 @dataclass(frozen=True)
 class _Window:
     """The run's calibration and scoring windows, the field of view and the models; ``raw``
-    is the dataset as a Recording (:func:`relloc.datasets.mrclam.to_recording`)."""
+    is the dataset as a Recording with the fitted models applied (:func:`calibrated_recording`)."""
 
     folder: Path
     ds: MrclamDataset
@@ -396,7 +468,8 @@ def _windows(folder: Path) -> _Window:
         raise DataError(f"{folder}: too short for a {EVAL_S:.0f} s evaluation after calibration")
     fov_fit = fit_field_of_view(ds, calibration)
     models = _settings(ds, calibration, fov_fit.half_width_rad)
-    return _Window(folder, ds, to_recording(ds), calibration, t_start, t_end, fov_fit, models)
+    raw = calibrated_recording(ds, models)
+    return _Window(folder, ds, raw, calibration, t_start, t_end, fov_fit, models)
 
 
 def _clock(w: _Window, offset: float) -> Array:
@@ -420,6 +493,11 @@ def _spread_runs(w: _Window, seed: int, runs: int) -> list[dict[str, Any]]:
         figures, _ = _evaluate(_run(rec, w.models.unknown, clock, sharing=False), clock[0], names)
         out.append({"run": k, "clock_offset_s": offset, **_headline(figures)})
     return out
+
+
+def _fit_record(fit: dict[str, Any]) -> dict[str, Any]:
+    """A fit's record without its window (the calibration window, stated once)."""
+    return {k: v for k, v in fit.items() if k != "calibration_window"}
 
 
 def _headline(figures: dict[str, Any]) -> dict[str, Any]:
@@ -487,8 +565,10 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
         "field_of_view_rad": [-fov, fov],
         "field_of_view_window": w.fov_fit.calibration_window.to_dict(),
         "odometry_noise": w.models.fits,
-        "sigma_range_m": SIGMA_RANGE,
-        "sigma_bearing_rad": SIGMA_BEARING,
+        "odometry_model": _fit_record(w.models.odometry.to_dict()),
+        "camera_model": _fit_record(w.models.camera_fit.to_dict()),
+        "sigma_range_m": w.models.unknown.sigma_range,
+        "sigma_bearing_rad": w.models.unknown.sigma_azimuth,
         **{k: spread[k]["mean"] if spread[k] is not None else None for k in HEADLINE_KEYS},
         "spread": {"runs": spread_runs, **spread},
         "run0": unknown,
@@ -584,11 +664,13 @@ def _report(s: dict[str, Any], rows: list[list[Any]], fig_name: str) -> str:
     return f"""# MRCLAM: relative localization with unknown bearing correspondence
 
 Dataset `{s["dataset"]}`, seed {s["seed"]}. **Calibration window** {c0:.2f}–{c1:.2f} s (odometry
-noise, detection probability); **scoring window** {t0:.2f}–{t1:.2f} s. Bearings of robots lose
-their barcodes and are mixed with {c["injected"]} injected false bearings (run 0), uniform over
-the camera's field of view ±{fov:.2f} rad ({s["clutter_per_scan"]} per scan on average); ranges
-keep their barcodes; {c["landmark_skipped"]} landmark rows are not used.
+and camera models, detection probability); **scoring window** {t0:.2f}–{t1:.2f} s. Bearings
+of robots lose their barcodes and are mixed with {c["injected"]} injected false bearings (run 0),
+uniform over the camera's field of view ±{fov:.2f} rad ({s["clutter_per_scan"]} per scan on
+average); ranges keep their barcodes; {c["landmark_skipped"]} landmark rows are not used.
 {c["scans_with_several_robots"]} of {s["scans"]} scans hold bearings of two or more robots.
+
+{_models_text(s)}
 
 **Unknown correspondence** (the headline, seed 002's separate sensors): the filter is not told
 whose bearing is whose, nor that a robot with a range in the frame has its bearing in it; its
@@ -649,10 +731,12 @@ and nothing corrects it: the ranges come only with camera detections, not from a
 ranging sensor as in seed 002, so an unseen robot gives no range either. The drifted track
 then takes another robot's bearing or a false one for its own — the no-clutter column shows
 how much of the loss is telling robots apart rather than rejecting clutter. The odometry is
-not the limit: on run 6 the commanded velocities dead-reckon a robot to about 0.15 m and
-0.15 rad over 20 s, but the robots move slowly (about 0.06 m/s), so a burst of a few seconds
-moves a teammate little more than the range noise. A filter of a teammate that has left the
-view keeps no range, and its track can go on feeding on another robot's bearings (the
+not the limit: the commands are calibrated (latency, lag, scales, above), and on run 6 the
+same figures with the raw held commands, the uncorrected camera and σ 0.2 m / 0.03 rad were
+within this spread (module docstring). The robots move slowly (about 0.06 m/s), so a burst of
+a few seconds moves a teammate little more than the range noise: a better dead reckoning does
+not resolve the relative yaw that a short burst leaves open. A filter of a teammate that has
+left the view keeps no range, and its track can go on feeding on another robot's bearings (the
 "another robot" row): with an in-view ``P_D`` this low, two robots at one bearing with one of
 them missed is a cheap explanation. Mutual and indirect fusion spread the unresolved yaw
 hypotheses of the teammates' filters, and a message only shares each local hypothesis's
@@ -666,6 +750,27 @@ is {s["odometry_noise"]["range_span_m"]:.2f} m ({RANGE_MARGIN:g} × the widest r
 calibration window) and a new track's height variance is the height reference's
 ({SIGMA_HEIGHT:g} m)², not Eq. 13's 0.05 m² (the robots are planar; :func:`planar_formation`).
 """
+
+
+def _models_text(s: dict[str, Any]) -> str:
+    """The fitted odometry and camera models, as applied to every model's recording."""
+    o, c, n = s["odometry_model"], s["camera_model"], s["odometry_noise"]
+    return (
+        f"**Error models** (fitted on the calibration window, applied before any filter runs): "
+        f"the commands act {o['latency_s']:.2f} s late through a {o['time_constant_s']:.2f} s "
+        f"first-order lag, speed scales {', '.join(f'{v:.3f}' for v in o['scale_v'])}, "
+        f"turn-rate scales {', '.join(f'{v:.3f}' for v in o['scale_w'])}; the calibrated "
+        f"commands leave a white input noise of σ_v {n['sigma_v']:.4f} m/s, σ_lateral "
+        f"{n['sigma_lateral']:.4f} m/s, σ_ω {n['sigma_w']:.4f} rad/s (RMS over robots, "
+        f"{o['odometry_window_s']:g} s windows). Camera: each robot's bearing bias on "
+        f"(1, η, η²) and the range bias on (1, η, η², ρ, ρη²) = "
+        f"({', '.join(f'{v:.3f}' for v in c['range_bias_coeffs'])}) are removed from every "
+        f"row; bearing σ {c['sigma_bearing_raw']:.4f} rad (MAD) × √{c['bearing_inflation']:.1f} "
+        f"(correlation inflation) = {s['sigma_bearing_rad']:.4f} rad, range σ "
+        f"{c['sigma_range_raw']:.3f} m × √{c['range_inflation']:.1f} = "
+        f"{s['sigma_range_m']:.3f} m (every range fused, inflated at the readings' spacing "
+        f"{c['correlation']['pair_spacing_s']['median']:.2f} s)."
+    )
 
 
 def _share(value: float | None) -> str:

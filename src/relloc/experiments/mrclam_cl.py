@@ -62,17 +62,17 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from relloc.calibration.camera import CameraFit, fit_camera, landmark_wait_s
+from relloc.calibration.camera import CameraFit, corrected_readings, fit_camera, landmark_wait_s
 from relloc.calibration.inflation import CORRELATION_HORIZON_S
 from relloc.calibration.odometry import (
     OdometryModelFit,
-    calibrated_commands,
+    calibrated_team,
     fit_odometry_model,
 )
 from relloc.calibration.window import SPLIT_CHOICES, CalibrationWindow, split_span
 from relloc.core.estimates import Estimates
 from relloc.core.gaussian import Gaussian
-from relloc.core.recording import Measurements, Odometry, Recording, measurement_rows
+from relloc.core.recording import Measurements, Recording, measurement_rows
 from relloc.estimators.cooperative import (
     CooperativeEstimator,
     CooperativeSettings,
@@ -185,9 +185,9 @@ def build_recording(ds: Any, fit: FittedModels, rng: np.random.Generator) -> Pre
     out_t = np.arange(t_start, t_end, OUTPUT_DT_S)
     recording = replace(
         raw,
-        odometry=calibrated_odometry(raw, fit),
+        odometry=calibrated_team(raw.odometry, fit.odometry),
         measurements=Measurements.concatenate(
-            [corrected_bearings(raw.measurements, fit), gps_fixes(ds, t_start, t_end, rng)]
+            [corrected_readings(raw.measurements, fit.camera), gps_fixes(ds, t_start, t_end, rng)]
         ),
     )
     start = np.concatenate([ds.robot(r).groundtruth.at(t_start).pose for r in robots])
@@ -203,24 +203,6 @@ def build_recording(ds: Any, fit: FittedModels, rng: np.random.Generator) -> Pre
         _two_landmarks(raw.measurements, ds),
         raw.skips.skipped_by_reason().get(UNMAPPED_SUBJECT, 0),
     )
-
-
-def calibrated_odometry(recording: Recording, fit: FittedModels) -> tuple[Odometry, ...]:
-    """Every robot's commands calibrated with the fitted latency, time constant and its scales
-    (:func:`relloc.calibration.odometry.calibrated_commands`)."""
-    o = fit.odometry
-    return tuple(
-        calibrated_commands(od, o.latency_s, o.scale_v[i], o.scale_w[i], o.time_constant_s)
-        for i, od in enumerate(recording.odometry)
-    )
-
-
-def corrected_bearings(m: Measurements, fit: FittedModels) -> Measurements:
-    """The camera rows with each observer's fitted bearing bias ``b_i(η)`` removed
-    (:meth:`relloc.calibration.camera.CameraFit.bearing_bias`)."""
-    value = np.array(m.value)
-    value[:, 1] -= fit.camera.bearing_bias(m.observer, value[:, 1])
-    return replace(m, value=value)
 
 
 def gps_fixes(ds: Any, t_start: float, t_end: float, rng: np.random.Generator) -> Measurements:
