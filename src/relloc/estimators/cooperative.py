@@ -90,6 +90,8 @@ or fix is gated as a whole with its normalised innovation squared against
 ``χ²_{dof}(p_gate)`` (:mod:`relloc.association.gating`) before the batch update. The NIS of every
 detection or fix used is recorded (:meth:`CooperativeEstimator.take_updates`), with the
 conditioning ``log10(λmax/λmin)`` of its ``R`` (diagonal) and of its ``S`` (at most 3 × 3).
+The gate's quantiles of every group size (:data:`GATE_DOFS`) are computed when the estimator is
+built (:func:`relloc.core.kalman.prepare_gates`), not in its first update.
 """
 
 from __future__ import annotations
@@ -105,7 +107,7 @@ from numpy.typing import NDArray
 from relloc.association.gating import mahalanobis_batch
 from relloc.core.contract import BeliefStack, HeldOdometry, Silent, UpdateRecord
 from relloc.core.gaussian import Gaussian
-from relloc.core.kalman import chi2_threshold
+from relloc.core.kalman import chi2_threshold, prepare_gates
 from relloc.core.recording import NO_TARGET, Measurements, kind_code
 from relloc.errors import ConfigError, DataError, ModelError
 from relloc.estimators.eif import ExtendedInformationFilter
@@ -692,6 +694,10 @@ def group_innovations(lin: LinearisedRows, P: Array) -> GroupInnovations:
     )
 
 
+GATE_DOFS = (1, 2, 3)
+"""Rows of a gating group: a bearing (1), a bearing with its range (2), a pose fix (3)."""
+
+
 def outside_gate(groups: GroupInnovations, p_gate: float) -> BoolArray:
     """Groups whose NIS exceeds ``χ²_{dof}(p_gate)``."""
     dofs, which = np.unique(groups.dof, return_inverse=True)
@@ -780,6 +786,7 @@ class CooperativeEstimator(Silent):
             raise ConfigError(f"landmarks: expected finite (L, 2) or (L, 3), got {lm.shape}")
         self.name: str = settings.filter
         self.settings = settings
+        prepare_gates(GATE_DOFS, settings.p_gate)
         self._landmarks = lm[:, :2]
         # the known landmarks the constrained Jacobians need (those the detections may use)
         self._anchors_xy = self._landmarks[[a for a in settings.anchors if a < lm.shape[0]]]

@@ -94,7 +94,7 @@ from relloc.association.mixture_reduction import (
 from relloc.association.nscan import branch, family_keep_mask, new_history
 from relloc.core.angles import wrap_angle
 from relloc.core.gaussian import Gaussian, GaussianMixture
-from relloc.core.kalman import chi2_threshold, kalman_update
+from relloc.core.kalman import chi2_threshold, kalman_update, prepare_gates
 from relloc.errors import ConfigError, DataError
 from relloc.estimators.relative import predict_arrays
 from relloc.fusion.covariance_intersection import covariance_intersection
@@ -389,6 +389,11 @@ class GaussianSumFuser:
         self.robot = int(robot)
         self.teammates = tuple(team)
         self.settings = settings
+        # the gates' χ² quantiles, when the fuser is built: a bearing block (gate and birth
+        # exclusion) and a 4-state track pair (the fusion's pairing gate)
+        gate = settings.gate
+        prepare_gates([len(settings.bearing_rows)], gate.p_gate, gate.p_birth_exclusion)
+        prepare_gates([4], gate.p_gate)
         self._index = {t: k for k, t in enumerate(team)}
         self.tracks = Tracks.empty(settings.nscan_depth)
         self._next_id = 0

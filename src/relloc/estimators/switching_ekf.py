@@ -55,7 +55,7 @@ from numpy.typing import NDArray
 from relloc.core.angles import wrap_angle
 from relloc.core.contract import Belief, HeldOdometry, Silent, UpdateRecord
 from relloc.core.gaussian import Gaussian
-from relloc.core.kalman import chi2_threshold, gated_update
+from relloc.core.kalman import gated_update, prepare_gates
 from relloc.core.linalg import condition_log10
 from relloc.core.recording import Measurements, kind_code
 from relloc.errors import ConfigError, DataError
@@ -267,11 +267,8 @@ class SwitchingEkf(Silent):
         self._last_sighting: dict[int, float] = {}
         self._updates: list[UpdateRecord] = []
         self._counts: dict[str, int] = {}
-        if settings.gate_probability is not None:
-            # the gates' χ² quantiles of every block size, computed (and cached) when the filter
-            # is built, not inside its first update: the first one imports scipy.stats
-            for dim in sorted(set(BLOCK_DIMS.values())):
-                chi2_threshold(dim, settings.gate_probability)
+        # the gates' χ² quantiles of every block size, when the filter is built
+        prepare_gates(BLOCK_DIMS.values(), settings.gate_probability)
 
     # ------------------------------------------------------------------ the estimator contract
 

@@ -3,7 +3,10 @@
 Start-up: the node subscribes to its teammates' streams and the clock, then declares its
 ``alive`` liveliness token; once it has seen the ``alive`` token of every teammate and of the
 clock it declares ``ready`` (see :func:`relloc.runtime.keys.ready_key`). The clock starts when
-every robot is ready.
+every robot is ready. The node's estimator is built before the node joins, and its one-off work
+is done then: a gating estimator computes its χ² gate quantiles when it is built
+(:func:`relloc.core.kalman.prepare_gates`; the first imports ``scipy.stats``), so that a ready
+node's first filtered window costs what a later one does and does not hold up an ``ack``.
 
 Per clock tick ``k`` (simulated time ``t_k``; see :mod:`relloc.runtime.clock`) a node
 
