@@ -160,8 +160,7 @@ def _summary(
         "distributed": ours,
         "in_process": ref,
         "difference": diff,
-        "tolerance": {"belief_entry": AGREEMENT_TOLERANCE, "figure": FIGURE_TOLERANCE},
-        "agreement": figure_agreement(
+        **figure_agreement(
             worst,
             perfect,
             diff,

@@ -493,8 +493,7 @@ def _summary(
         "distributed": _headline(ours),
         "in_process": _headline(ref),
         "difference": diff,
-        "tolerance": {"belief_entry": AGREEMENT_TOLERANCE, "figure": FIGURE_TOLERANCE},
-        "agreement": figure_agreement(
+        **figure_agreement(
             worst,
             perfect,
             diff,

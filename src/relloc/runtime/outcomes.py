@@ -169,13 +169,16 @@ def figure_agreement(
     belief_tolerance: float,
     figure_tolerance: float,
 ) -> dict[str, Any]:
-    """The ``agreement`` block of a reproduction's team: the largest belief-entry difference
-    ``worst`` from the in-process run, whether the network was perfect, and whether both the
-    beliefs and every headline figure (``|difference|``; None: nothing to compare) are within
-    their tolerance."""
+    """The ``tolerance`` and ``agreement`` blocks of a reproduction's team: the tolerances on a
+    belief entry and on a headline figure, the largest belief-entry difference ``worst`` from
+    the in-process run, whether the network was perfect, and whether both the beliefs and every
+    headline figure (``|difference|``; None: nothing to compare) are within their tolerance."""
     figures_ok = all(d is None or abs(d) <= figure_tolerance for d in differences.values())
     return {
-        "max_abs_diff": worst,
-        "perfect_network": perfect,
-        "within_tolerance": bool(worst <= belief_tolerance and figures_ok),
+        "tolerance": {"belief_entry": belief_tolerance, "figure": figure_tolerance},
+        "agreement": {
+            "max_abs_diff": worst,
+            "perfect_network": perfect,
+            "within_tolerance": bool(worst <= belief_tolerance and figures_ok),
+        },
     }
