@@ -68,23 +68,23 @@ def test_odometry_and_truth_is_where_a_robot_has_both(synthetic):
         odometry_and_truth(synthetic.robot(1, gt, empty), "run6")
 
 
-def test_split_span_fits_on_one_side_and_scores_on_the_other():
-    assert split_span("first-half", 10.0, 30.0, "r") == (
-        CalibrationWindow(10.0, 20.0, "r"),
-        CalibrationWindow(20.0, 30.0, "r"),
+@pytest.mark.parametrize(
+    ("spec", "calibration", "scored"),
+    [
+        ("first-half", (10.0, 20.0), (20.0, 30.0)),
+        ("second-half", (20.0, 30.0), (10.0, 20.0)),
+        (":12.5", (10.0, 12.5), (12.5, 30.0)),
+        ("25:", (25.0, 30.0), (10.0, 25.0)),
+    ],
+)
+def test_split_span_fits_on_one_side_and_scores_on_the_other(spec, calibration, scored):
+    assert split_span(spec, 10.0, 30.0, "r") == (
+        CalibrationWindow(*calibration, "r"),
+        CalibrationWindow(*scored, "r"),
     )
-    assert split_span("second-half", 10.0, 30.0, "r") == (
-        CalibrationWindow(20.0, 30.0, "r"),
-        CalibrationWindow(10.0, 20.0, "r"),
-    )
-    assert split_span(":12.5", 10.0, 30.0, "r") == (
-        CalibrationWindow(10.0, 12.5, "r"),
-        CalibrationWindow(12.5, 30.0, "r"),
-    )
-    assert split_span("25:", 10.0, 30.0, "r") == (
-        CalibrationWindow(25.0, 30.0, "r"),
-        CalibrationWindow(10.0, 25.0, "r"),
-    )
+
+
+def test_split_span_default_is_leading_fraction_half():
     # the default is the first half, the same window leading_fraction gives
     assert split_span("first-half", 0.015, 899.5, "r")[0] == leading_fraction(
         0.015, 899.5, 0.5, "r"

@@ -62,25 +62,34 @@ def test_odometry_noise_fit_refuses_windows_without_ground_truth(synthetic):
         fit_odometry_noise(robot, CalibrationWindow(1.0, 9.0, "synthetic"), rate_hz=0.0)
 
 
-def test_odometry_model_recovers_latency_scales_and_noise_rate(synthetic):
-    rng = np.random.default_rng(7)
-    q_v, q_w = 1e-4, 4e-4  # variance rates (m²/s, rad²/s) of the white input noise
+#: Variance rates (m²/s, rad²/s) of the white input noise of :func:`_white_noise_team`.
+Q_V, Q_W = 1e-4, 4e-4
+
+
+def _white_noise_team(synthetic, seed, subjects, **motion):
+    """Commanded robots whose motion carries white input noise of the rates ``Q_V``, ``Q_W``
+    on a 100 Hz grid (``motion``: duration, command period, latency, scales)."""
+    rng = np.random.default_rng(seed)
     dt = 0.01
-    robots = [
+    return [
         synthetic.commanded_robot(
-            subject,
-            rng,
-            duration=200.0,
-            latency=0.2,
-            scale_v=0.9,
-            scale_w=1.1,
-            sigma_v=np.sqrt(q_v / dt),
-            sigma_w=np.sqrt(q_w / dt),
-            dt=dt,
-            command_period=4.0,
+            subject, rng, sigma_v=np.sqrt(Q_V / dt), sigma_w=np.sqrt(Q_W / dt), dt=dt, **motion
         )
-        for subject in (1, 2)
+        for subject in subjects
     ]
+
+
+def _assert_rates_at_the_typical_command(fit):
+    """The fitted rate at |v| ≈ 0.25 m/s, |ω| ≈ 0.25 rad/s is the true one."""
+    rate_v = fit.q_v0 + fit.k_v * 0.25
+    rate_w = fit.q_w0 + fit.k_w * 0.25 + fit.k_wv * 0.25
+    assert rate_v == pytest.approx(Q_V, rel=0.3)
+    assert rate_w == pytest.approx(Q_W, rel=0.3)
+
+
+def test_odometry_model_recovers_latency_scales_and_noise_rate(synthetic):
+    motion = {"duration": 200.0, "latency": 0.2, "scale_v": 0.9, "scale_w": 1.1}
+    robots = _white_noise_team(synthetic, 7, (1, 2), command_period=4.0, **motion)
     ds = synthetic.dataset(robots)
     window = CalibrationWindow(0.0, 200.0, "synthetic")
     fit = fit_odometry_model(ds, window, integration_s=1.0)
@@ -90,11 +99,7 @@ def test_odometry_model_recovers_latency_scales_and_noise_rate(synthetic):
     # (central differences of the ground truth round the command steps off: ~1 % low)
     assert fit.scale_v == pytest.approx((0.9, 0.9), rel=0.02)
     assert fit.scale_w == pytest.approx((1.1, 1.1), rel=0.02)
-    # the rate at the typical command (|v| ≈ 0.25 m/s, |ω| ≈ 0.25 rad/s) is the true one
-    rate_v = fit.q_v0 + fit.k_v * 0.25
-    rate_w = fit.q_w0 + fit.k_w * 0.25 + fit.k_wv * 0.25
-    assert rate_v == pytest.approx(q_v, rel=0.3)
-    assert rate_w == pytest.approx(q_w, rel=0.3)
+    _assert_rates_at_the_typical_command(fit)
     assert set(fit.to_dict()) >= {"latency_s", "scale_v", "q_v0", "calibration_window"}
 
 
@@ -103,28 +108,11 @@ def test_rates_over_long_windows_of_a_turning_robot_are_the_true_rates(synthetic
     chord between a window's ends falls well short of its path and the wrapped end-to-end
     heading difference is off by 2π; the path length and total turn along the ground truth are
     exact, and the fitted rates are the white input noise's."""
-    rng = np.random.default_rng(3)
-    q_v, q_w = 1e-4, 4e-4  # variance rates (m²/s, rad²/s) of the white input noise
-    dt = 0.01
-    robots = [
-        synthetic.commanded_robot(
-            subject,
-            rng,
-            duration=600.0,
-            sigma_v=np.sqrt(q_v / dt),
-            sigma_w=np.sqrt(q_w / dt),
-            dt=dt,
-            command_period=8.0,
-        )
-        for subject in (1, 2, 3)
-    ]
+    robots = _white_noise_team(synthetic, 3, (1, 2, 3), duration=600.0, command_period=8.0)
     fit = fit_odometry_model(
         synthetic.dataset(robots), CalibrationWindow(0.0, 600.0, "synthetic"), integration_s=8.0
     )
-    rate_v = fit.q_v0 + fit.k_v * 0.25
-    rate_w = fit.q_w0 + fit.k_w * 0.25 + fit.k_wv * 0.25
-    assert rate_v == pytest.approx(q_v, rel=0.3)
-    assert rate_w == pytest.approx(q_w, rel=0.3)
+    _assert_rates_at_the_typical_command(fit)
 
 
 def test_odometry_model_recovers_a_first_order_lag(synthetic):
