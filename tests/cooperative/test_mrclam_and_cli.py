@@ -122,9 +122,41 @@ def test_mrclam_cl_on_a_cut_of_run6_states_its_windows(mrclam_run6_cut, tmp_path
         assert all(np.isfinite(v) for v in case["heldout"].values())
     for target in summary["targets"].values():
         assert np.isfinite(target["pos_rmse_m"]) and np.isfinite(target["nees_pct_beyond"])
+    inflation = summary["fit"]["odometry_inflation"]
+    assert inflation["cases"] == ["range_bearing/all_landmarks", "bearing/all_landmarks"]
     report = (out / "report.md").read_text()
+    if split == "first-half":  # 30 s from the start, the robots' first command included: too
+        assert inflation["k"] == 1.0 and not inflation["tried"]  # little odometry to fit on
+        assert "odometry" in inflation["not_fitted"]
+        assert "no factor on it could be fitted" in report
+    else:
+        assert not inflation["not_fitted"] and inflation["tried"][-1]["k"] == inflation["k"]
+        assert f"odometry σ multiplied by {inflation['k']:g}" in report
+    # the factor is checked on the second half of the calibration window, not on the scored part
+    assert inflation["fitted_on"]["start_s"] == fitted["start_s"]
+    assert inflation["fitted_on"]["end_s"] == inflation["checked_on"]["start_s"]
+    assert inflation["checked_on"]["end_s"] == fitted["end_s"]
     assert f"Scored on [{held['start_s']:.0f}, {held['end_s']:.0f}] s" in report
     assert f"calibration window [{fitted['start_s']:.0f}, {fitted['end_s']:.0f}] s" in report
+
+
+def test_odometry_inflation_reads_the_calibration_window_only(mrclam_run6_cut, tmp_path):
+    """The factor on the odometry noise is chosen by replaying the calibration window alone:
+    two recordings that share their first 60 s and differ after it (one stops at 60 s, one goes
+    on to 120 s) give the same factor, tried the same way, for a window inside those 60 s
+    (models fitted on its first half, replayed over its second)."""
+    from relloc.calibration.window import CalibrationWindow
+    from relloc.datasets.mrclam import load_mrclam
+    from relloc.experiments.mrclam_cl import ODOMETRY_INFLATION_GRID, fit_models
+
+    fits = []
+    for keep_s in (60.0, 120.0):
+        ds = load_mrclam(mrclam_run6_cut(tmp_path / f"cut{keep_s:g}", keep_s=keep_s))
+        t0 = max(float(ds.robot(r).groundtruth.t[0]) for r in ds.robot_ids)
+        fits.append(fit_models(ds, CalibrationWindow(t0, 55.0, "cut")).odometry_inflation)
+    assert fits[0] == fits[1]
+    tried = [k for k, _ in fits[0].tried]
+    assert tried == list(ODOMETRY_INFLATION_GRID[: len(tried)]) and fits[0].k == tried[-1]
 
 
 def test_mrclam_missing_file_is_a_data_error(synthetic_mrclam, tmp_path, capsys):

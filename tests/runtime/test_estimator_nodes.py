@@ -10,6 +10,7 @@ loopback Zenoh.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import numpy as np
@@ -270,9 +271,13 @@ def _handmade_fit(folder: str):
 
 
 def test_fitted_models_round_trip_through_fit_json(tmp_path):
+    from relloc.calibration.window import CalibrationWindow
+    from relloc.experiments.mrclam_cl import OdometryInflation
     from relloc.experiments.mrclam_team import load_fit, save_fit
 
-    fit = _handmade_fit("somewhere")
+    halves = CalibrationWindow(0.0, 200.0, "x"), CalibrationWindow(200.0, 400.0, "x")
+    inflation = OdometryInflation(1.5, True, 5.0, ((1.0, 9.5), (1.5, 4.25)), *halves)
+    fit = dataclasses.replace(_handmade_fit("somewhere"), odometry_inflation=inflation)
     save_fit(fit, tmp_path / "fit.json")
     assert load_fit(tmp_path / "fit.json") == fit
     (tmp_path / "bad.json").write_text('{"odometry": {}}')

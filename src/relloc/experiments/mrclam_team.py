@@ -37,6 +37,7 @@ from relloc.experiments.mrclam_cl import (
     MODES,
     OUTPUT_DT_S,
     FittedModels,
+    OdometryInflation,
     Prepared,
     build_recording,
     case_settings,
@@ -89,9 +90,22 @@ def load_fit(path: Path) -> FittedModels:
             out["calibration_window"] = CalibrationWindow(**d["calibration_window"])
             return {f.name: out[f.name] for f in dataclasses.fields(cls)}
 
+        inflation = raw["odometry_inflation"]
         return FittedModels(
             odometry=OdometryModelFit(**fields(OdometryModelFit, raw["odometry"])),
             camera=CameraFit(**fields(CameraFit, raw["camera"])),
+            odometry_inflation=OdometryInflation(
+                k=float(inflation["k"]),
+                met=bool(inflation["met"]),
+                target_percent=float(inflation["target_percent"]),
+                tried=tuple((float(k), float(p)) for k, p in inflation["tried"]),
+                not_fitted=str(inflation["not_fitted"]),
+                **{
+                    side: CalibrationWindow(**inflation[side])
+                    for side in ("fitted_on", "checked_on")
+                    if inflation[side] is not None
+                },
+            ),
         )
     except (OSError, ValueError, KeyError, TypeError) as exc:
         raise DataError(f"{path}: not the fitted models of relloc team up ({exc})") from None
