@@ -5,7 +5,11 @@ import math
 
 import pytest
 
-from relloc.calibration.inflation import autocorrelation_inflation, gauss_markov_inflation
+from relloc.calibration.inflation import (
+    autocorrelation_inflation,
+    gauss_markov_inflation,
+    smallest_factor,
+)
 from relloc.errors import ConfigError
 
 
@@ -39,3 +43,25 @@ def test_bad_inputs_are_refused():
         autocorrelation_inflation({1.0: 0.5}, 0.0)
     with pytest.raises(ConfigError, match="period"):
         gauss_markov_inflation(0.0, 1.0)
+
+
+def test_smallest_factor_stops_at_the_first_that_meets_the_target():
+    evaluated = []
+
+    def percent(k):
+        evaluated.append(k)
+        return 20.0 / k**2  # 20, 8.9, 5, 2.2 % for ×1, ×1.5, ×2, ×3
+
+    assert smallest_factor((1.0, 1.5, 2.0, 3.0), 5.0, percent) == (
+        2.0,
+        True,
+        ((1.0, 20.0), (1.5, pytest.approx(80 / 9)), (2.0, 5.0)),
+    )
+    assert evaluated == [1.0, 1.5, 2.0]  # the larger factors are never replayed
+
+
+def test_smallest_factor_keeps_the_largest_when_none_meets_the_target():
+    k, met, tried = smallest_factor((1.0, 2.0), 1.0, lambda k: 10.0 / k)
+    assert (k, met, [f for f, _ in tried]) == (2.0, False, [1.0, 2.0])
+    with pytest.raises(ConfigError, match="empty grid"):
+        smallest_factor((), 5.0, lambda k: 0.0)

@@ -16,13 +16,16 @@ burst of readings is then under-weighted, the price of keeping a white-noise fil
   ``CORRELATION_HORIZON_S``) — for residuals whose correlation is measured, not modelled;
 - :func:`gauss_markov_inflation`: the closed form for a first-order Gauss–Markov error of time
   constant ``τ`` sampled every ``Δ``: ``ρ(kΔ) = aᵏ`` with ``a = exp(−Δ/τ)``, so
-  ``f = 1 + 2a/(1 − a) = (1 + a)/(1 − a)`` (1 when τ = 0, white).
+  ``f = 1 + 2a/(1 − a) = (1 + a)/(1 − a)`` (1 when τ = 0, white);
+- :func:`smallest_factor`: where the correlation is not measured but its effect is, the
+  smallest factor of a grid at which a replay's share of NEES beyond its χ² bound meets a
+  target (the noise inflations of the seed-000 replay and of mrclam-cl).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
@@ -57,3 +60,19 @@ def gauss_markov_inflation(period: float, tau: float) -> float:
         raise ConfigError(f"gauss_markov_inflation: period must be > 0, got {period}")
     a = math.exp(-period / tau)
     return (1.0 + a) / (1.0 - a)
+
+
+def smallest_factor(
+    grid: Sequence[float], target_percent: float, percent_beyond: Callable[[float], float]
+) -> tuple[float, bool, tuple[tuple[float, float], ...]]:
+    """``(k, met, tried)``: the first factor ``k`` of ``grid`` (in order) whose
+    ``percent_beyond(k)`` is at most ``target_percent``, or the grid's last (``met`` false);
+    ``tried`` the ``(k, percent)`` of every factor evaluated, up to that one."""
+    if not grid:
+        raise ConfigError("smallest_factor: an empty grid of factors")
+    tried: list[tuple[float, float]] = []
+    for k in grid:
+        tried.append((k, float(percent_beyond(k))))
+        if tried[-1][1] <= target_percent:
+            break
+    return tried[-1][0], tried[-1][1] <= target_percent, tuple(tried)

@@ -76,7 +76,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from relloc.calibration.camera import CameraFit, corrected_readings, fit_camera, landmark_wait_s
-from relloc.calibration.inflation import CORRELATION_HORIZON_S
+from relloc.calibration.inflation import CORRELATION_HORIZON_S, smallest_factor
 from relloc.calibration.odometry import (
     OdometryModelFit,
     calibrated_team,
@@ -236,11 +236,11 @@ def fit_odometry_inflation(ds: Any, window: CalibrationWindow) -> OdometryInflat
     use no GPS fix, the only random input)."""
     fitted_on = leading_fraction(window.start_s, window.end_s, 0.5, window.source)
     checked_on = CalibrationWindow(fitted_on.end_s, window.end_s, window.source)
-    halves = {"fitted_on": fitted_on, "checked_on": checked_on}
+    unfitted = OdometryInflation(met=False, fitted_on=fitted_on, checked_on=checked_on)
     try:
         fitted = fit_error_models(ds, fitted_on)
     except DataError as exc:
-        return OdometryInflation(met=False, not_fitted=str(exc), **halves)
+        return replace(unfitted, not_fitted=str(exc))
     prepared = build_recording(ds, fitted, np.random.default_rng(0))
     t = prepared.out_t[
         (prepared.out_t >= checked_on.start_s) & (prepared.out_t <= checked_on.end_s)
@@ -248,33 +248,24 @@ def fit_odometry_inflation(ds: Any, window: CalibrationWindow) -> OdometryInflat
     valid = np.all([ds.robot(r).groundtruth.at(t).valid for r in ds.robot_ids], axis=0)
     if np.count_nonzero(valid) < 2:
         reason = f"{checked_on.describe()}: no two output times where every robot has ground truth"
-        return OdometryInflation(met=False, not_fitted=reason, **halves)
+        return replace(unfitted, not_fitted=reason)
     t = t[int(np.argmax(valid)) :]
     check = replace(prepared, prior=_truth_prior(ds, float(t[0])), t_start=float(t[0]))
     n_lm = prepared.recording.landmarks.shape[0]
-    tried: list[tuple[float, float]] = []
-    for k in ODOMETRY_INFLATION_GRID:
+
+    def percent_beyond(k: float) -> float:
         inflated = replace(fitted, odometry_inflation=OdometryInflation(k=k))
-        percents = [
-            evaluate(
-                run_filter(
-                    check, case_settings(mode, anchors, inflated, prepared.two_landmarks, n_lm), t
-                ),
-                ds,
-                t,
-                float(t[0]),
-            )["nees_pct_beyond"]
-            for mode, anchors in INFLATION_CASES
-        ]
-        tried.append((k, float(np.mean(percents))))
-        if tried[-1][1] <= ODOMETRY_INFLATION_TARGET_PCT:
-            break
-    return OdometryInflation(
-        k=tried[-1][0],
-        met=tried[-1][1] <= ODOMETRY_INFLATION_TARGET_PCT,
-        tried=tuple(tried),
-        **halves,
+        percents = []
+        for mode, anchors in INFLATION_CASES:
+            settings = case_settings(mode, anchors, inflated, prepared.two_landmarks, n_lm)
+            run = run_filter(check, settings, t)
+            percents.append(evaluate(run, ds, t, float(t[0]))["nees_pct_beyond"])
+        return float(np.mean(percents))
+
+    k, met, tried = smallest_factor(
+        ODOMETRY_INFLATION_GRID, ODOMETRY_INFLATION_TARGET_PCT, percent_beyond
     )
+    return replace(unfitted, k=k, met=met, tried=tried)
 
 
 def _truth_prior(ds: Any, t: float) -> Gaussian:

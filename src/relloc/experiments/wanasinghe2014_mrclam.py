@@ -75,6 +75,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.calibration.inflation import smallest_factor
 from relloc.calibration.odometry import (
     OdometryModelFit,
     OdometryNoiseFit,
@@ -633,16 +634,16 @@ def fit_noise_inflation(
         _cut(settings, ds, recording, w.start_s, w.end_s, pair, fitted.fits) for w in stretches
     ]
     n = len(parts) * settings.inflation_draws
-    percents: list[float] = []
     samples = 0
-    for k in settings.inflation_grid:
-        inflated = [_inflated_by(p, k) for p in parts]
+
+    def percent_beyond(k: float) -> float:
+        nonlocal samples
         counts = run_monte_carlo(
             inflation_task,
             n,
             seed,
             executor=executor,
-            task_args=(inflated, settings, steady_state_s),
+            task_args=([_inflated_by(p, k) for p in parts], settings, steady_state_s),
             description=(
                 f"seed 000: MRCLAM noise inflation x{k:g}, {fitted.odometry_kind} odometry "
                 "(calibration window)"
@@ -650,16 +651,17 @@ def fit_noise_inflation(
             quiet=quiet,
         )
         beyond, samples = sum(c[0] for c in counts), sum(c[1] for c in counts)
-        percents.append(100.0 * beyond / max(samples, 1))
-        if percents[-1] <= settings.inflation_target_percent:
-            break
-    met = percents[-1] <= settings.inflation_target_percent
+        return 100.0 * beyond / max(samples, 1)
+
+    k, met, tried = smallest_factor(
+        settings.inflation_grid, settings.inflation_target_percent, percent_beyond
+    )
     return InflationFit(
-        k=settings.inflation_grid[len(percents) - 1],
+        k=k,
         met=met,
         target_percent=settings.inflation_target_percent,
         grid=settings.inflation_grid,
-        yaw_percent_beyond=tuple(percents),
+        yaw_percent_beyond=tuple(p for _, p in tried),
         samples=samples,
         stretches=stretches,
         draws=settings.inflation_draws,
