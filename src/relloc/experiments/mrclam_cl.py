@@ -202,6 +202,7 @@ class FittedModels:
 
 
 def _window_dict(window: CalibrationWindow | None) -> dict[str, Any] | None:
+    """``window.to_dict()``, ``None`` where there is no window."""
     return None if window is None else window.to_dict()
 
 

@@ -99,16 +99,18 @@ def load_fit(path: Path) -> FittedModels:
                 met=bool(inflation["met"]),
                 target_percent=float(inflation["target_percent"]),
                 tried=tuple((float(k), float(p)) for k, p in inflation["tried"]),
+                fitted_on=_window_or_none(inflation["fitted_on"]),
+                checked_on=_window_or_none(inflation["checked_on"]),
                 not_fitted=str(inflation["not_fitted"]),
-                **{
-                    side: CalibrationWindow(**inflation[side])
-                    for side in ("fitted_on", "checked_on")
-                    if inflation[side] is not None
-                },
             ),
         )
     except (OSError, ValueError, KeyError, TypeError) as exc:
         raise DataError(f"{path}: not the fitted models of relloc team up ({exc})") from None
+
+
+def _window_or_none(d: dict[str, Any] | None) -> CalibrationWindow | None:
+    """A window :func:`save_fit` wrote (``None`` where there was none)."""
+    return None if d is None else CalibrationWindow(**d)
 
 
 def parse_case(case: str) -> tuple[str, str]:
