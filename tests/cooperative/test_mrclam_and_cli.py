@@ -140,6 +140,38 @@ def test_mrclam_cl_on_a_cut_of_run6_states_its_windows(mrclam_run6_cut, tmp_path
     assert f"calibration window [{fitted['start_s']:.0f}, {fitted['end_s']:.0f}] s" in report
 
 
+def test_mrclam_cl_figures_do_not_depend_on_the_world_frame_clock_or_barcodes(
+    mrclam_run6_cut, mrclam_run6_moved, tmp_path
+):
+    """Another run in every respect a pipeline could wrongly depend on: the same 120 s of three
+    robots recorded in a world frame turned by 2 rad and shifted, on a clock 123456.789 s later
+    and with other robot barcodes (``tests/conftest.py``). Ranges, bearings and odometry are
+    body-frame readings, so the fitted models and every held-out figure must agree; they differ
+    only by the stamps' and poses' rounding in the files."""
+    cut = mrclam_run6_cut(tmp_path / "cut", robots=(1, 3, 5), keep_s=120.0)
+    summaries = []
+    for name, folder in (("cut", cut), ("moved", mrclam_run6_moved(cut, tmp_path / "moved"))):
+        out = tmp_path / f"out_{name}"
+        args = ["reproduce", "mrclam-cl", "--out", str(out), "--dataset", str(folder)]
+        assert (
+            main([*args, "--executor", "serial", "--quiet", "--calibration-window", "second-half"])
+            == 0
+        )
+        summaries.append(json.loads((out / "summary.json").read_text()))
+    here, moved = summaries
+    assert moved["robots"] == here["robots"] == [1, 3, 5]
+    for edge in ("start_s", "end_s"):
+        assert moved["scored_on"][edge] == pytest.approx(here["scored_on"][edge], abs=1e-3)
+    assert moved["fit"]["odometry_inflation"]["k"] == here["fit"]["odometry_inflation"]["k"]
+    for key in ("scale_v", "scale_w"):
+        np.testing.assert_allclose(moved["fit"][key], here["fit"][key], rtol=1e-3)
+    for mode, target in here["targets"].items():
+        other = moved["targets"][mode]
+        for figure in ("pos_rmse_m", "heading_rmse_rad", "improvement_over_dead_reckoning"):
+            assert other[figure] == pytest.approx(target[figure], rel=5e-3), (mode, figure)
+        assert other["nees_pct_beyond"] == pytest.approx(target["nees_pct_beyond"], abs=1.0)
+
+
 def test_odometry_inflation_reads_the_calibration_window_only(mrclam_run6_cut, tmp_path):
     """The factor on the odometry noise is chosen by replaying the calibration window alone:
     two recordings that share their first 60 s and differ after it (one stops at 60 s, one goes
