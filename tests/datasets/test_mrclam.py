@@ -19,14 +19,14 @@ def _write(folder: Path, name: str, rows: list[str]) -> None:
     (folder / name).write_text(HEADER + "\n".join(rows) + "\n")
 
 
-def _small_dataset(folder: Path) -> Path:
+def _small_dataset(folder: Path, t0: float = T0) -> Path:
     """Two robots (subjects 1, 2; barcodes 5, 14), one landmark (subject 3, barcode 63) and a
-    subject never seen (4, barcode 70)."""
+    subject never seen (4, barcode 70); the first stamp is ``t0``."""
     folder.mkdir(parents=True, exist_ok=True)
     _write(folder, "Barcodes.dat", ["1 5", "2 14", "3 63", "4 70"])
     _write(folder, "Landmark_Groundtruth.dat", ["3 1.0 2.0 0.001 0.002"])
     for n in (1, 2):
-        t = T0 + np.arange(0.0, 10.0, 0.1)
+        t = t0 + np.arange(0.0, 10.0, 0.1)
         # robot n turns through ±π so the circular interpolation is exercised
         theta = np.angle(np.exp(1j * (3.0 + 0.05 * n * np.arange(len(t)))))
         gt = [
@@ -34,11 +34,11 @@ def _small_dataset(folder: Path) -> Path:
             for i, (ti, th) in enumerate(zip(t, theta, strict=True))
         ]
         _write(folder, f"Robot{n}_Groundtruth.dat", gt)
-        odo = [f"{T0 + 1.0 + 0.2 * i:.3f} 0.1 {0.01 * n:.3f}" for i in range(40)]
+        odo = [f"{t0 + 1.0 + 0.2 * i:.3f} 0.1 {0.01 * n:.3f}" for i in range(40)]
         _write(folder, f"Robot{n}_Odometry.dat", odo)
         other = 14 if n == 1 else 5
-        meas = [f"{T0 + 2.0 + 0.5 * i:.3f} {other} 1.5 0.1" for i in range(10)]
-        meas.append(f"{T0 + 8.0:.3f} 63 2.5 -0.2")
+        meas = [f"{t0 + 2.0 + 0.5 * i:.3f} {other} 1.5 0.1" for i in range(10)]
+        meas.append(f"{t0 + 8.0:.3f} 63 2.5 -0.2")
         _write(folder, f"Robot{n}_Measurement.dat", meas)
     return folder
 
@@ -70,6 +70,23 @@ def test_clean_folder_loads_on_one_clock(tmp_path: Path) -> None:
     np.testing.assert_allclose(ds.landmarks.position(3), [1.0, 2.0])
     with pytest.raises(DataError, match="robot 7"):
         ds.robot(7)
+
+
+def test_relative_stamps_are_the_written_differences_whatever_the_epoch(tmp_path: Path) -> None:
+    """The same recording stamped on three dates (and on a clock from 0) loads with bitwise the
+    same relative times: the differences of the millisecond stamps as written. Read as floats
+    near 1.2e9 s the stamps carry errors up to 1.2e-7 s, which differ from date to date."""
+    epochs = (T0, 1_248_444_175.103, 1_371_234_567.891, 0.0)
+    loaded = [load_mrclam(_small_dataset(tmp_path / f"e{i}", t0)) for i, t0 in enumerate(epochs)]
+    odometry = np.round(1.0 + 0.2 * np.arange(40), 3)
+    for ds in loaded:
+        np.testing.assert_array_equal(ds.robot(1).odometry.t, odometry)
+        for n in (1, 2):
+            for table in ("groundtruth", "odometry", "measurements"):
+                t = getattr(ds.robot(n), table).t
+                np.testing.assert_array_equal(t, getattr(loaded[0].robot(n), table).t)
+    raw = np.loadtxt(tmp_path / "e2" / "Robot1_Odometry.dat") - epochs[2]
+    assert np.max(np.abs(raw[:, 0] - odometry)) > 1e-9  # what plain float differences give
 
 
 def test_groundtruth_interpolates_yaw_on_the_circle_and_flags_queries(tmp_path: Path) -> None:

@@ -206,6 +206,44 @@ def test_hidden_correspondence_turns_frames_into_scans(tmp_path: Path) -> None:
         assert bearings.origin[hit].tolist() == [camera.target[r]]
 
 
+def test_fits_and_scans_do_not_depend_on_the_world_frame_clock_or_barcodes(
+    mrclam_run6_cut, mrclam_run6_moved, tmp_path: Path
+) -> None:
+    """Another run in every respect the experiment could wrongly depend on: 110 s of three of
+    run 6's robots, and the same recorded in a world frame turned by 2 rad and shifted, on a
+    clock 123456.789 s later and with other robot barcodes (``tests/conftest.py``). The windows,
+    the field of view, every fitted model and the scans built from the camera frames (with the
+    same clutter draws) agree, up to the files' rounding of the poses (1e-8 m, 1e-6 rad)."""
+    cut = mrclam_run6_cut(tmp_path / "cut", robots=(1, 2, 3), keep_s=110.0)
+    here = mrclam_association._windows(cut)
+    moved = mrclam_association._windows(mrclam_run6_moved(cut, tmp_path / "moved"))
+    for w in (here, moved):  # the scored part begins where the calibration ends
+        assert w.t_start == w.calibration.end_s and w.t_end > w.t_start
+    assert (moved.t_start, moved.t_end) == (here.t_start, here.t_end)
+    assert moved.fov_fit.half_width_rad == here.fov_fit.half_width_rad
+    for key in ("sigma_v", "sigma_lateral", "sigma_w", "p_detect_all_frames", "widest_range_m"):
+        assert moved.models.fits[key] == pytest.approx(here.models.fits[key], rel=1e-6), key
+    assert moved.models.fits["p_detect_in_view"]["p_detect"] == pytest.approx(
+        here.models.fits["p_detect_in_view"]["p_detect"], rel=1e-6
+    )
+    for key in ("sigma_range", "sigma_bearing"):
+        assert getattr(moved.models.camera_fit, key) == pytest.approx(
+            getattr(here.models.camera_fit, key), rel=1e-6
+        )
+    np.testing.assert_allclose(moved.models.odometry.scale_w, here.models.odometry.scale_w, 1e-6)
+    scans = [
+        mrclam_association._hidden_correspondence(
+            w.raw, w.t_start, w.t_end, w.fov_fit.half_width_rad, np.random.default_rng(5)
+        )
+        for w in (here, moved)
+    ]
+    assert scans[0][1] == scans[1][1] and scans[0][1]["robot"] > 0
+    bearings = [rec.measurements.of_kind("bearing") for rec, _ in scans]
+    np.testing.assert_array_equal(bearings[0].origin, bearings[1].origin)
+    # the bearings are corrected by the camera's bias fit, itself fitted against the poses
+    np.testing.assert_allclose(bearings[0].value, bearings[1].value, atol=1e-6)
+
+
 def test_run6_camera_sees_teammates_only_inside_its_field_of_view() -> None:
     """On run 6's calibration window, the in-view P_D the unknown-correspondence model uses is
     well above the all-frames share, and the ground truth puts hardly any detection outside

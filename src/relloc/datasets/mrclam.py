@@ -40,7 +40,9 @@ What the loader guarantees
 --------------------------
 - **One clock.** Every time is relative to ``t0_unix``, the earliest time stamp of any robot
   row the loader *kept* (a skipped row never sets it); the absolute offset is kept in
-  :attr:`MrclamDataset.t0_unix`.
+  :attr:`MrclamDataset.t0_unix`. The relative times are rounded to the finest decimal step the
+  absolute stamps resolve (1 µs at Unix times), so they are the differences of the stamps as
+  written and the same whatever the recording's date (``_clock_decimals``).
 - **Nothing lost silently.** Every data row of every file is kept or skipped, and for each file
   ``rows_read == rows_kept + n_skipped`` (:class:`FileReport`). A row that is not ASCII, has the
   wrong number of columns, a non-numeric, non-finite or out-of-bounds value, a non-integer id,
@@ -73,7 +75,7 @@ from __future__ import annotations
 import math
 import numbers
 import re
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Literal
@@ -763,11 +765,12 @@ def load_mrclam(folder: Path | str, options: MrclamOptions | None = None) -> Mrc
     }
     # The common clock: the earliest time stamp of any row kept (every ground truth has one).
     t0 = min(_earliest_time(robot) for robot in on_unix_clock.values())
+    decimals = _clock_decimals(on_unix_clock.values())
     return MrclamDataset(
         path=folder,
         t0_unix=t0,
         barcodes=dict(barcode_to_subject),
-        robots={n: _on_clock(robot, t0) for n, robot in on_unix_clock.items()},
+        robots={n: _on_clock(robot, t0, decimals) for n, robot in on_unix_clock.items()},
         landmarks=landmarks,
         report=report,
     )
@@ -775,17 +778,50 @@ def load_mrclam(folder: Path | str, options: MrclamOptions | None = None) -> Mrc
 
 def _earliest_time(robot: RobotData) -> float:
     """Earliest time stamp in any of the robot's (time-sorted, possibly empty) tables."""
-    tables = (robot.groundtruth.t, robot.odometry.t, robot.measurements.t)
-    return min(float(t[0]) for t in tables if len(t))
+    return min(float(t[0]) for t in _tables(robot) if len(t))
 
 
-def _on_clock(robot: RobotData, t0: float) -> RobotData:
-    """``robot`` with every time stamp made relative to ``t0``."""
+#: Finest decimal step the relative clock is rounded to (:func:`_clock_decimals`).
+MAX_CLOCK_DECIMALS = 12
+
+
+def _clock_decimals(robots: Iterable[RobotData]) -> int:
+    """Decimals of the finest step ``10⁻ᵈ`` that the absolute stamps resolve: the smallest
+    ``d`` with ``10⁻ᵈ ≥ ulp(|t|)`` at the largest stamp (at most :data:`MAX_CLOCK_DECIMALS`).
+
+    A decimal stamp read into a float carries an error of up to half an ulp — 1.2e-7 s at Unix
+    times near 1.2e9 s, where the ulp is 2.4e-7 s and ``d`` = 6. Rounded to ``10⁻ᵈ``, the
+    difference of two stamps is the difference of the decimals written in the file (for a file
+    written to ``d`` decimals or fewer, as MRCLAM's milliseconds are) and no longer depends on
+    the clock's epoch; without it a sample written at the same millisecond as a grid point lands
+    on either side of it by the float error alone, and fits that hold a command between stamps
+    change with the date of the recording."""
+    largest = max(
+        (float(np.max(np.abs(t))) for r in robots for t in _tables(r) if len(t)), default=0.0
+    )
+    ulp = float(np.spacing(largest)) if largest > 0 else 0.0
+    if ulp <= 10.0**-MAX_CLOCK_DECIMALS:
+        return MAX_CLOCK_DECIMALS
+    return int(-math.ceil(math.log10(ulp)))
+
+
+def _tables(robot: RobotData) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """The time columns of the robot's three tables."""
+    return robot.groundtruth.t, robot.odometry.t, robot.measurements.t
+
+
+def _on_clock(robot: RobotData, t0: float, decimals: int) -> RobotData:
+    """``robot`` with every time stamp made relative to ``t0``, rounded to ``decimals``
+    (:func:`_clock_decimals`)."""
+
+    def relative(t: FloatArray) -> FloatArray:
+        return np.round(t - t0, decimals)
+
     return replace(
         robot,
-        groundtruth=replace(robot.groundtruth, t=robot.groundtruth.t - t0),
-        odometry=replace(robot.odometry, t=robot.odometry.t - t0),
-        measurements=replace(robot.measurements, t=robot.measurements.t - t0),
+        groundtruth=replace(robot.groundtruth, t=relative(robot.groundtruth.t)),
+        odometry=replace(robot.odometry, t=relative(robot.odometry.t)),
+        measurements=replace(robot.measurements, t=relative(robot.measurements.t)),
     )
 
 
