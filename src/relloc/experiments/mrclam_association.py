@@ -88,7 +88,11 @@ both with the fitted, correlation-inflated range σ (0.38 m against 0.2 m): with
 but σ 0.2 m / 0.03 rad (run 0's recording only) the camera model tracked 0.45 and the bound was
 0.866, so those two losses are the range σ's (the price of a white-noise filter fed every
 reading of a correlated error, :mod:`relloc.calibration.inflation`). The tracks are lost to
-drift that a better dead reckoning does not remove (report.md, "Why tracks are lost").
+drift that a better dead reckoning does not remove (report.md, "Why tracks are lost"). Those
+figures predate the loader's rounding of the relative stamps to 1 µs
+(:mod:`relloc.datasets.mrclam`), which moved every stamp by up to 1.2e-7 s and the calibrated
+figures to 0.625 (0.579–0.716), tracked 0.336, wrong robot 0.204: a change of the kind the
+spread above samples, and inside it.
 
 What a filter could score (``association_bound``): the fuser's own bearing step with one track
 per teammate at its true relative pose (:mod:`relloc.experiments.association_bound`), on run
