@@ -8,6 +8,7 @@ import pytest
 from relloc.calibration.inflation import (
     autocorrelation_inflation,
     gauss_markov_inflation,
+    search_text,
     smallest_factor,
 )
 from relloc.errors import ConfigError
@@ -65,3 +66,9 @@ def test_smallest_factor_keeps_the_largest_when_none_meets_the_target():
     assert (k, met, [f for f, _ in tried]) == (2.0, False, [1.0, 2.0])
     with pytest.raises(ConfigError, match="empty grid"):
         smallest_factor((), 5.0, lambda k: 0.0)
+
+
+def test_search_text_states_the_verdict_and_every_factor_tried():
+    assert search_text([(1.0, 5.42), (1.5, 0.6)], True) == "met; tried ×1: 5.4 %, ×1.5: 0.6 %"
+    text = search_text([(1.0, 30.0), (4.0, 12.0)], False)
+    assert text.startswith("not met by any factor tried") and text.endswith("×4: 12.0 %")

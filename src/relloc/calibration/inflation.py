@@ -19,7 +19,8 @@ burst of readings is then under-weighted, the price of keeping a white-noise fil
   ``f = 1 + 2a/(1 − a) = (1 + a)/(1 − a)`` (1 when τ = 0, white);
 - :func:`smallest_factor`: where the correlation is not measured but its effect is, the
   smallest factor of a grid at which a replay's share of NEES beyond its χ² bound meets a
-  target (the noise inflations of the seed-000 replay and of mrclam-cl).
+  target (the noise inflations of the seed-000 replay and of mrclam-cl), and
+  :func:`search_text`, the reports' sentence on such a search.
 """
 
 from __future__ import annotations
@@ -76,3 +77,10 @@ def smallest_factor(
         if tried[-1][1] <= target_percent:
             break
     return tried[-1][0], tried[-1][1] <= target_percent, tuple(tried)
+
+
+def search_text(tried: Sequence[tuple[float, float]], met: bool) -> str:
+    """A report's account of a :func:`smallest_factor` search: whether the target was met and
+    the share beyond the bound at every factor tried, e.g. ``met; tried ×1: 5.4 %, ×1.5: 0.6 %``."""
+    verdict = "met" if met else "not met by any factor tried; the largest is used"
+    return f"{verdict}; tried " + ", ".join(f"×{k:g}: {p:.1f} %" for k, p in tried)

@@ -76,7 +76,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from relloc.calibration.camera import CameraFit, corrected_readings, fit_camera, landmark_wait_s
-from relloc.calibration.inflation import CORRELATION_HORIZON_S, smallest_factor
+from relloc.calibration.inflation import CORRELATION_HORIZON_S, search_text, smallest_factor
 from relloc.calibration.odometry import (
     OdometryModelFit,
     calibrated_team,
@@ -578,16 +578,14 @@ def _inflation_text(fit: dict[str, Any]) -> str:
     inf = fit["odometry_inflation"]
     if inf["not_fitted"]:
         return f"the odometry σ as fitted: no factor on it could be fitted ({inf['not_fitted']})."
-    tried = ", ".join(f"×{t['k']:g}: {t['nees_pct_beyond']:.1f} %" for t in inf["tried"])
-    verdict = "met" if inf["met"] else "not met by any factor tried; the largest kept"
+    search = search_text([(t["k"], t["nees_pct_beyond"]) for t in inf["tried"]], inf["met"])
     return (
         f"the odometry σ multiplied by {inf['k']:g} (variance rates by its square): the smallest "
         f"factor at which {' and '.join(inf['cases'])}, with every model fitted on the first "
         f"half of the calibration window, [{inf['fitted_on']['start_s']:.0f}, "
         f"{inf['fitted_on']['end_s']:.0f}] s, and replayed over its second half, "
         f"[{inf['checked_on']['start_s']:.0f}, {inf['checked_on']['end_s']:.0f}] s, keep NEES "
-        f"beyond χ²₃(0.95) at most {inf['target_percent']:g} % of the time ({verdict}; tried "
-        f"{tried})."
+        f"beyond χ²₃(0.95) at most {inf['target_percent']:g} % of the time ({search})."
     )
 
 

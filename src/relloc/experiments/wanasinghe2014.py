@@ -89,6 +89,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.calibration.inflation import search_text
 from relloc.datasets.paths import default_mrclam_dataset
 from relloc.errors import ConfigError
 from relloc.estimators.initialisation import known_pose
@@ -1306,14 +1307,13 @@ def turn_rate_section(s: dict[str, Any]) -> list[str]:
 
 def inflation_text(fit: dict[str, Any]) -> str:
     """How the calibrated noise inflation was chosen (:func:`fit_noise_inflation`)."""
-    tried = ", ".join(f"×{t['k']:g}: {t['yaw_percent_beyond']:.1f} %" for t in fit["tried"])
+    search = search_text([(t["k"], t["yaw_percent_beyond"]) for t in fit["tried"]], fit["met"])
     spans = ", ".join(f"[{w['start_s']:.1f}, {w['end_s']:.1f}]" for w in fit["stretches"])
-    verdict = "met" if fit["met"] else "not met by any factor tried; the largest is used"
     return (
         f"that σ multiplied by **×{fit['k']:g}**, the smallest factor at which the PLKF replayed "
         f"on the calibration window ({spans} s, {fit['draws_per_stretch']} draws each, seed "
         f"{fit['seed']}) keeps its relative-yaw NEES beyond χ²(1, 0.95) at most "
-        f"{fit['target_percent']:g} % of the steady-state updates ({verdict}; tried {tried})."
+        f"{fit['target_percent']:g} % of the steady-state updates ({search})."
     )
 
 
