@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 from relloc.calibration.odometry import ground_truth_velocities
+from relloc.calibration.window import CalibrationWindow
 from relloc.datasets.mrclam import load_mrclam
 from relloc.errors import ConfigError, DataError
 from relloc.experiments.registry import ReproduceArgs
@@ -35,6 +36,7 @@ from relloc.experiments.wanasinghe2014_mrclam import (
     prepare_replays,
     replay_recording,
     replay_task,
+    spread_stretches,
 )
 from relloc.experiments.wanasinghe2014_sim import SimSettings, team_task
 from relloc.models.measurement import range_bearing
@@ -254,15 +256,33 @@ def test_noise_inflation_is_fitted_on_the_calibration_window_only(small_dataset:
         np.testing.assert_allclose(
             od.sigma, fit.k * np.array([f.sigma_v, f.sigma_lateral, 0.0, f.sigma_w])
         )
-    # a target every factor meets stops at the first one
+    # every stretch of this short window is replayed (fewer than max_inflation_stretches)
+    assert len(fit.stretches) == fit.stretches_in_window >= 2
+    # a target every factor meets stops at the first one; capped at one stretch, the fit
+    # replays the window's first
     lax = prepare_replays(
-        _short_replay(small_dataset, inflation_target_percent=99.99),
+        _short_replay(small_dataset, inflation_target_percent=99.99, max_inflation_stretches=1),
         steady_state_s=3.0,
         seed=8203,
         executor="serial",
         quiet=True,
     )["calibrated"].inflation
     assert lax is not None and lax.k == 1.0 and lax.met and len(lax.yaw_percent_beyond) == 1
+    assert lax.stretches == fit.stretches[:1] and lax.samples < fit.samples
+    assert lax.stretches_in_window == fit.stretches_in_window
+    assert lax.to_dict()["stretches_in_window"] == fit.stretches_in_window
+
+
+def test_spread_stretches_keeps_the_first_the_last_and_evenly_between() -> None:
+    """The inflation fit's cap on a long recording: of 26 stretches, 8 are replayed, numbered
+    0, 4, 7, 11, 14, 18, 21, 25 (round(i·25/7)); a window with no more than the cap keeps all,
+    a cap of one keeps the first."""
+    windows = tuple(CalibrationWindow(10.0 * i, 10.0 * (i + 1), "w") for i in range(26))
+    kept = spread_stretches(windows, 8)
+    assert [round(w.start_s / 10.0) for w in kept] == [0, 4, 7, 11, 14, 18, 21, 25]
+    assert spread_stretches(windows[:8], 8) == windows[:8]
+    assert spread_stretches(windows, 1) == windows[:1]
+    assert spread_stretches(windows[:2], 3) == windows[:2]
 
 
 def test_noise_inflation_settings_are_checked(small_dataset: Path) -> None:
@@ -272,6 +292,9 @@ def test_noise_inflation_settings_are_checked(small_dataset: Path) -> None:
         {"inflation_grid": ()},
         {"inflation_draws": 0},
         {"inflation_target_percent": 0.0},
+        {"max_inflation_stretches": 0},
+        {"max_inflation_stretches": 2.5},
+        {"max_inflation_stretches": True},
     ):
         with pytest.raises(ConfigError, match="inflation"):
             _short_replay(small_dataset, **bad)

@@ -1305,13 +1305,21 @@ def turn_rate_section(s: dict[str, Any]) -> list[str]:
     ]
 
 
+def _stretch_count(fit: dict[str, Any]) -> str:
+    """ "k of the window's n stretches: " when the inflation fit replayed only some of them
+    (:func:`relloc.experiments.wanasinghe2014_mrclam.spread_stretches`), else nothing."""
+    used, held = len(fit["stretches"]), fit["stretches_in_window"]
+    return "" if used == held else f"{used} of the window's {held} stretches: "
+
+
 def inflation_text(fit: dict[str, Any]) -> str:
     """How the calibrated noise inflation was chosen (:func:`fit_noise_inflation`)."""
     search = search_text([(t["k"], t["yaw_percent_beyond"]) for t in fit["tried"]], fit["met"])
     spans = ", ".join(f"[{w['start_s']:.1f}, {w['end_s']:.1f}]" for w in fit["stretches"])
     return (
         f"that σ multiplied by **×{fit['k']:g}**, the smallest factor at which the PLKF replayed "
-        f"on the calibration window ({spans} s, {fit['draws_per_stretch']} draws each, seed "
+        f"on the calibration window ({_stretch_count(fit)}{spans} s, "
+        f"{fit['draws_per_stretch']} draws each, seed "
         f"{fit['seed']}) keeps its relative-yaw NEES beyond χ²(1, 0.95) at most "
         f"{fit['target_percent']:g} % of the steady-state updates ({search})."
     )

@@ -32,12 +32,13 @@ sensor settings. Here the same is done with two robots of any MRCLAM-layout data
     filter reads the observed robot's heading from the direction of its apparent motion, and
     errors that persist for seconds make that reading over-confident; so σ is then multiplied by
     the smallest factor ``k`` of ``inflation_grid`` at which the same PLKF, replayed on
-    stretches of the *calibration window* (:func:`fit_noise_inflation`), keeps its relative-yaw
-    NEES beyond χ²(1, 0.95) at most ``inflation_target_percent`` of the steady-state updates
-    (pooled over the Table-2 settings, stretches and draws). The yaw part is the test because
-    it is what the odometry noise governs: the position part of the noisy 10 Hz setting is
-    over-confident even with the true velocities (the pseudo-linear bias, which the
-    bias-compensated PLKF removes), and no odometry noise repairs that;
+    stretches of the *calibration window* (:func:`fit_noise_inflation`; at most
+    ``max_inflation_stretches`` of them, spread over it, :func:`spread_stretches`), keeps
+    its relative-yaw NEES beyond χ²(1, 0.95) at most ``inflation_target_percent`` of the
+    steady-state updates (pooled over the Table-2 settings, stretches and draws). The yaw part
+    is the test because it is what the odometry noise governs: the position part of the noisy
+    10 Hz setting is over-confident even with the true velocities (the pseudo-linear bias, which
+    the bias-compensated PLKF removes), and no odometry noise repairs that;
   - **raw** (the earlier replay, kept beside): the recorded commands as they are, with the
     equivalent white noise over 1 s windows fitted over each robot's whole recording (the
     scored window included);
@@ -162,6 +163,7 @@ class ReplaySettings:
     inflation_grid: tuple[float, ...] = (1.0, 1.5, 2.0, 3.0, 4.0)
     inflation_draws: int = 1
     inflation_target_percent: float = 5.0
+    max_inflation_stretches: int = 8
     init_range: tuple[float, float] = (0.3, 8.0)
 
     def __post_init__(self) -> None:
@@ -202,6 +204,13 @@ class ReplaySettings:
             raise ConfigError(
                 f"ReplaySettings.inflation_draws: an integer ≥ 1, got {self.inflation_draws!r}"
             )
+        if isinstance(self.max_inflation_stretches, bool) or not (
+            isinstance(self.max_inflation_stretches, int) and self.max_inflation_stretches >= 1
+        ):
+            raise ConfigError(
+                "ReplaySettings.max_inflation_stretches: an integer ≥ 1, got "
+                f"{self.max_inflation_stretches!r}"
+            )
         if not 0.0 < self.inflation_target_percent < 100.0:
             raise ConfigError(
                 "ReplaySettings.inflation_target_percent: in (0, 100), got "
@@ -217,11 +226,12 @@ class ReplaySettings:
 @dataclass(frozen=True)
 class InflationFit:
     """The factor ``k`` on the calibrated odometry noise σ and how it was chosen
-    (:func:`fit_noise_inflation`): ``stretches`` of the calibration window replayed, ``draws``
-    per stretch, ``seed`` of those draws, and per factor tried (``grid``, in order, up to the
-    first that met the target) the % of steady-state PLKF updates whose relative-yaw NEES is
-    beyond χ²(1, 0.95) (``yaw_percent_beyond``) over ``samples`` updates; ``met``: whether
-    ``k`` meets ``target_percent`` (else ``k`` is the grid's largest)."""
+    (:func:`fit_noise_inflation`): ``stretches`` of the calibration window replayed (of the
+    ``stretches_in_window`` it holds, :func:`spread_stretches`), ``draws`` per stretch,
+    ``seed`` of those draws, and per factor tried (``grid``, in order, up to the first that met
+    the target) the % of steady-state PLKF updates whose relative-yaw NEES is beyond
+    χ²(1, 0.95) (``yaw_percent_beyond``) over ``samples`` updates; ``met``: whether ``k`` meets
+    ``target_percent`` (else ``k`` is the grid's largest)."""
 
     k: float
     met: bool
@@ -230,6 +240,7 @@ class InflationFit:
     yaw_percent_beyond: tuple[float, ...]
     samples: int
     stretches: tuple[CalibrationWindow, ...]
+    stretches_in_window: int
     draws: int
     seed: int
 
@@ -245,6 +256,7 @@ class InflationFit:
             ],
             "samples_per_factor": self.samples,
             "stretches": [w.to_dict() for w in self.stretches],
+            "stretches_in_window": self.stretches_in_window,
             "draws_per_stretch": self.draws,
             "seed": self.seed,
         }
@@ -606,6 +618,21 @@ def calibration_stretches(
     return tuple(out)
 
 
+def spread_stretches(
+    stretches: tuple[CalibrationWindow, ...], m: int
+) -> tuple[CalibrationWindow, ...]:
+    """At most ``m`` of ``n`` consecutive ``stretches``: all when ``n ≤ m``, else those numbered
+    ``round(i (n − 1) / (m − 1))``, ``i = 0 … m − 1`` — the first, the last and evenly between
+    (the first alone when ``m = 1``). The noise inflation replays these, so its cost is bounded
+    on a recording of any length while it still samples the whole calibration window."""
+    n = len(stretches)
+    if n <= m:
+        return stretches
+    if m == 1:
+        return stretches[:1]
+    return tuple(stretches[round(i * (n - 1) / (m - 1))] for i in range(m))
+
+
 def fit_noise_inflation(
     settings: ReplaySettings,
     ds: MrclamDataset,
@@ -620,7 +647,8 @@ def fit_noise_inflation(
     """The smallest factor ``k`` of ``settings.inflation_grid`` on the fitted noise σ at
     which the PLKF keeps its relative-yaw NEES ``(e_φ/σ_φ)²`` beyond χ²(1, 0.95) on at most
     ``inflation_target_percent`` of its updates after ``steady_state_s``, replayed on
-    :func:`calibration_stretches` of the response's window with ``inflation_draws`` draws
+    :func:`calibration_stretches` of the response's window (at most
+    ``max_inflation_stretches``, :func:`spread_stretches`) with ``inflation_draws`` draws
     each (the same draws for every ``k``), pooled over the Table-2 settings, stretches and
     draws; ``fitted`` is a replay of :func:`_fitted_replay` and ``ds``, ``recording`` the source
     of its velocities. Only the calibration window is replayed: the scored window plays no
@@ -629,7 +657,8 @@ def fit_noise_inflation(
     if response is None:
         raise ConfigError("fit_noise_inflation: needs a fitted (calibrated or truth) replay")
     pair = _response_pair(settings, recording, response)
-    stretches = calibration_stretches(settings, recording, response.window)
+    every = calibration_stretches(settings, recording, response.window)
+    stretches = spread_stretches(every, settings.max_inflation_stretches)
     parts = [
         _cut(settings, ds, recording, w.start_s, w.end_s, pair, fitted.fits) for w in stretches
     ]
@@ -664,6 +693,7 @@ def fit_noise_inflation(
         yaw_percent_beyond=tuple(p for _, p in tried),
         samples=samples,
         stretches=stretches,
+        stretches_in_window=len(every),
         draws=settings.inflation_draws,
         seed=seed,
     )
