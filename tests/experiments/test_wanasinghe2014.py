@@ -25,6 +25,7 @@ from relloc.experiments.wanasinghe2014 import (
     RULES,
     STATES,
     Wanasinghe2014Config,
+    _bias_nees_text,
     run_reproduction,
     table1_best_summary,
     table1_summary,
@@ -133,6 +134,11 @@ def test_small_reproduction_on_another_mrclam_folder(small_dataset: Path, tmp_pa
         assert set(summary["table3_best"][kind]) == set(summary["table3"][kind])
         assert set(summary["table4"][kind]["case1"]["yaw_bank"]) >= {"nees_percent_beyond"}
     assert set(summary["bias_comparison"]["case2"]) == {"PLKF", "BC-PLKF", "TEKF", "yaw bank"}
+    # the bias comparison's PLKF is Table 4's calibrated PLKF, on the same draws
+    for case, filters in summary["bias_comparison"].items():
+        plkf = filters["PLKF"]["nees_percent_beyond"]
+        assert plkf == summary["table4"]["calibrated"][case]["nees_percent_beyond"]
+        assert all(0 <= f["nees_percent_beyond"] <= 100 for f in filters.values())
     assert set(summary["replay_targets"]) == set(summary["table3"]["calibrated"])
     # the turn-rate residual of the calibrated commands, both robots and the relative yaw, on
     # the calibration and the scored window, calibrated response and best FIR
@@ -271,6 +277,22 @@ def test_noise_inflation_is_fitted_on_the_calibration_window_only(small_dataset:
     assert lax.stretches == fit.stretches[:1] and lax.samples < fit.samples
     assert lax.stretches_in_window == fit.stretches_in_window
     assert lax.to_dict()["stretches_in_window"] == fit.stretches_in_window
+
+
+def test_a_nees_miss_states_the_bias_compensated_plkf_beside() -> None:
+    """Where the BC-PLKF runs (the noisy cases), a NEES miss is stated with its figure beside
+    the PLKF's; a case without it adds nothing."""
+    entry = {"radial_bias_m": 0.0, "position_rmse_m": 0.1, "yaw_rmse_rad": 0.3}
+    bias = {
+        "case2": {
+            "PLKF": {**entry, "nees_percent_beyond": 45.0},
+            "BC-PLKF": {**entry, "nees_percent_beyond": 7.5},
+        },
+        "case3": {"PLKF": {**entry, "nees_percent_beyond": 11.2}},
+    }
+    text = _bias_nees_text(bias, ["case2", "case3"])
+    assert "case2 7.5 % (PLKF 45.0 %)" in text and "case3" not in text
+    assert _bias_nees_text(bias, ["case3"]) == ""
 
 
 def test_spread_stretches_keeps_the_first_the_last_and_evenly_between() -> None:
