@@ -6,14 +6,18 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import NDArray
 from test_mrclam_association import _synthetic_folder
 
-from relloc.core.recording import CLUTTER
+from relloc.core.recording import CLUTTER, GroundTruth, Odometry, Recording, measurement_rows
 from relloc.datasets.mrclam import load_mrclam, to_recording
 from relloc.estimators.gaussian_sum import GaussianSumSettings
 from relloc.experiments import mrclam_association
-from relloc.experiments.association_bound import association_bound
+from relloc.experiments.association_bound import association_bound, sighting_reset_reference
 from relloc.models.motion import VelocityNoise
+from relloc.sim.trajectories import integrate_body_velocities
+
+Array = NDArray[np.float64]
 
 
 def _settings(clutter: float) -> GaussianSumSettings:
@@ -65,3 +69,75 @@ def test_bound_reads_the_origin_of_the_bearing_taken(tmp_path: Path) -> None:
     after = association_bound(relabelled, _settings(0.0))
     assert before.used == after.used > 0 and before.correct > 0
     assert after.correct == 0 and after.accuracy == 0.0
+
+
+def _pair(b_truth: GroundTruth, a_velocity: Array, b_odometry: Array) -> Recording:
+    """Observer A (truth: from its own held velocity, from the origin) and teammate B, whose
+    truth is ``b_truth`` and whose odometry reports ``b_odometry``; A sees B at 5 s and 30 s
+    (bearings of unknown correspondence whose origin is B)."""
+    grid = np.arange(0.0, 60.0 + 1e-9, 0.01)
+    a_pose = integrate_body_velocities(np.zeros(4), np.tile(a_velocity, (grid.size - 1, 1)), 0.01)
+    span = np.array([0.0, 60.0])
+    sightings = np.array([5.0, 30.0])
+    return Recording(
+        robots=("A", "B"),
+        platforms=("ground", "ground"),
+        odometry=(
+            Odometry(t=span, velocity=np.tile(a_velocity, (2, 1)), sigma=np.zeros(4)),
+            Odometry(t=span, velocity=np.tile(b_odometry, (2, 1)), sigma=np.zeros(4)),
+        ),
+        measurements=measurement_rows(
+            "bearing", t=sightings, observer=0, origin=np.ones(2, np.int64), value=np.zeros((2, 1))
+        ),
+        truth=(GroundTruth(t=grid, pose=a_pose), b_truth),
+    )
+
+
+RECORDS = {"A": np.arange(0.0, 60.0, 1.0)}
+
+
+def test_sighting_reset_dead_reckoning_is_exact_with_exact_odometry() -> None:
+    """Both robots moving (A straight, B on a circle), the odometry telling the truth: every
+    record after the first sighting (5 s) is tracked, whatever its age."""
+    grid = np.arange(0.0, 60.0 + 1e-9, 0.01)
+    b_velocity = np.array([0.3, 0.0, 0.0, 0.2])
+    b_pose = integrate_body_velocities(
+        np.array([2.0, 1.0, 0.0, 1.0]), np.tile(b_velocity, (grid.size - 1, 1)), 0.01
+    )
+    rec = _pair(GroundTruth(t=grid, pose=b_pose), np.array([0.1, 0.0, 0.0, 0.0]), b_velocity)
+    ref = sighting_reset_reference(rec, _settings(0.0), RECORDS, pos_tol=0.01, yaw_tol=0.01)
+    assert (ref.records, ref.tracked, ref.truth_missing) == (55, 55, 0)
+    assert ref.fraction == 1.0
+
+
+def test_sighting_reset_dead_reckoning_drifts_with_the_odometry_error() -> None:
+    """B stands still but its odometry turns at 0.04 rad/s: a record is tracked while
+    0.04 s⁻¹ × its age since the last sighting is within 0.5 rad (ages 0-12 s after each of
+    the sightings at 5 s and 30 s: 26 of the 55 records from 5 s on; median age 13 s). A gap
+    in B's truth (40-50 s) leaves out the records inside it (41-49 s): 9 fewer, all of them
+    older than 12 s."""
+    still = np.array([[2.0, 0.0, 0.0, 0.0]] * 2)
+    turning = np.array([0.0, 0.0, 0.0, 0.04])
+    rec = _pair(GroundTruth(t=np.array([0.0, 60.0]), pose=still), np.zeros(4), turning)
+    ref = sighting_reset_reference(rec, _settings(0.0), RECORDS, pos_tol=0.5, yaw_tol=0.5)
+    assert (ref.records, ref.tracked, ref.truth_missing) == (55, 26, 0)
+    assert ref.median_age_s == 13.0
+    gap = np.concatenate([np.arange(0.0, 41.0), np.arange(50.0, 61.0)])
+    holed = GroundTruth(t=gap, pose=np.tile(still[0], (gap.size, 1)), gap_s=5.0)
+    ref = sighting_reset_reference(
+        _pair(holed, np.zeros(4), turning), _settings(0.0), RECORDS, pos_tol=0.5, yaw_tol=0.5
+    )
+    assert (ref.records, ref.tracked, ref.truth_missing) == (46, 24, 9)
+    assert ref.to_dict()["tracked_fraction"] == 24 / 46
+
+
+def test_sighting_reset_reference_without_records_or_sightings() -> None:
+    still = GroundTruth(t=np.array([0.0, 60.0]), pose=np.array([[2.0, 0.0, 0.0, 0.0]] * 2))
+    rec = _pair(still, np.zeros(4), np.zeros(4))
+    none = sighting_reset_reference(rec, _settings(0.0), {}, pos_tol=0.5, yaw_tol=0.5)
+    assert none.records == 0 and none.fraction is None and none.median_age_s is None
+    # B never sees A: its records count nothing
+    unseen = sighting_reset_reference(
+        rec, _settings(0.0), {"B": RECORDS["A"]}, pos_tol=0.5, yaw_tol=0.5
+    )
+    assert unseen.records == 0 and unseen.to_dict()["tracked_fraction"] is None

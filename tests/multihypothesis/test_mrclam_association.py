@@ -122,6 +122,11 @@ def test_mrclam_association_on_any_mrclam_folder(
     lo, hi = s["field_of_view_rad"]
     assert lo == -hi and 0.0 < hi <= np.pi
     assert s["bearings"]["landmark_skipped"] > 0 and s["bearings"]["robot"] > 0
+    # the tracked-fraction reference: with the calibrated commands near exact and a sighting
+    # every 0.2 s, dead reckoning reset to the truth at every sighting keeps every record
+    ref = s["tracking_reference"]
+    assert ref["records"] > 0 and ref["tracked_fraction"] >= 0.95 and ref["median_age_s"] < 1.0
+    assert "sighting_reset_reference" in (out / "report.md").read_text()
     assert (out / s["figures"]["errors"]).is_file()
 
 

@@ -747,3 +747,18 @@ def relative_pose(a: Array, b: Array) -> Array:
     out[:, 2] = d[:, 2]
     out[:, 3] = wrap_angle(b[:, 3] - a[:, 3])
     return out
+
+
+def compose_pose(a: Array, b: Array) -> Array:
+    """Vectorised 4-DOF ``a ⊕ b`` for poses ``(N, 4)``: ``b``, given in ``a``'s body frame, in
+    ``a``'s frame of reference (the inverse of :func:`relative_pose`: ``a ⊕ (⊖a ⊕ b) = b``);
+    the heading is wrapped."""
+    a = np.atleast_2d(a)
+    b = np.atleast_2d(b)
+    c, s = np.cos(a[:, 3]), np.sin(a[:, 3])
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    out[:, 0] = a[:, 0] + c * b[:, 0] - s * b[:, 1]
+    out[:, 1] = a[:, 1] + s * b[:, 0] + c * b[:, 1]
+    out[:, 2] = a[:, 2] + b[:, 2]
+    out[:, 3] = wrap_angle(a[:, 3] + b[:, 3])
+    return out

@@ -18,18 +18,42 @@ bearing the heaviest component of each filter took. The share of those bearings 
 from the teammate (``origin``, scoring only) is the accuracy a filter with perfect tracks
 would score under the same definition: an upper bound of ``association_accuracy`` on that
 recording (a real filter's wider innovation captures more false bearings).
+
+:func:`sighting_reset_reference` does the same for ``tracked_fraction``, which counts the
+records whose dominant track is within a position and a yaw tolerance of the truth. Between two
+sightings of teammate ``j`` a filter of observer ``i`` that fuses only its own readings (direct
+fusion) learns nothing new about ``j``: it can only dead-reckon both robots with their
+odometry. The reference gives it the most a sighting could give — the exact relative pose,
+yaw included, which one range and bearing never fix — and dead-reckons from there: at a record
+time ``t`` with ``s`` the last sighting (a bearing of ``j`` in ``i``'s readings, by ``origin``)
+at or before it, robot ``k ∈ {i, j}`` is put at
+
+    x̂_k(t) = T_k(s) ⊕ (⊖O_k(s) ⊕ O_k(t)),
+
+``T_k`` its ground truth and ``O_k`` the pose integrated from its recorded (held) odometry
+(:func:`relloc.sim.trajectories.integrate_body_velocities` on a ``dt`` grid, read at the nearest
+grid time), and the record counts as tracked when ``⊖x̂_i ⊕ x̂_j`` is within the tolerances of
+the true relative pose. The share over the records after the teammate's first sighting is what
+such a filter scores; a real filter, which must find the yaw from the motion during its
+sightings, scores less.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
 from relloc.association.nscan import new_history
-from relloc.core.recording import Recording
+from relloc.core.angles import wrap_angle
+from relloc.core.recording import Recording, compose_pose, relative_pose
 from relloc.estimators.gaussian_sum import GaussianSumFuser, GaussianSumSettings, Tracks
 from relloc.fusion.gaussian_sum_estimator import bearing_kind, bearing_rows
+from relloc.sim.trajectories import integrate_body_velocities
+
+Array = NDArray[np.float64]
 
 #: variance of the truth-placed tracks (m², rad²): the innovation is the bearing noise alone
 TRUTH_VARIANCE = 1e-10
@@ -98,3 +122,96 @@ def _truth_tracks(poses: np.ndarray, depth: int) -> Tracks:
         history=new_history(np.arange(n, dtype=np.int64), depth),
         assoc=np.full(n, -1, dtype=np.int64),
     )
+
+
+@dataclass(frozen=True)
+class TrackingReference:
+    """Of ``records`` (observer records × teammates after the teammate's first sighting, truth
+    valid at the record and the sighting), how many the sighting-reset dead reckoning keeps
+    within the tolerances (``tracked``); ``truth_missing`` records left out for a ground-truth
+    gap; ``median_age_s`` the median time since the last sighting."""
+
+    records: int
+    tracked: int
+    truth_missing: int
+    median_age_s: float | None
+
+    @property
+    def fraction(self) -> float | None:
+        return self.tracked / self.records if self.records else None
+
+    def to_dict(self) -> dict[str, float | int | None]:
+        return {
+            "tracked_fraction": self.fraction,
+            "records": self.records,
+            "tracked": self.tracked,
+            "truth_missing": self.truth_missing,
+            "median_age_s": self.median_age_s,
+        }
+
+
+def sighting_reset_reference(
+    rec: Recording,
+    settings: GaussianSumSettings,
+    record_times: Mapping[str, Array],
+    *,
+    pos_tol: float,
+    yaw_tol: float,
+    dt: float = 0.01,
+) -> TrackingReference:
+    """The tracked fraction of dead reckoning reset to the true relative pose at every
+    sighting (module docstring), at each observer's ``record_times`` (robot name → times);
+    the planar position error is tested against ``pos_tol`` (m), the yaw's against ``yaw_tol``
+    (rad)."""
+    m = rec.measurements
+    assert m.origin is not None
+    truth = rec.require_truth("sighting_reset_reference")
+    kind = bearing_kind(settings)
+    times = {name: np.asarray(t, dtype=float) for name, t in record_times.items()}
+    stamps = [t for t in times.values() if t.size]
+    if not stamps:
+        return TrackingReference(0, 0, 0, None)
+    start = min(float(m.t.min()) if m.t.size else np.inf, min(float(t[0]) for t in stamps))
+    grid = np.arange(start, max(float(t[-1]) for t in stamps) + dt, dt)
+    odometry = [
+        integrate_body_velocities(np.zeros(4), rec.odometry[k].held_at(grid[:-1]), dt)
+        for k in range(rec.n_robots)
+    ]
+
+    def reset(k: int, s: Array, t: Array) -> Array:
+        """``x̂_k(t)`` from the truth at ``s`` (module docstring)."""
+        at = [
+            odometry[k][np.clip(np.rint((u - start) / dt).astype(np.int64), 0, grid.size - 1)]
+            for u in (s, t)
+        ]
+        return compose_pose(truth[k].at(s), relative_pose(at[0], at[1]))
+
+    records = tracked = missing = 0
+    ages = []
+    for i in range(rec.n_robots):
+        t_all = times.get(rec.robots[i], np.empty(0))
+        rows = bearing_rows(m, i, kind)
+        for j in range(rec.n_robots):
+            if j == i or t_all.size == 0:
+                continue
+            sightings = np.unique(m.t[rows[m.origin[rows] == j]])
+            last = np.searchsorted(sightings, t_all, side="right") - 1
+            t, s = t_all[last >= 0], sightings[last[last >= 0]]
+            ok = (
+                np.logical_and.reduce([truth[k].valid_at(u) for k in (i, j) for u in (s, t)])
+                if t.size
+                else np.zeros(0, dtype=bool)
+            )
+            missing += int(t.size - ok.sum())
+            t, s = t[ok], s[ok]
+            if t.size == 0:
+                continue
+            estimate = relative_pose(reset(i, s, t), reset(j, s, t))
+            true = rec.relative_truth(i, j, t)
+            position = np.hypot(*(estimate[:, :2] - true[:, :2]).T)
+            yaw = np.abs(wrap_angle(estimate[:, 3] - true[:, 3]))
+            records += int(t.size)
+            tracked += int(np.count_nonzero((position <= pos_tol) & (yaw <= yaw_tol)))
+            ages.append(t - s)
+    age = float(np.median(np.concatenate(ages))) if ages else None
+    return TrackingReference(records, tracked, missing, age)
