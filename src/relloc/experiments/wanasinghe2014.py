@@ -1497,7 +1497,7 @@ def replay_text(s: dict[str, Any]) -> str:
         f"{_span([cal[c]['phi']['rmse_mean'] for c in cal], ' rad')} and the NEES beyond the bound "
         f"from {_span([t4r[c]['nees_percent_beyond'] for c in t4r], ' %')} to "
         f"{_span([t4c[c]['nees_percent_beyond'] for c in t4c], ' %')} (paper 0.03–0.18 rad, "
-        f"0.06–9.25 %). {verdict} {_replay_yaw_cause(s)} {odometry_floor_text(s)} "
+        f"0.06–9.25 %). {verdict.strip()} {_replay_yaw_cause(s)} {odometry_floor_text(s)} "
         "What is left after the calibration is "
         "not a lag or a scale but the commands' own error: the commanded speed is quantised and "
         "constant while the real speed wanders, and the mean error of the calibrated commands "
