@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from relloc.core import compose, inverse, relative, wrap_angle
+from relloc.core.recording import compose_pose, relative_pose
 from relloc.errors import ModelError
 
 
@@ -46,3 +47,19 @@ def test_bad_layout_is_a_clear_error():
         compose(np.zeros(2), np.zeros(2))
     with pytest.raises(ModelError, match="differ"):
         compose(np.zeros(3), np.zeros(4))
+
+
+def test_vectorised_compose_pose_matches_compose_and_inverts_relative_pose() -> None:
+    """``core.recording.compose_pose`` is :func:`compose` row by row (heading wrapped), and
+    ``a ⊕ (⊖a ⊕ b) = b`` with ``relative_pose``."""
+    rng = np.random.default_rng(91)
+    a = rng.uniform(-4.0, 4.0, size=(50, 4))
+    b = rng.uniform(-4.0, 4.0, size=(50, 4))
+    out = compose_pose(a, b)
+    for k in range(a.shape[0]):
+        expected = compose(a[k], b[k])[0]
+        np.testing.assert_allclose(out[k, :3], expected[:3], atol=1e-12)
+        assert abs(wrap_angle(out[k, 3] - expected[3])) < 1e-12 and abs(out[k, 3]) <= np.pi
+    back = compose_pose(a, relative_pose(a, b))
+    np.testing.assert_allclose(back[:, :3], b[:, :3], atol=1e-12)
+    np.testing.assert_allclose(wrap_angle(back[:, 3] - b[:, 3]), 0.0, atol=1e-12)

@@ -180,11 +180,11 @@ def sighting_reset_reference(
 
     def reset(k: int, s: Array, t: Array) -> Array:
         """``x̂_k(t)`` from the truth at ``s`` (module docstring)."""
-        at = [
+        at_s, at_t = (
             odometry[k][np.clip(np.rint((u - start) / dt).astype(np.int64), 0, grid.size - 1)]
             for u in (s, t)
-        ]
-        return compose_pose(truth[k].at(s), relative_pose(at[0], at[1]))
+        )
+        return compose_pose(truth[k].at(s), relative_pose(at_s, at_t))
 
     records = tracked = missing = 0
     ages = []
@@ -197,11 +197,7 @@ def sighting_reset_reference(
             sightings = np.unique(m.t[rows[m.origin[rows] == j]])
             last = np.searchsorted(sightings, t_all, side="right") - 1
             t, s = t_all[last >= 0], sightings[last[last >= 0]]
-            ok = (
-                np.logical_and.reduce([truth[k].valid_at(u) for k in (i, j) for u in (s, t)])
-                if t.size
-                else np.zeros(0, dtype=bool)
-            )
+            ok = np.logical_and.reduce([truth[k].valid_at(u) for k in (i, j) for u in (s, t)])
             missing += int(t.size - ok.sum())
             t, s = t[ok], s[ok]
             if t.size == 0:

@@ -1321,8 +1321,9 @@ def turn_rate_section(s: dict[str, Any]) -> list[str]:
 
 
 def _stretch_count(fit: dict[str, Any]) -> str:
-    """ "k of the window's n stretches: " when the inflation fit replayed only some of them
-    (:func:`relloc.experiments.wanasinghe2014_mrclam.spread_stretches`), else nothing."""
+    """The prefix naming how many of the window's stretches the inflation fit replayed, when
+    it replayed only some (:func:`relloc.experiments.wanasinghe2014_mrclam.spread_stretches`);
+    empty when it replayed all."""
     used, held = len(fit["stretches"]), fit["stretches_in_window"]
     return "" if used == held else f"{used} of the window's {held} stretches: "
 

@@ -198,19 +198,10 @@ class ReplaySettings:
             raise ConfigError(
                 f"ReplaySettings.inflation_grid: ascending factors ≥ 1, got {self.inflation_grid}"
             )
-        if isinstance(self.inflation_draws, bool) or not (
-            isinstance(self.inflation_draws, int) and self.inflation_draws >= 1
-        ):
-            raise ConfigError(
-                f"ReplaySettings.inflation_draws: an integer ≥ 1, got {self.inflation_draws!r}"
-            )
-        if isinstance(self.max_inflation_stretches, bool) or not (
-            isinstance(self.max_inflation_stretches, int) and self.max_inflation_stretches >= 1
-        ):
-            raise ConfigError(
-                "ReplaySettings.max_inflation_stretches: an integer ≥ 1, got "
-                f"{self.max_inflation_stretches!r}"
-            )
+        for name in ("inflation_draws", "max_inflation_stretches"):
+            count = getattr(self, name)
+            if isinstance(count, bool) or not (isinstance(count, int) and count >= 1):
+                raise ConfigError(f"ReplaySettings.{name}: an integer ≥ 1, got {count!r}")
         if not 0.0 < self.inflation_target_percent < 100.0:
             raise ConfigError(
                 "ReplaySettings.inflation_target_percent: in (0, 100), got "
