@@ -8,6 +8,7 @@ from relloc.calibration.odometry import (
     OdometryModelFit,
     calibrated_commands,
     calibrated_team,
+    fit_largest_odometry_noise,
     fit_odometry_model,
     fit_odometry_noise,
 )
@@ -39,6 +40,26 @@ def test_odometry_noise_fit_recovers_a_known_error(synthetic):
     assert fit.sigma_lateral < 0.02
     with pytest.raises(DataError, match=r"calibration window \[1.00, 2.50\].*fewer than two"):
         fit_odometry_noise(robot, CalibrationWindow(1.0, 2.5, "synthetic"), window_s=1.0)
+
+
+def test_largest_noise_takes_the_time_scale_a_persistent_error_grows_to(synthetic):
+    """A constant turn-rate error of 0.02 rad/s is white-equivalent to 0.02·√(W/dt), growing
+    with the window length W: of the lengths that fit twice into 18 s (1, 2, 5 s; not 10, 20,
+    40 s) the largest σ_ω is the 5 s one."""
+    t = np.arange(0.0, 20.0, 0.01)
+    theta = 0.3 + 0.1 * t
+    x = 0.2 / 0.1 * (np.sin(theta) - np.sin(0.3))
+    y = -0.2 / 0.1 * (np.cos(theta) - np.cos(0.3))
+    gt = GroundTruth(t=t, x=x, y=y, theta=np.angle(np.exp(1j * theta)), gap_threshold=0.5)
+    odo = Odometry(t=t, v=np.full_like(t, 0.2), omega=np.full_like(t, 0.12))
+    robot = synthetic.robot(1, gt, odo)
+    fit = fit_largest_odometry_noise(robot, CalibrationWindow(1.0, 19.0, "synthetic robot 1"))
+    assert fit.window_s == 5.0 and fit.n_windows == 3
+    assert fit.sigma_w == pytest.approx(0.02 * np.sqrt(5.0 / 0.01), rel=0.02)
+    only_1s = fit_largest_odometry_noise(robot, CalibrationWindow(1.0, 19.0, "s"), (1.0, 40.0))
+    assert only_1s.window_s == 1.0 and only_1s.sigma_w == pytest.approx(0.2, rel=0.02)
+    with pytest.raises(DataError, match=r"\[1.00, 2.50\].*no noise window of \(2.0, 5.0\) s"):
+        fit_largest_odometry_noise(robot, CalibrationWindow(1.0, 2.5, "synthetic"), (2.0, 5.0))
 
 
 def test_odometry_noise_fit_recovers_white_input_noise(synthetic):

@@ -114,6 +114,10 @@ def test_mrclam_association_on_any_mrclam_folder(
     assert fit["calibration_window"] == s["calibration_window"]
     # the odometry and camera models are stated, and the filters' σ are the camera fit's
     assert {"latency_s", "time_constant_s", "scale_v", "scale_w"} <= set(s["odometry_model"])
+    # each robot's white σ is taken at the window length that gives it its largest σ_ω, among
+    # the lengths the 5 s calibration window holds twice (1 s and 2 s)
+    assert set(s["odometry_noise"]["noise_window_s"]) <= {1.0, 2.0}
+    assert len(s["odometry_noise"]["noise_window_s"]) == 3
     assert s["sigma_range_m"] == s["camera_model"]["sigma_range"]
     assert s["sigma_bearing_rad"] == s["camera_model"]["sigma_bearing"]
     # the shared-fusion variant and the camera model are run on the same data, beside it

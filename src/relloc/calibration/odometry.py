@@ -60,6 +60,13 @@ a unicycle reports as 0) and ``Δθ``. White noise of σ held over each step ``d
 displacement variance ``σ² dt W``, so the equivalent ``σ = √(mean(D²) / (dt W))`` with ``D`` the
 windowed error — bias included, which makes the fit conservative; the bias itself is reported as
 ``mean(D)/W``. Windows touching a ground-truth gap are left out.
+
+The real errors are correlated over seconds (command lag, scale errors), so an equivalent white
+noise is right at one time scale only. A filter that bridges several time scales — the
+relative yaw corrected only slowly through the motion, a teammate unseen for seconds to
+minutes — must not be over-confident at any of them: :func:`fit_largest_odometry_noise` makes
+the fit at each length of ``NOISE_WINDOWS_S`` that fits twice into the window and keeps the one
+with the largest ``σ_ω``.
 """
 
 from __future__ import annotations
@@ -80,6 +87,8 @@ from relloc.errors import ConfigError
 
 Array = NDArray[np.float64]
 
+#: Integration lengths (s) of :func:`fit_largest_odometry_noise`: 1 s up to 40 s.
+NOISE_WINDOWS_S: tuple[float, ...] = (1.0, 2.0, 5.0, 10.0, 20.0, 40.0)
 #: Resampling step (s) of the latency/scale/rate fit.
 GRID_DT_S = 0.02
 #: Latencies (s) searched by :func:`fit_odometry_model`.
@@ -572,4 +581,45 @@ def fit_odometry_noise(
         window_s=float(window_s),
         n_windows=int(ok.sum()),
         calibration_window=window,
+    )
+
+
+def noise_lengths(lengths_s: Sequence[float], window: CalibrationWindow) -> list[float]:
+    """The integration lengths of ``lengths_s`` that fit twice into ``window`` (DataError,
+    naming the window, when none does)."""
+    lengths = [float(w) for w in lengths_s if 2 * w <= window.duration_s]
+    if not lengths:
+        raise window.too_little(f"no noise window of {tuple(lengths_s)} s fits twice")
+    return lengths
+
+
+def fit_largest_odometry_noise(
+    robot: RobotData,
+    window: CalibrationWindow,
+    lengths_s: Sequence[float] = NOISE_WINDOWS_S,
+    *,
+    rate_hz: float = 100.0,
+    latency_s: float = 0.0,
+    scale_v: float = 1.0,
+    scale_w: float = 1.0,
+    time_constant_s: float = 0.0,
+) -> OdometryNoiseFit:
+    """:func:`fit_odometry_noise` at every length of ``lengths_s`` that fits twice into
+    ``window`` (:func:`noise_lengths`), and of those fits the one with the largest ``σ_ω``
+    (module docstring); its ``window_s`` says which length it is."""
+    return max(
+        (
+            fit_odometry_noise(
+                robot,
+                window,
+                rate_hz=rate_hz,
+                window_s=length,
+                latency_s=latency_s,
+                scale_v=scale_v,
+                scale_w=scale_w,
+                time_constant_s=time_constant_s,
+            )
+            for length in noise_lengths(lengths_s, window)
+        ),
+        key=lambda f: f.sigma_w,
     )

@@ -22,8 +22,8 @@ sensor settings. Here the same is done with two robots of any MRCLAM-layout data
     follow them through a lag — and per-robot scales ``s_v, s_ω``); the filters get the
     modelled response ``s · c_τ,T`` (:func:`relloc.calibration.odometry.calibrated_commands`)
     held on the grid, and the equivalent white noise left after that calibration
-    (:func:`relloc.calibration.odometry.fit_odometry_noise`) at the time scale where the
-    turn-rate error is largest: the fit over each window length of
+    (:func:`relloc.calibration.odometry.fit_largest_odometry_noise`) at the time scale where
+    the turn-rate error is largest: the fit over each window length of
     ``calibration_noise_windows_s`` (1 s up to 40 s, the settling time Table 3 allows) is made
     and the one with the largest σ_ω kept. The real errors are correlated over seconds, so an
     equivalent white noise is right at one time scale only; the relative yaw is corrected only
@@ -78,11 +78,14 @@ from numpy.typing import NDArray
 
 from relloc.calibration.inflation import smallest_factor
 from relloc.calibration.odometry import (
+    NOISE_WINDOWS_S,
     OdometryModelFit,
     OdometryNoiseFit,
     calibrated_commands,
+    fit_largest_odometry_noise,
     fit_odometry_model,
     fit_odometry_noise,
+    noise_lengths,
     truth_velocity_dataset,
 )
 from relloc.calibration.turn_rate import PairTurnRateResidual, pair_turn_rate_residual
@@ -159,7 +162,7 @@ class ReplaySettings:
     min_duration_s: float = 20.0
     rate_hz: float = 100.0
     noise_window_s: float = 1.0
-    calibration_noise_windows_s: tuple[float, ...] = (1.0, 2.0, 5.0, 10.0, 20.0, 40.0)
+    calibration_noise_windows_s: tuple[float, ...] = NOISE_WINDOWS_S
     inflation_grid: tuple[float, ...] = (1.0, 1.5, 2.0, 3.0, 4.0)
     inflation_draws: int = 1
     inflation_target_percent: float = 5.0
@@ -384,7 +387,9 @@ def prepare_replays(
     recording = to_recording(ds)
     raw = _raw_replay(settings, ds, recording)
     window = calibration_window(ds, raw.scored_window)
-    team = fit_odometry_model(ds, window, integration_s=min(_noise_lengths(settings, window)))
+    team = fit_odometry_model(
+        ds, window, integration_s=min(noise_lengths(settings.calibration_noise_windows_s, window))
+    )
     truth_ds = truth_velocity_dataset(ds)
     sources = {
         "calibrated": (ds, recording, PairResponse.of_team(team, ds, settings)),
@@ -503,16 +508,6 @@ def calibration_window(ds: MrclamDataset, scored: CalibrationWindow) -> Calibrat
     return CalibrationWindow(scored.end_s, end, f"{ds.path} after the scored window")
 
 
-def _noise_lengths(settings: ReplaySettings, window: CalibrationWindow) -> list[float]:
-    """The ``calibration_noise_windows_s`` that fit twice into ``window``."""
-    lengths = [w for w in settings.calibration_noise_windows_s if 2 * w <= window.duration_s]
-    if not lengths:
-        raise window.too_little(
-            f"no noise window of {settings.calibration_noise_windows_s} s fits twice"
-        )
-    return lengths
-
-
 def _fitted_replay(
     settings: ReplaySettings,
     ds: MrclamDataset,
@@ -532,20 +527,16 @@ def _fitted_replay(
         response.scales,
         strict=True,
     ):
-        candidates = [
-            fit_odometry_noise(
-                ds.robot(subject),
-                response.window,
-                rate_hz=settings.rate_hz,
-                window_s=length,
-                latency_s=response.latency_s,
-                scale_v=s_v,
-                scale_w=s_w,
-                time_constant_s=response.time_constant_s,
-            )
-            for length in _noise_lengths(settings, response.window)
-        ]
-        fits[label] = max(candidates, key=lambda f: f.sigma_w)
+        fits[label] = fit_largest_odometry_noise(
+            ds.robot(subject),
+            response.window,
+            settings.calibration_noise_windows_s,
+            rate_hz=settings.rate_hz,
+            latency_s=response.latency_s,
+            scale_v=s_v,
+            scale_w=s_w,
+            time_constant_s=response.time_constant_s,
+        )
     od_l, od_c = _response_pair(settings, recording, response)
     return replace(
         raw,
