@@ -62,6 +62,32 @@ def test_largest_noise_takes_the_time_scale_a_persistent_error_grows_to(syntheti
         fit_largest_odometry_noise(robot, CalibrationWindow(1.0, 2.5, "synthetic"), (2.0, 5.0))
 
 
+def test_largest_noise_leaves_out_lengths_whose_windows_hit_truth_gaps(synthetic):
+    """Vicon gaps at 3.0–3.8 s and 8.0–8.8 s: of the 5 s windows of [1, 19] s only one is
+    whole, so 5 s has no fit and the 2 s fit (the largest σ_ω left, a constant 0.02 rad/s
+    turn-rate error) is kept; with only 5 s allowed the fit's own error is raised."""
+    t = np.arange(0.0, 20.0, 0.01)
+    keep = ~(((t >= 3.0) & (t < 3.8)) | ((t >= 8.0) & (t < 8.8)))
+    theta = 0.3 + 0.1 * t
+    x = 0.2 / 0.1 * (np.sin(theta) - np.sin(0.3))
+    y = -0.2 / 0.1 * (np.cos(theta) - np.cos(0.3))
+    gt = GroundTruth(
+        t=t[keep],
+        x=x[keep],
+        y=y[keep],
+        theta=np.angle(np.exp(1j * theta[keep])),
+        gap_threshold=0.5,
+    )
+    odo = Odometry(t=t, v=np.full_like(t, 0.2), omega=np.full_like(t, 0.12))
+    robot = synthetic.robot(2, gt, odo)
+    window = CalibrationWindow(1.0, 19.0, "synthetic robot 2")
+    fit = fit_largest_odometry_noise(robot, window)
+    assert fit.window_s == 2.0
+    assert fit.sigma_w == pytest.approx(0.02 * np.sqrt(2.0 / 0.01), rel=0.02)
+    with pytest.raises(DataError, match="robot 2: ground truth has gaps in every window"):
+        fit_largest_odometry_noise(robot, window, (5.0,))
+
+
 def test_odometry_noise_fit_recovers_white_input_noise(synthetic):
     rng = np.random.default_rng(3)
     robot = synthetic.commanded_robot(1, rng, duration=200.0, sigma_v=0.05, sigma_w=0.1)

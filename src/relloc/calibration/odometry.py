@@ -83,7 +83,7 @@ from relloc.core.angles import wrap_angle
 from relloc.core.recording import Odometry
 from relloc.datasets.mrclam import GroundTruth, MrclamDataset, RobotData
 from relloc.datasets.mrclam import Odometry as Commands
-from relloc.errors import ConfigError
+from relloc.errors import ConfigError, DataError
 
 Array = NDArray[np.float64]
 
@@ -606,20 +606,27 @@ def fit_largest_odometry_noise(
 ) -> OdometryNoiseFit:
     """:func:`fit_odometry_noise` at every length of ``lengths_s`` that fits twice into
     ``window`` (:func:`noise_lengths`), and of those fits the one with the largest ``σ_ω``
-    (module docstring); its ``window_s`` says which length it is."""
-    return max(
-        (
-            fit_odometry_noise(
-                robot,
-                window,
-                rate_hz=rate_hz,
-                window_s=length,
-                latency_s=latency_s,
-                scale_v=scale_v,
-                scale_w=scale_w,
-                time_constant_s=time_constant_s,
+    (module docstring); its ``window_s`` says which length it is. A length at which the ground
+    truth has gaps in all windows but one has no fit and is left out (long windows are the
+    first to touch a Vicon gap); when no length has a fit, the shortest length's error is
+    raised."""
+    fits, errors = [], []
+    for length in noise_lengths(lengths_s, window):
+        try:
+            fits.append(
+                fit_odometry_noise(
+                    robot,
+                    window,
+                    rate_hz=rate_hz,
+                    window_s=length,
+                    latency_s=latency_s,
+                    scale_v=scale_v,
+                    scale_w=scale_w,
+                    time_constant_s=time_constant_s,
+                )
             )
-            for length in noise_lengths(lengths_s, window)
-        ),
-        key=lambda f: f.sigma_w,
-    )
+        except DataError as error:
+            errors.append(error)
+    if not fits:
+        raise errors[0]
+    return max(fits, key=lambda f: f.sigma_w)
