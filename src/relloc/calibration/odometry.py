@@ -610,7 +610,8 @@ def fit_largest_odometry_noise(
     truth has gaps in all windows but one has no fit and is left out (long windows are the
     first to touch a Vicon gap); when no length has a fit, the shortest length's error is
     raised."""
-    fits, errors = [], []
+    fits: list[OdometryNoiseFit] = []
+    first_error: DataError | None = None
     for length in noise_lengths(lengths_s, window):
         try:
             fits.append(
@@ -626,7 +627,8 @@ def fit_largest_odometry_noise(
                 )
             )
         except DataError as error:
-            errors.append(error)
+            first_error = first_error or error
     if not fits:
-        raise errors[0]
+        assert first_error is not None  # noise_lengths gives at least one length
+        raise first_error
     return max(fits, key=lambda f: f.sigma_w)

@@ -128,9 +128,8 @@ the 0.95 gate (seed 002's literal rule) gave 0.577 / 0.304; a smaller bearing an
 bearing from the third when the filters start, they let that observer's two filters keep the
 swapped pair — each following the other robot's bearings at its own range, which the ranges
 cannot tell apart — to the end of the scoring window (1 s odometry noise; accuracy of its two
-runs 0.99 and 0.89
-with the two gates; 0.63 and 0.62 with one gate; 0.99 and 0.62 with births from every
-out-of-gate bearing).
+runs 0.99 and 0.89 with the two gates; 0.63 and 0.62 with one gate; 0.99 and 0.62 with births
+from every out-of-gate bearing).
 
 What a filter could score (``association_bound``): the fuser's own bearing step with one track
 per teammate at its true relative pose (:mod:`relloc.experiments.association_bound`), on run
@@ -412,12 +411,12 @@ def planar_formation(sigma_height: float) -> FormationSettings:
 def _settings(ds: MrclamDataset, window: CalibrationWindow, fov: float) -> _Models:
     """Filter settings of both sensor models (module docstring), all fitted on ``window``: the
     odometry model (latency, lag, per-robot scales; :func:`fit_odometry_model`) and the
-    equivalent white noise the calibrated commands leave (RMS over robots of the fitted σ at
-    each robot's largest-σ_ω window length,
-    floored), the camera's range and bearing σ (:func:`fit_camera`, correlation-inflated), the
-    clutter density matching the injected clutter and, for the unknown-correspondence model,
-    the field of view and ``P_D`` inside it; both models take the range span from ``window``
-    (:func:`_widest_range`) and the planar birth of :func:`planar_formation`."""
+    equivalent white noise the calibrated commands leave (RMS over robots of the σ fitted at
+    each robot's largest-σ_ω window length, floored), the camera's range and bearing σ
+    (:func:`fit_camera`, correlation-inflated), the clutter density matching the injected
+    clutter and, for the unknown-correspondence model, the field of view and ``P_D`` inside it;
+    both models take the range span from ``window`` (:func:`_widest_range`) and the planar
+    birth of :func:`planar_formation`."""
     odometry = fit_odometry_model(ds, window, ODOMETRY_WINDOW_S)
     camera_fit = fit_camera(ds, window, range_interval_s=RANGE_INTERVAL_S)
     fits = [
@@ -833,8 +832,7 @@ def _models_text(s: dict[str, Any]) -> str:
         f"{n['sigma_lateral']:.4f} m/s, σ_ω {n['sigma_w']:.4f} rad/s (RMS over robots, each "
         f"at the window length giving its largest σ_ω: "
         f"{', '.join(f'{v:g}' for v in n['noise_window_s'])} s). Camera: each robot's bearing "
-        f"bias on "
-        f"(1, η, η²) and the range bias on (1, η, η², ρ, ρη²) = "
+        f"bias on (1, η, η²) and the range bias on (1, η, η², ρ, ρη²) = "
         f"({', '.join(f'{v:.3f}' for v in c['range_bias_coeffs'])}) are removed from every "
         f"row; bearing σ {c['sigma_bearing_raw']:.4f} rad (MAD) × √{c['bearing_inflation']:.1f} "
         f"(correlation inflation) = {s['sigma_bearing_rad']:.4f} rad, range σ "
