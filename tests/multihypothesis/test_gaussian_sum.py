@@ -213,6 +213,39 @@ def test_fuse_dispatches_mutual_and_indirect_and_validates() -> None:
         a.teammate_index(7)
 
 
+def test_sharing_policies_send_only_confirmed_filters_and_can_skip_indirect_fusion() -> None:
+    """``share_confirmed_only``: a filter whose dominant track is unconfirmed is not sent and
+    keeps its broadcast prior (what it learns goes out once it is confirmed); the sent one's
+    prior is reset. ``indirect_fusion=False``: a belief of a third robot is skipped, a mutual
+    one still fused."""
+    st = _settings(share_confirmed_only=True, indirect_fusion=False)
+    fus = GaussianSumFuser(0, [1, 2], st)
+    sure, vague = np.diag([0.05, 0.05, 0.01, 0.1]) ** 2, np.diag([1.0, 1.0, 0.01, 1.0]) ** 2
+    one, two = np.array([3.0, 1.0, 0.0, 0.2]), np.array([-2.0, 2.0, 0.0, 1.0])
+    old_prior = np.array([-1.5, 2.5, 0.0, 0.5])
+    tracks = Tracks.concat(
+        [_one_track(one, sure, st.nscan_depth), _one_track(two, vague, st.nscan_depth)]
+    )
+    prior_means = np.stack([one - 0.1, old_prior])
+    fus.tracks = replace(tracks, groups=np.array([0, 1]), prior_means=prior_means)
+    assert [fus.summary(r).confirmed for r in (1, 2)] == [True, False]  # type: ignore[union-attr]
+    sent = fus.broadcast()
+    assert [m.subject for m in sent] == [1]
+    np.testing.assert_allclose(sent[0].prior_means, [one - 0.1])
+    np.testing.assert_allclose(fus.tracks.prior_means, [one, old_prior])
+    # every filter is sent by default (seed 002)
+    fus_all = GaussianSumFuser(0, [1, 2], _settings())
+    fus_all.tracks = fus.tracks
+    assert [m.subject for m in fus_all.broadcast()] == [1, 2]
+    # teammate 1's message about 2 is indirect: skipped; its message about 0 is mutual
+    about_two = replace(sent[0], sender=1, subject=2)
+    assert fus.fuse(about_two) == "skipped"
+    assert fus_all.fuse(about_two) == "indirect"
+    assert fus.fuse(_message_about_receiver(1, 0, one, sure)) == "mutual"
+    with pytest.raises(ConfigError, match="indirect_fusion must be a bool"):
+        _settings(indirect_fusion=1)
+
+
 def _message_about_receiver(sender: int, receiver: int, mean: np.ndarray, cov: np.ndarray):  # type: ignore[no-untyped-def]
     """A one-track message of ``sender`` about ``receiver`` that inverts to ``N(mean, cov)``
     in the receiver's frame, carrying no information since the previous broadcast."""

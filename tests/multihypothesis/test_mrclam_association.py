@@ -121,7 +121,7 @@ def test_mrclam_association_on_any_mrclam_folder(
     assert s["sigma_range_m"] == s["camera_model"]["sigma_range"]
     assert s["sigma_bearing_rad"] == s["camera_model"]["sigma_bearing"]
     # the shared-fusion variant and the camera model are run on the same data, beside it
-    for other in ("unknown_shared", "unknown_no_clutter", "camera"):
+    for other in ("unknown_shared", "unknown_mutual_confirmed", "unknown_no_clutter", "camera"):
         assert {"association_accuracy", "pos_rmse_m", "tracked_fraction"} <= set(s[other])
     lo, hi = s["field_of_view_rad"]
     assert lo == -hi and 0.0 < hi <= np.pi

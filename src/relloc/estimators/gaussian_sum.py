@@ -68,6 +68,10 @@ weights, unlike the states, carry no prior to remove; :meth:`GaussianSumFuser._f
 derives it). The same increment is also
 fused into the local track's broadcast prior, so that a later broadcast forwards only this
 robot's own direct information (what was fused from others is never sent back to them).
+Two sharing policies may restrict this (``GaussianSumSettings``): ``share_confirmed_only``
+broadcasts only the filters whose dominant track is confirmed (an unresolved mixture of yaw
+hypotheses is kept at home), and ``indirect_fusion=False`` fuses only the mutual messages (a
+belief of a third robot registered through an uncertain belief of its sender is not used).
 """
 
 from __future__ import annotations
@@ -152,6 +156,11 @@ class GaussianSumSettings:
             standard deviation ``√tr P_xyz`` above ``max_position_sigma`` (m) carry no usable
             information (a teammate unseen for long) and are deleted; the filter then waits
             for new measurements to give birth to tracks again.
+        share_confirmed_only: a broadcast carries only the filters whose dominant track is
+            confirmed (the others keep their broadcast priors, so what they learn is sent once
+            they are confirmed); ``False``: every filter, as seed 002.
+        indirect_fusion: fuse teammates' beliefs of third robots (Eqs. 11–12); ``False``:
+            mutual fusion only (Eqs. 9–10), indirect messages are skipped.
     """
 
     velocity_noise: VelocityNoise
@@ -178,6 +187,8 @@ class GaussianSumSettings:
     known_outlier_probability: float = 0.01
     max_range: float = 20.0
     max_position_sigma: float = 5.0
+    share_confirmed_only: bool = False
+    indirect_fusion: bool = True
 
     def __post_init__(self) -> None:
         if not isinstance(self.velocity_noise, VelocityNoise):
@@ -215,11 +226,11 @@ class GaussianSumSettings:
             raise ConfigError(
                 f"GaussianSumSettings.max_components must be ≥ 1: {self.max_components}"
             )
-        if not isinstance(self.ranges_mark_detections, bool):
-            raise ConfigError(
-                "GaussianSumSettings.ranges_mark_detections must be a bool: "
-                f"{self.ranges_mark_detections!r}"
-            )
+        for name in ("ranges_mark_detections", "share_confirmed_only", "indirect_fusion"):
+            if not isinstance(getattr(self, name), bool):
+                raise ConfigError(
+                    f"GaussianSumSettings.{name} must be a bool: {getattr(self, name)!r}"
+                )
         if self.field_of_view is not None:
             if not (np.isfinite(self.field_of_view) and 0.0 < self.field_of_view <= np.pi):
                 raise ConfigError(
@@ -843,31 +854,43 @@ class GaussianSumFuser:
             return None
         t = self.tracks
         best = sel[int(np.argmax(t.weights[sel]))]
-        P = t.covs[best]
-        st = self.settings
-        confirmed = bool(
-            t.weights[best] >= st.confirm_weight
-            and np.sqrt(np.trace(P[:3, :3])) <= st.confirm_position_sigma
-            and np.sqrt(P[_YAW, _YAW]) <= st.confirm_yaw_sigma
-        )
         return TrackSummary(
-            belief=Gaussian(mean=t.means[best], cov=P),
+            belief=Gaussian(mean=t.means[best], cov=t.covs[best]),
             weight=float(t.weights[best]),
             components=int(sel.size),
-            confirmed=confirmed,
+            confirmed=self._confirmed(best),
             assoc=int(t.assoc[best]),
+        )
+
+    def _confirmed(self, track: int) -> bool:
+        """Whether ``track`` passes the confirmation thresholds (weight, position and yaw
+        standard deviations) of :class:`GaussianSumSettings`."""
+        st = self.settings
+        P = self.tracks.covs[track]
+        return bool(
+            self.tracks.weights[track] >= st.confirm_weight
+            and np.sqrt(np.trace(P[:3, :3])) <= st.confirm_position_sigma
+            and np.sqrt(P[_YAW, _YAW]) <= st.confirm_yaw_sigma
         )
 
     # ------------------------------------------------------------------ communication
 
     def broadcast(self) -> list[EquivalentMeasurement]:
-        """Equivalent measurements of every filter (Eq. 8); resets the broadcast priors."""
+        """Equivalent measurements of every filter (Eq. 8), or with ``share_confirmed_only``
+        of every filter whose dominant track is confirmed; resets the broadcast priors of the
+        filters sent."""
         t = self.tracks
         out = []
+        sent = np.zeros(t.size, dtype=bool)
         for j, robot in enumerate(self.teammates):
             sel = np.flatnonzero(t.groups == j)
             if sel.size == 0:
                 continue
+            if self.settings.share_confirmed_only and not self._confirmed(
+                sel[int(np.argmax(t.weights[sel]))]
+            ):
+                continue
+            sent[sel] = True
             out.append(
                 EquivalentMeasurement(
                     sender=self.robot,
@@ -880,7 +903,10 @@ class GaussianSumFuser:
                     weights=t.weights[sel],
                 )
             )
-        self.tracks = t.with_arrays(prior_means=t.means.copy(), prior_covs=t.covs.copy())
+        self.tracks = t.with_arrays(
+            prior_means=np.where(sent[:, None], t.means, t.prior_means),
+            prior_covs=np.where(sent[:, None, None], t.covs, t.prior_covs),
+        )
         return out
 
     def fuse(self, msg: EquivalentMeasurement) -> str:
@@ -889,8 +915,8 @@ class GaussianSumFuser:
         Mutual (Eq. 9–10): ``msg`` is ``j``'s belief of this robot, inverted with ⊖.
         Indirect (Eq. 11–12): ``msg`` is ``l``'s belief of a teammate ``j``, composed with this
         fuser's tracks of ``l`` (those above ``registration_weight``, weight ``w'_{il} w_{lj}``).
-        A message about a robot this fuser does not track, or from a sender it has no track of
-        yet, is skipped.
+        A message about a robot this fuser does not track, from a sender it has no track of
+        yet, or an indirect one without ``indirect_fusion``, is skipped.
         """
         if msg.sender == self.robot:
             raise DataError(f"fuser {self.robot}: received its own message")
@@ -900,7 +926,11 @@ class GaussianSumFuser:
             pmeans, pcovs = invert_beliefs(msg.prior_means, msg.prior_covs)
             self._fuse_tracks(j, means, covs, pmeans, pcovs, msg.weights)
             return "mutual"
-        if msg.subject not in self._index or msg.sender not in self._index:
+        if (
+            not self.settings.indirect_fusion
+            or msg.subject not in self._index
+            or msg.sender not in self._index
+        ):
             return "skipped"
         j = self._index[msg.subject]
         l_idx = self._index[msg.sender]
