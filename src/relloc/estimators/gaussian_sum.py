@@ -853,7 +853,7 @@ class GaussianSumFuser:
         if sel.size == 0:
             return None
         t = self.tracks
-        best = sel[int(np.argmax(t.weights[sel]))]
+        best = self._dominant(sel)
         return TrackSummary(
             belief=Gaussian(mean=t.means[best], cov=t.covs[best]),
             weight=float(t.weights[best]),
@@ -861,6 +861,10 @@ class GaussianSumFuser:
             confirmed=self._confirmed(best),
             assoc=int(t.assoc[best]),
         )
+
+    def _dominant(self, sel: IntArray) -> int:
+        """The heaviest of the tracks ``sel`` (one filter's, not empty)."""
+        return int(sel[np.argmax(self.tracks.weights[sel])])
 
     def _confirmed(self, track: int) -> bool:
         """Whether ``track`` passes the confirmation thresholds (weight, position and yaw
@@ -886,9 +890,7 @@ class GaussianSumFuser:
             sel = np.flatnonzero(t.groups == j)
             if sel.size == 0:
                 continue
-            if self.settings.share_confirmed_only and not self._confirmed(
-                sel[int(np.argmax(t.weights[sel]))]
-            ):
+            if self.settings.share_confirmed_only and not self._confirmed(self._dominant(sel)):
                 continue
             sent[sel] = True
             out.append(
