@@ -138,6 +138,10 @@ def test_mrclam_cl_on_a_cut_of_run6_states_its_windows(mrclam_run6_cut, tmp_path
     assert inflation["checked_on"]["end_s"] == fitted["end_s"]
     assert f"Scored on [{held['start_s']:.0f}, {held['end_s']:.0f}] s" in report
     assert f"calibration window [{fitted['start_s']:.0f}, {fitted['end_s']:.0f}] s" in report
+    # the ratio to dead reckoning states the drift it divides and the window's end it grew to
+    dr = summary["cases"]["dead_reckoning/none"]["heldout"]["pos_rmse_m"]
+    assert f"held-out position RMSE of dead reckoning ({dr:.2f} m)" in report
+    assert f"the window ends {held['end_s']:.0f} s after it" in report
 
 
 def test_mrclam_cl_figures_do_not_depend_on_the_world_frame_clock_or_barcodes(

@@ -33,6 +33,7 @@ SUBCOMMAND_MODULES = (
     "relloc.cli.airground",
     "relloc.cli.certs",
     "relloc.cli.bag",
+    "relloc.cli.mrclam",
 )
 
 
