@@ -95,7 +95,7 @@ BoolArray = NDArray[np.bool_]
 BARCODES_FILE = "Barcodes.dat"
 LANDMARKS_FILE = "Landmark_Groundtruth.dat"
 _ROBOT_FILE = re.compile(r"^Robot([1-9][0-9]*)_(Groundtruth|Odometry|Measurement)\.dat$", re.ASCII)
-_ROBOT_KINDS = ("Groundtruth", "Odometry", "Measurement")
+ROBOT_KINDS = ("Groundtruth", "Odometry", "Measurement")
 
 # Bounds of the columns (module docstring); a value outside is a logging fault.
 MAX_UNIX_TIME_S = 2.0**32
@@ -255,6 +255,23 @@ _NUMERAL = re.compile(
 )
 # rows made only of these (joined by \n) may take the fast path
 _FAST_PATH_BYTES = b"0123456789+-.eE \t\n"
+
+
+def data_row(line: bytes) -> bytes | None:
+    """``line`` stripped of blanks at both ends, or None for a blank or ``#`` comment line (a
+    data row is everything else, module docstring)."""
+    row = line.strip(_BLANK)
+    return row if row and not row.startswith(b"#") else None
+
+
+def leading_time(row: bytes) -> float | None:
+    """The first column of the data row ``row`` when it is a finite numeral as the loader reads
+    one (ASCII decimal, no ``_``), else None."""
+    token = _SEPARATOR.split(row, maxsplit=1)[0]
+    if not _NUMERAL.fullmatch(token):
+        return None
+    t = float(token)
+    return t if math.isfinite(t) else None
 
 
 @dataclass(frozen=True)
@@ -432,9 +449,9 @@ def _read_table(
     file_report = FileReport(path.name)
     report.files[path.name] = file_report
     sink = _RowSink(path, lines, file_report, options)
-    stripped = [line.strip(_BLANK) for line in lines]
-    numbers = [i for i, s in enumerate(stripped, start=1) if s and not s.startswith(b"#")]
-    rows = [stripped[i - 1] for i in numbers]
+    numbered = [(i, row) for i, line in enumerate(lines, start=1) if (row := data_row(line))]
+    numbers = [i for i, _ in numbered]
+    rows = [row for _, row in numbered]
     file_report.rows_read = len(rows)
     fast = _parse_fast(rows, len(columns))
     if fast is not None:
@@ -725,11 +742,11 @@ def _discover_robots(folder: Path, options: MrclamOptions) -> list[int]:
     if not wanted:
         raise DataError(f"{folder}: no RobotN_Groundtruth/Odometry/Measurement.dat files")
     for n in wanted:
-        missing = [k for k in _ROBOT_KINDS if k not in found.get(n, set())]
+        missing = [k for k in ROBOT_KINDS if k not in found.get(n, set())]
         if missing:
             raise DataError(
                 f"{folder / f'Robot{n}_{missing[0]}.dat'}: file missing "
-                f"(robot {n} needs {', '.join(f'Robot{n}_{k}.dat' for k in _ROBOT_KINDS)})"
+                f"(robot {n} needs {', '.join(f'Robot{n}_{k}.dat' for k in ROBOT_KINDS)})"
             )
     return wanted
 

@@ -31,10 +31,15 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from relloc.datasets.mrclam import BARCODES_FILE, LANDMARKS_FILE, load_mrclam
+from relloc.datasets.mrclam import (
+    BARCODES_FILE,
+    LANDMARKS_FILE,
+    ROBOT_KINDS,
+    data_row,
+    leading_time,
+    load_mrclam,
+)
 from relloc.errors import ConfigError, DataError
-
-_ROBOT_KINDS = ("Groundtruth", "Odometry", "Measurement")
 
 
 @dataclass(frozen=True)
@@ -94,7 +99,7 @@ def cut_mrclam(
         for name in (BARCODES_FILE, LANDMARKS_FILE):
             shutil.copyfile(src / name, staging / name)
         for n in kept_robots:
-            for kind in _ROBOT_KINDS:
+            for kind in ROBOT_KINDS:
                 name = f"Robot{n}_{kind}.dat"
                 files[name] = _cut_file(src / name, staging / name, lo, hi)
         load_mrclam(staging)
@@ -113,35 +118,21 @@ def cut_mrclam(
 
 def _cut_file(src: Path, dst: Path, lo: float, hi: float) -> FileCut:
     """Copy ``src``'s comment lines and the data rows stamped in ``[lo, hi)`` to ``dst``."""
-    kept: list[bytes] = []
-    outside = unreadable = 0
-    n_kept = 0
+    lines: list[bytes] = []
+    kept = outside = unreadable = 0
     for line in src.read_bytes().split(b"\n"):
-        body = line.strip(b" \t\r")
-        if not body:
+        row = data_row(line)
+        if row is None:
+            if line.strip():  # a comment, not a blank line
+                lines.append(line)
             continue
-        if body.startswith(b"#"):
-            kept.append(line)
-            continue
-        t = _stamp(body)
+        t = leading_time(row)
         if t is None:
             unreadable += 1
         elif lo <= t < hi:
-            kept.append(line)
-            n_kept += 1
+            lines.append(line)
+            kept += 1
         else:
             outside += 1
-    dst.write_bytes(b"\n".join(kept) + b"\n")
-    return FileCut(kept=n_kept, outside=outside, unreadable=unreadable)
-
-
-def _stamp(row: bytes) -> float | None:
-    """The row's first column as a finite number, or None."""
-    token = row.split()[0]
-    if b"_" in token:  # Python reads 1_0 as 10; the loader does not
-        return None
-    try:
-        t = float(token.decode("ascii"))
-    except (UnicodeDecodeError, ValueError):
-        return None
-    return t if math.isfinite(t) else None
+    dst.write_bytes(b"\n".join(lines) + b"\n")
+    return FileCut(kept=kept, outside=outside, unreadable=unreadable)
