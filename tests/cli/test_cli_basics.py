@@ -1,7 +1,10 @@
-"""CLI smoke tests: help, version, unknown experiment → clear error and exit code."""
+"""CLI smoke tests: help, version, unknown experiment, flags an experiment does not read and a bad
+``--pair`` → clear error and exit code."""
 
 import subprocess
 import sys
+
+import pytest
 
 from relloc.cli import main
 
@@ -17,3 +20,35 @@ def test_help_and_version(capsys):
 def test_unknown_experiment_is_config_error(tmp_path, capsys):
     assert main(["reproduce", "no-such-paper", "--out", str(tmp_path)]) == 2
     assert "unknown experiment" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("flags", "message"),
+    [
+        (["--dataset", "d"], "--dataset: sharma2013 does not read it; read by wanasinghe2014"),
+        (["--pair", "1,2"], "--pair: sharma2013 does not read it; read by wanasinghe2014"),
+        (["--calibration-window", "first-half"], "--calibration-window: sharma2013 does not"),
+        (["--bag", "b"], "--bag: sharma2013 does not read it; read by tiers-uwb"),
+    ],
+)
+def test_a_flag_the_experiment_does_not_read_is_refused(tmp_path, capsys, flags, message):
+    out = tmp_path / "out"
+    assert main(["reproduce", "sharma2013", "--out", str(out), *flags]) == 2
+    assert message in capsys.readouterr().err
+    assert not out.exists()  # refused before anything ran
+
+
+@pytest.mark.parametrize(
+    ("pair", "message"),
+    [
+        ("1", "--pair: two robots OBSERVER,OBSERVED, got '1'"),
+        ("1,2,3", "--pair: two robots OBSERVER,OBSERVED, got '1,2,3'"),
+        ("1,x", "--pair: '1,x' is not a comma-separated list of integers"),
+        ("2,2", "--pair: two different robots OBSERVER,OBSERVED, got (2, 2)"),
+    ],
+)
+def test_a_bad_pair_is_refused(tmp_path, capsys, pair, message):
+    out = tmp_path / "out"
+    assert main(["reproduce", "wanasinghe2014", "--out", str(out), "--pair", pair]) == 2
+    assert message in capsys.readouterr().err
+    assert not out.exists()

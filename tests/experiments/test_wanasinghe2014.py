@@ -189,6 +189,10 @@ def test_config_from_cli_arguments(tmp_path: Path) -> None:
     cfg = Wanasinghe2014Config.from_args(args)
     assert (cfg.runs, cfg.replay_runs, cfg.sweep_runs) == (2, 2, 2)
     assert cfg.replay.dataset == tmp_path / "elsewhere"
+    assert (cfg.replay.observer, cfg.replay.observed) == (1, 3)  # the default pair
+    paired = Wanasinghe2014Config.from_args(ReproduceArgs(out_dir=tmp_path, pair=(4, 2)))
+    assert (paired.replay.observer, paired.replay.observed) == (4, 2)
+    assert paired.replay.dataset == Wanasinghe2014Config().replay.dataset
     default = Wanasinghe2014Config.from_args(ReproduceArgs(out_dir=tmp_path))
     assert (default.runs, default.sim.n_poses) == (20, 13)  # the paper's counts
     with pytest.raises(ConfigError, match="steady_state_s"):
@@ -198,8 +202,24 @@ def test_config_from_cli_arguments(tmp_path: Path) -> None:
 def test_replay_rejects_a_folder_too_short(small_dataset: Path) -> None:
     with pytest.raises(DataError, match="share only"):
         prepare_replay(ReplaySettings(dataset=small_dataset, min_duration_s=100.0))
-    with pytest.raises(DataError, match="robot 5"):
+    with pytest.raises(ConfigError, match=r"robot\(s\) \[5\] of the pair 1 → 5.*--pair"):
         prepare_replay(ReplaySettings(dataset=small_dataset, observed=5))
+
+
+def test_another_pair_is_replayed(small_dataset: Path) -> None:
+    """``--pair 2,1``: robot 2 observes robot 1; the truth is robot 1 in robot 2's frame."""
+    data = prepare_replay(ReplaySettings(dataset=small_dataset, observer=2, observed=1))
+    assert data.robots == ("2", "1") and data.source.endswith("robots 2 → 1")
+    default = prepare_replay(ReplaySettings(dataset=small_dataset))
+    assert default.robots == ("1", "3")
+    ds = load_mrclam(small_dataset)
+    t = data.t[len(data.t) // 2 : len(data.t) // 2 + 1]
+    obs, tgt = (ds.robot(r).groundtruth.at(t) for r in (2, 1))
+    c, s = math.cos(obs.theta[0]), math.sin(obs.theta[0])
+    dx, dy = tgt.x[0] - obs.x[0], tgt.y[0] - obs.y[0]
+    got = data.relative_truth(t)[0]
+    assert got[:2] == pytest.approx([c * dx + s * dy, -s * dx + c * dy], abs=1e-9)
+    assert got[2] == pytest.approx(2.0)  # the observed robot's plane raised
 
 
 def test_a_replay_draw_is_four_sensors_of_the_observer(small_dataset: Path) -> None:

@@ -48,6 +48,7 @@ def test_reproduce_desilva2015_smoke(tmp_path: Path, monkeypatch: pytest.MonkeyP
         "kidnapped",
         "consistency",
         "covariance_intersection",
+        "mutual_confirmed",
     ):
         assert key in summary
     assert set(summary["clutter_sweep"]) == {"1", "10", "100", "1000"}

@@ -373,6 +373,14 @@ def test_filter_settings_follow_the_scenario() -> None:
     assert st.expected_clutter == pytest.approx(sc.expected_clutter)
     assert st.sigma_range == pytest.approx(np.sqrt(8.0) * 1e-3)
     assert replace(st, fusion="ci").fusion == "ci"
+    # a run's configuration: the scenario's settings with its fusion and sharing policy
+    assert RunConfig(scenario=sc).settings() == st  # seed 002's policy by default
+    restricted = RunConfig(
+        scenario=sc, fusion="ci", share_confirmed_only=True, indirect_fusion=False
+    )
+    assert restricted.settings() == replace(
+        st, fusion="ci", share_confirmed_only=True, indirect_fusion=False
+    )
 
 
 def _two_tracks(depth: int) -> Tracks:

@@ -40,3 +40,13 @@ def flag_errors(fields: Mapping[str, str] = FIELD_FLAGS) -> Iterator[None]:
         yield
     except ConfigError as exc:
         raise ConfigError(as_flag_message(str(exc), fields)) from None
+
+
+def integer_list(text: str | None, flag: str) -> list[int] | None:
+    """``"1,3,5"`` → ``[1, 3, 5]`` (the value of ``flag``); ``None`` stays ``None``."""
+    if text is None:
+        return None
+    try:
+        return [int(part) for part in text.split(",")]
+    except ValueError:
+        raise ConfigError(f"{flag}: {text!r} is not a comma-separated list of integers") from None

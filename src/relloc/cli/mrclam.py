@@ -9,7 +9,7 @@ import argparse
 import math
 from pathlib import Path
 
-from relloc.errors import ConfigError
+from relloc.cli.flags import integer_list
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -40,7 +40,7 @@ def run(args: argparse.Namespace) -> int:
         args.destination,
         start_s=args.start,
         end_s=args.end,
-        robots=robot_list(args.robots),
+        robots=integer_list(args.robots, "--robots"),
     )
     print(
         f"wrote {report.destination}: [{report.start_s:g}, {report.end_s:g}) s of "
@@ -51,13 +51,3 @@ def run(args: argparse.Namespace) -> int:
     for name, f in report.files.items():
         print(f"{name:<{width}}  {f.kept:>7}  {f.outside:>7}  {f.unreadable:>10}")
     return 0
-
-
-def robot_list(text: str | None) -> list[int] | None:
-    """``"1,3,5"`` → ``[1, 3, 5]``; None stays None (all robots)."""
-    if text is None:
-        return None
-    try:
-        return [int(part) for part in text.split(",")]
-    except ValueError:
-        raise ConfigError(f"--robots: {text!r} is not a comma-separated list of integers") from None

@@ -1,7 +1,9 @@
 """``relloc reproduce NAME --out DIR [--runs N] [--seed S] [--dataset PATH] [--executor E]
-[--calibration-window SPLIT] [--mcap FILE] [--tum DIR]`` (``--calibration-window``: mrclam-cl's
-calibration and scoring windows; the last two: one representative run's estimates, where the
-experiment states one — :func:`relloc.experiments.registry.exported_run`).
+[--calibration-window SPLIT] [--pair A,B] [--mcap FILE] [--tum DIR]`` (``--calibration-window``:
+mrclam-cl's calibration and scoring windows; ``--pair``: wanasinghe2014's replayed robots; the
+last two: one representative run's estimates, where the experiment states one —
+:func:`relloc.experiments.registry.exported_run`). A flag the experiment does not read is
+refused (:func:`relloc.experiments.registry.refuse_unread`).
 
 Prints the seed and run counts, the report's ours-vs-paper tables laid out for the terminal
 (:mod:`relloc.cli.comparison`) and every file written.
@@ -14,6 +16,8 @@ import json
 from pathlib import Path
 
 from relloc.cli.export_args import add_export_arguments, export_request, print_export
+from relloc.cli.flags import integer_list
+from relloc.errors import ConfigError
 from relloc.experiments import registry
 
 
@@ -48,6 +52,13 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         help="mrclam-cl: fit the error models on 'first-half' (default) or 'second-half' of the "
         "run, ':T' (up to T s) or 'T:' (from T s), and score on the rest",
     )
+    p.add_argument(
+        "--pair",
+        default=None,
+        metavar="A,B",
+        help="wanasinghe2014: the dataset's observer and observed robot of the real-trajectory "
+        "replay (default 1,3)",
+    )
     p.add_argument("--quiet", action="store_true", help="no progress display")
     add_export_arguments(p, "one representative run's estimates (where the experiment has any)")
     p.set_defaults(func=run)
@@ -57,28 +68,27 @@ def run(args: argparse.Namespace) -> int:
     reproduce = registry.get(args.name)
     export = export_request(args)
     if export is not None and registry.exported_run(args.name) is None:
-        from relloc.errors import ConfigError
-
         exporting = [n for n in registry.available() if registry.exported_run(n) is not None]
         raise ConfigError(
             f"--mcap/--tum: {args.name} does not export estimates; experiments that do: "
             + ", ".join(exporting)
         )
-    summary = reproduce(
-        registry.ReproduceArgs(
-            out_dir=args.out,
-            runs=args.runs,
-            seed=args.seed,
-            dataset=args.dataset,
-            executor=args.executor,
-            quiet=args.quiet,
-            export=export,
-            bag=args.bag,
-            map=args.map,
-            calibrate_on=args.calibrate_on,
-            calibration_window=args.calibration_window,
-        )
+    request = registry.ReproduceArgs(
+        out_dir=args.out,
+        runs=args.runs,
+        seed=args.seed,
+        dataset=args.dataset,
+        executor=args.executor,
+        quiet=args.quiet,
+        export=export,
+        bag=args.bag,
+        map=args.map,
+        calibrate_on=args.calibrate_on,
+        calibration_window=args.calibration_window,
+        pair=robot_pair(args.pair),
     )
+    registry.refuse_unread(args.name, request)
+    summary = reproduce(request)
     if not args.quiet:
         from relloc.cli.comparison import comparison_text
         from relloc.cli.console import terminal_width
@@ -87,3 +97,13 @@ def run(args: argparse.Namespace) -> int:
         print(comparison_text(args.name, args.out, width=terminal_width()))
         print_export(summary.get("export"))
     return 0
+
+
+def robot_pair(text: str | None) -> tuple[int, int] | None:
+    """``--pair A,B`` → ``(A, B)``; ``None`` stays ``None``."""
+    robots = integer_list(text, "--pair")
+    if robots is None:
+        return None
+    if len(robots) != 2:
+        raise ConfigError(f"--pair: two robots OBSERVER,OBSERVED, got {text!r}")
+    return robots[0], robots[1]

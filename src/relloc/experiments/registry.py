@@ -9,6 +9,9 @@ sentence) and, when ``args.export`` is set, writes that run's
 :class:`~relloc.core.estimates.Estimates` with its recording through
 :func:`relloc.pipeline.export.export_estimates`, putting the returned section under
 ``summary["export"]``. :func:`exported_run` reads the constant (``None``: nothing to export).
+
+Some of :class:`ReproduceArgs`' inputs are read by only some experiments (:data:`READ_BY`);
+:func:`refuse_unread` refuses them for the others, so a flag is never silently ignored.
 """
 
 from __future__ import annotations
@@ -46,7 +49,9 @@ class ReproduceArgs:
     ``bag``, ``map`` and ``calibrate_on`` are read by the experiments on ROS 2 bags (a bag, its
     topic mapping, and another bag of the same hardware to calibrate on);
     ``calibration_window`` by mrclam-cl (which side of the run its error models are fitted on,
-    :func:`relloc.calibration.window.split_span`; ``None``: the experiment's default)."""
+    :func:`relloc.calibration.window.split_span`; ``None``: the experiment's default);
+    ``pair`` by wanasinghe2014 (the dataset's ``(observer, observed)`` robots of its
+    real-trajectory replay; ``None``: the experiment's default)."""
 
     out_dir: Path
     runs: int | None = None
@@ -59,12 +64,35 @@ class ReproduceArgs:
     map: Path | None = None
     calibrate_on: Path | None = None
     calibration_window: str | None = None
+    pair: tuple[int, int] | None = None
 
     def __post_init__(self) -> None:
         if self.runs is not None and self.runs < 1:
             raise ConfigError(f"--runs must be ≥ 1, got {self.runs}")
         if self.seed < 0:
             raise ConfigError(f"--seed must be ≥ 0, got {self.seed}")
+        if self.pair is not None and (len(self.pair) != 2 or self.pair[0] == self.pair[1]):
+            raise ConfigError(f"--pair: two different robots OBSERVER,OBSERVED, got {self.pair}")
+
+
+#: :class:`ReproduceArgs` inputs read by only some experiments → those experiments.
+READ_BY: dict[str, tuple[str, ...]] = {
+    "dataset": ("wanasinghe2014", "mrclam-cl", "mrclam-association"),
+    "bag": ("tiers-uwb",),
+    "map": ("tiers-uwb",),
+    "calibrate_on": ("tiers-uwb",),
+    "calibration_window": ("mrclam-cl",),
+    "pair": ("wanasinghe2014",),
+}
+
+
+def refuse_unread(name: str, args: ReproduceArgs) -> None:
+    """ConfigError naming the flag when ``args`` sets an input experiment ``name`` does not read
+    (:data:`READ_BY`)."""
+    for field, readers in READ_BY.items():
+        if getattr(args, field) is not None and name not in readers:
+            flag = "--" + field.replace("_", "-")
+            raise ConfigError(f"{flag}: {name} does not read it; read by {', '.join(readers)}")
 
 
 def available() -> list[str]:

@@ -24,10 +24,11 @@ the RMSE over draws), Table 3 (RMSE over draws per instant), the radial bias and
 ratios are built here on those evaluations.
 
 ``--runs N`` sets the team draws to N and the sweep and replay draws to ``min(N, 4)`` and
-``min(N, 5)``. Every Monte-Carlo loop goes through :func:`relloc.pipeline.montecarlo.
-run_monte_carlo` with ``--executor``; seeds: team ``S``, replay ``S + 1``, sweep level ``i``
-``S + 2 + i``, the replay's noise-inflation fit on the calibration window the next one
-(``S`` = ``--seed``).
+``min(N, 5)``; ``--dataset D`` replays another MRCLAM-layout folder and ``--pair A,B``
+robot ``A`` observing robot ``B`` of it (default ``1,3``). Every Monte-Carlo loop goes
+through :func:`relloc.pipeline.montecarlo.run_monte_carlo` with ``--executor``; seeds: team
+``S``, replay ``S + 1``, sweep level ``i`` ``S + 2 + i``, the replay's noise-inflation fit on
+the calibration window the next one (``S`` = ``--seed``).
 
 summary.json keys
 -----------------
@@ -197,7 +198,7 @@ class Wanasinghe2014Config:
 
     @classmethod
     def from_args(cls, args: ReproduceArgs) -> Wanasinghe2014Config:
-        """Defaults, with ``--runs`` and ``--dataset`` applied."""
+        """Defaults, with ``--runs``, ``--dataset`` and ``--pair`` applied."""
         base = cls()
         changes: dict[str, Any] = {}
         if args.runs is not None:
@@ -206,8 +207,13 @@ class Wanasinghe2014Config:
                 replay_runs=min(args.runs, base.replay_runs),
                 sweep_runs=min(args.runs, base.sweep_runs),
             )
+        replay: dict[str, Any] = {}
         if args.dataset is not None:
-            changes["replay"] = dataclasses.replace(base.replay, dataset=Path(args.dataset))
+            replay["dataset"] = Path(args.dataset)
+        if args.pair is not None:
+            replay["observer"], replay["observed"] = args.pair
+        if replay:
+            changes["replay"] = dataclasses.replace(base.replay, **replay)
         return dataclasses.replace(base, **changes)
 
 
@@ -1199,7 +1205,8 @@ def replay_section(s: dict[str, Any]) -> list[str]:
     lines = [
         "## Tables 3–4 — real MRCLAM trajectories",
         "",
-        f"{s['replay']['source']}; observed plane raised {s['replay']['observed_height_m']:g} m; "
+        f"{s['replay']['source']} (another pair: `--pair OBSERVER,OBSERVED`); observed plane "
+        f"raised {s['replay']['observed_height_m']:g} m; "
         f"scored window [{w['scored']['start_s']:.1f}, {w['scored']['end_s']:.1f}] s of the "
         f"recording, steady state after {s['replay']['steady_state_after_s']:g} s; "
         "measurements synthesised from the ground truth; the same draws (sensor noise, initial "

@@ -367,7 +367,7 @@ def _sigma(fit: OdometryNoiseFit) -> Array:
 
 def prepare_replay(settings: ReplaySettings) -> ReplayData:
     """The raw replay only (:func:`prepare_replays`)."""
-    ds = load_mrclam(settings.dataset)
+    ds = _load_pair_dataset(settings)
     return _raw_replay(settings, ds, to_recording(ds))
 
 
@@ -383,7 +383,7 @@ def prepare_replays(
     and ground-truth odometry (module docstring), from one load of the dataset; the noise
     inflation of the calibrated and of the truth-velocity odometry is fitted with the same draws
     of ``seed`` scored after ``steady_state_s`` (:func:`fit_noise_inflation`)."""
-    ds = load_mrclam(settings.dataset)
+    ds = _load_pair_dataset(settings)
     recording = to_recording(ds)
     raw = _raw_replay(settings, ds, recording)
     window = calibration_window(ds, raw.scored_window)
@@ -417,6 +417,19 @@ def prepare_replays(
     )
     out["calibrated"] = replace(out["calibrated"], calibration=team, turn_rate=turn_rate)
     return {kind: out[kind] for kind in ODOMETRY_KINDS}
+
+
+def _load_pair_dataset(settings: ReplaySettings) -> MrclamDataset:
+    """The dataset, with a ConfigError when it lacks a robot of the pair."""
+    ds = load_mrclam(settings.dataset)
+    missing = [r for r in (settings.observer, settings.observed) if r not in ds.robot_ids]
+    if missing:
+        raise ConfigError(
+            f"ReplaySettings: robot(s) {missing} of the pair {settings.observer} → "
+            f"{settings.observed} are not in {settings.dataset} (robots: {list(ds.robot_ids)}); "
+            "choose the pair with --pair OBSERVER,OBSERVED"
+        )
+    return ds
 
 
 def _pair_span(settings: ReplaySettings, recording: Recording) -> tuple[float, float]:
