@@ -52,3 +52,27 @@ def test_a_bad_pair_is_refused(tmp_path, capsys, pair, message):
     assert main(["reproduce", "wanasinghe2014", "--out", str(out), "--pair", pair]) == 2
     assert message in capsys.readouterr().err
     assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (
+            ["team", "up", "default", "--sharing-policy", "all"],
+            "--sharing-policy: only desilva2015 teams (desilva2015, desilva2015-kidnapped)",
+        ),
+        (
+            ["team", "up", "desilva2015", "--sharing-policy", "none"],
+            "sharing policy 'none': one of all, mutual-confirmed",
+        ),
+        (
+            ["node", "--robot", "L1", "--scenario", "sharma2013", "--sharing-policy", "all"],
+            "--sharing-policy: only desilva2015 teams",
+        ),
+    ],
+)
+def test_a_sharing_policy_is_refused_where_it_means_nothing(tmp_path, capsys, argv, message):
+    out = tmp_path / "out"
+    assert main([*argv, *(["--out", str(out)] if argv[0] == "team" else [])]) == 2
+    assert message in capsys.readouterr().err
+    assert not out.exists()

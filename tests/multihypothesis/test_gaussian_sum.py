@@ -375,9 +375,12 @@ def test_filter_settings_follow_the_scenario() -> None:
     assert replace(st, fusion="ci").fusion == "ci"
     # a run's configuration: the scenario's settings with its fusion and sharing policy
     assert RunConfig(scenario=sc).settings() == st  # seed 002's policy by default
-    restricted = RunConfig(
-        scenario=sc, fusion="ci", share_confirmed_only=True, indirect_fusion=False
+    restricted = RunConfig(scenario=sc, fusion="ci", sharing_policy="mutual-confirmed")
+    assert restricted.settings() == replace(
+        st, fusion="ci", share_confirmed_only=True, indirect_fusion=False
     )
+    with pytest.raises(ConfigError, match="sharing policy 'none': one of all, mutual-confirmed"):
+        RunConfig(scenario=sc, sharing_policy="none")
     assert restricted.settings() == replace(
         st, fusion="ci", share_confirmed_only=True, indirect_fusion=False
     )

@@ -37,9 +37,12 @@ from relloc.runtime.teammates import ReceivedOdometry
 ROSTER = ("L1", "L2", "P1", "P2", "P3")
 
 
-def _leader_drivers(duration_s: float):
+def _leader_drivers(duration_s: float, policy: str = "all"):
     recording = desilva_recording("desilva2015", 4, 0, duration_s)
-    parts = [named_node_parts("desilva2015", r, 4, 0, duration_s) for r in ("L1", "L2")]
+    parts = [
+        named_node_parts("desilva2015", r, 4, 0, duration_s, sharing_policy=policy)
+        for r in ("L1", "L2")
+    ]
     streams = []
     for robot in recording.robots:
         s = ReceivedOdometry()
@@ -56,8 +59,9 @@ def _exchange(pairs):
             other.deliver(stamp, d.robot, [m])
 
 
-def test_two_leader_drivers_exchanging_mail_reproduce_the_in_process_replay():
-    recording, parts, streams = _leader_drivers(4.0)
+@pytest.mark.parametrize("policy", ["all", "mutual-confirmed"])
+def test_two_leader_drivers_exchanging_mail_reproduce_the_in_process_replay(policy):
+    recording, parts, streams = _leader_drivers(4.0, policy)
     drivers = [p.driver for p in parts]
     pairs = list(zip(drivers, drivers[::-1], strict=True))
     edges = np.round(np.arange(0, 41) * 0.1, 12)
@@ -83,7 +87,7 @@ def test_two_leader_drivers_exchanging_mail_reproduce_the_in_process_replay():
             assert stalls < 100, "the drivers wait for each other forever"
         _exchange(pairs)
     reference = leader_estimates(
-        recording, RunConfig(scenario=desilva_scenario("desilva2015", 4.0))
+        recording, RunConfig(scenario=desilva_scenario("desilva2015", 4.0), sharing_policy=policy)
     )
     got = {s.key: s for d in drivers for s in d.take_new().beliefs}
     assert set(got) == {s.key for s in reference.beliefs}
@@ -94,7 +98,15 @@ def test_two_leader_drivers_exchanging_mail_reproduce_the_in_process_replay():
         np.testing.assert_allclose(g.cov, ref.cov, rtol=0, atol=1e-12)
     fused = {k: v for d in drivers for k, v in d.counters().items() if "messages" in k}
     assert fused.get("messages_late", 0) == 0
-    assert sum(v for k, v in fused.items() if k.startswith("messages_fused")) > 0
+    assert fused.get("messages_fused:mutual", 0) > 0
+    # seed 002's policy fuses the other leader's beliefs of the pods (indirect messages); the
+    # restricted one skips them (and sends only confirmed filters)
+    indirect = fused.get("messages_fused:indirect", 0)
+    skipped = fused.get("messages_fused:skipped", 0)
+    if policy == "all":
+        assert indirect > 0 and skipped == 0
+    else:
+        assert indirect == 0 and skipped > 0
 
 
 def _eqm(subject: int, k: int, t: float) -> EquivalentMeasurement:
@@ -160,6 +172,25 @@ def test_desilva_leaders_as_processes_match_in_process_and_refind_the_kidnapped_
         )
         assert sent - 1 <= got <= sent
     assert (out / "report.md").read_text().startswith("# relloc team up — desilva2015-kidnapped")
+
+
+@pytest.mark.slow
+def test_a_sharing_policy_reaches_the_leader_processes(tmp_path):
+    """``--sharing-policy mutual-confirmed``: both leader processes skip the other's beliefs of
+    the pods (indirect messages) and agree with the in-process run of the same policy. The run
+    is shorter than the 5 s steady-state start, so its RMSE is undefined in both and agrees."""
+    out = tmp_path / "out"
+    argv = ["team", "up", "desilva2015", "--out", str(out), "--duration", "4", "--seed", "3"]
+    assert main([*argv, "--sharing-policy", "mutual-confirmed", "--quiet"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["sharing_policy"] == "mutual-confirmed"
+    agree = summary["agreement"]
+    assert agree["perfect_network"] and agree["within_tolerance"], agree
+    for leader in ("L1", "L2"):
+        tracks = summary["per_run"][0]["messages"][leader]["tracks"]
+        assert tracks.get("messages_fused:indirect", 0) == 0, tracks
+        assert tracks["messages_fused:skipped"] > 0 and tracks["messages_fused:mutual"] > 0
+    assert "sharing policy `mutual-confirmed`" in (out / "report.md").read_text()
 
 
 def test_an_agent_refilters_late_readings_from_a_checkpoint_and_matches_the_in_process_eif():

@@ -129,6 +129,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         default="track",
         help="with --dataset: seed 000's track manager, or seed 001's team EIF (mrclam-cl)",
     )
+    add_sharing_policy_argument(p)
     p.add_argument(
         "--fit", default=None, metavar="FILE", help="--estimator cooperative: fitted models"
     )
@@ -252,6 +253,7 @@ def node_parts(args: argparse.Namespace) -> NodeParts:
     """The robot's sensor source and estimator for the team source the arguments name."""
     from relloc.experiments.team_sources import named_node_parts, team_names
 
+    refuse_sharing_policy(args)
     if args.dataset is None and args.scenario in team_names():
         return named_node_parts(
             args.scenario,
@@ -260,6 +262,7 @@ def node_parts(args: argparse.Namespace) -> NodeParts:
             args.run,
             args.duration,
             args.case or "two_landmarks",
+            args.sharing_policy or "all",
         )
     if args.dataset is not None and args.estimator == "cooperative":
         from pathlib import Path
@@ -313,3 +316,28 @@ def track_manager_parts(args: argparse.Namespace) -> NodeParts:
     return NodeParts(
         recording.robots, RecordingSource(recording, args.robot), driver, recording=recording
     )
+
+
+def add_sharing_policy_argument(p: argparse.ArgumentParser) -> None:
+    """``--sharing-policy NAME`` of a desilva2015 team's leaders."""
+    p.add_argument(
+        "--sharing-policy",
+        default=None,
+        metavar="NAME",
+        help="desilva2015 teams: the leaders' sharing policy, 'all' (seed 002's, default) or "
+        "'mutual-confirmed' (only confirmed filters broadcast, only mutual messages fused)",
+    )
+
+
+def refuse_sharing_policy(args: argparse.Namespace) -> None:
+    """ConfigError when ``--sharing-policy`` is given to a team without Gaussian-sum fusers."""
+    from relloc.errors import ConfigError
+    from relloc.experiments.team_sources import KIDNAPPED
+
+    if args.sharing_policy is not None and (
+        getattr(args, "dataset", None) is not None or args.scenario not in KIDNAPPED
+    ):
+        raise ConfigError(
+            f"--sharing-policy: only desilva2015 teams ({', '.join(KIDNAPPED)}) share "
+            "Gaussian-sum beliefs"
+        )

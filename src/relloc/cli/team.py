@@ -36,8 +36,10 @@ from relloc.cli.console import plain_text
 from relloc.cli.export_args import add_export_arguments, export_request, print_export
 from relloc.cli.node import (
     add_network_fault_arguments,
+    add_sharing_policy_argument,
     add_transport_arguments,
     network_faults_from_args,
+    refuse_sharing_policy,
     transport_from_args,
 )
 
@@ -106,6 +108,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         metavar="DIR",
         help="certificate folder of 'relloc certs' (default with --secure: made in OUT/certs)",
     )
+    add_sharing_policy_argument(up)
     up.add_argument("--quiet", action="store_true", help="print nothing")
     faults = add_network_fault_arguments(up)
     faults.add_argument("--kill", action="append", default=[], metavar="ROBOT@SECONDS")
@@ -137,6 +140,8 @@ def _robot_events(args: argparse.Namespace) -> dict[str, tuple[object, ...]]:
 
 def run_up(args: argparse.Namespace) -> int:
     from relloc.runtime.scenario import REPRODUCTIONS
+
+    refuse_sharing_policy(args)
 
     if args.scenario == "guler2023":
         from relloc.cli.airground import run_team_up
@@ -223,6 +228,7 @@ def run_reproduction(args: argparse.Namespace) -> int:
             seed=args.seed,
             runs=args.runs,
             duration_s=args.duration,
+            sharing_policy=args.sharing_policy or "all",
             **_reproduction_team_args(args),
         )
     )

@@ -71,13 +71,16 @@ robot's own direct information (what was fused from others is never sent back to
 Two sharing policies may restrict this (``GaussianSumSettings``): ``share_confirmed_only``
 broadcasts only the filters whose dominant track is confirmed (an unresolved mixture of yaw
 hypotheses is kept at home), and ``indirect_fusion=False`` fuses only the mutual messages (a
-belief of a third robot registered through an uncertain belief of its sender is not used).
+belief of a third robot registered through an uncertain belief of its sender is not used);
+:data:`SHARING_POLICIES` names the combinations in use (``"all"``: seed 002's;
+``"mutual-confirmed"``: both restrictions), :meth:`GaussianSumSettings.with_sharing_policy`
+applies one.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, replace
 from typing import Any, Literal
 
 import numpy as np
@@ -271,6 +274,23 @@ class GaussianSumSettings:
         clutter and a teammate of unknown place are uniform over ``±f``)."""
         azimuth = 2.0 * np.pi if self.field_of_view is None else 2.0 * self.field_of_view
         return azimuth * (np.pi if self.use_elevation else 1.0)
+
+    def with_sharing_policy(self, name: str) -> GaussianSumSettings:
+        """These settings with the named sharing policy of :data:`SHARING_POLICIES`."""
+        if name not in SHARING_POLICIES:
+            raise ConfigError(f"sharing policy {name!r}: one of {', '.join(SHARING_POLICIES)}")
+        confirmed_only, indirect = SHARING_POLICIES[name]
+        return replace(self, share_confirmed_only=confirmed_only, indirect_fusion=indirect)
+
+
+#: Named sharing policies → their ``(share_confirmed_only, indirect_fusion)`` of
+#: :class:`GaussianSumSettings`: ``"all"`` is seed 002's (every filter broadcast, mutual and
+#: indirect messages fused); ``"mutual-confirmed"`` broadcasts only confirmed filters and fuses
+#: only mutual messages.
+SHARING_POLICIES: dict[str, tuple[bool, bool]] = {
+    "all": (False, True),
+    "mutual-confirmed": (True, False),
+}
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -11,9 +11,9 @@ P_B 0.5, P_G 0.95 (see the simulator's docstring for how the units were read).
 
 Configurations and run counts. ``paper`` (the settings above, decorrelated sharing),
 ``no_sharing`` (mutual/indirect fusion off), ``covariance_intersection`` (sharing fused by CI,
-the conservative alternative), ``mutual_confirmed`` (a restricted sharing policy: only
-confirmed filters are broadcast and only mutual messages fused,
-``GaussianSumSettings.share_confirmed_only`` and ``indirect_fusion=False``; the policy
+the conservative alternative), ``mutual_confirmed`` (the restricted sharing policy
+``"mutual-confirmed"``: only confirmed filters are broadcast and only mutual messages fused,
+:data:`relloc.estimators.gaussian_sum.SHARING_POLICIES`; the policy
 ``relloc reproduce mrclam-association`` reports beside its headline on real data, measured here
 on the paper's scenario), every sweep point (clutter λ × 10, 100, 1000; P_D 0.8, 0.6) and the
 kidnapped-robot configuration use the paper's 25 runs each (275 runs, about 2.5 CPU-s each, so
@@ -118,24 +118,22 @@ def filter_settings(scenario: DeSilvaScenario) -> GaussianSumSettings:
 @dataclass(frozen=True)
 class RunConfig:
     """One Monte-Carlo configuration: the scenario, whether the leaders share at all, how shared
-    beliefs are fused (``fusion``) and what is shared and fused (``share_confirmed_only``,
-    ``indirect_fusion``: the sharing policies of
-    :class:`~relloc.estimators.gaussian_sum.GaussianSumSettings`; seed 002's is the default)."""
+    beliefs are fused (``fusion``) and what is shared and fused (``sharing_policy``, a name of
+    :data:`~relloc.estimators.gaussian_sum.SHARING_POLICIES`; seed 002's ``"all"`` by default).
+    """
 
     scenario: DeSilvaScenario
     sharing: bool = True
     fusion: FusionMode = "decorrelated"
-    share_confirmed_only: bool = False
-    indirect_fusion: bool = True
+    sharing_policy: str = "all"
+
+    def __post_init__(self) -> None:
+        self.settings()  # an unknown policy or fusion mode is refused here
 
     def settings(self) -> GaussianSumSettings:
         """The leaders' fuser settings: :func:`filter_settings` with this fusion and policy."""
-        return replace(
-            filter_settings(self.scenario),
-            fusion=self.fusion,
-            share_confirmed_only=self.share_confirmed_only,
-            indirect_fusion=self.indirect_fusion,
-        )
+        base = replace(filter_settings(self.scenario), fusion=self.fusion)
+        return base.with_sharing_policy(self.sharing_policy)
 
 
 @dataclass(frozen=True)
@@ -402,7 +400,7 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
     nosh_res = run(RunConfig(scenario=base, sharing=False), runs, "no sharing")
     no_sharing = metrics(nosh_res)
     ci = metrics(run(RunConfig(scenario=base, fusion="ci"), runs, "covariance intersection"))
-    mutual_config = RunConfig(scenario=base, share_confirmed_only=True, indirect_fusion=False)
+    mutual_config = RunConfig(scenario=base, sharing_policy="mutual-confirmed")
     mutual = metrics(run(mutual_config, runs, "mutual fusion of confirmed tracks"))
 
     def sweep_entry(m: dict[str, Any], scenario: DeSilvaScenario) -> dict[str, Any]:

@@ -16,7 +16,9 @@ and the same runs are replayed in-process
 ``agreement`` (largest |Δ| of any belief mean / covariance entry at common record times, per
 run); for the kidnapped team ``kidnapped`` (``refound_rate``, ``time_to_refind_s`` and
 ``tracked_last_second``, distributed and in-process);
-``secure`` (mutual TLS and access control: ``--secure``); ``messages`` per robot and per run
+``sharing_policy`` (the leaders', ``--sharing-policy``: ``all``, seed 002's, or
+``mutual-confirmed``, :data:`relloc.estimators.gaussian_sum.SHARING_POLICIES`); ``secure``
+(mutual TLS and access control: ``--secure``); ``messages`` per robot and per run
 (sent, received, rejected by reason) and what the collector rejected
 (``collector_rejected_by_reason``); per run ``fault_outcomes`` (accuracy before / during /
 after each fault, tracks kept, deleted and re-found: :mod:`relloc.runtime.outcomes`);
@@ -32,6 +34,7 @@ the differences are reported, not held to the tolerance.
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -71,13 +74,14 @@ class DeSilvaTeamSettings(ProcessTeam):
     seed: int = 0
     runs: int = 1
     duration_s: float | None = None
+    sharing_policy: str = "all"
 
 
 def run_desilva_team(s: DeSilvaTeamSettings) -> dict[str, Any]:
     """Run every run's team, score it beside the in-process run, write the outputs."""
-    out = prepare_out_dir(s.out_dir)
     scenario = desilva_scenario(s.name, s.duration_s)
-    config = RunConfig(scenario=scenario)
+    config = RunConfig(scenario=scenario, sharing_policy=s.sharing_policy)
+    out = prepare_out_dir(s.out_dir)
     distributed: list[LeaderRunScores] = []
     in_process: list[LeaderRunScores] = []
     runs: list[dict[str, Any]] = []
@@ -89,7 +93,14 @@ def run_desilva_team(s: DeSilvaTeamSettings) -> dict[str, Any]:
             out_dir=out / f"run{i}",
             seed=s.seed,
             preload=("relloc.experiments.team_sources",),
-            node_args=("--run", str(i), "--duration", repr(scenario.duration)),
+            node_args=(
+                "--run",
+                str(i),
+                "--duration",
+                repr(scenario.duration),
+                "--sharing-policy",
+                s.sharing_policy,
+            ),
         )
         span = recording.span[1] - recording.span[0]
         collected = TeamLauncher(settings, recording.robots, span).run()
@@ -155,6 +166,7 @@ def _summary(
         "runs": s.runs,
         "duration_s": duration_s,
         "processes_per_run": {"leaders": 2, "pods": 3, "clock": 1},
+        "sharing_policy": s.sharing_policy,
         "faults": s.faults.to_dict(),
         "secure": s.secure,
         "distributed": ours,
@@ -172,7 +184,12 @@ def _summary(
 
 
 def _diff(a: float | None, b: float | None) -> float | None:
-    return None if a is None or b is None else float(a) - float(b)
+    """Distributed − in-process; None when there is nothing to compare: a figure missing, or
+    undefined (NaN) in both — a run shorter than the steady-state start has no RMSE. NaN in one
+    only stays NaN, a disagreement."""
+    if a is None or b is None or (math.isnan(a) and math.isnan(b)):
+        return None
+    return float(a) - float(b)
 
 
 def report_markdown(summary: Mapping[str, Any]) -> str:
@@ -185,7 +202,8 @@ def report_markdown(summary: Mapping[str, Any]) -> str:
         f"{summary['seed']}, {fmt(summary['duration_s'])} s each)",
         "",
         "Leaders L1, L2 run their Gaussian-sum fusers in their own processes, pods P1–P3 share "
-        "their odometry; equivalent measurements travel once a second over Zenoh.",
+        "their odometry; equivalent measurements travel once a second over Zenoh; sharing "
+        f"policy `{summary['sharing_policy']}`.",
         "",
         markdown_table(["figure", "distributed", "in-process", "difference"], rows),
         "",

@@ -618,7 +618,7 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
     )
     unknown, rows = _evaluate(scores, clock[0], names)
     shared, _ = _evaluate(_run(rec, w.models.unknown, clock, sharing=True), clock[0], names)
-    mutual_settings = replace(w.models.unknown, share_confirmed_only=True, indirect_fusion=False)
+    mutual_settings = w.models.unknown.with_sharing_policy("mutual-confirmed")
     mutual, _ = _evaluate(_run(rec, mutual_settings, clock, sharing=True), clock[0], names)
     clean, _ = _hidden_correspondence(w.raw, clock[0], clock[-1], fov, rng, 0.0)
     clean_settings = replace(w.models.unknown, expected_clutter=0.0)

@@ -7,10 +7,10 @@ very estimator the in-process reproduction gives that robot:
 
 - ``desilva2015`` (seed 002): leaders L1, L2 each run their
   :class:`~relloc.fusion.gaussian_sum_estimator.GaussianSumEstimator` (the settings of
-  :func:`relloc.experiments.desilva2015.filter_settings`, equivalent measurements every
-  second) and record their dominant tracks at their scan times; pods P1–P3 only share their
-  odometry. ``desilva2015-kidnapped``: the same with the kidnapped-robot scenario
-  (:func:`kidnap_of`). Run ``i`` of
+  :meth:`relloc.experiments.desilva2015.RunConfig.settings` with the team's sharing policy,
+  equivalent measurements every second) and record their dominant tracks at their scan
+  times; pods P1–P3 only share their odometry. ``desilva2015-kidnapped``: the same with the
+  kidnapped-robot scenario (:func:`kidnap_of`). Run ``i`` of
   seed ``S`` is run ``i`` of ``relloc reproduce desilva2015 --seed S`` (the Monte-Carlo
   task's seed sequence ``SeedSequence(S).spawn(n)[i]``), shortened to ``duration`` seconds.
 - ``sharma2013`` (seed 001): every agent (robots 1–5) shares its odometry and its readings
@@ -33,7 +33,7 @@ import numpy as np
 
 from relloc.core.recording import Recording
 from relloc.errors import ConfigError
-from relloc.experiments.desilva2015 import DURATION_S, FUSION_PERIOD_S, KIDNAP, filter_settings
+from relloc.experiments.desilva2015 import DURATION_S, FUSION_PERIOD_S, KIDNAP, RunConfig
 from relloc.fusion.gaussian_sum_estimator import GaussianSumEstimator
 from relloc.pipeline.montecarlo import spawn_seeds
 from relloc.runtime.estimation import (
@@ -96,11 +96,14 @@ def named_node_parts(
     run: int,
     duration_s: float | None,
     case: str = "two_landmarks",
+    sharing_policy: str = "all",
 ) -> NodeParts:
-    """Robot ``robot``'s sensors and estimator in the team ``name`` (module docstring)."""
+    """Robot ``robot``'s sensors and estimator in the team ``name`` (module docstring);
+    ``sharing_policy``: the leaders' (desilva2015 only)."""
     if name == "sharma2013":
         return sharma_node_parts(robot, seed, run, duration_s, case)
     scenario = desilva_scenario(name, duration_s)
+    settings = RunConfig(scenario=scenario, sharing_policy=sharing_policy).settings()
     recording = simulate(scenario, np.random.default_rng(run_seed(seed, run)))
     if robot not in recording.robots:
         raise ConfigError(f"--robot: {robot!r} is not in {name} {recording.robots}")
@@ -111,7 +114,7 @@ def named_node_parts(
         estimator = GaussianSumEstimator(
             recording.robots,
             index,
-            filter_settings(scenario),
+            settings,
             sharing=True,
             fusion_period=FUSION_PERIOD_S,
         )
