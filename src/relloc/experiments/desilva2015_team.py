@@ -34,7 +34,6 @@ the differences are reported, not held to the tolerance.
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -54,7 +53,7 @@ from relloc.experiments.desilva2015 import (
 from relloc.experiments.team_sources import desilva_recording, desilva_scenario
 from relloc.pipeline.output import fmt, markdown_table, prepare_out_dir, write_report, write_summary
 from relloc.runtime.launcher import ProcessTeam, TeamLauncher
-from relloc.runtime.outcomes import figure_agreement, outcomes_of
+from relloc.runtime.outcomes import figure_agreement, figure_difference, outcomes_of
 from relloc.runtime.summary import agreement, assemble_estimates, robot_messages
 
 AGREEMENT_TOLERANCE = 1e-6
@@ -157,7 +156,7 @@ def _summary(
     runs: list[dict[str, Any]],
 ) -> dict[str, Any]:
     ours, ref = _headline(metrics(distributed)), _headline(metrics(in_process))
-    diff = {k: _diff(ours[k], ref[k]) for k in HEADLINE}
+    diff = {k: figure_difference(ours[k], ref[k]) for k in HEADLINE}
     worst = max(max(r["agreement"].values()) for r in runs)
     perfect = not s.faults.network_faulty and not s.faults.kills
     return {
@@ -181,15 +180,6 @@ def _summary(
         ),
         "per_run": runs,
     }
-
-
-def _diff(a: float | None, b: float | None) -> float | None:
-    """Distributed − in-process; None when there is nothing to compare: a figure missing, or
-    undefined (NaN) in both — a run shorter than the steady-state start has no RMSE. NaN in one
-    only stays NaN, a disagreement."""
-    if a is None or b is None or (math.isnan(a) and math.isnan(b)):
-        return None
-    return float(a) - float(b)
 
 
 def report_markdown(summary: Mapping[str, Any]) -> str:

@@ -60,7 +60,7 @@ from relloc.pipeline.output import fmt, markdown_table, prepare_out_dir, write_r
 from relloc.pipeline.replay import replay
 from relloc.runtime.faults import FaultSettings
 from relloc.runtime.launcher import Collected, ProcessTeam, TeamLauncher
-from relloc.runtime.outcomes import outcomes_of
+from relloc.runtime.outcomes import figure_difference, outcomes_of
 from relloc.runtime.summary import agreement, assemble_estimates, robot_messages
 
 AGREEMENT_TOLERANCE = 1e-9
@@ -276,7 +276,7 @@ def agents_summary(runs: list[dict[str, Any]], faults: FaultSettings) -> dict[st
     missing = sum(a["records_missing"] for r in runs for a in r["agents"].values())
     perfect = not faults.network_faulty and not faults.kills
     cost = {
-        f"run{r['run']}:{robot}": _diff(a["pos_rmse_m"], r["in_process"]["pos_rmse_m"])
+        f"run{r['run']}:{robot}": figure_difference(a["pos_rmse_m"], r["in_process"]["pos_rmse_m"])
         for r in runs
         for robot, a in r["agents"].items()
     }
@@ -296,10 +296,6 @@ def agents_summary(runs: list[dict[str, Any]], faults: FaultSettings) -> dict[st
 
 def _largest(values: Mapping[str, float]) -> float | None:
     return max(values.values(), default=None)
-
-
-def _diff(a: float | None, b: float | None) -> float | None:
-    return None if a is None or b is None else float(a) - float(b)
 
 
 def report_markdown(summary: Mapping[str, Any]) -> str:

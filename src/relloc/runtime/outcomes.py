@@ -20,6 +20,7 @@ for the whole run against the fault-free in-process run on the same seed.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -159,6 +160,15 @@ def outcomes_of(
 
     result = RunResult(evaluations=evaluate(estimates, recording), events=estimates.events)
     return fault_outcomes(faults, result, estimates, recording)
+
+
+def figure_difference(a: float | None, b: float | None) -> float | None:
+    """A figure of the distributed team minus the in-process run's; None when there is nothing
+    to compare: a figure missing, or undefined (NaN) in both — a run shorter than the
+    steady-state start has no RMSE. NaN in one only stays NaN, a disagreement."""
+    if a is None or b is None or (math.isnan(a) and math.isnan(b)):
+        return None
+    return float(a) - float(b)
 
 
 def figure_agreement(
