@@ -109,6 +109,15 @@ def test_small_reproduction_on_another_mrclam_folder(small_dataset: Path, tmp_pa
     # Tables 3-4 on the truncated copy: calibrated and raw odometry, calibrated on the rest of
     # the recording after the scored window (disjoint windows, both stated)
     assert summary["replay"]["dataset"] == str(small_dataset)
+    # the pair's horizontal range in the steady state, from the dataset's ground truth
+    start, end = summary["replay"]["window_s"]
+    t = np.arange(start + summary["replay"]["steady_state_after_s"], end, 0.01)
+    obs, tgt = (load_mrclam(small_dataset).robot(r).groundtruth.at(t) for r in (1, 3))
+    apart = np.hypot(tgt.x - obs.x, tgt.y - obs.y)
+    spread = summary["replay"]["steady_state_range_m"]
+    assert spread["mean"] == pytest.approx(float(np.mean(apart)), rel=1e-2)
+    assert spread["max"] == pytest.approx(float(np.max(apart)), rel=1e-2)
+    assert f"{spread['mean']:.2f} m apart on average" in (out / "report.md").read_text()
     windows = summary["table3"]["windows"]
     assert windows == summary["table4"]["windows"]
     assert windows["calibration"]["start_s"] >= windows["scored"]["end_s"]

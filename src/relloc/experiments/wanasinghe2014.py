@@ -73,7 +73,8 @@ fitted on the calibration window, summarised under ``fir``): mean, std, the std 
 ``yaw_random_walk_span_s``;
 ``bias_comparison[case][filter]``: radial bias (m), position and yaw RMSE and % NEES beyond
 χ²(4, 0.95) of PLKF, BC-PLKF (noisy cases) and TEKF on the calibrated replay; ``replay``:
-dataset, robots, window, skipped epochs, loader report; ``pcrlb_ratio[robot][state]``:
+dataset, robots, window, the pair's horizontal range in the steady state
+(``steady_state_range_m``: mean, max), skipped epochs, loader report; ``pcrlb_ratio[robot][state]``:
 RMSE / √PCRLB (steady state) from :mod:`relloc.observability.pcrlb`. The run time is in
 report.md only (the summary is the same whatever the executor).
 """
@@ -778,8 +779,13 @@ def replay_targets(summary: dict[str, Any]) -> dict[str, Any]:
 
 
 def replay_info(config: Wanasinghe2014Config, data: ReplayData) -> dict[str, Any]:
-    """Where the replay came from and what the loader skipped."""
+    """Where the replay came from, the pair's horizontal range in the steady state of the
+    scored window (mean and largest, from the ground truth at the valid epochs: the lever an
+    error of the observer's turn rate acts through) and what the loader skipped."""
     r = config.replay
+    steady = data.valid & (data.t >= data.t[0] + config.replay_steady_state_s)
+    relative = data.relative_truth(data.t[steady])
+    horizontal = np.hypot(relative[:, 0], relative[:, 1])
     return {
         "source": data.source,
         "dataset": str(r.dataset),
@@ -788,6 +794,10 @@ def replay_info(config: Wanasinghe2014Config, data: ReplayData) -> dict[str, Any
         "observed_height_m": r.height,
         "window_s": [float(data.t[0]), float(data.t[-1])],
         "steady_state_after_s": config.replay_steady_state_s,
+        "steady_state_range_m": {
+            "mean": float(np.mean(horizontal)),
+            "max": float(np.max(horizontal)),
+        },
         "epochs_skipped_in_groundtruth_gaps": data.skipped_epochs,
         "loader": {
             "n_skipped": data.load_report["n_skipped"],
@@ -1191,6 +1201,7 @@ def readings_section(s: dict[str, Any]) -> list[str]:
 def replay_section(s: dict[str, Any]) -> list[str]:
     """Tables 3–4: the windows, the calibration, the targets, then calibrated and raw."""
     w = s["table3"]["windows"]
+    rng = s["replay"]["steady_state_range_m"]
     cal = s["odometry_noise"]["replay_calibration"]
     fits = s["odometry_noise"]["replay_fit"]
 
@@ -1208,7 +1219,9 @@ def replay_section(s: dict[str, Any]) -> list[str]:
         f"{s['replay']['source']} (another pair: `--pair OBSERVER,OBSERVED`); observed plane "
         f"raised {s['replay']['observed_height_m']:g} m; "
         f"scored window [{w['scored']['start_s']:.1f}, {w['scored']['end_s']:.1f}] s of the "
-        f"recording, steady state after {s['replay']['steady_state_after_s']:g} s; "
+        f"recording, steady state after {s['replay']['steady_state_after_s']:g} s, in which "
+        f"the pair is {rng['mean']:.2f} m apart on average (at most {rng['max']:.2f} m, "
+        "horizontally); "
         "measurements synthesised from the ground truth; the same draws (sensor noise, initial "
         "pose) for every odometry.",
         "",
