@@ -331,12 +331,12 @@ def add_sharing_policy_argument(p: argparse.ArgumentParser) -> None:
 
 def refuse_sharing_policy(args: argparse.Namespace) -> None:
     """ConfigError when ``--sharing-policy`` is given to a team without Gaussian-sum fusers."""
+    if args.sharing_policy is None:
+        return
     from relloc.errors import ConfigError
     from relloc.experiments.team_sources import KIDNAPPED
 
-    if args.sharing_policy is not None and (
-        getattr(args, "dataset", None) is not None or args.scenario not in KIDNAPPED
-    ):
+    if getattr(args, "dataset", None) is not None or args.scenario not in KIDNAPPED:
         raise ConfigError(
             f"--sharing-policy: only desilva2015 teams ({', '.join(KIDNAPPED)}) share "
             "Gaussian-sum beliefs"
