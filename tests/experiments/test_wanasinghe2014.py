@@ -131,6 +131,11 @@ def test_small_reproduction_on_another_mrclam_folder(small_dataset: Path, tmp_pa
         f["calibration_window"] == windows["calibration"]
         for f in summary["odometry_noise"]["replay_fit"]["truth_velocity"].values()
     )
+    # each draw's steady-state yaw RMSE (one draw here): the pooled figure of the same draw
+    for case, t3 in summary["table3"]["calibrated"].items():
+        per_draw = t3["phi"]["rmse_per_draw"]
+        pooled = summary["bias_comparison"][case]["PLKF"]["yaw_rmse_rad"]
+        assert per_draw == [pytest.approx(pooled, rel=1e-9)]
     for kind in ("calibrated", "raw", "truth_velocity"):
         assert set(summary["table3"][kind]) == {"case1", "case2", "case3", "case4"}
         for case, t3 in summary["table3"][kind].items():

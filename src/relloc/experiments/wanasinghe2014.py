@@ -52,8 +52,9 @@ a guess that never converges counts as (updates + 1) and is counted in
 PLKF), ``table1_best[case]["speedup_vs_plkf"][rule][state]`` and ``table1_best["acceptance"]``;
 ``table1_readings[filter][reading]``: case 4, φ, the count under each reading of the paper's
 set-up (:data:`TABLE1_READINGS`) beside the paper's;
-``table3[odometry][case][state] = {rmse_mean, rmse_std, paper_rmse, paper_std}`` (PLKF,
-MRCLAM replay, steady state t ≥ 40 s of the window; ``odometry`` ``calibrated``, ``raw`` or
+``table3[odometry][case][state] = {rmse_mean, rmse_std, rmse_per_draw, paper_rmse, paper_std}``
+(PLKF, MRCLAM replay, steady state t ≥ 40 s of the window; ``rmse_per_draw``: each draw's RMSE
+over its steady state; ``odometry`` ``calibrated``, ``raw`` or
 ``truth_velocity`` — the last a diagnostic driven by the ground truth's own velocities, which no
 robot has, described in ``odometry_kinds``) and
 ``table3_best`` (the same for the yaw bank started from the same pose);
@@ -614,12 +615,15 @@ def table1_readings(team: list[dict[str, Any]], thresholds: dict[str, Any]) -> d
 
 
 def _table3_entry(E: Array, ss: NDArray[np.bool_], case: str) -> dict[str, Any]:
-    """Mean and std over the steady-state updates of the RMSE over draws, per state."""
+    """Mean and std over the steady-state updates of the RMSE over draws, per state, and each
+    draw's RMSE over its steady-state updates (``rmse_per_draw``: whether one draw dominates)."""
     curve = rmse(E, axis=0)[ss]
+    per_draw = rmse(E[:, ss], axis=1)
     return {
         st: {
             "rmse_mean": float(np.nanmean(curve[:, i])),
             "rmse_std": float(np.nanstd(curve[:, i])),
+            "rmse_per_draw": [float(v) for v in per_draw[:, i]],
             "paper_rmse": PAPER_TABLE3[case][st][0],
             "paper_std": PAPER_TABLE3[case][st][1],
         }
@@ -1377,9 +1381,15 @@ def _replay_tables(s: dict[str, Any], kind: str) -> list[str]:
                 "paper",
                 "z RMSE (std)",
                 "paper",
+                "φ RMSE of each draw",
             ],
             [
-                [case, filt, *_table3_cells(s[key][kind][case])]
+                [
+                    case,
+                    filt,
+                    *_table3_cells(s[key][kind][case]),
+                    " / ".join(f"{v:.3f}" for v in s[key][kind][case]["phi"]["rmse_per_draw"]),
+                ]
                 for case in s["table3"][kind]
                 for key, filt in (("table3", "PLKF"), ("table3_best", "yaw bank"))
             ],
