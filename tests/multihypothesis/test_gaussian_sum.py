@@ -381,9 +381,6 @@ def test_filter_settings_follow_the_scenario() -> None:
     )
     with pytest.raises(ConfigError, match="sharing policy 'none': one of all, mutual-confirmed"):
         RunConfig(scenario=sc, sharing_policy="none")
-    assert restricted.settings() == replace(
-        st, fusion="ci", share_confirmed_only=True, indirect_fusion=False
-    )
 
 
 def _two_tracks(depth: int) -> Tracks:
