@@ -29,6 +29,7 @@ def test_unknown_experiment_is_config_error(tmp_path, capsys):
         (["--pair", "1,2"], "--pair: sharma2013 does not read it; read by wanasinghe2014"),
         (["--calibration-window", "first-half"], "--calibration-window: sharma2013 does not"),
         (["--bag", "b"], "--bag: sharma2013 does not read it; read by tiers-uwb"),
+        (["--sensing", "all"], "--sensing: sharma2013 does not read it; read by desilva2015"),
     ],
 )
 def test_a_flag_the_experiment_does_not_read_is_refused(tmp_path, capsys, flags, message):
@@ -51,6 +52,16 @@ def test_a_bad_pair_is_refused(tmp_path, capsys, pair, message):
     out = tmp_path / "out"
     assert main(["reproduce", "wanasinghe2014", "--out", str(out), "--pair", pair]) == 2
     assert message in capsys.readouterr().err
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("sensing", ["Q1", "L1,L1", "", "L1,,P1", "all,L1"])
+def test_bad_sensing_robots_are_refused(tmp_path, capsys, sensing):
+    out = tmp_path / "out"
+    assert main(["reproduce", "desilva2015", "--out", str(out), "--sensing", sensing]) == 2
+    assert "--sensing: 'all' or distinct robot names from L1, L2, P1, P2, P3" in (
+        capsys.readouterr().err
+    )
     assert not out.exists()
 
 

@@ -12,7 +12,10 @@ from relloc.experiments import desilva2015
 
 
 @pytest.mark.slow
-def test_reproduce_desilva2015_smoke(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+@pytest.mark.parametrize("sensing", [None, "P2,L2"])
+def test_reproduce_desilva2015_smoke(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, sensing: str | None
+) -> None:
     # shortened runs: the experiment's constants are module level on purpose
     monkeypatch.setattr(desilva2015, "DURATION_S", 3.0)
     monkeypatch.setattr(desilva2015, "STEADY_FROM_S", 1.0)
@@ -32,11 +35,17 @@ def test_reproduce_desilva2015_smoke(tmp_path: Path, monkeypatch: pytest.MonkeyP
             "--executor",
             "serial",
             "--quiet",
+            *(["--sensing", sensing] if sensing else []),
         ]
     )
     assert code == 0
     summary = json.loads((out / "summary.json").read_text())
     assert summary["experiment"] == "desilva2015" and summary["seed"] == 7
+    sensing_names = ["L1", "L2"] if sensing is None else ["L2", "P2"]
+    assert summary["settings"]["sensing"] == sensing_names
+    assert summary["settings"]["paper_sensing"] == ["L1", "L2"]
+    observers = {pair.split("->")[0] for pair in summary["success_rate"]["per_pair"]}
+    assert observers == set(sensing_names)
     for key in (
         "success_rate",
         "clutter_sweep",
@@ -56,6 +65,8 @@ def test_reproduce_desilva2015_smoke(tmp_path: Path, monkeypatch: pytest.MonkeyP
     assert 0.0 <= summary["success_rate"]["overall"] <= 1.0
     assert summary["consistency"]["anees"] > 0.0
     report = (out / "report.md").read_text()
+    team_note = "the paper's leaders" if sensing is None else "`--sensing`; an extension"
+    assert f"Sensing robots: {', '.join(sensing_names)} ({team_note}" in report
     for fig in summary["figures"].values():
         assert (out / fig).is_file() and fig in report
 

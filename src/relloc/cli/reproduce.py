@@ -1,7 +1,8 @@
 """``relloc reproduce NAME --out DIR [--runs N] [--seed S] [--dataset PATH] [--executor E]
-[--calibration-window SPLIT] [--pair A,B] [--mcap FILE] [--tum DIR]`` (``--calibration-window``:
-mrclam-cl's calibration and scoring windows; ``--pair``: wanasinghe2014's replayed robots; the
-last two: one representative run's estimates, where the experiment states one —
+[--calibration-window SPLIT] [--pair A,B] [--sensing ROBOTS] [--mcap FILE] [--tum DIR]``
+(``--calibration-window``: mrclam-cl's calibration and scoring windows; ``--pair``:
+wanasinghe2014's replayed robots; ``--sensing``: desilva2015's sensing robots; the last two: one
+representative run's estimates, where the experiment states one —
 :func:`relloc.experiments.registry.exported_run`). A flag the experiment does not read is
 refused (:func:`relloc.experiments.registry.refuse_unread`).
 
@@ -59,6 +60,13 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         help="wanasinghe2014: the dataset's observer and observed robot of the real-trajectory "
         "replay (default 1,3)",
     )
+    p.add_argument(
+        "--sensing",
+        default=None,
+        metavar="ROBOTS",
+        help="desilva2015: the simulated robots that sense, 'all' or names such as L1,L2,P1 "
+        "(default: the paper's leaders L1,L2)",
+    )
     p.add_argument("--quiet", action="store_true", help="no progress display")
     add_export_arguments(p, "one representative run's estimates (where the experiment has any)")
     p.set_defaults(func=run)
@@ -86,6 +94,7 @@ def run(args: argparse.Namespace) -> int:
         calibrate_on=args.calibrate_on,
         calibration_window=args.calibration_window,
         pair=robot_pair(args.pair),
+        sensing=args.sensing,
     )
     registry.refuse_unread(args.name, request)
     summary = reproduce(request)

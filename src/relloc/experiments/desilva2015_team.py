@@ -137,7 +137,16 @@ def tracked_at_end(results: list[LeaderRunScores], robot: int, window_s: float =
     (over leaders and runs): a short run's view of "re-found and tracked to the end"."""
     t = results[0].times
     last = t >= t[-1] - window_s
-    return float(np.mean([r.tracked[:, last, robot].mean() for r in results]))
+    return float(
+        np.mean(
+            [
+                r.tracked[li, last, robot].mean()
+                for r in results
+                for li, observer in enumerate(r.observers)
+                if observer != robot
+            ]
+        )
+    )
 
 
 def _headline(m: Mapping[str, Any]) -> dict[str, Any]:

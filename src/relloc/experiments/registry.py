@@ -51,7 +51,8 @@ class ReproduceArgs:
     ``calibration_window`` by mrclam-cl (which side of the run its error models are fitted on,
     :func:`relloc.calibration.window.split_span`; ``None``: the experiment's default);
     ``pair`` by wanasinghe2014 (the dataset's ``(observer, observed)`` robots of its
-    real-trajectory replay; ``None``: the experiment's default)."""
+    real-trajectory replay; ``None``: the experiment's default); ``sensing`` by desilva2015
+    (which simulated robots sense, as ``--sensing`` gives it; ``None``: the paper's leaders)."""
 
     out_dir: Path
     runs: int | None = None
@@ -65,6 +66,7 @@ class ReproduceArgs:
     calibrate_on: Path | None = None
     calibration_window: str | None = None
     pair: tuple[int, int] | None = None
+    sensing: str | None = None
 
     def __post_init__(self) -> None:
         if self.runs is not None and self.runs < 1:
@@ -83,6 +85,7 @@ READ_BY: dict[str, tuple[str, ...]] = {
     "calibrate_on": ("tiers-uwb",),
     "calibration_window": ("mrclam-cl",),
     "pair": ("wanasinghe2014",),
+    "sensing": ("desilva2015",),
 }
 
 

@@ -28,6 +28,10 @@ The path (Fig. 4 of the paper is not given numerically): the group drives a wide
 relative poses keep changing, which makes the relative yaw observable), pods also oscillate in
 height. A *kidnap* moves one robot's true pose by a fixed offset at a given time.
 
+Beyond the paper, ``DeSilvaScenario.sensing`` may make any robots scan (``(0, 1, 2, 3, 4)``:
+every robot senses, so every pair has mutual sightings): a pod's scan is the same sensor model
+at its own height. The platforms stay as above (leaders ground, pods aerial) whoever senses.
+
 :func:`simulate` gives a :class:`~relloc.core.recording.Recording`: every robot's measured body
 velocities on the filter grid (odometry), the leaders' scans as measurement rows at the scan
 times — ``"height"`` and ``"range"`` rows of a known teammate (``target``) and
@@ -88,7 +92,8 @@ _NONHOLONOMIC = (0, 1)
 class DeSilvaScenario:
     """Settings of the seed-002 simulation (defaults: the paper's values, units above).
 
-    ``kidnap``: ``(robot index, time s, dx m, dy m, dψ rad)`` or ``None``.
+    ``kidnap``: ``(robot index, time s, dx m, dy m, dψ rad)`` or ``None``. ``sensing``: the
+    indices of the robots that scan (ascending; the paper's: the two leaders).
     """
 
     duration: float = 60.0
@@ -106,6 +111,7 @@ class DeSilvaScenario:
     group_speed: float = 0.3
     group_turn_rate: float = 0.04
     kidnap: tuple[int, float, float, float, float] | None = None
+    sensing: tuple[int, ...] = (0, 1)
 
     def __post_init__(self) -> None:
         positive = (
@@ -136,15 +142,19 @@ class DeSilvaScenario:
                 "DeSilvaScenario.direct_rate must divide filter_rate "
                 f"({self.direct_rate} vs {self.filter_rate})"
             )
+        if (
+            not self.sensing
+            or list(self.sensing) != sorted(set(self.sensing))
+            or not 0 <= self.sensing[0] <= self.sensing[-1] < len(ROBOT_NAMES)
+        ):
+            raise ConfigError(
+                "DeSilvaScenario.sensing must be distinct ascending robot indices in "
+                f"[0, {len(ROBOT_NAMES)}), got {self.sensing}"
+            )
         if self.kidnap is not None:
             robot, time = int(self.kidnap[0]), float(self.kidnap[1])
             if not 0 <= robot < len(ROBOT_NAMES) or not 0.0 < time < self.duration:
                 raise ConfigError(f"DeSilvaScenario.kidnap: bad robot or time {self.kidnap}")
-
-    @property
-    def sensing(self) -> tuple[int, ...]:
-        """Indices of the leaders (sensing robots)."""
-        return (0, 1)
 
     @property
     def sigma_height(self) -> float:
@@ -212,7 +222,7 @@ def zoh_velocities(poses: Array, dt: float) -> Array:
 
 
 def simulate(scenario: DeSilvaScenario, rng: np.random.Generator) -> Recording:
-    """Simulate one run: truth, noisy velocities and the leaders' direct scans."""
+    """Simulate one run: truth, noisy velocities and the sensing robots' direct scans."""
     dt = 1.0 / scenario.filter_rate
     n_steps = round(scenario.duration * scenario.filter_rate) + 1
     times: Array = np.arange(n_steps, dtype=np.float64) * dt
@@ -230,7 +240,7 @@ def simulate(scenario: DeSilvaScenario, rng: np.random.Generator) -> Recording:
     robots = range(len(ROBOT_NAMES))
     return Recording(
         robots=ROBOT_NAMES,
-        platforms=tuple("ground" if j in scenario.sensing else "aerial" for j in robots),
+        platforms=tuple("ground" if j in _NONHOLONOMIC else "aerial" for j in robots),
         odometry=tuple(Odometry(t=times, velocity=u_meas[:, j], sigma=sigmas) for j in robots),
         measurements=rows.table(scenario),
         truth=tuple(GroundTruth(t=times, pose=truth[:, j]) for j in robots),
