@@ -77,8 +77,7 @@ def test_figures_are_those_of_the_sensing_robots() -> None:
 #: test ran 15 s with a 4 s final window on the children of 73019 and failed on its run 1: L1's
 #: and P3's filters of L2 were tracked in 0.63 and 0.51 of the last scans. Traced in L1's filter:
 #: each 1 s fusion pulled the dominant track to the true yaw with a small covariance (σ_ψ about
-#: 0.02 rad; beliefs that have gone round five fusers are over-confident, ANEES 188 in the
-#: reproduction), and within the next scans L1's own readings gave the weight back to a broader
+#: 0.02 rad), and within the next scans L1's own readings gave the weight back to a broader
 #: component about 0.9 rad off in yaw, both within 0.2 m in position (with only confirmed filters
 #: shared, or no indirect fusion, all 20 filters were tracked). The test now runs
 #: the experiment's own duration and criterion, under which the reproduction (seed 2026,
