@@ -33,8 +33,11 @@ from relloc.experiments.wanasinghe2014 import (
 from relloc.experiments.wanasinghe2014_mrclam import (
     TABLE2,
     ReplaySettings,
+    _epochs,
+    _inflated_by,
     prepare_replay,
     prepare_replays,
+    replay_pcrlb,
     replay_recording,
     replay_task,
     spread_stretches,
@@ -118,6 +121,13 @@ def test_small_reproduction_on_another_mrclam_folder(small_dataset: Path, tmp_pa
     assert spread["mean"] == pytest.approx(float(np.mean(apart)), rel=1e-2)
     assert spread["max"] == pytest.approx(float(np.max(apart)), rel=1e-2)
     assert f"{spread['mean']:.2f} m apart on average" in (out / "report.md").read_text()
+    # the replay's own bound, beside Table 3 and the yaw target
+    assert set(summary["replay_pcrlb"]) == {"calibrated", "raw", "truth_velocity"}
+    for case, target in summary["replay_targets"].items():
+        bound = summary["replay_pcrlb"]["calibrated"][case]["phi"]
+        assert target["yaw_bound_rad"] == bound > 0.0
+        assert target["yaw_bound_ok"] == (bound <= 0.10)
+    assert "φ √PCRLB" in (out / "report.md").read_text()
     windows = summary["table3"]["windows"]
     assert windows == summary["table4"]["windows"]
     assert windows["calibration"]["start_s"] >= windows["scored"]["end_s"]
@@ -258,6 +268,32 @@ def test_a_replay_draw_is_four_sensors_of_the_observer(small_dataset: Path) -> N
         # noise-free readings would be the raised truth's range, azimuth and elevation
         truth = rec.relative_truth(0, 1, m.t[rows])
         np.testing.assert_allclose(m.value[rows], range_bearing(truth), atol=6 * max(s_r, s_b))
+
+
+def test_the_replay_bound_falls_with_information_and_rises_with_noise(small_dataset: Path) -> None:
+    """:func:`replay_pcrlb`: more readings or smaller σ never raise the bound, more odometry
+    noise never lowers it, and the position part is at most that of one reading alone."""
+    settings = _short_replay(small_dataset)
+    data = prepare_replay(settings)
+    bound = replay_pcrlb(data, settings, steady_state_s=3.0)
+    noisier = replay_pcrlb(_inflated_by(data, 2.0), settings, steady_state_s=3.0)
+    for case in TABLE2:
+        for state in STATES:
+            assert 0.0 < bound[case][state] <= noisier[case][state], (case, state)
+        assert noisier[case]["phi"] > bound[case]["phi"]
+    for more, fewer in (("case1", "case3"), ("case2", "case4"), ("case1", "case2")):
+        for state in STATES:
+            assert bound[more][state] <= bound[fewer][state] * (1 + 1e-9), (more, fewer, state)
+    # one reading (r, θ, α) alone bounds the position by σ_r² + (r cos α σ_θ)² + (r σ_α)²
+    # (range, azimuth and elevation directions); the filter's information only adds to it
+    for case, (s_r, s_b, rate) in TABLE2.items():
+        steps = _epochs(data.t, rate)
+        steps = steps[data.valid[steps] & (data.t[steps] >= data.t[0] + 3.0)]
+        rel = data.relative_truth(data.t[steps])[:, :3]
+        r = np.linalg.norm(rel, axis=1)
+        cos_el = np.hypot(rel[:, 0], rel[:, 1]) / r
+        one_reading = np.mean(s_r**2 + (r * cos_el * s_b) ** 2 + (r * s_b) ** 2)
+        assert sum(bound[case][st] ** 2 for st in STATES[:3]) <= one_reading, case
 
 
 def _short_replay(dataset: Path, **changes: object) -> ReplaySettings:

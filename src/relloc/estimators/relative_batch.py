@@ -213,7 +213,7 @@ class RelativeFilterBatch(ObserverClock):
             if (spec.subject, spec.label) in seen:
                 raise ConfigError(f"TrackSpec: label {spec.label!r} repeats for {spec.subject!r}")
             seen.add((spec.subject, spec.label))
-            noise = VelocityNoise(observer=self._sigma[self._me], observed=self._sigma[j])  # type: ignore[arg-type]
+            noise = VelocityNoise.of(self._sigma[self._me], self._sigma[j])
             members.setdefault(noise, []).append(i)
         return [self._build_group(noise, idx) for noise, idx in members.items()]
 

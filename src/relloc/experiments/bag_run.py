@@ -52,10 +52,7 @@ def range_pairs(recording: Recording, sigma: float) -> list[RangePairBank]:
             )
             if not linked.any():
                 continue
-            noise = VelocityNoise(
-                observer=tuple(recording.odometry[i].sigma.tolist()),  # type: ignore[arg-type]
-                observed=tuple(recording.odometry[j].sigma.tolist()),  # type: ignore[arg-type]
-            )
+            noise = VelocityNoise.of(recording.odometry[i].sigma, recording.odometry[j].sigma)
             out.append(
                 RangePairBank(i, j, recording.robots, noise, RangePairSettings(sigma_range=sigma))
             )

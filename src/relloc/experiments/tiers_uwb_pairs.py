@@ -110,8 +110,7 @@ def pair_case(
     rec: Recording, raw: Recording, i: int, j: int, t0: float, t1: float, sigma: float
 ) -> dict[str, Any]:
     """Range + odometry pair from an unknown start, with its baselines and observability."""
-    sig = [tuple(rec.odometry[k].sigma.tolist()) for k in (i, j)]
-    noise = VelocityNoise(observer=sig[0], observed=sig[1])  # type: ignore[arg-type]
+    noise = VelocityNoise.of(rec.odometry[i].sigma, rec.odometry[j].sigma)
     settings = RangePairSettings(sigma_range=sigma)
     grid = record_grid(t0, t1, RECORD_HZ)
 

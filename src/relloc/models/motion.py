@@ -71,6 +71,14 @@ class VelocityNoise:
                 raise ConfigError(f"VelocityNoise.{name}: sigmas must be finite and ≥ 0: {values}")
             object.__setattr__(self, name, values)
 
+    @classmethod
+    def of(cls, observer: ArrayLike, observed: ArrayLike) -> VelocityNoise:
+        """From any four-element sequences or arrays (an odometry's stated ``sigma``)."""
+        return cls(
+            observer=tuple(np.asarray(observer, dtype=float).reshape(-1).tolist()),  # type: ignore[arg-type]
+            observed=tuple(np.asarray(observed, dtype=float).reshape(-1).tolist()),  # type: ignore[arg-type]
+        )
+
     @property
     def covariance(self) -> Array:
         """``Σ_u`` (8 × 8) ordered as ``[u_l, u_c]``."""
