@@ -1564,16 +1564,17 @@ def _yaw_bound_text(targets: dict[str, Any], missed: list[str]) -> str:
     above = [c for c in missed if not targets[c]["yaw_bound_ok"]]
     bounds = ", ".join(f"{c} {targets[c]['yaw_bound_rad']:.3f}" for c in missed)
     text = (
-        "The posterior Cramér–Rao bound of the same model (the pair's true trajectory, the "
-        "calibrated commands and their inflated noise, the case's sensor; √PCRLB of φ over the "
-        f"steady state, column φ √PCRLB) is {bounds} rad there"
+        "The posterior Cramér–Rao bound of the filters' own model (the pair's true trajectory, "
+        "the calibrated commands with their inflated white noise, the case's sensor; √PCRLB of "
+        f"φ over the steady state, column φ √PCRLB) is {bounds} rad there"
     )
     if not above:
-        return text + ", so the model leaves the target within reach and the filter misses it. "
+        return text + ": the model allows the target and the filter misses it. "
     return text + (
-        f": in {', '.join(above)} no unbiased estimator of that model reaches 0.10 rad, so "
-        "these misses are set by the noise the commands need to keep the filter consistent, "
-        "not by the filter. "
+        f": in {', '.join(above)} the model itself does not allow 0.10 rad — with the noise "
+        "the calibration needs to keep the filter consistent, no estimator of data that "
+        "followed the model would get below the bound. The recorded commands' errors are not "
+        "that white noise, so the bound is the model's, not a limit on what the data allow. "
     )
 
 

@@ -808,10 +808,12 @@ def replay_pcrlb(
     pair's true relative trajectory with the inputs the filters are given (``data.odometry``
     held on the grid), their stated white velocity noise (with its inflation), the case's
     sensor σ at its epochs outside ground-truth gaps, and the filters' prior covariance
-    (:func:`replay_prior`). No unbiased estimator of that model has a smaller mean-square error,
-    so a case whose φ bound exceeds the yaw target cannot meet it with that noise: the price of
-    the noise level the replay needs to stay consistent, which a smaller σ would not repay on
-    these commands (it leaves the filters over-confident, :func:`fit_noise_inflation`).
+    (:func:`replay_prior`). No estimator of data that followed that model has a smaller
+    mean-square error; so where the φ bound exceeds the yaw target the model, with the noise the
+    replay needs to stay consistent
+    (:func:`fit_noise_inflation`), does not allow the target. The recorded commands' errors
+    are not that white noise, so a filter on the real data may still be more accurate than the
+    bound: it is the model's, not a limit on what the data allow.
     """
     t = data.t
     observer, observed = data.odometry
