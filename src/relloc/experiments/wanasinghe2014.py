@@ -1480,8 +1480,9 @@ def _replay_yaw_cause(s: dict[str, Any]) -> str:
 
 
 def _span(values: list[float], unit: str = "") -> str:
-    """``min–max`` of ``values`` to three decimals."""
-    return f"{min(values):.3f}–{max(values):.3f}{unit}"
+    """``min–max`` of ``values`` to three decimals (one value when they agree)."""
+    lo, hi = f"{min(values):.3f}", f"{max(values):.3f}"
+    return f"{lo}{unit}" if lo == hi else f"{lo}–{hi}{unit}"
 
 
 def replay_text(s: dict[str, Any]) -> str:
@@ -1563,10 +1564,12 @@ def _yaw_bound_text(targets: dict[str, Any], missed: list[str]) -> str:
     """What the calibrated model's √PCRLB of the yaw says of the cases that miss the target."""
     above = [c for c in missed if not targets[c]["yaw_bound_ok"]]
     bounds = ", ".join(f"{c} {targets[c]['yaw_bound_rad']:.3f}" for c in missed)
+    ratios = [targets[c]["yaw_rmse_rad"] / targets[c]["yaw_bound_rad"] for c in missed]
     text = (
         "The posterior Cramér–Rao bound of the filters' own model (the pair's true trajectory, "
         "the calibrated commands with their inflated white noise, the case's sensor; √PCRLB of "
-        f"φ over the steady state, column φ √PCRLB) is {bounds} rad there"
+        f"φ over the steady state, column φ √PCRLB) is {bounds} rad there, and the PLKF's yaw "
+        f"RMSE is {_span(ratios)} times it"
     )
     if not above:
         return text + ": the model allows the target and the filter misses it. "
