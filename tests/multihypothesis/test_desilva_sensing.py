@@ -6,6 +6,8 @@ the simulator's scans, the flag's parsing and that the figures are of the sensin
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -21,6 +23,7 @@ from relloc.experiments.desilva2015 import (
     metrics,
     sensing_robots,
 )
+from relloc.experiments.desilva2015_team import tracked_at_end
 from relloc.pipeline.montecarlo import spawn_seeds
 from relloc.sim.multihypothesis import ROBOT_NAMES, DeSilvaScenario, simulate
 
@@ -65,11 +68,14 @@ def test_figures_are_those_of_the_sensing_robots() -> None:
     assert pairs == {f"L2->{n}" for n in ("L1", "P1", "P2", "P3")} | {
         f"P2->{n}" for n in ("L1", "L2", "P1", "P3")
     }
-    # a kidnapped sensing robot is scored by the others only (P2 is the observer in row 1)
+    # a kidnapped sensing robot is scored by the others only: P2 (robot 3) is the observer of
+    # row 1, whose own column is never tracked; with L2 tracking everyone P2 is re-found in all
+    tracked = np.ones_like(result.tracked)
+    tracked[0, :, 1] = tracked[1, :, 3] = False
+    everyone = dataclasses.replace(result, tracked=tracked)
     kidnap = (3, 1.0, 3.0, -2.0, 2.0)
-    assert kidnap_metrics([result], kidnap)["runs"] == 1
-    refound = kidnap_metrics([result, result], kidnap)
-    assert refound["refound_rate"] == kidnap_metrics([result], kidnap)["refound_rate"]
+    assert kidnap_metrics([everyone], kidnap)["refound_rate"] == 1.0
+    assert tracked_at_end([everyone], 3) == 1.0
 
 
 #: Root seed of this test, not used while developing ``--sensing`` (development used the
