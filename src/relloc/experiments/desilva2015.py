@@ -403,8 +403,14 @@ def _time_series(results: list[LeaderRunScores]) -> dict[str, dict[str, Array]]:
     return out
 
 
+def tracked_by_others(result: LeaderRunScores, robot: int) -> NDArray[np.bool_]:
+    """``[leader, scan]``: whether each sensing robot other than ``robot`` tracks it."""
+    others = [li for li, observer in enumerate(result.observers) if observer != robot]
+    return result.tracked[others, :, robot]
+
+
 def kidnap_metrics(
-    results: list[LeaderRunScores], kidnap: tuple[int, float, float, float, float] = KIDNAP
+    results: list[LeaderRunScores], kidnap: tuple[int, float, float, float, float]
 ) -> dict[str, Any]:
     """Whether and how fast each leader re-found the kidnapped robot, over the runs."""
     t = results[0].times
@@ -412,10 +418,7 @@ def kidnap_metrics(
     final = t >= t[-1] - FINAL_WINDOW_S
     refound, delays = [], []
     for r in results:
-        for li, observer in enumerate(r.observers):
-            if observer == robot:
-                continue
-            tr = r.tracked[li, :, robot]
+        for tr in tracked_by_others(r, robot):
             refound.append(tr[final].mean() >= TRACKED_FRACTION)
             after = np.flatnonzero((t > when) & tr)
             delays.append(float(t[after[0]] - when) if after.size else float("nan"))

@@ -49,6 +49,7 @@ from relloc.experiments.desilva2015 import (
     leader_estimates,
     metrics,
     score_run,
+    tracked_by_others,
 )
 from relloc.experiments.team_sources import desilva_recording, desilva_scenario
 from relloc.pipeline.output import fmt, markdown_table, prepare_out_dir, write_report, write_summary
@@ -137,16 +138,7 @@ def tracked_at_end(results: list[LeaderRunScores], robot: int, window_s: float =
     (over leaders and runs): a short run's view of "re-found and tracked to the end"."""
     t = results[0].times
     last = t >= t[-1] - window_s
-    return float(
-        np.mean(
-            [
-                r.tracked[li, last, robot].mean()
-                for r in results
-                for li, observer in enumerate(r.observers)
-                if observer != robot
-            ]
-        )
-    )
+    return float(np.mean([tracked_by_others(r, robot)[:, last].mean() for r in results]))
 
 
 def _headline(m: Mapping[str, Any]) -> dict[str, Any]:
