@@ -169,6 +169,25 @@ def test_the_calibration_window_fits_calibrate_the_recording(
     assert 0.04 < w.models.camera_fit.sigma_range_raw < 0.07
 
 
+def test_the_scoring_window_ends_with_the_first_robots_ground_truth(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A robot whose Vicon record stops early (robot 1 of run 6 at 771.9 s of 900 s): the
+    scoring window ends there, and the runs are scored, instead of asking for truth beyond it
+    (a DataError before ``truth_span``)."""
+    folder = _synthetic_folder(tmp_path / "data", np.random.default_rng(3))
+    short_windows(monkeypatch)
+    gt = folder / "Robot3_Groundtruth.dat"
+    rows = gt.read_text().splitlines()
+    kept = [r for r in rows if r.startswith("#") or float(r.split()[0]) <= T0 + 17.0]
+    gt.write_text("\n".join(kept) + "\n")
+    w = mrclam_association._windows(folder)
+    assert w.ds.truth_span[1] == pytest.approx(17.0, abs=0.02)
+    assert w.t_end == w.ds.truth_span[1] < w.ds.duration
+    (run,) = mrclam_association._spread_runs(w, seed=5, runs=1)
+    assert run["tracked_fraction"] is not None and run["coverage"] > 0.0
+
+
 def test_mrclam_association_names_a_missing_folder(tmp_path: Path) -> None:
     code = main(
         [

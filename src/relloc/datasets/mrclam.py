@@ -682,6 +682,16 @@ class MrclamDataset:
                     ends.append(float(arr[-1]))
         return max(ends) if ends else 0.0
 
+    @property
+    def truth_span(self) -> tuple[float, float]:
+        """``(start, end)``: the span in which every robot has ground truth, from the latest
+        first stamp to the earliest last stamp of the ``Robot*_Groundtruth.dat`` files (s since
+        ``t0_unix``; a robot's Vicon record may end before the others' and before its own
+        odometry: robot 1's at 771.9 s of run 6's 900 s). The loader gives every robot at least
+        two ground-truth rows."""
+        truth = [self.robots[s].groundtruth.t for s in self.robot_ids]
+        return max(float(t[0]) for t in truth), min(float(t[-1]) for t in truth)
+
     def robot(self, subject: int) -> RobotData:
         """The data of robot ``subject`` (DataError naming the loaded ones if unknown)."""
         if subject not in self.robots:

@@ -55,8 +55,9 @@ mean, with the min and max and every run in ``spread``. The other two models run
 
 Error models, all fitted (:mod:`relloc.calibration`, the fits mrclam-cl uses) on a
 calibration window — the first ``CALIBRATION_S`` seconds after every robot has started moving
-(``calibration_window``) — while the scoring uses the next ``EVAL_S`` seconds (``scored_on``),
-so nothing is fitted on the data it is scored on:
+(``calibration_window``) — while the scoring uses the next ``EVAL_S`` seconds (``scored_on``;
+fewer where a robot's ground truth ends sooner, ``MrclamDataset.truth_span``), so nothing is
+fitted on the data it is scored on:
 
 - odometry (``fit_odometry_model``, ``odometry_model``): one latency ``τ`` and first-order lag
   ``T`` for the team (the robot follows its command ``c(t − τ)`` through ``ẏ = (c(t − τ) −
@@ -523,16 +524,21 @@ class _Window:
 
 def _windows(folder: Path) -> _Window:
     """Calibration window (``CALIBRATION_S`` after every robot has started moving), the
-    scoring window after it (``EVAL_S``), the field of view and the fitted models."""
+    scoring window after it (``EVAL_S``, cut short where the first robot's ground truth ends:
+    ``truth_span``), the field of view and the fitted models."""
     ds = load_mrclam(folder)
     starts = [float(ds.robot(s).odometry.t[0]) for s in ds.robot_ids if ds.robot(s).odometry.t.size]
     if len(starts) != len(ds.robot_ids) or len(starts) < 2:
         raise DataError(f"{folder}: needs odometry for at least two robots")
     calibration = following(max(starts), CALIBRATION_S, str(folder))
     t_start = calibration.end_s
-    t_end = min(t_start + EVAL_S, ds.duration)
+    t_end = min(t_start + EVAL_S, ds.truth_span[1])
     if t_end - t_start < 2 * WARMUP_S:
-        raise DataError(f"{folder}: too short for a {EVAL_S:.0f} s evaluation after calibration")
+        raise DataError(
+            f"{folder}: too short for a {EVAL_S:.0f} s evaluation after calibration "
+            f"(scoring window [{t_start:.1f}, {t_end:.1f}] s, ground truth of every robot "
+            f"up to {ds.truth_span[1]:.1f} s)"
+        )
     fov_fit = fit_field_of_view(ds, calibration)
     models = _settings(ds, calibration, fov_fit.half_width_rad)
     raw = calibrated_recording(ds, models)

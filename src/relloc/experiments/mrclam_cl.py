@@ -313,8 +313,7 @@ def build_recording(ds: Any, fit: FittedModels, rng: np.random.Generator) -> Pre
     from relloc.datasets.mrclam import UNMAPPED_SUBJECT, to_recording
 
     raw = to_recording(ds)
-    robots = ds.robot_ids
-    t_start = max(float(ds.robot(r).groundtruth.t[0]) for r in robots)
+    t_start = ds.truth_span[0]
     t_end = float(ds.duration)
     out_t = np.arange(t_start, t_end, OUTPUT_DT_S)
     recording = replace(
@@ -499,7 +498,7 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
     out = prepare_out_dir(args.out_dir)
     folder = Path(args.dataset) if args.dataset is not None else default_mrclam_dataset()
     ds = load_mrclam(folder)
-    t0 = max(float(ds.robot(r).groundtruth.t[0]) for r in ds.robot_ids)
+    t0 = ds.truth_span[0]
     spec = args.calibration_window if args.calibration_window is not None else SPLIT_CHOICES[0]
     window, scored = split_span(spec, t0, float(ds.duration), str(folder))
     fit = fit_models(ds, window)

@@ -70,7 +70,7 @@ def fit_dataset(folder: Path) -> tuple[Any, FittedModels]:
     from relloc.datasets.mrclam import load_mrclam
 
     ds = load_mrclam(folder)
-    t0 = max(float(ds.robot(r).groundtruth.t[0]) for r in ds.robot_ids)
+    t0 = ds.truth_span[0]
     window = leading_fraction(t0, float(ds.duration), 0.5, str(folder))
     return ds, fit_models(ds, window)
 
