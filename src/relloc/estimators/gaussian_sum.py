@@ -45,7 +45,10 @@ split into ``formation.birth_yaw_components`` components (8 by default, yaw ``2�
 σ = π/8), so that no update is linearised about a yaw far from the truth. The scan's detection
 probability is ``formation.p_detect`` for every teammate, or, with
 ``ranges_mark_detections`` (one detector gives range and bearing, like a camera reading
-barcodes), 1 for the teammates with a range in the scan and 0 for the others.
+barcodes), 1 for the teammates with a range in the scan and 0 for the others. Between the
+two, ``range_in_view`` keeps the sensors separate but gives the range sensor the bearing
+sensor's field of view: whether a teammate was ranged then weighs its tracks by where they
+put it (inside or outside the view), not which bearing is its.
 :meth:`GaussianSumFuser.decide` gives, on top, a one-to-one bearing-to-teammate decision
 (``linear_sum_assignment``) for reporting.
 
@@ -153,6 +156,13 @@ class GaussianSumSettings:
             ``P_D`` is that times the probability that its predicted azimuth lies inside
             ``±field_of_view`` (module docstring), and the bearing space spans
             ``±field_of_view`` (:attr:`bearing_volume`); separate sensors only.
+        range_in_view: the range sensor shares the bearing sensor's field of view (a
+            camera's barcode ranges): it ranges a teammate with probability
+            ``formation.p_detect`` inside ``±field_of_view`` and never outside, so a range of
+            ``j`` multiplies each of ``j``'s tracks by its in-view probability and a scan
+            without one by ``1 − P_D`` of the track (:meth:`GaussianSumFuser.update_known`);
+            ``False``: the range sensor sees all around (seed 002's ranging). Needs
+            ``field_of_view``.
         known_outlier_probability: probability ``ε`` that a range or height is an outlier
             (uniform over the sensor's span; module docstring).
         max_range, max_position_sigma: tracks farther than ``max_range`` (m) or with a position
@@ -187,6 +197,7 @@ class GaussianSumSettings:
     confirm_yaw_sigma: float = 0.35
     ranges_mark_detections: bool = False
     field_of_view: float | None = None
+    range_in_view: bool = False
     known_outlier_probability: float = 0.01
     max_range: float = 20.0
     max_position_sigma: float = 5.0
@@ -229,7 +240,12 @@ class GaussianSumSettings:
             raise ConfigError(
                 f"GaussianSumSettings.max_components must be ≥ 1: {self.max_components}"
             )
-        for name in ("ranges_mark_detections", "share_confirmed_only", "indirect_fusion"):
+        for name in (
+            "ranges_mark_detections",
+            "range_in_view",
+            "share_confirmed_only",
+            "indirect_fusion",
+        ):
             if not isinstance(getattr(self, name), bool):
                 raise ConfigError(
                     f"GaussianSumSettings.{name} must be a bool: {getattr(self, name)!r}"
@@ -244,6 +260,8 @@ class GaussianSumSettings:
                     "GaussianSumSettings: field_of_view is a separate-sensor model; it cannot "
                     "be combined with ranges_mark_detections"
                 )
+        if self.range_in_view and self.field_of_view is None:
+            raise ConfigError("GaussianSumSettings.range_in_view needs a field_of_view")
         if self.fusion not in FUSION_MODES:
             raise ConfigError(f"GaussianSumSettings.fusion: one of {FUSION_MODES}: {self.fusion}")
 
@@ -534,12 +552,17 @@ class GaussianSumFuser:
         """Update with a known-correspondence sensor (``values`` per teammate, NaN = none).
 
         Weights are multiplied by the outlier-robust predictive density (module docstring) and
-        left unnormalised (see :meth:`direct_scan`; :meth:`reduce` normalises).
+        left unnormalised (see :meth:`direct_scan`; :meth:`reduce` normalises). With
+        ``range_in_view`` a range scan first weighs every track by whether its teammate was
+        ranged (:meth:`_range_detection`).
         """
         vals = self._per_teammate(values, kind)
         t = self.tracks
         if t.size == 0:
             return
+        if kind == "range" and self.settings.range_in_view:
+            t = t.with_arrays(weights=t.weights * self._range_detection(np.isfinite(vals)))
+            self.tracks = t
         z = vals[t.groups]
         sel = np.flatnonzero(np.isfinite(z))
         if sel.size == 0:
@@ -555,6 +578,22 @@ class GaussianSumFuser:
         covs[sel] = np.where(inside[:, None, None], new_P, cov)
         weights[sel] = t.weights[sel] * (valid + outlier)
         self.tracks = t.with_arrays(means=means, covs=covs, weights=weights)
+
+    def _range_detection(self, ranged: NDArray[np.bool_]) -> Array:
+        """The likelihood of a scan's range detections (``ranged`` per teammate) for every
+        track, up to a factor common to each teammate's filter.
+
+        With the range sensor seeing only inside ``±f`` (``range_in_view``) and ranging a
+        teammate there with probability ``P_D``, a track whose azimuth lies inside with
+        probability ``p_in`` (:meth:`_track_detection`) explains a range with ``P_D·p_in``
+        and its absence with ``1 − P_D·p_in``. The common ``P_D`` of the first is dropped:
+        the births of the same scan, at a measured bearing, are inside by construction and
+        carry it too. A track out of view therefore loses its weight when its teammate is
+        ranged, and one in view when it is not."""
+        st = self.settings
+        p_in = self._track_detection(np.ones(len(self.teammates)))
+        ranged_track = ranged[self.tracks.groups]
+        return np.where(ranged_track, p_in, 1.0 - st.formation.p_detect * p_in)
 
     def _known_density(
         self, kind: Literal["height", "range"], z: Array, mean: Array, cov: Array
