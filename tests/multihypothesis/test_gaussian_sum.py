@@ -421,3 +421,40 @@ def test_field_of_view_is_checked() -> None:
         _settings(use_elevation=False, field_of_view=0.0)
     with pytest.raises(ConfigError, match="ranges_mark_detections"):
         _settings(use_elevation=False, field_of_view=0.5, ranges_mark_detections=True)
+
+
+@pytest.mark.parametrize("ranged", [True, False])
+def test_a_range_sensor_with_the_field_of_view_weighs_tracks_by_where_they_put_the_teammate(
+    ranged: bool,
+) -> None:
+    """Two tracks at the same 2 m range, one ahead (in a ±0.5 rad view) and one to the left
+    (out of it): a range of the teammate can only have come from the one in view, and no
+    range is what the one out of view predicts. Expected ratios from the normal CDF of each
+    track's azimuth, σ² = (∂α/∂p) P (∂α/∂p)ᵀ + σ_α² = 0.01/4 + 0.05²."""
+    from scipy.stats import norm
+
+    fov, p_d = 0.5, 0.8
+    st = _settings(use_elevation=False, field_of_view=fov, range_in_view=True)
+    st = replace(st, formation=replace(st.formation, p_detect=p_d))
+    sd = np.sqrt(0.01 / 4 + 0.05**2)
+    p_in = np.array([norm.cdf((fov - a) / sd) - norm.cdf((-fov - a) / sd) for a in (0, np.pi / 2)])
+    for in_view in (True, False):
+        fuser = GaussianSumFuser(0, [1], st if in_view else replace(st, range_in_view=False))
+        fuser.tracks = _two_tracks(st.nscan_depth)
+        fuser.update_known("range", [2.0 if ranged else np.nan])
+        w = fuser.tracks.weights
+        if not in_view:
+            assert w[0] == pytest.approx(w[1], rel=1e-12)  # all-around ranging: no information
+        elif ranged:
+            assert w[0] / w[1] == pytest.approx(p_in[0] / p_in[1], rel=1e-9)
+            assert w[0] / w[1] > 1e6
+        else:
+            assert w[0] / w[1] == pytest.approx((1 - p_d * p_in[0]) / (1 - p_d * p_in[1]))
+            assert w[0] / w[1] == pytest.approx(1 - p_d, rel=1e-3)
+
+
+def test_range_in_view_needs_a_field_of_view() -> None:
+    with pytest.raises(ConfigError, match="range_in_view needs a field_of_view"):
+        _settings(use_elevation=False, range_in_view=True)
+    with pytest.raises(ConfigError, match="range_in_view must be a bool"):
+        _settings(use_elevation=False, field_of_view=0.5, range_in_view=1)

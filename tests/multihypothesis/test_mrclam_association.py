@@ -121,7 +121,13 @@ def test_mrclam_association_on_any_mrclam_folder(
     assert s["sigma_range_m"] == s["camera_model"]["sigma_range"]
     assert s["sigma_bearing_rad"] == s["camera_model"]["sigma_bearing"]
     # the shared-fusion variant and the camera model are run on the same data, beside it
-    for other in ("unknown_shared", "unknown_mutual_confirmed", "unknown_no_clutter", "camera"):
+    for other in (
+        "unknown_ranges_all_around",
+        "unknown_shared",
+        "unknown_mutual_confirmed",
+        "unknown_no_clutter",
+        "camera",
+    ):
         assert {"association_accuracy", "pos_rmse_m", "tracked_fraction"} <= set(s[other])
     lo, hi = s["field_of_view_rad"]
     assert lo == -hi and 0.0 < hi <= np.pi
@@ -164,6 +170,9 @@ def test_the_calibration_window_fits_calibrate_the_recording(
     for settings in (w.models.unknown, w.models.camera):
         assert settings.sigma_range == w.models.camera_fit.sigma_range
         assert settings.sigma_azimuth == w.models.camera_fit.sigma_bearing
+    # the headline's ranges are the camera's: their sensor has the camera's field of view
+    assert w.models.unknown.range_in_view
+    assert w.models.unknown.field_of_view == w.fov_fit.half_width_rad
     # the raw ranges' own noise (0.05 m) is what is left for the filter, give or take the
     # correlation inflation
     assert 0.04 < w.models.camera_fit.sigma_range_raw < 0.07
