@@ -1,5 +1,6 @@
-"""CLI smoke tests: help, version, unknown experiment, flags an experiment does not read and a bad
-``--pair`` → clear error and exit code."""
+"""CLI smoke tests: help, version, unknown experiment, flags an experiment does not read, a bad
+``--pair`` and a ``--sharing-policy`` / ``--sensing`` a team does not take → clear error and exit
+code."""
 
 import subprocess
 import sys
@@ -86,4 +87,43 @@ def test_a_sharing_policy_is_refused_where_it_means_nothing(tmp_path, capsys, ar
     out = tmp_path / "out"
     assert main([*argv, *(["--out", str(out)] if argv[0] == "team" else [])]) == 2
     assert message in capsys.readouterr().err
+    assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["team", "up", "default", "--sensing", "all"],
+        ["team", "up", "sharma2013", "--sensing", "L1"],
+        ["team", "up", "guler2023", "--sensing", "all"],
+        ["node", "--robot", "L1", "--scenario", "sharma2013", "--sensing", "all"],
+        ["node", "--robot", "L1", "--dataset", "somewhere", "--sensing", "all"],
+    ],
+)
+def test_sensing_robots_are_refused_outside_desilva_teams(tmp_path, capsys, argv):
+    out = tmp_path / "out"
+    assert main([*argv, *(["--out", str(out)] if argv[0] == "team" else [])]) == 2
+    err = capsys.readouterr().err
+    assert "--sensing: only desilva2015 teams (desilva2015, desilva2015-kidnapped)" in err
+    assert "Traceback" not in err
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("sensing", ["Q1", "L1,L1", "", "L1,,P1", "all,L1"])
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["team", "up", "desilva2015"],
+        ["team", "up", "desilva2015-kidnapped"],
+        ["node", "--robot", "L1", "--scenario", "desilva2015"],
+    ],
+)
+def test_bad_sensing_robots_of_a_team_are_refused_as_for_reproduce(tmp_path, capsys, argv, sensing):
+    """The team's ``--sensing`` is parsed by the reproduction's parser: the same message."""
+    out = tmp_path / "out"
+    team = ["--out", str(out)] if argv[0] == "team" else []
+    assert main([*argv, *team, "--sensing", sensing]) == 2
+    assert "--sensing: 'all' or distinct robot names from L1, L2, P1, P2, P3" in (
+        capsys.readouterr().err
+    )
     assert not out.exists()

@@ -1,6 +1,7 @@
 """Any contract estimator in a robot node: the window driver's message rule, the ``mail``
 codec, re-filtering late readings from a checkpoint, seed 002's leaders as processes (``relloc team
-up desilva2015-kidnapped``) and seed 001's agents as processes (``relloc team up sharma2013``).
+up desilva2015-kidnapped``, ``--sharing-policy``, ``--sensing``) and seed 001's agents as
+processes (``relloc team up sharma2013``).
 
 The driver tests run two seed-002 leaders' drivers in one process, window by window, handing
 each other only what the node protocol hands over (stamped messages and progress): they must
@@ -191,6 +192,36 @@ def test_a_sharing_policy_reaches_the_leader_processes(tmp_path):
         assert tracks.get("messages_fused:indirect", 0) == 0, tracks
         assert tracks["messages_fused:skipped"] > 0 and tracks["messages_fused:mutual"] > 0
     assert "sharing policy `mutual-confirmed`" in (out / "report.md").read_text()
+
+
+@pytest.mark.slow
+def test_the_sensing_robots_reach_every_robot_process(tmp_path):
+    """``--sensing L1,P2``: every process simulates those robots sensing, so P2 runs a fuser
+    (beliefs of its teammates, mail to L1) and L2 only shares its odometry; the distributed
+    beliefs and figures of both fusers agree with the in-process run of the same sensing robots,
+    and the summary and report name them."""
+    out = tmp_path / "out"
+    argv = ["team", "up", "desilva2015", "--out", str(out), "--duration", "6", "--seed", "3"]
+    assert main([*argv, "--sensing", "L1,P2", "--quiet"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["sensing"] == ["L1", "P2"] and summary["paper_sensing"] == ["L1", "L2"]
+    assert summary["processes_per_run"]["fusers"] == 2
+    agree = summary["agreement"]
+    assert agree["perfect_network"] and agree["within_tolerance"], agree
+    assert agree["max_abs_diff"] < 1e-9
+    for figure, diff in summary["difference"].items():
+        assert diff is None or abs(diff) <= summary["tolerance"]["figure"], figure
+    pairs = {f"{me}->{mate}" for me in ("L1", "P2") for mate in ROSTER if mate != me}
+    for side in ("distributed", "in_process"):
+        assert set(summary[side]["success_rate_per_pair"]) == pairs, side
+    run = summary["per_run"][0]
+    assert all(codes == [0] for codes in run["exit_codes"].values())
+    for robot, m in run["messages"].items():
+        assert m["rejected"] == 0 and m["final_report"]
+        fuser = robot in ("L1", "P2")
+        assert (m["estimates"] > 0) == fuser and (m["sent"]["mail"] > 0) == fuser, robot
+    assert run["messages"]["P2"]["tracks"]["messages_fused:mutual"] > 0
+    assert "Sensing robots L1, P2 (`--sensing`" in (out / "report.md").read_text()
 
 
 def test_an_agent_refilters_late_readings_from_a_checkpoint_and_matches_the_in_process_eif():

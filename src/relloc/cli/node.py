@@ -130,6 +130,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         help="with --dataset: seed 000's track manager, or seed 001's team EIF (mrclam-cl)",
     )
     add_sharing_policy_argument(p)
+    add_sensing_argument(p)
     p.add_argument(
         "--fit", default=None, metavar="FILE", help="--estimator cooperative: fitted models"
     )
@@ -251,9 +252,11 @@ def run_realtime(args: argparse.Namespace, parts: NodeParts) -> int:
 
 def node_parts(args: argparse.Namespace) -> NodeParts:
     """The robot's sensor source and estimator for the team source the arguments name."""
+    from relloc.experiments.desilva2015 import sensing_robots
     from relloc.experiments.team_sources import named_node_parts, team_names
 
     refuse_sharing_policy(args)
+    refuse_sensing(args)
     if args.dataset is None and args.scenario in team_names():
         return named_node_parts(
             args.scenario,
@@ -263,6 +266,7 @@ def node_parts(args: argparse.Namespace) -> NodeParts:
             args.duration,
             args.case or "two_landmarks",
             args.sharing_policy or "all",
+            sensing_robots(args.sensing),
         )
     if args.dataset is not None and args.estimator == "cooperative":
         from pathlib import Path
@@ -340,4 +344,31 @@ def refuse_sharing_policy(args: argparse.Namespace) -> None:
         raise ConfigError(
             f"--sharing-policy: only desilva2015 teams ({', '.join(KIDNAPPED)}) share "
             "Gaussian-sum beliefs"
+        )
+
+
+def add_sensing_argument(p: argparse.ArgumentParser) -> None:
+    """``--sensing ROBOTS`` of a desilva2015 team: the simulated robots that sense and run the
+    fusers (parsed by :func:`relloc.experiments.desilva2015.sensing_robots`)."""
+    p.add_argument(
+        "--sensing",
+        default=None,
+        metavar="ROBOTS",
+        help="desilva2015 teams: the simulated robots that sense and run Gaussian-sum fusers, "
+        "'all' or names such as L1,P2 (default: the paper's leaders L1,L2)",
+    )
+
+
+def refuse_sensing(args: argparse.Namespace) -> None:
+    """ConfigError when ``--sensing`` is given to a team other than desilva2015's simulated one;
+    a bad value is refused by :func:`relloc.experiments.desilva2015.sensing_robots`."""
+    if args.sensing is None:
+        return
+    from relloc.errors import ConfigError
+    from relloc.experiments.team_sources import KIDNAPPED
+
+    if getattr(args, "dataset", None) is not None or args.scenario not in KIDNAPPED:
+        raise ConfigError(
+            f"--sensing: only desilva2015 teams ({', '.join(KIDNAPPED)}) choose their sensing "
+            "robots"
         )

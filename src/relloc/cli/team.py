@@ -18,10 +18,13 @@ a scenario, ``default``, a dataset folder and every reproduction.
 A reproduction's team (``desilva2015``, ``desilva2015-kidnapped``: seed 002's leaders and pods,
 see :mod:`relloc.experiments.desilva2015_team`) runs ``--runs N`` Monte-Carlo runs of
 ``--duration S`` simulated seconds each and is scored beside the in-process reproduction on the
-same seeds. ``guler2023`` (seed 003's air-ground team in closed loop: a world process, the
-leader, followers and drones as processes, ``--case`` one of its paper scenarios, default
-``two_drones``; see :mod:`relloc.experiments.guler2023_team`) takes the same flags; its tick is
-the scenario's 0.05 s, not ``--tick``.
+same seeds; for these two only, ``--sharing-policy NAME`` sets the leaders' sharing policy and
+``--sensing all|L1,P2,...`` the simulated robots that sense and run the fusers (default the
+paper's leaders L1, L2, as for ``relloc reproduce desilva2015``). ``guler2023`` (seed 003's
+air-ground team in closed loop: a world process, the leader, followers and drones as processes,
+``--case`` one of its paper scenarios, default ``two_drones``; see
+:mod:`relloc.experiments.guler2023_team`) takes the same flags but those two; its tick is the
+scenario's 0.05 s, not ``--tick``.
 
 ``relloc team clock`` runs only the clock/simulator process (for robots started by hand).
 """
@@ -36,9 +39,11 @@ from relloc.cli.console import plain_text
 from relloc.cli.export_args import add_export_arguments, export_request, print_export
 from relloc.cli.node import (
     add_network_fault_arguments,
+    add_sensing_argument,
     add_sharing_policy_argument,
     add_transport_arguments,
     network_faults_from_args,
+    refuse_sensing,
     refuse_sharing_policy,
     transport_from_args,
 )
@@ -109,6 +114,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         help="certificate folder of 'relloc certs' (default with --secure: made in OUT/certs)",
     )
     add_sharing_policy_argument(up)
+    add_sensing_argument(up)
     up.add_argument("--quiet", action="store_true", help="print nothing")
     faults = add_network_fault_arguments(up)
     faults.add_argument("--kill", action="append", default=[], metavar="ROBOT@SECONDS")
@@ -142,6 +148,7 @@ def run_up(args: argparse.Namespace) -> int:
     from relloc.runtime.scenario import REPRODUCTIONS
 
     refuse_sharing_policy(args)
+    refuse_sensing(args)
 
     if args.scenario == "guler2023":
         from relloc.cli.airground import run_team_up
@@ -214,6 +221,7 @@ def run_reproduction(args: argparse.Namespace) -> int:
     """``team up desilva2015`` / ``sharma2013``: the runs, scored beside the in-process
     reproduction."""
     from relloc.errors import ConfigError
+    from relloc.experiments.desilva2015 import sensing_robots
     from relloc.experiments.desilva2015_team import DeSilvaTeamSettings, run_desilva_team
     from relloc.pipeline.output import fmt
 
@@ -229,6 +237,7 @@ def run_reproduction(args: argparse.Namespace) -> int:
             runs=args.runs,
             duration_s=args.duration,
             sharing_policy=args.sharing_policy or "all",
+            sensing=sensing_robots(args.sensing),
             **_reproduction_team_args(args),
         )
     )

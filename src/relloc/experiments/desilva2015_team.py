@@ -1,10 +1,13 @@
-"""``relloc team up desilva2015 | desilva2015-kidnapped --out DIR``: seed 002's team as robot
-processes, scored beside the in-process reproduction on the same seeds.
+"""``relloc team up desilva2015 | desilva2015-kidnapped --out DIR [--sharing-policy NAME]
+[--sensing all|L1,P2,...]``: seed 002's team as robot processes, scored beside the in-process
+reproduction on the same seeds.
 
 Every run ``i`` of ``--runs N`` launches the whole team — leaders L1, L2 each running its
 Gaussian-sum fuser in its own process, pods P1–P3 sharing their odometry — over Zenoh
 (:class:`relloc.runtime.launcher.TeamLauncher`, :mod:`relloc.experiments.team_sources`);
-the leaders' equivalent measurements (Eq. 8) travel once a second as ``mail``. The collected
+the leaders' equivalent measurements (Eq. 8) travel once a second as ``mail``. With
+``--sensing`` the named robots (``all``: every robot) sense and run the fusers instead of the
+leaders, and the in-process reference uses the same sensing robots. The collected
 estimates are scored by the reproduction's own functions
 (:func:`relloc.experiments.desilva2015.score_run`, :func:`~relloc.experiments.desilva2015.metrics`),
 and the same runs are replayed in-process
@@ -17,7 +20,12 @@ and the same runs are replayed in-process
 run); for the kidnapped team ``kidnapped`` (``refound_rate``, ``time_to_refind_s`` and
 ``tracked_last_second``, distributed and in-process);
 ``sharing_policy`` (the leaders', ``--sharing-policy``: ``all``, seed 002's, or
-``mutual-confirmed``, :data:`relloc.estimators.gaussian_sum.SHARING_POLICIES`); ``secure``
+``mutual-confirmed``, :data:`relloc.estimators.gaussian_sum.SHARING_POLICIES`); ``sensing``
+(the sensing robots' names, ``--sensing all|L1,P2,...``, parsed by
+:func:`relloc.experiments.desilva2015.sensing_robots` as for ``relloc reproduce desilva2015``;
+every robot process simulates the same sensing robots and each of them runs a fuser, so the
+figures and the agreement are those of every sensing robot's filters) and ``paper_sensing``
+(the paper's, L1, L2); ``secure``
 (mutual TLS and access control: ``--secure``); ``messages`` per robot and per run
 (sent, received, rejected by reason) and what the collector rejected
 (``collector_rejected_by_reason``); per run ``fault_outcomes`` (accuracy before / during /
@@ -49,6 +57,7 @@ from relloc.experiments.desilva2015 import (
     leader_estimates,
     metrics,
     score_run,
+    sensing_robots,
     tracked_by_others,
 )
 from relloc.experiments.team_sources import desilva_recording, desilva_scenario
@@ -56,6 +65,7 @@ from relloc.pipeline.output import fmt, markdown_table, prepare_out_dir, write_r
 from relloc.runtime.launcher import ProcessTeam, TeamLauncher
 from relloc.runtime.outcomes import figure_agreement, figure_difference, outcomes_of
 from relloc.runtime.summary import agreement, assemble_estimates, robot_messages
+from relloc.sim.multihypothesis import ROBOT_NAMES
 
 AGREEMENT_TOLERANCE = 1e-6
 """Largest |difference| of a belief entry (mean or covariance) at a common record time that
@@ -75,11 +85,13 @@ class DeSilvaTeamSettings(ProcessTeam):
     runs: int = 1
     duration_s: float | None = None
     sharing_policy: str = "all"
+    sensing: tuple[int, ...] = sensing_robots(None)
+    """The sensing robots' indices (``--sensing``; default the paper's leaders L1, L2)."""
 
 
 def run_desilva_team(s: DeSilvaTeamSettings) -> dict[str, Any]:
     """Run every run's team, score it beside the in-process run, write the outputs."""
-    scenario = desilva_scenario(s.name, s.duration_s)
+    scenario = desilva_scenario(s.name, s.duration_s, s.sensing)
     config = RunConfig(scenario=scenario, sharing_policy=s.sharing_policy)
     out = prepare_out_dir(s.out_dir)
     distributed: list[LeaderRunScores] = []
@@ -87,7 +99,7 @@ def run_desilva_team(s: DeSilvaTeamSettings) -> dict[str, Any]:
     runs: list[dict[str, Any]] = []
     start = time.monotonic()
     for i in range(s.runs):
-        recording = desilva_recording(s.name, s.seed, i, s.duration_s)
+        recording = desilva_recording(s.name, s.seed, i, s.duration_s, scenario.sensing)
         settings = s.launch(
             scenario=s.name,
             out_dir=out / f"run{i}",
@@ -100,6 +112,8 @@ def run_desilva_team(s: DeSilvaTeamSettings) -> dict[str, Any]:
                 repr(scenario.duration),
                 "--sharing-policy",
                 s.sharing_policy,
+                "--sensing",
+                ",".join(_names(scenario.sensing)),
             ),
         )
         span = recording.span[1] - recording.span[0]
@@ -131,6 +145,11 @@ def run_desilva_team(s: DeSilvaTeamSettings) -> dict[str, Any]:
     write_summary(out, summary)
     write_report(out, report_markdown(summary))
     return summary
+
+
+def _names(sensing: tuple[int, ...]) -> list[str]:
+    """The sensing robots' names (:data:`~relloc.sim.multihypothesis.ROBOT_NAMES`)."""
+    return [ROBOT_NAMES[i] for i in sensing]
 
 
 def tracked_at_end(results: list[LeaderRunScores], robot: int, window_s: float = 1.0) -> float:
@@ -165,8 +184,10 @@ def _summary(
         "seed": s.seed,
         "runs": s.runs,
         "duration_s": duration_s,
-        "processes_per_run": {"leaders": 2, "pods": 3, "clock": 1},
+        "processes_per_run": {"leaders": 2, "pods": 3, "clock": 1, "fusers": len(s.sensing)},
         "sharing_policy": s.sharing_policy,
+        "sensing": _names(s.sensing),
+        "paper_sensing": _names(sensing_robots(None)),
         "faults": s.faults.to_dict(),
         "secure": s.secure,
         "distributed": ours,
@@ -183,6 +204,23 @@ def _summary(
     }
 
 
+def _who_senses(summary: Mapping[str, Any]) -> str:
+    """The report's sentence on which robots run fusers (``--sensing``)."""
+    sensing, paper = summary["sensing"], summary["paper_sensing"]
+    if sensing == paper:
+        return (
+            "Leaders L1, L2 run their Gaussian-sum fusers in their own processes, pods P1–P3 "
+            "share their odometry"
+        )
+    others = [r for r in ROBOT_NAMES if r not in sensing]
+    return (
+        f"Sensing robots {', '.join(sensing)} (`--sensing`; an extension: the paper's sensing "
+        f"robots are {', '.join(paper)}, so the figures are of a different team) run their "
+        "Gaussian-sum fusers in their own processes"
+        + (f", {', '.join(others)} only share their odometry" if others else "")
+    )
+
+
 def report_markdown(summary: Mapping[str, Any]) -> str:
     """``report.md``: the figures side by side, the agreement, the messages."""
     d, r = summary["distributed"], summary["in_process"]
@@ -192,9 +230,8 @@ def report_markdown(summary: Mapping[str, Any]) -> str:
         f"# relloc team up — {summary['experiment']} ({summary['runs']} run(s), seed "
         f"{summary['seed']}, {fmt(summary['duration_s'])} s each)",
         "",
-        "Leaders L1, L2 run their Gaussian-sum fusers in their own processes, pods P1–P3 share "
-        "their odometry; equivalent measurements travel once a second over Zenoh; sharing "
-        f"policy `{summary['sharing_policy']}`.",
+        f"{_who_senses(summary)}; equivalent measurements travel once a second over Zenoh; "
+        f"sharing policy `{summary['sharing_policy']}`.",
         "",
         markdown_table(["figure", "distributed", "in-process", "difference"], rows),
         "",

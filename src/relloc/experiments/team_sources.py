@@ -9,7 +9,10 @@ very estimator the in-process reproduction gives that robot:
   :class:`~relloc.fusion.gaussian_sum_estimator.GaussianSumEstimator` (the settings of
   :meth:`relloc.experiments.desilva2015.RunConfig.settings` with the team's sharing policy,
   equivalent measurements every second) and record their dominant tracks at their scan
-  times; pods P1–P3 only share their odometry. ``desilva2015-kidnapped``: the same with the
+  times; pods P1–P3 only share their odometry. With ``--sensing`` (the team's sensing robots,
+  parsed by :func:`relloc.experiments.desilva2015.sensing_robots`) those robots scan and run
+  the fusers instead of the leaders, the others only share their odometry; every process
+  simulates the same sensing robots. ``desilva2015-kidnapped``: the same with the
   kidnapped-robot scenario (:func:`kidnap_of`). Run ``i`` of
   seed ``S`` is run ``i`` of ``relloc reproduce desilva2015 --seed S`` (the Monte-Carlo
   task's seed sequence ``SeedSequence(S).spawn(n)[i]``), shortened to ``duration`` seconds.
@@ -33,7 +36,13 @@ import numpy as np
 
 from relloc.core.recording import Recording
 from relloc.errors import ConfigError
-from relloc.experiments.desilva2015 import DURATION_S, FUSION_PERIOD_S, KIDNAP, RunConfig
+from relloc.experiments.desilva2015 import (
+    DURATION_S,
+    FUSION_PERIOD_S,
+    KIDNAP,
+    RunConfig,
+    sensing_robots,
+)
 from relloc.fusion.gaussian_sum_estimator import GaussianSumEstimator
 from relloc.pipeline.montecarlo import spawn_seeds
 from relloc.runtime.estimation import (
@@ -59,13 +68,18 @@ def team_names() -> tuple[str, ...]:
     return REPRODUCTIONS
 
 
-def desilva_scenario(name: str, duration_s: float | None) -> DeSilvaScenario:
-    """The scenario of ``desilva2015`` / ``desilva2015-kidnapped`` (default: the paper's 30 s)."""
+def desilva_scenario(
+    name: str, duration_s: float | None, sensing: tuple[int, ...] | None = None
+) -> DeSilvaScenario:
+    """The scenario of ``desilva2015`` / ``desilva2015-kidnapped`` (default: the paper's 30 s);
+    ``sensing``: the sensing robots' indices (default: the paper's leaders)."""
     if name not in KIDNAPPED:
         raise ConfigError(f"team source: {name!r} is not one of {team_names()}")
     duration = DURATION_S if duration_s is None else float(duration_s)
     return DeSilvaScenario(
-        duration=duration, kidnap=kidnap_of(duration) if KIDNAPPED[name] else None
+        duration=duration,
+        kidnap=kidnap_of(duration) if KIDNAPPED[name] else None,
+        sensing=sensing_robots(None) if sensing is None else sensing,
     )
 
 
@@ -83,9 +97,15 @@ def run_seed(seed: int, run: int) -> np.random.SeedSequence:
     return spawn_seeds(seed, run + 1)[run]
 
 
-def desilva_recording(name: str, seed: int, run: int, duration_s: float | None) -> Recording:
-    """The recording every process of the team builds."""
-    scenario = desilva_scenario(name, duration_s)
+def desilva_recording(
+    name: str,
+    seed: int,
+    run: int,
+    duration_s: float | None,
+    sensing: tuple[int, ...] | None = None,
+) -> Recording:
+    """The recording every process of the team builds (``sensing``: as :func:`desilva_scenario`)."""
+    scenario = desilva_scenario(name, duration_s, sensing)
     return simulate(scenario, np.random.default_rng(run_seed(seed, run)))
 
 
@@ -97,12 +117,14 @@ def named_node_parts(
     duration_s: float | None,
     case: str = "two_landmarks",
     sharing_policy: str = "all",
+    sensing: tuple[int, ...] | None = None,
 ) -> NodeParts:
     """Robot ``robot``'s sensors and estimator in the team ``name`` (module docstring);
-    ``sharing_policy``: the leaders' (desilva2015 only)."""
+    desilva2015 only: ``sharing_policy``, the leaders'; ``sensing``, the indices of the sensing
+    robots, those that run the fusers (default: the paper's leaders L1, L2)."""
     if name == "sharma2013":
         return sharma_node_parts(robot, seed, run, duration_s, case)
-    scenario = desilva_scenario(name, duration_s)
+    scenario = desilva_scenario(name, duration_s, sensing)
     settings = RunConfig(scenario=scenario, sharing_policy=sharing_policy).settings()
     recording = simulate(scenario, np.random.default_rng(run_seed(seed, run)))
     if robot not in recording.robots:
