@@ -8,6 +8,7 @@ through :func:`flag_errors`, which rewrites that prefix into the flag
 
 from __future__ import annotations
 
+import re
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 
@@ -50,3 +51,39 @@ def integer_list(text: str | None, flag: str) -> list[int] | None:
         return [int(part) for part in text.split(",")]
     except ValueError:
         raise ConfigError(f"{flag}: {text!r} is not a comma-separated list of integers") from None
+
+
+def number_pair(text: str | None, flag: str) -> tuple[float, float] | None:
+    """``"3.7,-1.2"`` → ``(3.7, -1.2)`` (the value of ``flag``); ``None`` stays ``None``."""
+    if text is None:
+        return None
+    parts = text.split(",")
+    try:
+        if len(parts) == 2:
+            return float(parts[0]), float(parts[1])
+    except ValueError:
+        pass
+    raise ConfigError(f"{flag}: {text!r} is not two numbers X,Y (e.g. {flag}=3.7,-1.2)")
+
+
+_BARCODE_PAIR = re.compile(r"\s*([0-9]{1,10})\s*:\s*([0-9]{1,10})\s*", re.ASCII)
+
+
+def barcode_map(text: str | None, flag: str) -> dict[int, int] | None:
+    """``"5:11,14:12"`` → ``{5: 11, 14: 12}`` (the value of ``flag``, each old barcode once);
+    ``None`` stays ``None``. Only the form is checked here, the barcodes by the library."""
+    if text is None:
+        return None
+    mapping: dict[int, int] = {}
+    for part in text.split(","):
+        pair = _BARCODE_PAIR.fullmatch(part)
+        if pair is None:
+            raise ConfigError(
+                f"{flag}: {part!r} in {text!r} is not OLD:NEW (barcodes as whole numbers, "
+                f"pairs separated by commas, e.g. {flag} 5:11,14:12)"
+            )
+        old, new = int(pair[1]), int(pair[2])
+        if old in mapping:
+            raise ConfigError(f"{flag}: barcode {old} is mapped twice in {text!r}")
+        mapping[old] = new
+    return mapping

@@ -264,14 +264,19 @@ def data_row(line: bytes) -> bytes | None:
     return row if row and not row.startswith(b"#") else None
 
 
-def leading_time(row: bytes) -> float | None:
-    """The first column of the data row ``row`` when it is a finite numeral as the loader reads
-    one (ASCII decimal, no ``_``), else None."""
-    token = _SEPARATOR.split(row, maxsplit=1)[0]
+def finite_numeral(token: bytes) -> float | None:
+    """The column ``token`` when it is a finite numeral as the loader reads one (ASCII decimal,
+    no ``_``), else None."""
     if not _NUMERAL.fullmatch(token):
         return None
-    t = float(token)
-    return t if math.isfinite(t) else None
+    x = float(token)
+    return x if math.isfinite(x) else None
+
+
+def leading_time(row: bytes) -> float | None:
+    """The first column of the data row ``row`` when it is a finite numeral as the loader reads
+    one (:func:`finite_numeral`), else None."""
+    return finite_numeral(_SEPARATOR.split(row, maxsplit=1)[0])
 
 
 @dataclass(frozen=True)
