@@ -151,7 +151,8 @@ def test_mrclam_cl_figures_do_not_depend_on_the_world_frame_clock_or_barcodes(
     robots recorded in a world frame turned by 2 rad and shifted, on a clock 123456.789 s later
     and with other robot barcodes (``tests/conftest.py``). Ranges, bearings and odometry are
     body-frame readings, so the fitted models and every held-out figure must agree; they differ
-    only by the files' rounding of the poses (1e-8 m, 1e-8 rad: relloc.datasets.mrclam_move)."""
+    only by the files' rounding of the poses (1e-8 m, 1e-8 rad;
+    :mod:`relloc.datasets.mrclam_move`)."""
     cut = mrclam_run6_cut(tmp_path / "cut", robots=(1, 3, 5), keep_s=120.0)
     summaries = []
     for name, folder in (("cut", cut), ("moved", mrclam_run6_moved(cut, tmp_path / "moved"))):

@@ -250,7 +250,8 @@ def test_fits_and_scans_do_not_depend_on_the_world_frame_clock_or_barcodes(
     run 6's robots, and the same recorded in a world frame turned by 2 rad and shifted, on a
     clock 123456.789 s later and with other robot barcodes (``tests/conftest.py``). The windows,
     the field of view, every fitted model and the scans built from the camera frames (with the
-    same clutter draws) agree, up to the files' rounding of the poses (1e-8 m, 1e-8 rad: relloc.datasets.mrclam_move)."""
+    same clutter draws) agree, up to the files' rounding of the poses (1e-8 m, 1e-8 rad;
+    :mod:`relloc.datasets.mrclam_move`)."""
     cut = mrclam_run6_cut(tmp_path / "cut", robots=(1, 2, 3), keep_s=110.0)
     here = mrclam_association._windows(cut)
     moved = mrclam_association._windows(mrclam_run6_moved(cut, tmp_path / "moved"))
