@@ -122,6 +122,12 @@ def test_sighting_reset_dead_reckoning_drifts_with_the_odometry_error() -> None:
     ref = sighting_reset_reference(rec, _settings(0.0), RECORDS, pos_tol=0.5, yaw_tol=0.5)
     assert (ref.records, ref.tracked, ref.truth_missing) == (55, 26, 0)
     assert ref.median_age_s == 13.0
+    # by age (bins 0-1-5-15-45-∞ s): ages 0-24 s after 5 s and 0-29 s after 30 s, tracked
+    # up to 12 s
+    assert ref.by_age.records == (2, 8, 20, 25, 0)
+    assert ref.by_age.tracked == (2, 8, 16, 0, 0)
+    assert [b["tracked_fraction"] for b in ref.to_dict()["by_age"]] == [1.0, 1.0, 0.8, 0.0, None]
+    assert ref.to_dict()["by_age"][-1]["to_s"] is None
     gap = np.concatenate([np.arange(0.0, 41.0), np.arange(50.0, 61.0)])
     holed = GroundTruth(t=gap, pose=np.tile(still[0], (gap.size, 1)), gap_s=5.0)
     ref = sighting_reset_reference(
@@ -136,6 +142,7 @@ def test_sighting_reset_reference_without_records_or_sightings() -> None:
     rec = _pair(still, np.zeros(4), np.zeros(4))
     none = sighting_reset_reference(rec, _settings(0.0), {}, pos_tol=0.5, yaw_tol=0.5)
     assert none.records == 0 and none.fraction is None and none.median_age_s is None
+    assert none.by_age.records == (0,) * 5
     # B never sees A: its records count nothing
     unseen = sighting_reset_reference(
         rec, _settings(0.0), {"B": RECORDS["A"]}, pos_tol=0.5, yaw_tol=0.5

@@ -137,6 +137,12 @@ def test_mrclam_association_on_any_mrclam_folder(
     ref = s["tracking_reference"]
     assert ref["records"] > 0 and ref["tracked_fraction"] >= 0.95 and ref["median_age_s"] < 1.0
     assert "sighting_reset_reference" in (out / "report.md").read_text()
+    # a sighting every 0.2 s: every record, the filter's and the reference's, is under 1 s old
+    for bins in (s["tracked_by_age"], ref["by_age"]):
+        assert bins[0]["from_s"] == 0.0 and bins[0]["to_s"] == 1.0
+        assert bins[0]["records"] > 0 and all(b["records"] == 0 for b in bins[1:])
+    assert ref["by_age"][0]["records"] == ref["records"]
+    assert "time since the last sighting" in (out / "report.md").read_text()
     assert (out / s["figures"]["errors"]).is_file()
 
 

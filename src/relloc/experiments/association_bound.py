@@ -35,13 +35,16 @@ at or before it, robot ``k ∈ {i, j}`` is put at
 grid time), and the record counts as tracked when ``⊖x̂_i ⊕ x̂_j`` is within the tolerances of
 the true relative pose. The share over the records after the teammate's first sighting is what
 such a filter scores; a real filter, which must find the yaw from the motion during its
-sightings, scores less.
+sightings, scores less. :class:`TrackedByAge` splits a tracked share by the record's age
+``t − s`` (bins :data:`AGE_EDGES_S`), for the reference and for a filter alike
+(:func:`last_sightings`): how fast a track is lost once its teammate is out of sight.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -57,6 +60,8 @@ Array = NDArray[np.float64]
 
 #: variance of the truth-placed tracks (m², rad²): the innovation is the bearing noise alone
 TRUTH_VARIANCE = 1e-10
+#: edges (s) of the bins of a record's age, the time since the last sighting (the last is ∞)
+AGE_EDGES_S = (0.0, 1.0, 5.0, 15.0, 45.0, np.inf)
 
 
 @dataclass(frozen=True)
@@ -124,29 +129,79 @@ def _truth_tracks(poses: np.ndarray, depth: int) -> Tracks:
     )
 
 
+def last_sightings(rec: Recording, observer: int, target: int, t: Array, kind: str) -> Array:
+    """The time ``s`` of ``observer``'s last sighting of ``target`` (a bearing row of kind
+    ``kind`` whose ``origin`` is ``target``: the truth, for scoring only) at or before each
+    of ``t``; NaN before the first."""
+    m = rec.measurements
+    assert m.origin is not None
+    rows = bearing_rows(m, observer, kind)
+    sightings = np.unique(m.t[rows[m.origin[rows] == target]])
+    if sightings.size == 0:
+        return np.full(np.shape(t), np.nan)
+    last = np.searchsorted(sightings, t, side="right") - 1
+    return np.where(last >= 0, sightings[np.maximum(last, 0)], np.nan)
+
+
+@dataclass(frozen=True)
+class TrackedByAge:
+    """Records and tracked records in each bin ``[AGE_EDGES_S[k], AGE_EDGES_S[k + 1])`` of
+    the time since the last sighting."""
+
+    records: tuple[int, ...]
+    tracked: tuple[int, ...]
+
+    @classmethod
+    def count(cls, age: Array, tracked: NDArray[np.bool_]) -> TrackedByAge:
+        """Bin the records of ages ``age`` (s, finite, ≥ 0) and their ``tracked`` flags."""
+        k = np.searchsorted(AGE_EDGES_S, np.asarray(age, dtype=float), side="right") - 1
+        n = len(AGE_EDGES_S) - 1
+        flags = np.asarray(tracked, dtype=bool)
+        return cls(
+            tuple(int(v) for v in np.bincount(k, minlength=n)),
+            tuple(int(v) for v in np.bincount(k[flags], minlength=n)),
+        )
+
+    def to_list(self) -> list[dict[str, float | int | None]]:
+        """One entry per bin: ``from_s``, ``to_s`` (None: no end), ``records`` and
+        ``tracked_fraction`` (None: no record)."""
+        return [
+            {
+                "from_s": AGE_EDGES_S[k],
+                "to_s": AGE_EDGES_S[k + 1] if np.isfinite(AGE_EDGES_S[k + 1]) else None,
+                "records": n,
+                "tracked_fraction": self.tracked[k] / n if n else None,
+            }
+            for k, n in enumerate(self.records)
+        ]
+
+
 @dataclass(frozen=True)
 class TrackingReference:
     """Of ``records`` (observer records × teammates after the teammate's first sighting, truth
     valid at the record and the sighting), how many the sighting-reset dead reckoning keeps
     within the tolerances (``tracked``); ``truth_missing`` records left out for a ground-truth
-    gap; ``median_age_s`` the median time since the last sighting."""
+    gap; ``median_age_s`` the median time since the last sighting, ``by_age`` the records by
+    that time."""
 
     records: int
     tracked: int
     truth_missing: int
     median_age_s: float | None
+    by_age: TrackedByAge
 
     @property
     def fraction(self) -> float | None:
         return self.tracked / self.records if self.records else None
 
-    def to_dict(self) -> dict[str, float | int | None]:
+    def to_dict(self) -> dict[str, Any]:
         return {
             "tracked_fraction": self.fraction,
             "records": self.records,
             "tracked": self.tracked,
             "truth_missing": self.truth_missing,
             "median_age_s": self.median_age_s,
+            "by_age": self.by_age.to_list(),
         }
 
 
@@ -170,7 +225,8 @@ def sighting_reset_reference(
     times = {name: np.asarray(t, dtype=float) for name, t in record_times.items()}
     stamps = [t for t in times.values() if t.size]
     if not stamps:
-        return TrackingReference(0, 0, 0, None)
+        empty = TrackedByAge.count(np.empty(0), np.empty(0, dtype=bool))
+        return TrackingReference(0, 0, 0, None, empty)
     start = min(float(m.t.min()) if m.t.size else np.inf, min(float(t[0]) for t in stamps))
     grid = np.arange(start, max(float(t[-1]) for t in stamps) + dt, dt)
     odometry = [
@@ -186,17 +242,16 @@ def sighting_reset_reference(
         )
         return compose_pose(truth[k].at(s), relative_pose(at_s, at_t))
 
-    records = tracked = missing = 0
-    ages = []
+    missing = 0
+    ages, flags = [], []
     for i in range(rec.n_robots):
         t_all = times.get(rec.robots[i], np.empty(0))
-        rows = bearing_rows(m, i, kind)
         for j in range(rec.n_robots):
             if j == i or t_all.size == 0:
                 continue
-            sightings = np.unique(m.t[rows[m.origin[rows] == j]])
-            last = np.searchsorted(sightings, t_all, side="right") - 1
-            t, s = t_all[last >= 0], sightings[last[last >= 0]]
+            s_all = last_sightings(rec, i, j, t_all, kind)
+            seen = np.isfinite(s_all)
+            t, s = t_all[seen], s_all[seen]
             ok = np.logical_and.reduce([truth[k].valid_at(u) for k in (i, j) for u in (s, t)])
             missing += int(t.size - ok.sum())
             t, s = t[ok], s[ok]
@@ -206,8 +261,14 @@ def sighting_reset_reference(
             true = rec.relative_truth(i, j, t)
             position = np.hypot(*(estimate[:, :2] - true[:, :2]).T)
             yaw = np.abs(wrap_angle(estimate[:, 3] - true[:, 3]))
-            records += int(t.size)
-            tracked += int(np.count_nonzero((position <= pos_tol) & (yaw <= yaw_tol)))
+            flags.append((position <= pos_tol) & (yaw <= yaw_tol))
             ages.append(t - s)
-    age = float(np.median(np.concatenate(ages))) if ages else None
-    return TrackingReference(records, tracked, missing, age)
+    age = np.concatenate(ages) if ages else np.empty(0)
+    hit = np.concatenate(flags) if flags else np.empty(0, dtype=bool)
+    return TrackingReference(
+        records=int(age.size),
+        tracked=int(np.count_nonzero(hit)),
+        truth_missing=missing,
+        median_age_s=float(np.median(age)) if age.size else None,
+        by_age=TrackedByAge.count(age, hit),
+    )

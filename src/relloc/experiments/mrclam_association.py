@@ -210,7 +210,9 @@ all records × teammates) — all the unknown-correspondence means over the runs
 figures, run 0's frames),
 ``association_bound`` (``with_clutter``, ``no_clutter``: accuracy, bearings used, correct),
 ``tracking_reference`` (the tracked fraction of dead reckoning reset to the truth at every
-sighting, run 0's records: ``sighting_reset_reference``), ``bearings`` (counts of robot,
+sighting, run 0's records: ``sighting_reset_reference``; ``by_age``: by the time since the last
+sighting), ``tracked_by_age`` (the headline's run 0, the same bins: ``from_s``, ``to_s``,
+``records``, ``tracked_fraction``), ``bearings`` (counts of robot,
 landmark and injected bearings, scans with several robots, ``unknown_subject``: camera rows of
 no other robot and no landmark,
 skipped by the conversion, and ``truth_missing``: filter ticks × robots inside a Vicon gap
@@ -254,7 +256,12 @@ from relloc.datasets.mrclam import UNMAPPED_SUBJECT, MrclamDataset, load_mrclam,
 from relloc.datasets.paths import default_mrclam_dataset
 from relloc.errors import DataError
 from relloc.estimators.gaussian_sum import GaussianSumSettings
-from relloc.experiments.association_bound import association_bound, sighting_reset_reference
+from relloc.experiments.association_bound import (
+    TrackedByAge,
+    association_bound,
+    last_sightings,
+    sighting_reset_reference,
+)
 from relloc.experiments.multihypothesis_scores import NO_READING, LeaderScores, leader_scores
 from relloc.experiments.registry import ReproduceArgs
 from relloc.fusion.gaussian_sum_estimator import bearing_kind, scan_times, team
@@ -272,6 +279,7 @@ from relloc.pipeline.output import (
 from relloc.pipeline.replay import feed_ticks, replay
 
 Array = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
 
 FILTER_RATE = 20.0
 CALIBRATION_S = 60.0
@@ -696,6 +704,7 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
         "unknown_no_clutter": _headline(no_clutter),
         "association_bound": bound,
         "tracking_reference": reference.to_dict(),
+        "tracked_by_age": _tracked_by_age(scores, rec, clock[0], w.models.unknown).to_list(),
         "camera": _headline(camera),
         "bearings": counts,
         "scans": n_scans,
@@ -864,7 +873,10 @@ dead-reckon both robots with their calibrated commands until the next
 between sightings alone costs the rest; the gap from this reference down to the filter's
 {_share(s["tracked_fraction"])} is the relative yaw a sighting leaves open and the bearings
 taken wrongly. The {TARGET_TRACKED} target lies below the reference, so the data do not rule
-it out.
+it out. By the time since the observer last saw the teammate (run 0; a filter's records with a
+track, the reference's after a first sighting):
+
+{_by_age_table(s["tracked_by_age"], ref["by_age"])}
 
 The paper (seed 002) has no real-data experiment. Why tracks are lost here: a robot sees a
 given teammate in short bursts (``P_D`` {pin["p_detect"]:.2f} inside the view, and a teammate
@@ -894,6 +906,32 @@ is {s["odometry_noise"]["range_span_m"]:.2f} m ({RANGE_MARGIN:g} × the widest r
 calibration window) and a new track's height variance is the height reference's
 ({SIGMA_HEIGHT:g} m)², not Eq. 13's 0.05 m² (the robots are planar; :func:`planar_formation`).
 """
+
+
+def _by_age_table(filter_bins: list[dict[str, Any]], reference_bins: list[dict[str, Any]]) -> str:
+    """Records and tracked share by time since the last sighting, the filter's beside the
+    reference's (:class:`relloc.experiments.association_bound.TrackedByAge`)."""
+    rows = [
+        [
+            f"{f['from_s']:g}–{f['to_s']:g} s" if f["to_s"] is not None else f"≥ {f['from_s']:g} s",
+            f["records"],
+            f["tracked_fraction"],
+            r["records"],
+            r["tracked_fraction"],
+        ]
+        for f, r in zip(filter_bins, reference_bins, strict=True)
+    ]
+    return markdown_table(
+        [
+            "time since the last sighting",
+            "filter: records",
+            "filter: tracked",
+            "reference: records",
+            "reference: tracked",
+        ],
+        rows,
+        digits=3,
+    )
 
 
 def _models_text(s: dict[str, Any]) -> str:
@@ -944,8 +982,7 @@ def _evaluate(
     own = np.arange(len(names))[None, :]
     for sc in scores:
         i = sc.observer
-        pe = np.linalg.norm(sc.error[..., :2], axis=-1)
-        ye = np.abs(sc.error[..., 3])
+        pe, ye, ok, tracked = _scored(sc, t0)
         after = (sc.t - t0) >= WARMUP_S
         conf = np.cumsum(sc.confirmed, axis=0) > 0
         used = conf & (sc.assoc_origin != NO_READING)
@@ -956,8 +993,6 @@ def _evaluate(
         j_used = conf & (sc.joint_origin != NO_READING)
         j_used_total += int(j_used.sum())
         j_correct_total += int((j_used & (sc.joint_origin == own)).sum())
-        ok = np.isfinite(pe) & after[:, None]
-        tracked = (pe <= POS_TOL_M) & (ye <= YAW_TOL_RAD)
         per_obs[names[i]] = {
             "association_accuracy": c / u if u else None,
             "bearings_used": u,
@@ -987,6 +1022,36 @@ def _evaluate(
         "per_observer": per_obs,
     }
     return figures, rows
+
+
+def _scored(sc: LeaderScores, t0: float) -> tuple[Array, Array, BoolArray, BoolArray]:
+    """The planar position and |yaw| errors of one observer's dominant tracks, the records
+    scored (a track, ``WARMUP_S`` after ``t0``) and those tracked (within ``POS_TOL_M`` and
+    ``YAW_TOL_RAD``), indexed ``[record, teammate]``."""
+    pe = np.linalg.norm(sc.error[..., :2], axis=-1)
+    ye = np.abs(sc.error[..., 3])
+    ok = np.isfinite(pe) & ((sc.t - t0) >= WARMUP_S)[:, None]
+    return pe, ye, ok, (pe <= POS_TOL_M) & (ye <= YAW_TOL_RAD)
+
+
+def _tracked_by_age(
+    scores: list[LeaderScores], rec: Recording, t0: float, settings: GaussianSumSettings
+) -> TrackedByAge:
+    """The scored records of every observer by the time since it last saw the teammate
+    (:func:`relloc.experiments.association_bound.last_sightings`; records before a first
+    sighting are left out), and how many of them are tracked."""
+    kind = bearing_kind(settings)
+    ages, flags = [], []
+    for sc in scores:
+        _, _, ok, tracked = _scored(sc, t0)
+        for j in range(rec.n_robots):
+            if j == sc.observer:
+                continue
+            s = last_sightings(rec, sc.observer, j, sc.t, kind)
+            sel = ok[:, j] & np.isfinite(s)
+            ages.append(sc.t[sel] - s[sel])
+            flags.append(tracked[sel, j])
+    return TrackedByAge.count(np.concatenate(ages), np.concatenate(flags))
 
 
 def _figure(out: Path, scores: list[LeaderScores], t0: float, names: list[str]) -> str:
