@@ -13,7 +13,9 @@ from __future__ import annotations
 
 import argparse
 import math
+from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 from relloc.cli.flags import barcode_map, flag_errors, integer_list, number_pair
 
@@ -83,10 +85,7 @@ def run(args: argparse.Namespace) -> int:
         f"wrote {report.destination}: [{report.start_s:g}, {report.end_s:g}) s of "
         f"{report.source} (t0 {report.t0_unix:.3f} Unix s), robots {list(report.robots)}"
     )
-    width = max(len(name) for name in report.files)
-    print(f"{'file':<{width}}  {'kept':>7}  {'outside':>7}  {'unreadable':>10}")
-    for name, f in report.files.items():
-        print(f"{name:<{width}}  {f.kept:>7}  {f.outside:>7}  {f.unreadable:>10}")
+    _print_files(report.files, ("kept", "outside", "unreadable"))
     return 0
 
 
@@ -111,8 +110,17 @@ def run_move(args: argparse.Namespace) -> int:
         f"{report.clock_s:+} s (t0 {report.t0_unix:.3f} → {report.t0_unix + report.clock_s:.3f}"
         f" Unix s), barcodes {codes}"
     )
-    width = max(len(name) for name in report.files)
-    print(f"{'file':<{width}}  {'moved':>7}  {'unreadable':>10}")
-    for name, f in report.files.items():
-        print(f"{name:<{width}}  {f.moved:>7}  {f.unreadable:>10}")
+    _print_files(report.files, ("moved", "unreadable"))
     return 0
+
+
+def _print_files(files: Mapping[str, Any], counts: tuple[str, ...]) -> None:
+    """One line per file written, with its row ``counts`` (attributes of its record)."""
+    width = max(len(name) for name in files)
+    widths = [max(7, len(c)) for c in counts]
+    print(
+        f"{'file':<{width}}" + "".join(f"  {c:>{w}}" for c, w in zip(counts, widths, strict=True))
+    )
+    for name, f in files.items():
+        cells = "".join(f"  {getattr(f, c):>{w}}" for c, w in zip(counts, widths, strict=True))
+        print(f"{name:<{width}}{cells}")

@@ -255,8 +255,7 @@ def node_parts(args: argparse.Namespace) -> NodeParts:
     from relloc.experiments.desilva2015 import sensing_robots
     from relloc.experiments.team_sources import named_node_parts, team_names
 
-    refuse_sharing_policy(args)
-    refuse_sensing(args)
+    refuse_desilva_only(args)
     if args.dataset is None and args.scenario in team_names():
         return named_node_parts(
             args.scenario,
@@ -333,20 +332,6 @@ def add_sharing_policy_argument(p: argparse.ArgumentParser) -> None:
     )
 
 
-def refuse_sharing_policy(args: argparse.Namespace) -> None:
-    """ConfigError when ``--sharing-policy`` is given to a team without Gaussian-sum fusers."""
-    if args.sharing_policy is None:
-        return
-    from relloc.errors import ConfigError
-    from relloc.experiments.team_sources import KIDNAPPED
-
-    if getattr(args, "dataset", None) is not None or args.scenario not in KIDNAPPED:
-        raise ConfigError(
-            f"--sharing-policy: only desilva2015 teams ({', '.join(KIDNAPPED)}) share "
-            "Gaussian-sum beliefs"
-        )
-
-
 def add_sensing_argument(p: argparse.ArgumentParser) -> None:
     """``--sensing ROBOTS`` of a desilva2015 team: the simulated robots that sense and run the
     fusers (parsed by :func:`relloc.experiments.desilva2015.sensing_robots`)."""
@@ -359,16 +344,17 @@ def add_sensing_argument(p: argparse.ArgumentParser) -> None:
     )
 
 
-def refuse_sensing(args: argparse.Namespace) -> None:
-    """ConfigError when ``--sensing`` is given to a team other than desilva2015's simulated one;
-    a bad value is refused by :func:`relloc.experiments.desilva2015.sensing_robots`."""
-    if args.sensing is None:
-        return
+def refuse_desilva_only(args: argparse.Namespace) -> None:
+    """ConfigError when a flag of desilva2015's simulated teams only (``--sharing-policy``,
+    ``--sensing``) is given to another team; a bad value is refused where it is parsed."""
     from relloc.errors import ConfigError
     from relloc.experiments.team_sources import KIDNAPPED
 
-    if getattr(args, "dataset", None) is not None or args.scenario not in KIDNAPPED:
-        raise ConfigError(
-            f"--sensing: only desilva2015 teams ({', '.join(KIDNAPPED)}) choose their sensing "
-            "robots"
-        )
+    if getattr(args, "dataset", None) is None and args.scenario in KIDNAPPED:
+        return
+    for flag, value, what in (
+        ("--sharing-policy", args.sharing_policy, "share Gaussian-sum beliefs"),
+        ("--sensing", args.sensing, "choose their sensing robots"),
+    ):
+        if value is not None:
+            raise ConfigError(f"{flag}: only desilva2015 teams ({', '.join(KIDNAPPED)}) {what}")

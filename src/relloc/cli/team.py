@@ -43,8 +43,7 @@ from relloc.cli.node import (
     add_sharing_policy_argument,
     add_transport_arguments,
     network_faults_from_args,
-    refuse_sensing,
-    refuse_sharing_policy,
+    refuse_desilva_only,
     transport_from_args,
 )
 
@@ -147,8 +146,7 @@ def _robot_events(args: argparse.Namespace) -> dict[str, tuple[object, ...]]:
 def run_up(args: argparse.Namespace) -> int:
     from relloc.runtime.scenario import REPRODUCTIONS
 
-    refuse_sharing_policy(args)
-    refuse_sensing(args)
+    refuse_desilva_only(args)
 
     if args.scenario == "guler2023":
         from relloc.cli.airground import run_team_up
