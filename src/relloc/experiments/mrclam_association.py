@@ -35,7 +35,10 @@ Sensor models (both on the same data):
   fusion: association accuracy 0.41, tracked fraction 0.045). The ranges are the camera's
   too, so the range sensor has the same field of view (``GaussianSumSettings.range_in_view``):
   a range of a teammate says it is inside the view, a frame without one that it is outside or
-  missed (``1 − P_D``) — where the teammate is, not which bearing is its. The same model with
+  missed (``1 − P_D``) — where the teammate is, not which bearing is its. The filter still
+  takes the two detections as independent, as seed 002's separate sensors are, although on
+  MRCLAM one camera detection gives both: a teammate in view and missed counts against a
+  track twice (``1 − P_D`` for the range, ``1 − P_D P_G`` for the bearing). The same model with
   seed 002's all-around ranging, where the presence of a range says nothing, is reported
   beside (``unknown_ranges_all_around``); it was the headline model before, and every figure
   below that does not name the in-view range is of it. Direct fusion only: on real
@@ -815,10 +818,11 @@ window), times the probability that the track's predicted azimuth lies inside it
 frames the share is {fits["p_detect_all_frames"]:.3f}, the constant ``P_D`` of seed 002's model).
 The ranges come from the same camera, so the range sensor shares its field of view: a range
 of a teammate says that it is in view, a frame without one that it is out of view or missed
-— where the teammate is, not which bearing is its. The next column is the same model with
-seed 002's all-around ranging, where a range's presence says nothing. Direct fusion only; the
-same model with seed 002's mutual and indirect fusion is the column after, and with mutual
-fusion of confirmed tracks only the one after that. **Camera** (second row
+— where the teammate is, not which bearing is its (the two detections are still taken as
+independent, so a teammate in view and missed counts twice against a track). The next column
+is the same model with seed 002's all-around ranging, where a range's presence says nothing.
+Direct fusion only; the same model with seed 002's mutual and indirect fusion is the column
+after, and with mutual fusion of confirmed tracks only the one after that. **Camera** (second row
 of the issue): range and bearing come from one detection, so a robot with a range has its
 bearing in the set (P_D = 1) and one without has none (P_D = 0) — with one robot in most frames
 this gives the bearing's identity away.
