@@ -68,6 +68,14 @@ Sensor models (both on the same data):
   from accuracy 0.633 (0.562–0.726) to 0.726 (0.683–0.833) and from tracked 0.343
   (0.311–0.384) to 0.359 (0.315–0.404); the all-around row, run 0, still gives 0.579 / 0.311.
   The accuracy gain is about the spread's width, the tracked gain inside it.
+
+  A detection probability by range was tried and not adopted. Over 316–771 s of run 6 the
+  camera detects an in-view teammate with probability 0.06 under 1 m, 0.40–0.50 at 1–2.5 m
+  and 0.22–0.36 beyond; ``P_D(r̂)`` in 1 m bins (fitted on each development window's 60 s of
+  calibration, the constant where a bin has under 20 pairs), used for the tracks, the births
+  and the in-view range, gave accuracy 0.660 and 0.567, tracked 0.486 and 0.283 on the two
+  development windows (seeds 99–101): no better than the constant's 0.658 / 0.502 and
+  0.595 / 0.296. The calibration window is too short to fill the bins.
 - **camera** (``camera``, the second row): range and bearing come from one detection, so the
   fuser runs with ``ranges_mark_detections`` (a robot with a range in a frame has its bearing
   in the set, one without has none) and with mutual and indirect fusion; in run 6 only 71 of
