@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import math
 import shutil
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -89,31 +89,45 @@ def cut_mrclam(
         what = f"robots {unknown} are not in {src}" if unknown else "no robot chosen"
         raise ConfigError(f"mrclam cut: {what} (robots: {list(whole.robot_ids)})")
     lo, hi = whole.t0_unix + start_s, whole.t0_unix + end_s
-    staging = dst.with_name(f".{dst.name}.partial")
-    shutil.rmtree(staging, ignore_errors=True)
-    staging.mkdir(parents=True)
     kept_robots = tuple(sorted(set(chosen)))
     files: dict[str, FileCut] = {}
-    written = False
-    try:
+
+    def write(staging: Path) -> None:
         for name in (BARCODES_FILE, LANDMARKS_FILE):
             shutil.copyfile(src / name, staging / name)
         for n in kept_robots:
             for kind in ROBOT_KINDS:
                 name = f"Robot{n}_{kind}.dat"
                 files[name] = _cut_file(src / name, staging / name, lo, hi)
+
+    staged_write(
+        dst,
+        write,
+        f"mrclam cut: [{start_s:g}, {end_s:g}) s of robots {list(kept_robots)} of {src} "
+        "is not a usable run",
+    )
+    return CutReport(src, dst, whole.t0_unix, start_s, end_s, kept_robots, files)
+
+
+def staged_write(destination: Path, write: Callable[[Path], None], failure: str) -> None:
+    """``write(staging)`` into a fresh folder beside ``destination``, which becomes
+    ``destination`` only once it loads as an MRCLAM run; one that does not (DataError) is
+    removed and reported as ``failure: <the loader's error>``, so a failed cut or move leaves
+    nothing behind."""
+    staging = destination.with_name(f".{destination.name}.partial")
+    shutil.rmtree(staging, ignore_errors=True)
+    staging.mkdir(parents=True)
+    written = False
+    try:
+        write(staging)
         load_mrclam(staging)
         written = True
     except DataError as exc:
-        raise DataError(
-            f"mrclam cut: [{start_s:g}, {end_s:g}) s of robots {list(kept_robots)} of {src} "
-            f"is not a usable run: {exc}"
-        ) from exc
+        raise DataError(f"{failure}: {exc}") from exc
     finally:
         if not written:
             shutil.rmtree(staging, ignore_errors=True)
-    staging.rename(dst)
-    return CutReport(src, dst, whole.t0_unix, start_s, end_s, kept_robots, files)
+    staging.rename(destination)
 
 
 def _cut_file(src: Path, dst: Path, lo: float, hi: float) -> FileCut:

@@ -54,7 +54,6 @@ from __future__ import annotations
 import math
 import numbers
 import re
-import shutil
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from decimal import Context, Decimal
@@ -73,7 +72,8 @@ from relloc.datasets.mrclam import (
     finite_numeral,
     load_mrclam,
 )
-from relloc.errors import ConfigError, DataError
+from relloc.datasets.mrclam_cut import staged_write
+from relloc.errors import ConfigError
 
 #: Decimals of a moved position or heading, unless the source writes more (module docstring).
 POSE_DECIMALS = 8
@@ -135,22 +135,13 @@ def move_mrclam(
             for kind in ROBOT_KINDS
         },
     }
-    staging = dst.with_name(f".{dst.name}.partial")
-    shutil.rmtree(staging, ignore_errors=True)
-    staging.mkdir(parents=True)
     files: dict[str, FileMove] = {}
-    written = False
-    try:
+
+    def write(staging: Path) -> None:
         for name, move_row in rows.items():
             files[name] = _move_file(src / name, staging / name, move_row)
-        load_mrclam(staging)
-        written = True
-    except DataError as exc:
-        raise DataError(f"mrclam move: {src} moved is not a usable run: {exc}") from exc
-    finally:
-        if not written:
-            shutil.rmtree(staging, ignore_errors=True)
-    staging.rename(dst)
+
+    staged_write(dst, write, f"mrclam move: {src} moved is not a usable run")
     return MoveReport(src, dst, whole.t0_unix, rotation, shift, clock, mapping, files)
 
 
