@@ -51,8 +51,8 @@ Sensor models (both on the same data):
   left is telling robots apart).
 
   The in-view range was chosen on the development windows (cuts of run 6 from 256 s and from
-  476 s, each scored on the 240 s after its own 60 s calibration window, 315.9–555.9 s and
-  535.9–771.9 s, clutter seeds 99–101, one run each) before the scoring window was run: there,
+  476 s, each scored on the 240 s after its own 60 s calibration window, 316.0–556.0 s and
+  536.0–771.9 s, clutter seeds 99–101, one run each) before the scoring window was run: there,
   against all-around ranging, the association accuracy went from 0.624 to 0.658 and from
   0.514 to 0.595 (means of the three seeds), the tracked fraction from 0.477 to 0.502 and from
   0.227 to 0.296. A positive-only variant (a range says "in view", its absence nothing) gave
