@@ -27,7 +27,10 @@ def test_unknown_experiment_is_config_error(tmp_path, capsys):
     ("flags", "message"),
     [
         (["--dataset", "d"], "--dataset: sharma2013 does not read it; read by wanasinghe2014"),
-        (["--pair", "1,2"], "--pair: sharma2013 does not read it; read by wanasinghe2014"),
+        (
+            ["--pair", "1,2"],
+            "--pair: sharma2013 does not read it; read by wanasinghe2014, wanasinghe2014-pairs",
+        ),
         (["--calibration-window", "first-half"], "--calibration-window: sharma2013 does not"),
         (["--bag", "b"], "--bag: sharma2013 does not read it; read by tiers-uwb"),
         (["--sensing", "all"], "--sensing: sharma2013 does not read it; read by desilva2015"),
@@ -52,6 +55,26 @@ def test_a_flag_the_experiment_does_not_read_is_refused(tmp_path, capsys, flags,
 def test_a_bad_pair_is_refused(tmp_path, capsys, pair, message):
     out = tmp_path / "out"
     assert main(["reproduce", "wanasinghe2014", "--out", str(out), "--pair", pair]) == 2
+    assert message in capsys.readouterr().err
+    assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    ("name", "pairs", "message"),
+    [
+        (
+            "wanasinghe2014-pairs",
+            ["1,3", "1,3"],
+            "--pair: a pair is given twice in [(1, 3), (1, 3)]",
+        ),
+        ("wanasinghe2014", ["1,3", "2,4"], "--pair: wanasinghe2014 replays one pair, got 2"),
+        ("wanasinghe2014-pairs", ["1,3", "2,9"], "--pair 2,9: robot(s) [9] not in"),
+    ],
+)
+def test_repeated_pairs_are_checked(tmp_path, capsys, name, pairs, message):
+    out = tmp_path / "out"
+    flags = [flag for pair in pairs for flag in ("--pair", pair)]
+    assert main(["reproduce", name, "--out", str(out), *flags]) == 2
     assert message in capsys.readouterr().err
     assert not out.exists()
 

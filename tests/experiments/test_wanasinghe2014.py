@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from wanasinghe_small import small_config
 
 from relloc.calibration.odometry import ground_truth_velocities
 from relloc.calibration.window import CalibrationWindow
@@ -59,32 +60,10 @@ def medium_dataset(tmp_path_factory: pytest.TempPathFactory, mrclam_run6_cut) ->
     return mrclam_run6_cut(tmp_path_factory.mktemp("mrclam") / "MRCLAM_200s", keep_s=200.0)
 
 
-def _small_config(dataset: Path) -> Wanasinghe2014Config:
-    return Wanasinghe2014Config(
-        runs=2,
-        replay_runs=1,
-        sweep_runs=1,
-        sweep_scales=(1.0,),
-        sweep_duration_s=2.0,
-        steady_state_s=1.0,
-        replay_steady_state_s=3.0,
-        sim=SimSettings(
-            scenario=dataclasses.replace(default_scenario(), duration_s=6.0), n_poses=3
-        ),
-        replay=ReplaySettings(
-            dataset=dataset,
-            duration_s=10.0,
-            min_duration_s=8.0,
-            start_after_odometry_s=1.0,
-            calibration_noise_windows_s=(1.0, 2.0),
-        ),
-    )
-
-
 def test_small_reproduction_on_another_mrclam_folder(small_dataset: Path, tmp_path: Path) -> None:
     out = tmp_path / "out"
     summary = run_reproduction(
-        _small_config(small_dataset), out, seed=11, executor="serial", quiet=True
+        small_config(small_dataset), out, seed=11, executor="serial", quiet=True
     )
     on_disk = json.loads((out / "summary.json").read_text())
     assert on_disk["seed"] == 11 and on_disk["runs"] == 2
@@ -214,9 +193,11 @@ def test_config_from_cli_arguments(tmp_path: Path) -> None:
     assert (cfg.runs, cfg.replay_runs, cfg.sweep_runs) == (2, 2, 2)
     assert cfg.replay.dataset == tmp_path / "elsewhere"
     assert (cfg.replay.observer, cfg.replay.observed) == (1, 3)  # the default pair
-    paired = Wanasinghe2014Config.from_args(ReproduceArgs(out_dir=tmp_path, pair=(4, 2)))
+    paired = Wanasinghe2014Config.from_args(ReproduceArgs(out_dir=tmp_path, pairs=((4, 2),)))
     assert (paired.replay.observer, paired.replay.observed) == (4, 2)
     assert paired.replay.dataset == Wanasinghe2014Config().replay.dataset
+    with pytest.raises(ConfigError, match=r"replays one pair, got 2; .*wanasinghe2014-pairs"):
+        Wanasinghe2014Config.from_args(ReproduceArgs(out_dir=tmp_path, pairs=((4, 2), (1, 3))))
     default = Wanasinghe2014Config.from_args(ReproduceArgs(out_dir=tmp_path))
     assert (default.runs, default.sim.n_poses) == (20, 13)  # the paper's counts
     with pytest.raises(ConfigError, match="steady_state_s"):

@@ -1,10 +1,10 @@
 """``relloc reproduce NAME --out DIR [--runs N] [--seed S] [--dataset PATH] [--executor E]
-[--calibration-window SPLIT] [--pair A,B] [--sensing ROBOTS] [--mcap FILE] [--tum DIR]``
-(``--calibration-window``: mrclam-cl's calibration and scoring windows; ``--pair``:
-wanasinghe2014's replayed robots; ``--sensing``: desilva2015's sensing robots; the last two: one
-representative run's estimates, where the experiment states one —
-:func:`relloc.experiments.registry.exported_run`). A flag the experiment does not read is
-refused (:func:`relloc.experiments.registry.refuse_unread`).
+[--calibration-window SPLIT] [--pair A,B ...] [--sensing ROBOTS] [--mcap FILE] [--tum DIR]``
+(``--calibration-window``: mrclam-cl's calibration and scoring windows; ``--pair``: the
+replayed robots of wanasinghe2014 (one pair) and wanasinghe2014-pairs (repeatable);
+``--sensing``: desilva2015's sensing robots; the last two: one representative run's estimates,
+where the experiment states one — :func:`relloc.experiments.registry.exported_run`). A flag
+the experiment does not read is refused (:func:`relloc.experiments.registry.refuse_unread`).
 
 Prints the seed and run counts, the report's ours-vs-paper tables laid out for the terminal
 (:mod:`relloc.cli.comparison`) and every file written.
@@ -55,10 +55,12 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     )
     p.add_argument(
         "--pair",
+        action="append",
         default=None,
         metavar="A,B",
         help="wanasinghe2014: the dataset's observer and observed robot of the real-trajectory "
-        "replay (default 1,3)",
+        "replay (default 1,3); wanasinghe2014-pairs: repeat it for each pair to replay "
+        "(default: every robot observing the next two)",
     )
     p.add_argument(
         "--sensing",
@@ -93,7 +95,7 @@ def run(args: argparse.Namespace) -> int:
         map=args.map,
         calibrate_on=args.calibrate_on,
         calibration_window=args.calibration_window,
-        pair=robot_pair(args.pair),
+        pairs=robot_pairs(args.pair),
         sensing=args.sensing,
     )
     registry.refuse_unread(args.name, request)
@@ -108,11 +110,14 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def robot_pair(text: str | None) -> tuple[int, int] | None:
-    """``--pair A,B`` → ``(A, B)``; ``None`` stays ``None``."""
-    robots = integer_list(text, "--pair")
-    if robots is None:
+def robot_pairs(texts: list[str] | None) -> tuple[tuple[int, int], ...] | None:
+    """Each ``--pair A,B`` → ``(A, B)``; ``None`` (no flag) stays ``None``."""
+    if texts is None:
         return None
-    if len(robots) != 2:
-        raise ConfigError(f"--pair: two robots OBSERVER,OBSERVED, got {text!r}")
-    return robots[0], robots[1]
+    pairs = []
+    for text in texts:
+        robots = integer_list(text, "--pair")
+        if robots is None or len(robots) != 2:
+            raise ConfigError(f"--pair: two robots OBSERVER,OBSERVED, got {text!r}")
+        pairs.append((robots[0], robots[1]))
+    return tuple(pairs)

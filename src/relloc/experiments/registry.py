@@ -30,6 +30,7 @@ if TYPE_CHECKING:
 
 EXPERIMENTS: dict[str, str] = {
     "wanasinghe2014": "relloc.experiments.wanasinghe2014",
+    "wanasinghe2014-pairs": "relloc.experiments.wanasinghe2014_pairs",
     "wanasinghe-observability": "relloc.experiments.wanasinghe_observability",
     "sharma-observability": "relloc.experiments.sharma_observability",
     "sharma2013": "relloc.experiments.sharma2013",
@@ -50,8 +51,9 @@ class ReproduceArgs:
     topic mapping, and another bag of the same hardware to calibrate on);
     ``calibration_window`` by mrclam-cl (which side of the run its error models are fitted on,
     :func:`relloc.calibration.window.split_span`; ``None``: the experiment's default);
-    ``pair`` by wanasinghe2014 (the dataset's ``(observer, observed)`` robots of its
-    real-trajectory replay; ``None``: the experiment's default); ``sensing`` by desilva2015
+    ``pairs`` by wanasinghe2014 (one ``(observer, observed)`` pair of the dataset's robots for
+    its real-trajectory replay) and wanasinghe2014-pairs (the pairs it replays; ``None``: each
+    experiment's default); ``sensing`` by desilva2015
     (which simulated robots sense, as ``--sensing`` gives it; ``None``: the paper's leaders)."""
 
     out_dir: Path
@@ -65,7 +67,7 @@ class ReproduceArgs:
     map: Path | None = None
     calibrate_on: Path | None = None
     calibration_window: str | None = None
-    pair: tuple[int, int] | None = None
+    pairs: tuple[tuple[int, int], ...] | None = None
     sensing: str | None = None
 
     def __post_init__(self) -> None:
@@ -73,20 +75,29 @@ class ReproduceArgs:
             raise ConfigError(f"--runs must be ≥ 1, got {self.runs}")
         if self.seed < 0:
             raise ConfigError(f"--seed must be ≥ 0, got {self.seed}")
-        if self.pair is not None and (len(self.pair) != 2 or self.pair[0] == self.pair[1]):
-            raise ConfigError(f"--pair: two different robots OBSERVER,OBSERVED, got {self.pair}")
+        if self.pairs is not None:
+            if not self.pairs:
+                raise ConfigError("--pair: at least one pair OBSERVER,OBSERVED")
+            for pair in self.pairs:
+                if len(pair) != 2 or pair[0] == pair[1]:
+                    raise ConfigError(f"--pair: two different robots OBSERVER,OBSERVED, got {pair}")
+            if len(set(self.pairs)) != len(self.pairs):
+                raise ConfigError(f"--pair: a pair is given twice in {list(self.pairs)}")
 
 
 #: :class:`ReproduceArgs` inputs read by only some experiments → those experiments.
 READ_BY: dict[str, tuple[str, ...]] = {
-    "dataset": ("wanasinghe2014", "mrclam-cl", "mrclam-association"),
+    "dataset": ("wanasinghe2014", "wanasinghe2014-pairs", "mrclam-cl", "mrclam-association"),
     "bag": ("tiers-uwb",),
     "map": ("tiers-uwb",),
     "calibrate_on": ("tiers-uwb",),
     "calibration_window": ("mrclam-cl",),
-    "pair": ("wanasinghe2014",),
+    "pairs": ("wanasinghe2014", "wanasinghe2014-pairs"),
     "sensing": ("desilva2015",),
 }
+
+#: The command-line flag of a :class:`ReproduceArgs` input whose name is not its field's.
+FLAGS: dict[str, str] = {"pairs": "--pair"}
 
 
 def refuse_unread(name: str, args: ReproduceArgs) -> None:
@@ -94,7 +105,7 @@ def refuse_unread(name: str, args: ReproduceArgs) -> None:
     (:data:`READ_BY`)."""
     for field, readers in READ_BY.items():
         if getattr(args, field) is not None and name not in readers:
-            flag = "--" + field.replace("_", "-")
+            flag = FLAGS.get(field, "--" + field.replace("_", "-"))
             raise ConfigError(f"{flag}: {name} does not read it; read by {', '.join(readers)}")
 
 

@@ -216,8 +216,13 @@ class Wanasinghe2014Config:
         replay: dict[str, Any] = {}
         if args.dataset is not None:
             replay["dataset"] = Path(args.dataset)
-        if args.pair is not None:
-            replay["observer"], replay["observed"] = args.pair
+        if args.pairs is not None:
+            if len(args.pairs) != 1:
+                raise ConfigError(
+                    f"--pair: wanasinghe2014 replays one pair, got {len(args.pairs)}; "
+                    "relloc reproduce wanasinghe2014-pairs replays several"
+                )
+            replay["observer"], replay["observed"] = args.pairs[0]
         if replay:
             changes["replay"] = dataclasses.replace(base.replay, **replay)
         return dataclasses.replace(base, **changes)
@@ -275,18 +280,7 @@ def run_reproduction(
         description="seed 000: team (accuracy, Table 1)",
         quiet=quiet,
     )
-    replay = {
-        kind: run_monte_carlo(
-            replay_task,
-            config.replay_runs,
-            seed + 1,  # the same sensor-noise draws and initial poses for every odometry
-            executor=executor,
-            task_args=(replay_data, config.replay),
-            description=f"seed 000: MRCLAM replay, {kind} odometry (Tables 3-4)",
-            quiet=quiet,
-        )
-        for kind, replay_data in data.items()
-    }
+    replay = run_replays(config, data, seed, executor=executor, quiet=quiet)
     sweep = []
     for i, scale in enumerate(config.sweep_scales):
         settings = dataclasses.replace(
@@ -329,26 +323,8 @@ def run_reproduction(
     summary["table1_thresholds"] = thresholds
     summary["table1_best"] = table1_best_summary(team, table1, thresholds)
     summary["table1_readings"] = table1_readings(team, thresholds)
-    windows = replay_windows(data["calibrated"])
-    replay_series: dict[str, dict[str, dict[str, Array]]] = {}
-    for key in ("table3", "table3_best", "table4"):
-        summary[key] = {"windows": windows}
-    for kind, runs in replay.items():
-        table3, table3_best, table4, bias, series = replay_summary(runs, config, kind)
-        summary["table3"][kind] = table3
-        summary["table3_best"][kind] = table3_best
-        summary["table4"][kind] = table4
-        if kind == "calibrated":
-            summary["bias_comparison"] = bias
-            replay_series = series
-    summary["replay_pcrlb"] = {
-        kind: replay_pcrlb(replay_data, config.replay, config.replay_steady_state_s)
-        for kind, replay_data in data.items()
-    }
-    summary["replay_targets"] = replay_targets(summary)
-    summary["turn_rate_residual"] = turn_rate_summary(config, data["calibrated"])
-    summary["replay"] = replay_info(config, data["calibrated"])
-    summary["odometry_kinds"] = {kind: ODOMETRY_KIND_NOTES[kind] for kind in data}
+    replay_part, replay_series = replay_results(config, data, replay)
+    summary.update(replay_part)
     ratios, bounds = pcrlb_summary(config, acc_series)
     summary["pcrlb_ratio"] = ratios
     if export is not None:
@@ -667,6 +643,64 @@ def run_averaged_band(runs: list[SeriesEvaluation], settle_s: float) -> dict[str
         return None
     rate_hz = 1.0 / float(np.median(np.diff(runs[0].t)))
     return nees_band_check(runs, rate_hz=rate_hz, settle_s=settle_s)
+
+
+def run_replays(
+    config: Wanasinghe2014Config,
+    data: dict[str, ReplayData],
+    seed: int,
+    *,
+    executor: str | None = None,
+    quiet: bool = False,
+) -> dict[str, list[dict[str, dict[str, ReplayTrack]]]]:
+    """``config.replay_runs`` draws of the replay per odometry kind of ``data``, all with seed
+    ``seed + 1``: the same sensor-noise draws and initial poses for every odometry."""
+    r = config.replay
+    return {
+        kind: run_monte_carlo(
+            replay_task,
+            config.replay_runs,
+            seed + 1,
+            executor=executor,
+            task_args=(replay_data, r),
+            description=f"seed 000: MRCLAM replay {r.observer} → {r.observed}, {kind} odometry",
+            quiet=quiet,
+        )
+        for kind, replay_data in data.items()
+    }
+
+
+def replay_results(
+    config: Wanasinghe2014Config,
+    data: dict[str, ReplayData],
+    replay: dict[str, list[dict[str, dict[str, ReplayTrack]]]],
+) -> tuple[dict[str, Any], dict[str, dict[str, dict[str, Array]]]]:
+    """The summary's replay keys (module docstring: ``table3``, ``table3_best``, ``table4``
+    with their ``windows``, ``bias_comparison``, ``replay_pcrlb``, ``replay_targets``,
+    ``turn_rate_residual``, ``replay``, ``odometry_kinds``) of :func:`run_replays`' draws, and
+    the calibrated replay's series for the figures."""
+    windows = replay_windows(data["calibrated"])
+    part: dict[str, Any] = {
+        key: {"windows": windows} for key in ("table3", "table3_best", "table4")
+    }
+    replay_series: dict[str, dict[str, dict[str, Array]]] = {}
+    for kind, runs in replay.items():
+        table3, table3_best, table4, bias, series = replay_summary(runs, config, kind)
+        part["table3"][kind] = table3
+        part["table3_best"][kind] = table3_best
+        part["table4"][kind] = table4
+        if kind == "calibrated":
+            part["bias_comparison"] = bias
+            replay_series = series
+    part["replay_pcrlb"] = {
+        kind: replay_pcrlb(replay_data, config.replay, config.replay_steady_state_s)
+        for kind, replay_data in data.items()
+    }
+    part["replay_targets"] = replay_targets(part)
+    part["turn_rate_residual"] = turn_rate_summary(config, data["calibrated"])
+    part["replay"] = replay_info(config, data["calibrated"])
+    part["odometry_kinds"] = {kind: ODOMETRY_KIND_NOTES[kind] for kind in data}
+    return part, replay_series
 
 
 def replay_summary(

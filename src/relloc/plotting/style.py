@@ -21,13 +21,16 @@ def legend_outside(ax: Any, **kwargs: Any) -> None:
         )
 
 
-def plain_log_ticks(ax: Any) -> None:
-    """Ticks of a logarithmic y axis at 1, 2, 5 × 10^k written as plain numbers (0.5, 2, 10)."""
+def plain_log_ticks(ax: Any, axes: str = "y") -> None:
+    """Ticks of each logarithmic axis named in ``axes`` (``"x"``, ``"y"`` or ``"xy"``) at
+    1, 2, 5 × 10^k written as plain numbers (0.5, 2, 10)."""
     from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
-    ax.yaxis.set_major_locator(LogLocator(base=10.0, subs=(1.0, 2.0, 5.0)))
-    ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
-    ax.yaxis.set_minor_formatter(NullFormatter())
+    for name in axes:
+        axis = getattr(ax, f"{name}axis")
+        axis.set_major_locator(LogLocator(base=10.0, subs=(1.0, 2.0, 5.0)))
+        axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+        axis.set_minor_formatter(NullFormatter())
 
 
 def integer_ticks(axis: Any) -> None:

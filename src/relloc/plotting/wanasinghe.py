@@ -15,7 +15,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from relloc.plotting.errors import STATE_LABELS
-from relloc.plotting.style import legend_outside
+from relloc.plotting.style import legend_outside, plain_log_ticks
 
 
 def plot_convergence_curves(
@@ -94,3 +94,44 @@ def plot_bias_comparison(
     ax.set_ylabel(ylabel)
     ax.grid(True, axis="y", alpha=0.3)
     legend_outside(ax)
+
+
+def plot_pair_targets(
+    axes: Sequence[Any],
+    pairs: Sequence[Mapping[str, Any]],
+    cases: Sequence[str],
+    *,
+    yaw_target: float,
+    nees_target: float,
+) -> None:
+    """Per pair record of ``wanasinghe2014-pairs`` and case: the calibrated yaw RMSE against
+    the model's √PCRLB of φ (``axes[0]``, log–log, the diagonal RMSE = bound) and the % NEES
+    beyond χ²(4, 0.95) per pair (``axes[1]``), each with its target dashed."""
+    markers = "osD^v<>"
+    names = [f"{p['observer']}→{p['observed']}" for p in pairs]
+    x = np.arange(len(pairs))
+    width = 0.8 / max(len(cases), 1)
+    for k, case in enumerate(cases):
+        bound = np.array([p["cases"][case]["yaw_bound_rad"] for p in pairs], dtype=float)
+        yaw = np.array([p["cases"][case]["calibrated"]["yaw_rmse_rad"] for p in pairs], dtype=float)
+        nees = np.array(
+            [p["cases"][case]["calibrated"]["nees_percent_beyond"] for p in pairs], dtype=float
+        )
+        axes[0].scatter(bound, yaw, marker=markers[k % len(markers)], label=case)
+        axes[1].bar(x + (k - (len(cases) - 1) / 2) * width, nees, width, label=case)
+    lo = min(axes[0].get_xlim()[0], axes[0].get_ylim()[0])
+    hi = max(axes[0].get_xlim()[1], axes[0].get_ylim()[1])
+    axes[0].plot([lo, hi], [lo, hi], color="k", lw=0.8)
+    axes[0].axhline(yaw_target, color="k", lw=0.8, ls="--")
+    axes[0].set_xscale("log")
+    axes[0].set_yscale("log")
+    plain_log_ticks(axes[0], "xy")
+    axes[0].set_xlabel("√PCRLB of φ, calibrated model (rad)")
+    axes[0].set_ylabel("calibrated PLKF yaw RMSE (rad)")
+    axes[0].grid(True, alpha=0.3, which="both")
+    axes[0].legend(fontsize=8)
+    axes[1].axhline(nees_target, color="k", lw=0.8, ls="--")
+    axes[1].set_xticks(x, names, rotation=45)
+    axes[1].set_ylabel("% NEES beyond χ²(4, 0.95)")
+    axes[1].grid(True, alpha=0.3, axis="y")
+    axes[1].legend(fontsize=8)

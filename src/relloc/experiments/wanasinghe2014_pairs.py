@@ -1,0 +1,411 @@
+"""``relloc reproduce wanasinghe2014-pairs``: seed 000's real-trajectory Tables 3–4 on many
+pairs of one MRCLAM-layout run, each with its own model bound.
+
+Which pair of a recording the replay takes decides much of what Tables 3–4 say: on MRCLAM run 6
+the calibrated PLKF's yaw RMSE ranges over 0.05–0.75 rad across pairs in one Table-2 case
+(:mod:`relloc.experiments.wanasinghe2014_mrclam`). This experiment runs, for each pair
+``observer → observed``, exactly the replay of ``relloc reproduce wanasinghe2014 --pair A,B``
+with the same settings and seeds (:func:`relloc.experiments.wanasinghe2014.run_replays`,
+:func:`~relloc.experiments.wanasinghe2014.replay_results`): the odometry calibrated on the
+pair's calibration window and scored on its disjoint scored window, raw and truth-velocity
+odometry beside it, ``replay_runs`` (5) sensor-noise draws, and the √PCRLB of φ of each
+model (:func:`relloc.experiments.wanasinghe2014_mrclam.replay_pcrlb`). A pair's row therefore
+equals the ``replay_targets``, ``table3`` and ``table4`` of that one-pair reproduction at the
+same seed.
+
+Pairs: ``--pair A,B`` (repeatable), or by default every robot observing the next two of the
+dataset's robots in ascending order, cyclically (``r_k → r_{k+1}`` and ``r_k → r_{k+2}``;
+with two or three robots, every ordered pair): run 6's ten pairs 1 → 2, 1 → 3, …, 5 → 1, 5 → 2.
+A pair naming a robot the dataset lacks is a ConfigError before anything runs; a pair whose
+replay the data cannot give (a DataError: too short a shared span, no ground truth) is skipped,
+counted and reported with its reason, and the others still run.
+
+Seeds: the replay draws ``S + 1`` and the noise-inflation fit ``S + 6`` for every pair, as in
+the one-pair reproduction with its default sweep (``S`` = ``--seed``). ``--runs N`` sets the
+draws to ``min(N, 5)``.
+
+summary.json keys
+-----------------
+``experiment``, ``seed``, ``replay_runs``, ``seeds``, ``dataset``, ``targets`` (yaw RMSE ≤ 0.10
+rad and % NEES beyond χ²(4, 0.95) ≤ 10 % per Table-2 case, position RMSE no worse than the raw
+replay's), ``paper[case]`` (seed 000's Table-3 φ RMSE and Table-4 % NEES beyond);
+``pairs``: one record per replayed pair with ``observer``, ``observed``, ``windows``
+(``calibration`` and ``scored``, disjoint), ``steady_state_range_m`` (mean horizontal range in
+the steady state) and ``cases[case]``: ``calibrated`` and ``raw`` (PLKF ``yaw_rmse_rad``,
+``yaw_rmse_per_draw``, ``nees_percent_beyond``, ``position_rmse_m``), ``yaw_bound_rad`` (√PCRLB
+of φ, calibrated model), ``truth_velocity_yaw_bound_rad``, ``yaw_ok``, ``nees_ok``,
+``position_ok`` and ``met`` (all three); ``skipped``: ``{observer, observed, reason}`` of each
+pair not replayed; ``tally``: cells (pair × case) replayed and meeting both the yaw and the NEES
+target, pairs meeting them in every case, and per case the pairs meeting both.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from relloc.datasets.mrclam import load_mrclam
+from relloc.errors import ConfigError, DataError
+from relloc.experiments.registry import ReproduceArgs
+from relloc.experiments.wanasinghe2014 import (
+    PAPER_TABLE3,
+    PAPER_TABLE4,
+    STATES,
+    TARGET_NEES_PERCENT,
+    TARGET_YAW_RMSE_RAD,
+    Wanasinghe2014Config,
+    inflation_seed,
+    replay_results,
+    run_replays,
+)
+from relloc.experiments.wanasinghe2014_mrclam import TABLE2, prepare_replays
+from relloc.pipeline.output import (
+    figure_md,
+    markdown_table,
+    prepare_out_dir,
+    save_figure,
+    write_report,
+    write_summary,
+)
+
+Pair = tuple[int, int]
+
+
+def reproduce(args: ReproduceArgs) -> dict[str, Any]:
+    """Entry point of ``relloc reproduce wanasinghe2014-pairs`` (see module docstring)."""
+    config = Wanasinghe2014Config.from_args(dataclasses.replace(args, pairs=None))
+    return run_pairs(
+        config,
+        args.pairs,
+        args.out_dir,
+        seed=args.seed,
+        executor=args.executor,
+        quiet=args.quiet,
+    )
+
+
+def default_pairs(robots: Sequence[int]) -> tuple[Pair, ...]:
+    """Every robot observing the next two of ``robots`` (ascending, cyclic), each pair once."""
+    ordered = sorted(robots)
+    n = len(ordered)
+    pairs: list[Pair] = []
+    for k, observer in enumerate(ordered):
+        for step in (1, 2):
+            pair = (observer, ordered[(k + step) % n])
+            if pair[0] != pair[1] and pair not in pairs:
+                pairs.append(pair)
+    return tuple(pairs)
+
+
+def chosen_pairs(dataset: Path, pairs: Sequence[Pair] | None) -> tuple[Pair, ...]:
+    """``pairs``, or :func:`default_pairs` of the dataset's robots; ConfigError naming a robot
+    the dataset does not have."""
+    robots = load_mrclam(dataset).robot_ids
+    if pairs is None:
+        if len(robots) < 2:
+            raise ConfigError(f"--dataset: {dataset} has {len(robots)} robot(s); pairs need two")
+        return default_pairs(robots)
+    for pair in pairs:
+        missing = [r for r in pair if r not in robots]
+        if missing:
+            raise ConfigError(
+                f"--pair {pair[0]},{pair[1]}: robot(s) {missing} not in {dataset} "
+                f"(robots {list(robots)})"
+            )
+    return tuple(pairs)
+
+
+def run_pairs(
+    config: Wanasinghe2014Config,
+    pairs: Sequence[Pair] | None,
+    out_dir: Path,
+    *,
+    seed: int,
+    executor: str | None = None,
+    quiet: bool = False,
+) -> dict[str, Any]:
+    """Replay every pair, write summary.json, report.md and the figure; return the summary."""
+    started = time.perf_counter()
+    dataset = config.replay.dataset
+    replayed = chosen_pairs(dataset, pairs)  # refuse a bad --pair before writing anything
+    out = prepare_out_dir(out_dir)
+    rows: list[dict[str, Any]] = []
+    skipped: list[dict[str, Any]] = []
+    for observer, observed in replayed:
+        pair_config = dataclasses.replace(
+            config,
+            replay=dataclasses.replace(config.replay, observer=observer, observed=observed),
+        )
+        try:
+            data = prepare_replays(
+                pair_config.replay,
+                steady_state_s=config.replay_steady_state_s,
+                seed=inflation_seed(seed, config),
+                executor=executor,
+                quiet=quiet,
+            )
+        except DataError as err:
+            skipped.append({"observer": observer, "observed": observed, "reason": str(err)})
+            continue
+        replay = run_replays(pair_config, data, seed, executor=executor, quiet=quiet)
+        part, _ = replay_results(pair_config, data, replay)
+        rows.append(pair_row(observer, observed, part))
+    summary: dict[str, Any] = {
+        "experiment": "wanasinghe2014-pairs",
+        "seed": seed,
+        "replay_runs": config.replay_runs,
+        "seeds": {"replay": seed + 1, "replay_noise_inflation": inflation_seed(seed, config)},
+        "dataset": str(dataset),
+        "targets": {
+            "yaw_rmse_rad": TARGET_YAW_RMSE_RAD,
+            "nees_percent_beyond": TARGET_NEES_PERCENT,
+            "position": "calibrated RMSE no worse than raw",
+        },
+        "paper": {
+            case: {
+                "yaw_rmse_rad": PAPER_TABLE3[case]["phi"][0],
+                "nees_percent_beyond": PAPER_TABLE4[case],
+            }
+            for case in TABLE2
+        },
+        "pairs": rows,
+        "skipped": skipped,
+        "tally": tally(rows),
+    }
+    figures = {"targets": plot_pairs(out, summary)} if rows else {}
+    write_summary(out, summary)
+    write_report(out, build_report(summary, figures, elapsed_s=time.perf_counter() - started))
+    return summary
+
+
+def _filter_cell(part: dict[str, Any], kind: str, case: str) -> dict[str, Any]:
+    """The PLKF's yaw RMSE (with each draw's), % NEES beyond and position RMSE (x, y, z mean)."""
+    t3 = part["table3"][kind][case]
+    return {
+        "yaw_rmse_rad": t3["phi"]["rmse_mean"],
+        "yaw_rmse_per_draw": t3["phi"]["rmse_per_draw"],
+        "nees_percent_beyond": part["table4"][kind][case]["nees_percent_beyond"],
+        "position_rmse_m": float(np.mean([t3[st]["rmse_mean"] for st in STATES[:3]])),
+    }
+
+
+def pair_row(observer: int, observed: int, part: dict[str, Any]) -> dict[str, Any]:
+    """One pair's record (module docstring) from :func:`replay_results`' summary keys."""
+    cases = {}
+    for case, target in part["replay_targets"].items():
+        ok = {key: target[key] for key in ("yaw_ok", "nees_ok", "position_ok")}
+        cases[case] = {
+            "calibrated": _filter_cell(part, "calibrated", case),
+            "raw": _filter_cell(part, "raw", case),
+            "yaw_bound_rad": target["yaw_bound_rad"],
+            "truth_velocity_yaw_bound_rad": part["replay_pcrlb"]["truth_velocity"][case]["phi"],
+            **ok,
+            "met": all(ok.values()),
+        }
+    return {
+        "observer": observer,
+        "observed": observed,
+        "windows": part["table3"]["windows"],
+        "steady_state_range_m": part["replay"]["steady_state_range_m"]["mean"],
+        "cases": cases,
+    }
+
+
+def _both(cell: dict[str, Any]) -> bool:
+    """The yaw and NEES targets of one case of one pair."""
+    return bool(cell["yaw_ok"] and cell["nees_ok"])
+
+
+def tally(rows: list[dict[str, Any]]) -> dict[str, Any]:
+    """Cells meeting the yaw and NEES targets, pairs meeting them in every case, per case."""
+    cells = [_both(row["cases"][case]) for row in rows for case in TABLE2]
+    return {
+        "cells": len(cells),
+        "cells_meeting_yaw_and_nees": int(sum(cells)),
+        "pairs": len(rows),
+        "pairs_meeting_every_case": int(
+            sum(all(_both(row["cases"][case]) for case in TABLE2) for row in rows)
+        ),
+        "per_case": {case: int(sum(_both(row["cases"][case]) for row in rows)) for case in TABLE2},
+    }
+
+
+def _name(row: dict[str, Any]) -> str:
+    return f"{row['observer']} → {row['observed']}"
+
+
+def plot_pairs(out: Path, summary: dict[str, Any]) -> str:
+    """Each pair and case: the calibrated PLKF's yaw RMSE against its model's √PCRLB, and its %
+    NEES beyond, with the targets."""
+    from relloc.plotting.setup import pyplot
+    from relloc.plotting.wanasinghe import plot_pair_targets
+
+    plt = pyplot()
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.5), layout="constrained")
+    plot_pair_targets(
+        axes,
+        summary["pairs"],
+        list(TABLE2),
+        yaw_target=TARGET_YAW_RMSE_RAD,
+        nees_target=TARGET_NEES_PERCENT,
+    )
+    fig.suptitle(
+        f"{len(summary['pairs'])} pairs of {Path(summary['dataset']).name}, calibrated odometry "
+        f"(seed {summary['seed']}, draws per pair: {summary['replay_runs']})"
+    )
+    return save_figure(fig, out, "pairs_yaw_vs_bound")
+
+
+def build_report(summary: dict[str, Any], figures: dict[str, str], *, elapsed_s: float) -> str:
+    """report.md: the paper beside the pairs, the per-pair tables, windows, skips, figure."""
+    rows = summary["pairs"]
+    t = summary["tally"]
+    seeds = summary["seeds"]
+    lines = [
+        "# Seed 000 Tables 3–4 on every pair of a run (`wanasinghe2014-pairs`)",
+        "",
+        f"Dataset `{summary['dataset']}`, seed {summary['seed']} (replay draws "
+        f"{seeds['replay']}, noise inflation {seeds['replay_noise_inflation']}), "
+        f"{summary['replay_runs']} sensor-noise draws per pair, run time {elapsed_s:.0f} s. "
+        "Each pair is the replay of `relloc reproduce wanasinghe2014 --pair A,B`: odometry "
+        "calibrated on the pair's calibration window, scored on its disjoint scored window "
+        "(table below).",
+        "",
+        f"Targets: calibrated PLKF yaw RMSE ≤ {TARGET_YAW_RMSE_RAD} rad and % NEES beyond "
+        f"χ²(4, 0.95) ≤ {TARGET_NEES_PERCENT:g} % in every Table-2 case. Met in "
+        f"**{t['cells_meeting_yaw_and_nees']} of {t['cells']}** pair-cases; "
+        f"**{t['pairs_meeting_every_case']} of {t['pairs']}** pairs meet them in every case.",
+        "",
+        "## The paper beside the pairs",
+        "",
+        "The paper replays one pair of its own recording; ours is every pair here (median and "
+        "range over the pairs, calibrated PLKF).",
+        "",
+    ]
+    paper_rows = []
+    for case in TABLE2:
+        yaw = [row["cases"][case]["calibrated"]["yaw_rmse_rad"] for row in rows]
+        nees = [row["cases"][case]["calibrated"]["nees_percent_beyond"] for row in rows]
+        paper = summary["paper"][case]
+        paper_rows.append(
+            [
+                case,
+                _median_range(yaw, 3),
+                paper["yaw_rmse_rad"],
+                _median_range(nees, 1),
+                paper["nees_percent_beyond"],
+                f"{t['per_case'][case]} of {t['pairs']}",
+            ]
+        )
+    lines += [
+        markdown_table(
+            [
+                "case",
+                "φ RMSE (rad), ours",
+                "paper",
+                "% NEES beyond, ours",
+                "paper",
+                "pairs meeting both",
+            ],
+            paper_rows,
+        ),
+        "",
+        "## Per pair: calibrated PLKF yaw RMSE (rad) / % NEES beyond",
+        "",
+    ]
+    lines += _pair_table(rows, "calibrated")
+    lines += ["", "## Per pair: raw odometry (the same draws)", ""]
+    lines += _pair_table(rows, "raw")
+    lines += [
+        "",
+        "## Per pair: the model's bound",
+        "",
+        "√PCRLB of φ of the calibrated model per case, of the truth-velocity model (its range "
+        "over the cases), and the calibrated yaw RMSE divided by the calibrated bound. A bound "
+        f"above {TARGET_YAW_RMSE_RAD} rad means the calibrated model itself does not allow the "
+        "yaw target on that pair.",
+        "",
+    ]
+    bound_rows = []
+    for row in rows:
+        c = row["cases"]
+        bound_rows.append(
+            [
+                _name(row),
+                " / ".join(f"{c[case]['yaw_bound_rad']:.3f}" for case in TABLE2),
+                _span([c[case]["truth_velocity_yaw_bound_rad"] for case in TABLE2]),
+                " / ".join(
+                    f"{c[case]['calibrated']['yaw_rmse_rad'] / c[case]['yaw_bound_rad']:.2f}"
+                    for case in TABLE2
+                ),
+            ]
+        )
+    lines += [
+        markdown_table(
+            ["pair", "calibrated bound, cases 1–4", "truth velocity", "RMSE ÷ bound, cases 1–4"],
+            bound_rows,
+        ),
+        "",
+        "## Windows",
+        "",
+        markdown_table(
+            ["pair", "calibration window (s)", "scored window (s)"],
+            [
+                [
+                    _name(row),
+                    _window(row["windows"]["calibration"]),
+                    _window(row["windows"]["scored"]),
+                ]
+                for row in rows
+            ],
+        ),
+        "",
+    ]
+    if summary["skipped"]:
+        lines += ["## Skipped pairs", ""]
+        lines += [f"- {s['observer']} → {s['observed']}: {s['reason']}" for s in summary["skipped"]]
+        lines.append("")
+    if "targets" in figures:
+        lines.append(
+            figure_md(
+                figures["targets"],
+                "Left: calibrated yaw RMSE against the model's √PCRLB (the diagonal: RMSE = "
+                "bound; dashed: the 0.10 rad target). Right: % NEES beyond χ²(4, 0.95) per pair "
+                "(dashed: 10 %).",
+            )
+        )
+    return "\n".join(lines)
+
+
+def _pair_table(rows: list[dict[str, Any]], kind: str) -> list[str]:
+    """Pair, mean range, and per case ``yaw / % NEES`` of ``kind`` odometry (✓: both met)."""
+    body = []
+    for row in rows:
+        cells = []
+        for case in TABLE2:
+            c = row["cases"][case]
+            mark = " ✓" if kind == "calibrated" and _both(c) else ""
+            cells.append(
+                f"{c[kind]['yaw_rmse_rad']:.3f} / {c[kind]['nees_percent_beyond']:.1f}{mark}"
+            )
+        body.append([_name(row), f"{row['steady_state_range_m']:.1f} m", *cells])
+    return [markdown_table(["pair", "range", *TABLE2], body)]
+
+
+def _median_range(values: list[float], digits: int) -> str:
+    if not values:
+        return "—"
+    return f"{np.median(values):.{digits}f} ({min(values):.{digits}f}–{max(values):.{digits}f})"
+
+
+def _span(values: list[float]) -> str:
+    return f"{min(values):.3f}–{max(values):.3f}"
+
+
+def _window(w: dict[str, Any]) -> str:
+    return f"{w['start_s']:.2f}–{w['end_s']:.2f}"
