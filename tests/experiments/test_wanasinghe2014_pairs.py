@@ -58,6 +58,11 @@ def test_a_row_is_the_one_pair_reproduction(short_dataset: Path, tmp_path: Path)
     assert row["windows"] == one["table3"]["windows"]
     calibration, scored = row["windows"]["calibration"], row["windows"]["scored"]
     assert calibration["start_s"] >= scored["end_s"] or calibration["end_s"] <= scored["start_s"]
+    walk = one["turn_rate_residual"]["residual"]["relative"]
+    assert row["relative_yaw_random_walk_rad"] == {
+        window: walk[window]["calibrated"]["yaw_random_walk_rad"]
+        for window in ("calibration", "scored")
+    }
     for case in TABLE2:
         cell = row["cases"][case]
         for kind in ("calibrated", "raw"):

@@ -25,7 +25,8 @@ ratios are built here on those evaluations.
 
 ``--runs N`` sets the team draws to N and the sweep and replay draws to ``min(N, 4)`` and
 ``min(N, 5)``; ``--dataset D`` replays another MRCLAM-layout folder and ``--pair A,B``
-robot ``A`` observing robot ``B`` of it (default ``1,3``). Every Monte-Carlo loop goes
+robot ``A`` observing robot ``B`` of it (default ``1,3``; many pairs of one run, each with its
+bound: :mod:`relloc.experiments.wanasinghe2014_pairs`). Every Monte-Carlo loop goes
 through :func:`relloc.pipeline.montecarlo.run_monte_carlo` with ``--executor``; seeds: team
 ``S``, replay ``S + 1``, sweep level ``i`` ``S + 2 + i``, the replay's noise-inflation fit on
 the calibration window the next one (``S`` = ``--seed``).
@@ -1267,7 +1268,8 @@ def replay_section(s: dict[str, Any]) -> list[str]:
     lines = [
         "## Tables 3–4 — real MRCLAM trajectories",
         "",
-        f"{s['replay']['source']} (another pair: `--pair OBSERVER,OBSERVED`); observed plane "
+        f"{s['replay']['source']} (another pair: `--pair OBSERVER,OBSERVED`; every pair of the "
+        "run: `relloc reproduce wanasinghe2014-pairs`); observed plane "
         f"raised {s['replay']['observed_height_m']:g} m; "
         f"scored window [{w['scored']['start_s']:.1f}, {w['scored']['end_s']:.1f}] s of the "
         f"recording, steady state after {s['replay']['steady_state_after_s']:g} s, in which "

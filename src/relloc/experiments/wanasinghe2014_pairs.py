@@ -34,9 +34,13 @@ replay's), ``paper[case]`` (seed 000's Table-3 φ RMSE and Table-4 % NEES beyond
 the steady state) and ``cases[case]``: ``calibrated`` and ``raw`` (PLKF ``yaw_rmse_rad``,
 ``yaw_rmse_per_draw``, ``nees_percent_beyond``, ``position_rmse_m``), ``yaw_bound_rad`` (√PCRLB
 of φ, calibrated model), ``truth_velocity_yaw_bound_rad``, ``yaw_ok``, ``nees_ok``,
-``position_ok`` and ``met`` (all three); ``skipped``: ``{observer, observed, reason}`` of each
-pair not replayed; ``tally``: cells (pair × case) replayed and meeting both the yaw and the NEES
-target, pairs meeting them in every case, and per case the pairs meeting both.
+``position_ok`` and ``met`` (all three); ``relative_yaw_random_walk_rad``: the calibrated
+commands' relative-yaw random walk over the steady state, on the calibration and on the scored
+window (:mod:`relloc.calibration.turn_rate`; a scored window with a smaller walk than its
+calibration window is kinder than the noise fitted there); ``skipped``: ``{observer,
+observed, reason}`` of each pair not replayed; ``tally``: cells (pair × case) replayed and
+meeting both the yaw and the NEES target, pairs meeting them in every case, and per case the
+pairs meeting both.
 """
 
 from __future__ import annotations
@@ -207,11 +211,15 @@ def pair_row(observer: int, observed: int, part: dict[str, Any]) -> dict[str, An
             **ok,
             "met": all(ok.values()),
         }
+    walk = part["turn_rate_residual"]["residual"]["relative"]
     return {
         "observer": observer,
         "observed": observed,
         "windows": part["table3"]["windows"],
         "steady_state_range_m": part["replay"]["steady_state_range_m"]["mean"],
+        "relative_yaw_random_walk_rad": {
+            window: walk[window]["calibrated"]["yaw_random_walk_rad"] for window in walk
+        },
         "cases": cases,
     }
 
@@ -353,13 +361,25 @@ def build_report(summary: dict[str, Any], figures: dict[str, str], *, elapsed_s:
         "",
         "## Windows",
         "",
+        "Each pair's windows, and the calibrated commands' relative-yaw random walk over the "
+        "steady state on each (the noise the commands leave: a scored window with a smaller "
+        "walk than its calibration window is kinder than the filters' noise says).",
+        "",
         markdown_table(
-            ["pair", "calibration window (s)", "scored window (s)"],
+            [
+                "pair",
+                "calibration window (s)",
+                "scored window (s)",
+                "yaw walk, calibration / scored (rad)",
+            ],
             [
                 [
                     _name(row),
                     _window(row["windows"]["calibration"]),
                     _window(row["windows"]["scored"]),
+                    "{calibration:.3f} / {scored:.3f}".format(
+                        **row["relative_yaw_random_walk_rad"]
+                    ),
                 ]
                 for row in rows
             ],
