@@ -134,4 +134,5 @@ def plot_pair_targets(
     axes[1].set_xticks(x, names, rotation=45)
     axes[1].set_ylabel("% NEES beyond χ²(4, 0.95)")
     axes[1].grid(True, alpha=0.3, axis="y")
-    axes[1].legend(fontsize=8)
+    axes[1].set_ylim(top=1.2 * axes[1].get_ylim()[1])  # room for the legend above the bars
+    axes[1].legend(fontsize=8, ncols=len(cases), loc="upper center")
