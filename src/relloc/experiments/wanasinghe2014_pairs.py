@@ -8,10 +8,10 @@ the calibrated PLKF's yaw RMSE ranges over 0.05–0.75 rad across pairs in one T
 with the same settings and seeds (:func:`relloc.experiments.wanasinghe2014.run_replays`,
 :func:`~relloc.experiments.wanasinghe2014.replay_results`): the odometry calibrated on the
 pair's calibration window and scored on its disjoint scored window, raw and truth-velocity
-odometry beside it, ``replay_runs`` (5) sensor-noise draws, and the √PCRLB of φ of each
-model (:func:`relloc.experiments.wanasinghe2014_mrclam.replay_pcrlb`). A pair's row therefore
-equals the ``replay_targets``, ``table3`` and ``table4`` of that one-pair reproduction at the
-same seed.
+odometry beside it, 5 sensor-noise draws (``Wanasinghe2014Config.replay_runs``), and the
+√PCRLB of φ of each model (:func:`relloc.experiments.wanasinghe2014_mrclam.replay_pcrlb`). A
+pair's row therefore equals the ``replay_targets``, ``table3`` and ``table4`` of that one-pair
+reproduction at the same seed.
 
 Pairs: ``--pair A,B`` (repeatable), or by default every robot observing the next two of the
 dataset's robots in ascending order, cyclically (``r_k → r_{k+1}`` and ``r_k → r_{k+2}``;
@@ -31,9 +31,10 @@ draws to ``min(N, 5)``.
 
 summary.json keys
 -----------------
-``experiment``, ``seed``, ``replay_runs``, ``seeds``, ``dataset``, ``targets`` (yaw RMSE ≤ 0.10
-rad and % NEES beyond χ²(4, 0.95) ≤ 10 % per Table-2 case, position RMSE no worse than the raw
-replay's), ``paper[case]`` (seed 000's Table-3 φ RMSE and Table-4 % NEES beyond);
+``experiment``, ``seed``, ``runs`` (sensor-noise draws per pair), ``seeds``, ``dataset``,
+``targets`` (yaw RMSE ≤ 0.10 rad and % NEES beyond χ²(4, 0.95) ≤ 10 % per Table-2 case,
+position RMSE no worse than the raw replay's), ``paper[case]`` (seed 000's Table-3 φ RMSE and
+Table-4 % NEES beyond);
 ``pairs``: one record per replayed pair with ``observer``, ``observed``, ``windows``
 (``calibration`` and ``scored``, disjoint), ``steady_state_range_m`` (mean horizontal range in
 the steady state) and ``cases[case]``: ``calibrated`` and ``raw`` (PLKF ``yaw_rmse_rad``,
@@ -167,7 +168,7 @@ def run_pairs(
     summary: dict[str, Any] = {
         "experiment": "wanasinghe2014-pairs",
         "seed": seed,
-        "replay_runs": config.replay_runs,
+        "runs": config.replay_runs,
         "seeds": {"replay": seed + 1, "replay_noise_inflation": inflation_seed(seed, config)},
         "dataset": str(dataset),
         "targets": {
@@ -269,7 +270,7 @@ def plot_pairs(out: Path, summary: dict[str, Any]) -> str:
     )
     fig.suptitle(
         f"{len(summary['pairs'])} pairs of {Path(summary['dataset']).name}, calibrated odometry "
-        f"(seed {summary['seed']}, draws per pair: {summary['replay_runs']})"
+        f"(seed {summary['seed']}, draws per pair: {summary['runs']})"
     )
     return save_figure(fig, out, "pairs_yaw_vs_bound")
 
@@ -284,7 +285,7 @@ def build_report(summary: dict[str, Any], figures: dict[str, str], *, elapsed_s:
         "",
         f"Dataset `{summary['dataset']}`, seed {summary['seed']} (replay draws "
         f"{seeds['replay']}, noise inflation {seeds['replay_noise_inflation']}), "
-        f"{summary['replay_runs']} sensor-noise draws per pair, run time {elapsed_s:.0f} s. "
+        f"{summary['runs']} sensor-noise draws per pair, run time {elapsed_s:.0f} s. "
         "Each pair is the replay of `relloc reproduce wanasinghe2014 --pair A,B`: odometry "
         "calibrated on the pair's calibration window, scored on its disjoint scored window "
         "(table below).",
