@@ -73,6 +73,8 @@ def test_a_row_is_the_one_pair_reproduction(short_dataset: Path, tmp_path: Path)
         tv = one["replay_pcrlb"]["truth_velocity"][case]["phi"]
         assert cell["truth_velocity_yaw_bound_rad"] == tv
         targets = one["replay_targets"][case]
+        assert cell["calibrated"]["position_rmse_m"] == targets["position_rmse_m"]
+        assert cell["raw"]["position_rmse_m"] == targets["raw_position_rmse_m"]
         assert cell["met"] == all(targets[k] for k in ("yaw_ok", "nees_ok", "position_ok"))
     on_disk = json.loads((tmp_path / "pairs" / "summary.json").read_text())
     assert on_disk["pairs"][0]["cases"]["case1"]["yaw_bound_rad"] == pytest.approx(
