@@ -22,11 +22,7 @@ from relloc.datasets.mrclam import load_mrclam
 from relloc.errors import ConfigError, DataError
 from relloc.experiments.registry import ReproduceArgs
 from relloc.experiments.wanasinghe2014 import (
-    PAPER_TABLE1,
-    RULES,
-    STATES,
     Wanasinghe2014Config,
-    _bias_nees_text,
     run_reproduction,
     table1_best_summary,
     table1_summary,
@@ -43,6 +39,8 @@ from relloc.experiments.wanasinghe2014_mrclam import (
     replay_task,
     spread_stretches,
 )
+from relloc.experiments.wanasinghe2014_paper import PAPER_TABLE1, RULES, STATES
+from relloc.experiments.wanasinghe2014_report import _bias_nees_text
 from relloc.experiments.wanasinghe2014_sim import SimSettings, team_task
 from relloc.models.measurement import range_bearing
 from relloc.sim.scenario import default_scenario

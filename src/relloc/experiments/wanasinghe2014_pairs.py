@@ -66,16 +66,18 @@ from relloc.datasets.mrclam import load_mrclam
 from relloc.errors import ConfigError, DataError
 from relloc.experiments.registry import ReproduceArgs
 from relloc.experiments.wanasinghe2014 import (
-    PAPER_TABLE3,
-    PAPER_TABLE4,
-    TARGET_NEES_PERCENT,
-    TARGET_YAW_RMSE_RAD,
     Wanasinghe2014Config,
     inflation_seed,
     replay_results,
     run_replays,
 )
 from relloc.experiments.wanasinghe2014_mrclam import TABLE2, prepare_replays
+from relloc.experiments.wanasinghe2014_paper import (
+    PAPER_TABLE3,
+    PAPER_TABLE4,
+    TARGET_NEES_PERCENT,
+    TARGET_YAW_RMSE_RAD,
+)
 from relloc.pipeline.output import (
     figure_md,
     markdown_table,
