@@ -61,7 +61,12 @@ def test_run_default_scenario_writes_summary_report_and_figures(tmp_path, capsys
     for s in summary["pairs"].values():
         assert 0.0 < s["position_rmse_m"] < 0.2 and 0.0 < s["yaw_rmse_rad"] < 0.2
         assert s["anees"] > 0.0 and 0.0 <= s["nees_percent_beyond"] <= 100.0
+        share = s["nees_beyond_interval"]
+        assert share["percent"] == s["nees_percent_beyond"] and share["batches"] == 10
     report = (out / "report.md").read_text()
+    share = summary["team"]["nees_beyond_interval"]
+    lo, hi = share["interval"]
+    assert f"| {lo:.1f}–{hi:.1f} {share['verdict']} |" in report
     pngs = sorted(p.name for p in out.glob("*.png"))
     assert {"errors_all.png", "nees_nis.png", "conditioning.png", "trajectories.png"} <= set(pngs)
     for name in pngs:

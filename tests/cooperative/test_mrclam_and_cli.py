@@ -119,9 +119,20 @@ def test_mrclam_cl_on_a_cut_of_run6_states_its_windows(mrclam_run6_cut, tmp_path
     assert (held["start_s"] if split == "first-half" else held["end_s"]) == cut_at
     for case in summary["cases"].values():
         assert set(case["pos_rmse_m"]) == {"2", "4", "5", "mean"}
+        held_share = case["heldout"].pop("nees_beyond_interval")
+        assert held_share["percent"] == case["heldout"]["nees_pct_beyond"]
         assert all(np.isfinite(v) for v in case["heldout"].values())
     for target in summary["targets"].values():
         assert np.isfinite(target["pos_rmse_m"]) and np.isfinite(target["nees_pct_beyond"])
+        # the held-out share's interval by batch means: the same share, inside its interval
+        share = target["nees_beyond_interval"]
+        assert share["percent"] == target["nees_pct_beyond"] and share["batches"] == 10
+        assert share["interval"][0] <= share["percent"] <= share["interval"][1]
+        assert share["verdict"] in {"consistent", "conservative", "over-confident"}
+        assert (
+            f"{share['interval'][0]:.1f}–{share['interval'][1]:.1f} {share['verdict']}"
+            in (out / "report.md").read_text()
+        )
     inflation = summary["fit"]["odometry_inflation"]
     assert inflation["cases"] == ["range_bearing/all_landmarks", "bearing/all_landmarks"]
     report = (out / "report.md").read_text()
@@ -175,6 +186,7 @@ def test_mrclam_cl_figures_do_not_depend_on_the_world_frame_clock_or_barcodes(
         for figure in ("pos_rmse_m", "heading_rmse_rad", "improvement_over_dead_reckoning"):
             assert other[figure] == pytest.approx(target[figure], rel=1e-5), (mode, figure)
         assert other["nees_pct_beyond"] == target["nees_pct_beyond"]
+        assert other["nees_beyond_interval"] == target["nees_beyond_interval"]
 
 
 def test_odometry_inflation_reads_the_calibration_window_only(mrclam_run6_cut, tmp_path):

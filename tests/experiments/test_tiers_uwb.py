@@ -73,9 +73,13 @@ def test_calibrated_on_one_stretch_scored_on_another(tmp_path):
         team = b["team"][case]
         assert team["pos_rmse_m"] < team["baselines"]["uncalibrated"]["pos_rmse_m"]
         assert {"nees_pct_beyond", "converged_after_s"} <= set(team)
+        share = team["nees_beyond_interval"]
+        assert share["percent"] == team["nees_pct_beyond"] and share["samples"] > 0
+        assert share["interval"][0] <= share["percent"] <= share["interval"][1]
     assert b["team"]["anchored"]["mode"] == "leave-one-out"  # every robot stands
     assert b["pairs"] == {}  # no odometry in this layout
-    assert "| team aligned" in (out / "report.md").read_text()
+    report = (out / "report.md").read_text()
+    assert "| team aligned" in report and "its 95 % interval" in report
 
 
 def test_pairs_with_odometry_get_an_observability_verdict(tmp_path):

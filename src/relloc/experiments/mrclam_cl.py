@@ -69,9 +69,17 @@ bearing-only 0.1075 m, 0.0786 rad and 0.02 %, all met, but 14.4× and 11.8× dea
 fitted on the later half (inflated ×1.5, which left 4.9 % beyond on its own check quarter,
 675–900 s) over-states the earlier half's odometry error: conservative, not over-confident.
 
+How sure one run makes the NEES figure (``nees_beyond_interval``: 95 % interval by batch means,
+ten 45 s blocks of the held-out window). Run 6, the default split: range+bearing 6.25 %
+beyond, interval 0.0–12.7 %; bearing-only 4.95 %, 0.0–11.7 %. Both hold 5 % (verdict
+consistent), and neither lies wholly below 10 %: the target is met on the share, but one run
+cannot show it is met at 95 % confidence.
+
 summary.json keys: ``cases.<mode>/<anchors>``: ``pos_rmse_m`` and ``heading_rmse_rad`` (per robot
 "1"…"5" and ``mean`` = arithmetic mean over robots), ``final_pos_err_m`` (same layout),
-``nees_pct_beyond`` (per-robot 3-DOF NEES above χ²₃(0.95), pooled), ``anees``, ``used``,
+``nees_pct_beyond`` (per-robot 3-DOF NEES above χ²₃(0.95), pooled; ``nees_beyond_interval``
+its 95 % interval by batch means over time, :func:`relloc.metrics.percent_beyond_interval`,
+with the verdict), ``anees``, ``used``,
 ``rejected`` (χ² gate + degenerate geometry + unknown barcodes), ``counts`` (the breakdown),
 ``heldout`` (the same accuracy numbers over the held-out window only); ``fit`` (the fitted models),
 ``scored_on`` (the held-out window, after the calibration window), ``targets`` (the issue's
@@ -117,6 +125,7 @@ from relloc.experiments.registry import ReproduceArgs
 from relloc.pipeline.montecarlo import run_monte_carlo
 from relloc.pipeline.output import (
     figure_md,
+    interval_text,
     markdown_table,
     prepare_out_dir,
     save_figure,
@@ -437,9 +446,9 @@ def evaluate(
 ) -> dict[str, Any]:
     """Accuracy and consistency against ground truth at the output times in
     ``[t_from, t_to]``."""
-    from relloc.metrics import chi2_upper, nees, percent_beyond, state_errors
+    from relloc.metrics import chi2_upper, nees, percent_beyond_interval, state_errors
 
-    pos, head, final, nees_all = {}, {}, {}, []
+    pos, head, final, nees_all, nees_t = {}, {}, {}, [], []
     for i, rid in enumerate(ds.robot_ids):
         q = ds.robot(rid).groundtruth.at(out_t)
         ok = q.valid & (out_t >= t_from) & (out_t <= t_to)
@@ -450,14 +459,17 @@ def evaluate(
         head[str(rid)] = float(np.sqrt(np.mean(err[:, 2] ** 2)))
         final[str(rid)] = float(np.hypot(*err[-1, :2]))
         nees_all.append(nees(err, result["cov"][ok, i]))
+        nees_t.append(out_t[ok])
     ne = np.concatenate(nees_all)
+    share = percent_beyond_interval(ne, np.concatenate(nees_t), chi2_upper(3, 0.95))
     for d in (pos, head, final):
         d["mean"] = float(np.mean(list(d.values())))
     return {
         "pos_rmse_m": pos,
         "heading_rmse_rad": head,
         "final_pos_err_m": final,
-        "nees_pct_beyond": percent_beyond(ne, chi2_upper(3, 0.95)),
+        "nees_pct_beyond": share.percent,
+        "nees_beyond_interval": share.to_dict(),
         "anees": float(np.mean(ne) / 3.0),
     }
 
@@ -547,6 +559,7 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
                 "pos_rmse_m": held["pos_rmse_m"]["mean"],
                 "heading_rmse_rad": held["heading_rmse_rad"]["mean"],
                 "nees_pct_beyond": held["nees_pct_beyond"],
+                "nees_beyond_interval": held["nees_beyond_interval"],
                 "anees": held["anees"],
             }
             if anchors == "all_landmarks" and mode != "dead_reckoning":
@@ -623,6 +636,7 @@ def _targets(cases: dict[str, Any]) -> dict[str, Any]:
             "improvement_ok": ratio is not None and ratio >= TARGET_IMPROVEMENT,
             "nees_pct_beyond": nees,
             "nees_ok": nees <= TARGET_NEES_PCT,
+            "nees_beyond_interval": held["nees_beyond_interval"],
             "in_sample": {
                 "pos_rmse_m": c["pos_rmse_m"]["mean"],
                 "heading_rmse_rad": c["heading_rmse_rad"]["mean"],
@@ -786,6 +800,7 @@ def _report(summary: dict[str, Any], figures: list[tuple[str, str]]) -> str:
             v["improvement_ok"],
             v["nees_pct_beyond"],
             v["nees_ok"],
+            interval_text(v["nees_beyond_interval"]),
             f"{v['in_sample']['pos_rmse_m']:.4f} / {v['in_sample']['heading_rmse_rad']:.4f} / "
             f"{v['in_sample']['improvement_over_dead_reckoning']:.1f} / "
             f"{v['in_sample']['nees_pct_beyond']:.1f}",
@@ -803,6 +818,7 @@ def _report(summary: dict[str, Any], figures: list[tuple[str, str]]) -> str:
             "≥ 20",
             "NEES>χ² %",
             "≤ 10",
+            "its 95 % interval",
             "in-sample (whole run): pos / heading / × DR / NEES %",
         ],
         trows,
@@ -870,7 +886,12 @@ def _report(summary: dict[str, Any], figures: list[tuple[str, str]]) -> str:
         table,
         "Position / heading RMSE: per robot over every output time (0.5 s grid) with valid "
         "ground truth, then the arithmetic mean over robots. NEES: per-robot 3-DOF pose NEES "
-        "pooled over robots and times against χ²₃(0.95) (5 % expected for a consistent filter). "
+        "pooled over robots and times against χ²₃(0.95) (5 % expected for a consistent filter); "
+        "those samples are correlated in time and across robots, so the target table gives the "
+        "held-out share's 95 % interval by batch means (the window cut into 10 blocks, each "
+        "block's samples of every robot one sample) and its verdict: consistent when it holds "
+        "5 %, over-confident above, conservative below. The 10 % target is judged on the share "
+        "itself, as the issue states it. "
         f"`held-out`: the same over [{held['start_s']:.0f}, {held['end_s']:.0f}] s, the part of "
         "the run the models were not fitted on. "
         f"The two landmarks are subjects {summary['two_landmarks']}.",

@@ -14,6 +14,7 @@ import numpy as np
 from relloc.core.kalman import chi2_threshold
 from relloc.core.recording import Recording
 from relloc.estimators.uwb_range import RangePairBank, RangePairSettings, RelativeDeadReckoning
+from relloc.metrics.consistency import percent_beyond_interval
 from relloc.models.motion import VelocityNoise
 from relloc.models.symbolic import relative_nonlinear
 from relloc.observability.analysis import InputRankEvaluator, analyse
@@ -95,12 +96,11 @@ def _generic_conditions() -> str:
 
 def _pair_score(ev: SeriesEvaluation) -> dict[str, Any]:
     pos = np.linalg.norm(ev.error[:, :3], axis=1)
-    finite = np.isfinite(ev.nees)
+    share = percent_beyond_interval(ev.nees, ev.t, chi2_threshold(4, 0.95))
     return {
         "pos_rmse_m": float(np.sqrt(np.mean(pos**2))) if pos.size else None,
-        "nees_pct_beyond": float(100 * np.mean(ev.nees[finite] > chi2_threshold(4, 0.95)))
-        if finite.any()
-        else None,
+        "nees_pct_beyond": share.percent if share.samples else None,
+        "nees_beyond_interval": share.to_dict(),
         "converged_after_s": convergence_time(ev, [CONVERGED_M] * 3 + [CONVERGED_YAW]),
         "records": int(ev.t.size),
     }

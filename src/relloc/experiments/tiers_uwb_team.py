@@ -20,6 +20,7 @@ from relloc.datasets.bag_mapping import BagMapping
 from relloc.errors import DataError
 from relloc.estimators.uwb_range import RangeTeamFilter, RangeTeamSettings
 from relloc.geometry.multilateration import classical_mds, multilaterate, rigid_alignment
+from relloc.metrics.consistency import percent_beyond_interval
 from relloc.pipeline.replay import record_grid, replay
 
 Array = NDArray[np.float64]
@@ -215,7 +216,9 @@ def multilateration(rec: Recording, grid: Array, anchors: list[int]) -> Array:
 def score_positions(
     grid: Array, est: Array, cov: Array | None, truth: Array, robots: list[int], *, align: bool
 ) -> dict[str, Any]:
-    """Position RMSE (all, per robot), NEES share beyond χ²₂(0.95), convergence time; with
+    """Position RMSE (all, per robot), NEES share beyond χ²₂(0.95) with its interval by batch
+    means over the grid (:func:`relloc.metrics.consistency.percent_beyond_interval`), convergence
+    time; with
     ``align`` after the per-time best rigid alignment of the robots' estimates onto truth."""
     err = np.full((grid.size, len(robots), 2), np.nan)
     nees = np.full((grid.size, len(robots)), np.nan)
@@ -242,10 +245,10 @@ def score_positions(
         "records": int(ok.sum()),
     }
     if cov is not None:
-        finite = np.isfinite(nees)
-        out["nees_pct_beyond"] = (
-            float(100 * np.mean(nees[finite] > chi2_threshold(2, 0.95))) if finite.any() else None
-        )
+        times = np.broadcast_to(grid[:, None], nees.shape)
+        share = percent_beyond_interval(nees, times, chi2_threshold(2, 0.95))
+        out["nees_pct_beyond"] = share.percent if share.samples else None
+        out["nees_beyond_interval"] = share.to_dict()
         above = np.flatnonzero(ok & ~np.all(norm < CONVERGED_M, axis=1))
         last = int(above[-1]) if above.size else -1
         out["converged_after_s"] = (

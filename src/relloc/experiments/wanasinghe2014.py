@@ -599,6 +599,7 @@ def _consistency_entry(runs: list[SeriesEvaluation], settle_s: float) -> dict[st
     pooled = accuracy_and_consistency(runs, settle_s=settle_s)
     return {
         "nees_percent_beyond": pooled["nees_percent_beyond"],
+        "nees_beyond_interval": pooled["nees_beyond_interval"],
         "nis_percent_beyond": pooled["nis_percent_beyond"],
         "anees": pooled["anees"],
         "max_conditioning": {

@@ -3,6 +3,7 @@ convergence time."""
 
 from relloc.metrics.conditioning import ILL_CONDITIONED_LOG10, condition_log10_batch
 from relloc.metrics.consistency import (
+    BeyondShare,
     anees,
     anees_band,
     chi2_upper,
@@ -11,6 +12,7 @@ from relloc.metrics.consistency import (
     nis,
     normalised_squared,
     percent_beyond,
+    percent_beyond_interval,
     run_average_band,
 )
 from relloc.metrics.convergence import (
@@ -27,6 +29,7 @@ __all__ = [
     "ILL_CONDITIONED_LOG10",
     "PAPER_MARGIN",
     "RELPOSE4_ANGLES",
+    "BeyondShare",
     "anees",
     "anees_band",
     "chi2_upper",
@@ -37,6 +40,7 @@ __all__ = [
     "normalised_squared",
     "paper_thresholds",
     "percent_beyond",
+    "percent_beyond_interval",
     "radial_errors",
     "rmse",
     "run_average_band",

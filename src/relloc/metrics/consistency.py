@@ -9,9 +9,25 @@
   ANEES ``= ε̄ / n`` (ideal 1) has the same band divided by ``n``. The ``N`` values must be
   independent: NEES of independent runs at one instant (:func:`run_average_band`), never the
   time-correlated samples of one run pooled as if independent.
+* One run, no independent copies (a real recording): the share beyond the bound is still a
+  fair point estimate, but its samples are correlated in time, so the binomial spread
+  ``√(p(1−p)/N)`` understates its uncertainty. :func:`percent_beyond_interval` gives its
+  interval of confidence ``c`` by batch means over time: the span is cut into ``B`` contiguous
+  blocks of equal duration, each block (every subject's samples in it) one cluster, and the
+  ratio estimator ``p̂ = Σ_b k_b / Σ_b n_b`` (``k_b`` of the block's ``n_b`` samples beyond the
+  bound) gets the cluster variance
+
+      V̂ = B/(B−1) · Σ_b (k_b − p̂ n_b)² / (Σ_b n_b)²,
+
+  valid when a block is long against the correlation time; ``p̂ ± t_{B−1}((1+c)/2) √V̂``
+  (clipped to [0, 1]), and the effective sample size ``N_eff = p̂(1−p̂)/V̂`` (Bar-Shalom et al.
+  2001 §5.4 for the test; batch means: Law & Kelton, *Simulation Modeling and Analysis* §9.5).
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -143,3 +159,117 @@ def percent_beyond(values: ArrayLike, bound: float) -> float:
     if v.size == 0:
         return float("nan")
     return float(100.0 * np.count_nonzero(v > bound) / v.size)
+
+
+#: Blocks of :func:`percent_beyond_interval` by default: ten, so that a 450 s window gives
+#: 45 s blocks (longer than the seconds over which odometry errors persist on MRCLAM).
+INTERVAL_BATCHES = 10
+
+
+@dataclass(frozen=True)
+class BeyondShare:
+    """A share (%) of values beyond a bound with its interval (of confidence ``confidence``) by
+    batch means (:func:`percent_beyond_interval`): ``samples`` N, ``effective_samples``
+    ``N_eff`` (at most N), ``batches`` (non-empty blocks), ``batch_s`` (block duration),
+    ``expected_percent`` (what a consistent filter leaves beyond the bound: 5 for a
+    ``χ²(0.95)`` bound). ``interval`` and ``effective_samples`` are ``None`` with fewer than two
+    non-empty blocks."""
+
+    percent: float
+    interval: tuple[float, float] | None
+    samples: int
+    effective_samples: float | None
+    batches: int
+    batch_s: float
+    expected_percent: float
+    confidence: float
+
+    @property
+    def verdict(self) -> str | None:
+        """``"consistent"`` when the interval holds ``expected_percent``, ``"over-confident"``
+        when it lies above, ``"conservative"`` below; ``None`` without an interval."""
+        if self.interval is None:
+            return None
+        if self.interval[0] > self.expected_percent:
+            return "over-confident"
+        return "conservative" if self.interval[1] < self.expected_percent else "consistent"
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "percent": self.percent,
+            "interval": list(self.interval) if self.interval is not None else None,
+            "samples": self.samples,
+            "effective_samples": self.effective_samples,
+            "batches": self.batches,
+            "batch_s": self.batch_s,
+            "verdict": self.verdict,
+        }
+
+
+def percent_beyond_interval(
+    values: ArrayLike,
+    times: ArrayLike,
+    bound: float | ArrayLike,
+    *,
+    expected_percent: float = 5.0,
+    batches: int = INTERVAL_BATCHES,
+    confidence: float = 0.95,
+) -> BeyondShare:
+    """Percentage of finite ``values`` above ``bound`` with its interval of confidence
+    ``confidence`` by batch means over ``times`` (module docstring): the samples of any number
+    of subjects of one run, each with its time; ``bound`` a scalar or one per value;
+    ``expected_percent`` what a consistent filter leaves beyond it (5 for ``χ²(0.95)``), for
+    the verdict. When every block sits at ``p̂`` (e.g. none beyond anywhere) there is no spread
+    to measure: ``N_eff`` is then the number of blocks and the interval Clopper–Pearson's for
+    ``B p̂`` in ``B``.
+    """
+    c = _check_probability(confidence)
+    expected = 100.0 * _check_probability(expected_percent / 100.0)
+    if isinstance(batches, bool) or not isinstance(batches, int | np.integer) or batches < 2:
+        raise ConfigError(f"percent_beyond_interval: batches must be an integer ≥ 2, got {batches}")
+    v = np.asarray(values, dtype=float).reshape(-1)
+    t = np.asarray(times, dtype=float).reshape(-1)
+    if t.shape != v.shape:
+        raise ConfigError(
+            f"percent_beyond_interval: {t.size} times for {v.size} values; one time per value"
+        )
+    b = np.asarray(bound, dtype=float)
+    if b.size != 1 and b.shape != v.shape:
+        raise ConfigError(
+            f"percent_beyond_interval: {b.size} bounds for {v.size} values; one, or one per value"
+        )
+    b = np.broadcast_to(b.reshape(-1) if b.size == 1 else b, v.shape)
+    ok = np.isfinite(v) & np.isfinite(t)
+    v, t, b = v[ok], t[ok], b[ok]
+    if v.size == 0:
+        return BeyondShare(float("nan"), None, 0, None, 0, float("nan"), expected, c)
+    beyond = (v > b).astype(float)
+    percent = float(100.0 * np.count_nonzero(beyond) / v.size)  # as percent_beyond rounds it
+    p_hat = percent / 100.0
+    width = float(t.max() - t.min()) / batches
+    if width > 0:
+        block = np.minimum((t - t.min()) / width, batches - 1).astype(np.int64)
+    else:
+        block = np.zeros(v.size, dtype=np.int64)
+    n_b = np.bincount(block, minlength=batches).astype(float)
+    k_b = np.bincount(block, weights=beyond, minlength=batches)
+    used = n_b > 0
+    n_b, k_b = n_b[used], k_b[used]
+    m = int(n_b.size)
+    if m < 2:
+        return BeyondShare(percent, None, int(v.size), None, m, width, expected, c)
+    from scipy.stats import beta
+    from scipy.stats import t as student_t
+
+    var = m / (m - 1) * float(np.sum((k_b - p_hat * n_b) ** 2)) / float(np.sum(n_b)) ** 2
+    if var > 0.0:
+        half = float(student_t.ppf((1.0 + c) / 2.0, m - 1) * np.sqrt(var))
+        lo, hi = max(0.0, p_hat - half), min(1.0, p_hat + half)
+        n_eff = min(float(v.size), p_hat * (1.0 - p_hat) / var)
+    else:
+        k = p_hat * m
+        lo = float(beta.ppf((1.0 - c) / 2.0, k, m - k + 1)) if k > 0 else 0.0
+        hi = float(beta.ppf((1.0 + c) / 2.0, k + 1, m - k)) if k < m else 1.0
+        n_eff = float(m)
+    interval = (100.0 * lo, 100.0 * hi)
+    return BeyondShare(percent, interval, int(v.size), n_eff, m, width, expected, c)

@@ -12,7 +12,9 @@ against the recording's ground truth in the series' frame (:mod:`relloc.pipeline
 :func:`accuracy_and_consistency` pools evaluations (runs, pairs) over their steady-state samples
 (track age ≥ ``settle_s``): RMSE of position, yaw and every state; the share of errors inside
 ±3σ; ANEES and the share of NEES beyond the single-run bound ``χ²(n, 0.95)`` (about 5 % for a
-consistent filter); ANIS and the share of NIS beyond ``χ²(m, 0.95)``.
+consistent filter), with its 95 % interval by batch means over time (the samples of one run are
+correlated in time; :func:`relloc.metrics.consistency.percent_beyond_interval`); ANIS and the
+share of NIS beyond ``χ²(m, 0.95)``.
 :func:`run_averaged_nees` gives the NEES averaged over *independent runs at one instant* — the
 only average whose 95 % band (:func:`relloc.metrics.consistency.mean_chi2_band`) is valid;
 time-correlated samples of one run pooled as if independent give a band far too narrow.
@@ -39,6 +41,7 @@ from relloc.metrics.consistency import (
     chi2_upper,
     nees,
     percent_beyond,
+    percent_beyond_interval,
     run_average_band,
 )
 from relloc.metrics.errors import state_errors
@@ -176,7 +179,9 @@ def accuracy_and_consistency(
 
     Keys: ``samples``, ``position_rmse_m``, ``yaw_rmse_rad``, ``rmse`` and
     ``within_3sigma_percent`` per state, ``anees``, ``nees_bound``, ``nees_percent_beyond``,
-    ``anis``, ``nis_bound`` (the bound of the most common NIS dof), ``nis_percent_beyond``.
+    ``nees_beyond_interval`` (that share's interval by batch means over the record times,
+    :func:`relloc.metrics.consistency.percent_beyond_interval`, with its verdict), ``anis``,
+    ``nis_bound`` (the bound of the most common NIS dof), ``nis_percent_beyond``.
     """
     if not evaluations:
         raise ConfigError("accuracy_and_consistency: nothing to pool")
@@ -193,6 +198,7 @@ def accuracy_and_consistency(
         -1, n
     )
     ne = np.concatenate([e.nees[s] for e, s in zip(evaluations, steady, strict=True)])
+    ne_t = np.concatenate([e.t[s] for e, s in zip(evaluations, steady, strict=True)])
     keep_nis = [e.update_age >= settle_s for e in evaluations]
     ni = np.concatenate([e.nis[k] for e, k in zip(evaluations, keep_nis, strict=True)])
     ni_dof = np.concatenate(
@@ -220,6 +226,7 @@ def accuracy_and_consistency(
         "anees": anees(ne, n),
         "nees_bound": chi2_upper(n, 0.95),
         "nees_percent_beyond": percent_beyond(ne, chi2_upper(n, 0.95)),
+        "nees_beyond_interval": percent_beyond_interval(ne, ne_t, chi2_upper(n, 0.95)).to_dict(),
         "anis": _normalised_mean(ni, ni_dof),
         "nis_bound": chi2_upper(common_dof, 0.95) if common_dof else nan,
         "nis_percent_beyond": _percent_beyond_bound(ni, ni_dof),

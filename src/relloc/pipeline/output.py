@@ -94,6 +94,16 @@ def fmt(value: Any, digits: int = 4) -> str:
     return str(value)
 
 
+def interval_text(share: Mapping[str, Any] | None) -> str:
+    """A share beyond a χ² bound's interval and verdict for a table cell, from
+    :meth:`relloc.metrics.consistency.BeyondShare.to_dict`: ``"3.1–7.4 consistent"``
+    (``—`` without one)."""
+    if not share or share.get("interval") is None:
+        return "—"
+    lo, hi = share["interval"]
+    return f"{lo:.1f}–{hi:.1f} {share['verdict']}"
+
+
 def markdown_table(headers: Sequence[str], rows: Sequence[Sequence[Any]], digits: int = 4) -> str:
     """A GitHub-flavoured markdown table."""
     head = "| " + " | ".join(headers) + " |"
