@@ -2,6 +2,8 @@
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy.signal import lfilter
 from scipy.stats import norm
 
@@ -147,3 +149,34 @@ def test_bad_bounds_and_levels_are_refused():
         percent_beyond_interval([1.0, 2.0], [0.0, 1.0], 1.0, confidence=1.0)
     with pytest.raises(ConfigError, match="probability"):
         percent_beyond_interval([1.0, 2.0], [0.0, 1.0], 1.0, expected_percent=0.0)
+
+
+SAMPLES = st.lists(
+    st.tuples(
+        st.one_of(st.floats(-1e3, 1e3), st.just(float("nan")), st.just(float("inf"))),
+        st.one_of(st.floats(-1e4, 1e4), st.just(float("nan"))),
+    ),
+    max_size=60,
+)
+
+
+@settings(derandomize=True, max_examples=300, deadline=None)
+@given(SAMPLES, st.floats(-10.0, 10.0), st.integers(2, 12))
+def test_any_samples_give_a_share_inside_its_interval(samples, bound, batches):
+    values = np.array([v for v, _ in samples], dtype=float)
+    times = np.array([t for _, t in samples], dtype=float)
+    share = percent_beyond_interval(values, times, bound, batches=batches)
+    kept = np.isfinite(values) & np.isfinite(times)
+    assert share.samples == int(kept.sum())
+    if share.samples == 0:
+        assert np.isnan(share.percent) and share.interval is None
+        return
+    assert share.percent == pytest.approx(100.0 * np.mean(values[kept] > bound))
+    assert 1 <= share.batches <= batches
+    if share.interval is None:
+        assert share.batches == 1 and share.verdict is None
+        return
+    lo, hi = share.interval
+    assert 0.0 <= lo <= share.percent + 1e-9 and share.percent - 1e-9 <= hi <= 100.0
+    assert share.effective_samples is not None
+    assert 0.0 < share.effective_samples <= share.samples
