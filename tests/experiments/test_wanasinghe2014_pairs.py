@@ -69,6 +69,8 @@ def test_a_row_is_the_one_pair_reproduction(short_dataset: Path, tmp_path: Path)
             assert cell[kind]["yaw_rmse_rad"] == one["table3"][kind][case]["phi"]["rmse_mean"]
             nees = one["table4"][kind][case]["nees_percent_beyond"]
             assert cell[kind]["nees_percent_beyond"] == nees
+            share = one["table4"][kind][case]["nees_beyond_interval"]
+            assert cell[kind]["nees_beyond_interval"] == share
         assert cell["yaw_bound_rad"] == one["replay_pcrlb"]["calibrated"][case]["phi"]
         tv = one["replay_pcrlb"]["truth_velocity"][case]["phi"]
         assert cell["truth_velocity_yaw_bound_rad"] == tv

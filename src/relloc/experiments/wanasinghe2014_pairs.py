@@ -41,7 +41,8 @@ Table-4 % NEES beyond);
 ``pairs``: one record per replayed pair with ``observer``, ``observed``, ``windows``
 (``calibration`` and ``scored``, disjoint), ``steady_state_range_m`` (mean horizontal range in
 the steady state) and ``cases[case]``: ``calibrated`` and ``raw`` (PLKF ``yaw_rmse_rad``,
-``yaw_rmse_per_draw``, ``nees_percent_beyond``, ``position_rmse_m``), ``yaw_bound_rad`` (√PCRLB
+``yaw_rmse_per_draw``, ``nees_percent_beyond`` with ``nees_beyond_interval``, its 95 %
+interval by batch means over time and the verdict, ``position_rmse_m``), ``yaw_bound_rad`` (√PCRLB
 of φ, calibrated model), ``truth_velocity_yaw_bound_rad``, ``yaw_ok``, ``nees_ok``,
 ``position_ok`` and ``met`` (all three); ``relative_yaw_random_walk_rad``: the calibrated
 commands' relative-yaw random walk over the steady state, on the calibration and on the scored
@@ -198,14 +199,15 @@ def run_pairs(
 
 
 def _filter_cell(part: dict[str, Any], kind: str, case: str) -> dict[str, Any]:
-    """The PLKF's yaw RMSE (with each draw's), % NEES beyond and position RMSE (x, y, z mean,
-    as :func:`~relloc.experiments.wanasinghe2014.replay_targets` gives it)."""
+    """The PLKF's yaw RMSE (with each draw's), % NEES beyond (with its interval) and position
+    RMSE (x, y, z mean, as :func:`~relloc.experiments.wanasinghe2014.replay_targets` gives it)."""
     phi = part["table3"][kind][case]["phi"]
     target = part["replay_targets"][case]
     return {
         "yaw_rmse_rad": phi["rmse_mean"],
         "yaw_rmse_per_draw": phi["rmse_per_draw"],
         "nees_percent_beyond": part["table4"][kind][case]["nees_percent_beyond"],
+        "nees_beyond_interval": part["table4"][kind][case]["nees_beyond_interval"],
         "position_rmse_m": target["raw_position_rmse_m" if kind == "raw" else "position_rmse_m"],
     }
 
