@@ -293,4 +293,12 @@ def test_sharma2013_cli_writes_the_acceptance_keys(tmp_path, monkeypatch):
         assert set(case["heading_rmse_rad"]) == {"1", "2", "3", "4", "5", "mean"}
         assert isinstance(case["bounded"], bool)
         assert case["observability_rank"]["available"] is False
+        share = case["nees_beyond_interval"]
+        assert share["percent"] == case["nees_pct_beyond"] and share["samples"] > 0
+    aware = summary["observability_aware"]
+    assert set(aware["nees_beyond_interval"]) == {"no_landmark", "one_landmark"}
+    share = aware["nees_beyond_interval"]["no_landmark"]
+    assert share == summary[aware["block"]]["no_landmark"]["nees_beyond_interval"]
+    lo, hi = share["interval"]
+    assert f"{lo:.1f}–{hi:.1f} {share['verdict']}" in (out / "report.md").read_text()
     assert (out / "fig3_topology.png").is_file() and (out / "report.md").is_file()
