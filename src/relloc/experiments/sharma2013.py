@@ -426,7 +426,7 @@ def summarise(results: list[dict[str, Any]], n: int, block: str = "cases") -> di
         yr = np.sqrt(np.mean(err[..., 1] ** 2, axis=(0, 1)))
         hr = np.sqrt(np.mean(err[..., 2] ** 2, axis=(0, 1)))
         ne = nees(err, cov)  # (R, T, n)
-        times = np.stack([r["t"] for r in results])[:, :, None] + np.zeros(ne.shape)
+        times = np.broadcast_to(np.stack([r["t"] for r in results])[:, :, None], ne.shape)
         share = percent_beyond_interval(ne, times, chi2_upper(3, 0.95))
         growth = _growth(err, cov)
         bounded = growth["error_ratio"] < GROWTH_LIMIT and growth["sigma_ratio"] < GROWTH_LIMIT

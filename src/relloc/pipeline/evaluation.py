@@ -199,6 +199,7 @@ def accuracy_and_consistency(
     )
     ne = np.concatenate([e.nees[s] for e, s in zip(evaluations, steady, strict=True)])
     ne_t = np.concatenate([e.t[s] for e, s in zip(evaluations, steady, strict=True)])
+    nees_share = percent_beyond_interval(ne, ne_t, chi2_upper(n, 0.95))
     keep_nis = [e.update_age >= settle_s for e in evaluations]
     ni = np.concatenate([e.nis[k] for e, k in zip(evaluations, keep_nis, strict=True)])
     ni_dof = np.concatenate(
@@ -225,8 +226,8 @@ def accuracy_and_consistency(
         },
         "anees": anees(ne, n),
         "nees_bound": chi2_upper(n, 0.95),
-        "nees_percent_beyond": percent_beyond(ne, chi2_upper(n, 0.95)),
-        "nees_beyond_interval": percent_beyond_interval(ne, ne_t, chi2_upper(n, 0.95)).to_dict(),
+        "nees_percent_beyond": nees_share.percent,
+        "nees_beyond_interval": nees_share.to_dict(),
         "anis": _normalised_mean(ni, ni_dof),
         "nis_bound": chi2_upper(common_dof, 0.95) if common_dof else nan,
         "nis_percent_beyond": _percent_beyond_bound(ni, ni_dof),
