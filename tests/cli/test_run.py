@@ -62,7 +62,9 @@ def test_run_default_scenario_writes_summary_report_and_figures(tmp_path, capsys
         assert 0.0 < s["position_rmse_m"] < 0.2 and 0.0 < s["yaw_rmse_rad"] < 0.2
         assert s["anees"] > 0.0 and 0.0 <= s["nees_percent_beyond"] <= 100.0
         share = s["nees_beyond_interval"]
-        assert share["percent"] == s["nees_percent_beyond"] and share["batches"] == 10
+        assert share["percent"] == s["nees_percent_beyond"]
+        # two independent runs: each run one cluster
+        assert share["clustering"] == "runs" and share["clusters"] == share["runs"] == 2
     report = (out / "report.md").read_text()
     share = summary["team"]["nees_beyond_interval"]
     lo, hi = share["interval"]

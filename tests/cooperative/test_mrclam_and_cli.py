@@ -126,7 +126,8 @@ def test_mrclam_cl_on_a_cut_of_run6_states_its_windows(mrclam_run6_cut, tmp_path
         assert np.isfinite(target["pos_rmse_m"]) and np.isfinite(target["nees_pct_beyond"])
         # the held-out share's interval by batch means: the same share, inside its interval
         share = target["nees_beyond_interval"]
-        assert share["percent"] == target["nees_pct_beyond"] and share["batches"] == 10
+        assert share["percent"] == target["nees_pct_beyond"] and share["clusters"] == 10
+        assert share["clustering"] == "time blocks" and share["runs"] == 1
         assert share["interval"][0] <= share["percent"] <= share["interval"][1]
         assert share["verdict"] in {"consistent", "conservative", "over-confident"}
         assert (
@@ -295,6 +296,8 @@ def test_sharma2013_cli_writes_the_acceptance_keys(tmp_path, monkeypatch):
         assert case["observability_rank"]["available"] is False
         share = case["nees_beyond_interval"]
         assert share["percent"] == case["nees_pct_beyond"] and share["samples"] > 0
+        assert share["clustering"] == "time blocks"  # one run: its blocks of time
+        assert case["nees_pct_beyond_per_run"] == [pytest.approx(share["percent"])]
     aware = summary["observability_aware"]
     assert set(aware["nees_beyond_interval"]) == {"no_landmark", "one_landmark"}
     share = aware["nees_beyond_interval"]["no_landmark"]

@@ -132,8 +132,9 @@ def test_small_reproduction_on_another_mrclam_folder(small_dataset: Path, tmp_pa
             assert 0 <= t4["nees_percent_beyond"] <= 100
             # one draw still gets the share's interval: by batch means over time
             assert t4["nees_beyond_interval"]["percent"] == t4["nees_percent_beyond"]
+            assert t4["nees_beyond_interval"]["clustering"] == "time blocks"
             # of 10 blocks, those the steady state reaches (a re-created track leaves gaps)
-            assert 2 <= t4["nees_beyond_interval"]["batches"] <= 10
+            assert 2 <= t4["nees_beyond_interval"]["clusters"] <= 10
             assert set(t4["max_conditioning"]) == {"P", "R", "S"}
             assert t4["run_averaged_nees"] is None  # one draw: no band across draws
         assert set(summary["table3_best"][kind]) == set(summary["table3"][kind])

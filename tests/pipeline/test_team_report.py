@@ -35,8 +35,20 @@ def test_two_runs_pool_into_the_summary_layout():
     assert pair["track_events"]["created"] == 2  # one per run
     assert len(pair["nees_run_average_band"]) == 2 and 0 <= pair["nees_run_average_in_band_percent"]
     everything = [e for r in results for e in r.evaluations]
-    pooled = accuracy_and_consistency(everything, settle_s=2.0)
+    run_of = [k for k, r in enumerate(results) for _ in r.evaluations]
+    pooled = accuracy_and_consistency(everything, settle_s=2.0, runs=run_of)
     assert {k: summary["team"][k] for k in pooled} == pooled
+    # the NEES share's interval: the two independent runs are its clusters
+    share = summary["team"]["nees_beyond_interval"]
+    assert share["clustering"] == "runs" and share["clusters"] == share["runs"] == 2
+    replayed = accuracy_and_consistency(
+        everything, settle_s=2.0, runs=run_of, shared_recording=True
+    )["nees_beyond_interval"]
+    assert replayed["clustering"] == "runs and time blocks" and replayed["clusters"] == 2
+    one_run = accuracy_and_consistency(everything, settle_s=2.0)["nees_beyond_interval"]
+    assert one_run["clustering"] == "time blocks" and one_run["clusters"] == 10
+    with pytest.raises(ConfigError, match="one per evaluation"):
+        accuracy_and_consistency(everything, settle_s=2.0, runs=[0])
     for s in (summary["team"], pair):  # the spread of the per-run RMSE over the two runs
         spread = s["position_rmse_over_runs"]
         assert spread["runs"] == 2 and spread["std"] >= 0.0

@@ -596,7 +596,9 @@ def _table3_entry(E: Array, ss: NDArray[np.bool_], case: str) -> dict[str, Any]:
 def _consistency_entry(runs: list[SeriesEvaluation], settle_s: float) -> dict[str, Any]:
     """Steady-state % NEES beyond χ²(4, 0.95), % NIS beyond χ²(3, 0.95) and ANEES; max
     conditioning of P, R and S over every update."""
-    pooled = accuracy_and_consistency(runs, settle_s=settle_s)
+    pooled = accuracy_and_consistency(
+        runs, settle_s=settle_s, runs=range(len(runs)), shared_recording=True
+    )
     return {
         "nees_percent_beyond": pooled["nees_percent_beyond"],
         "nees_beyond_interval": pooled["nees_beyond_interval"],

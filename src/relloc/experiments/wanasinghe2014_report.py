@@ -601,10 +601,10 @@ def _replay_tables(s: dict[str, Any], kind: str) -> list[str]:
         "run-averaged NEES averages the draws at each update time; the draws differ in sensor "
         "noise and initial pose but share the one recorded odometry, so its band tests the "
         "consistency towards the sensor noise, not towards the odometry error. The share's "
-        "95 % interval is by batch means over time (the steady state cut into 10 blocks, each "
-        "block's samples of every draw one sample), so it counts the errors the draws share "
-        "and those that persist in time; its verdict says whether it holds the 5 % of a "
-        "consistent filter, lies above (over-confident) or below (conservative).",
+        "95 % interval is by cluster means two ways, over the draws and over time (the "
+        "steady state cut into 10 blocks), so it counts the errors the draws share at one "
+        "time and those that persist through a draw; its verdict says whether it holds the "
+        "5 % of a consistent filter, lies above (over-confident) or below (conservative).",
     ]
 
 

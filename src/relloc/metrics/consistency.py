@@ -9,19 +9,35 @@
   ANEES ``= ε̄ / n`` (ideal 1) has the same band divided by ``n``. The ``N`` values must be
   independent: NEES of independent runs at one instant (:func:`run_average_band`), never the
   time-correlated samples of one run pooled as if independent.
-* One run, no independent copies (a real recording): the share beyond the bound is still a
-  fair point estimate, but its samples are correlated in time, so the binomial spread
-  ``√(p(1−p)/N)`` understates its uncertainty. :func:`percent_beyond_interval` gives its
-  interval of confidence ``c`` by batch means over time: the span is cut into ``B`` contiguous
-  blocks of equal duration, each block (every subject's samples in it) one cluster, and the
-  ratio estimator ``p̂ = Σ_b k_b / Σ_b n_b`` (``k_b`` of the block's ``n_b`` samples beyond the
-  bound) gets the cluster variance
+* The share beyond the bound with its uncertainty: the share is a fair point estimate, but its
+  samples are correlated in time (and, on one recording, across subjects), so the binomial
+  spread ``√(p(1−p)/N)`` understates its uncertainty. :func:`percent_beyond_interval` gives its
+  interval of confidence ``c`` by cluster (batch) means: the samples fall into ``G`` clusters,
+  and the ratio estimator ``p̂ = Σ_g k_g / Σ_g n_g`` (``k_g`` of the cluster's ``n_g`` samples
+  beyond the bound) gets the cluster variance
 
-      V̂ = B/(B−1) · Σ_b (k_b − p̂ n_b)² / (Σ_b n_b)²,
+      V̂ = G/(G−1) · Σ_g (k_g − p̂ n_g)² / (Σ_g n_g)²,
 
-  valid when a block is long against the correlation time; ``p̂ ± t_{B−1}((1+c)/2) √V̂``
-  (clipped to [0, 1]), and the effective sample size ``N_eff = p̂(1−p̂)/V̂`` (Bar-Shalom et al.
-  2001 §5.4 for the test; batch means: Law & Kelton, *Simulation Modeling and Analysis* §9.5).
+  the effective sample size ``N_eff = p̂(1−p̂)/V̂`` (at most ``N``) and the interval of Korn &
+  Graubard (1998): Clopper–Pearson's for ``p̂ N_df`` successes in
+
+      N_df = N_eff · (t_{N−1}(q) / t_{G−1}(q))²,     q = (1+c)/2,
+
+  which, unlike ``p̂ ± t_{G−1}(q) √V̂``, stays inside [0, 1] and keeps its coverage for shares
+  near 0 (5 %) and clusters of unequal share (Bar-Shalom et al. 2001 §5.4 for the test; batch
+  means: Law & Kelton, *Simulation Modeling and Analysis* §9.5). The clusters must be about
+  independent:
+
+  - one run: ``B`` contiguous blocks of equal duration, each block (every subject's samples in
+    it) one cluster — valid when a block is long against the correlation time;
+  - independent runs (Monte Carlo): each run one cluster, ``G = R``. Blocks of time pooled over
+    the runs would miss what persists through a run (a run whose filter locked onto a wrong
+    geometry stays over-confident in every block), and the interval would be too narrow;
+  - runs that replay one recording (fresh measurement noise on shared odometry): correlated
+    both through a run and across the runs at one time, so the variance is two-way clustered
+    (Cameron, Gelbach & Miller 2011), ``V̂ = V̂_runs + V̂_blocks − V̂_cells`` with the cells
+    ``run × block`` each by the formula above (``max(V̂_runs, V̂_blocks)`` should the difference
+    not be positive), and ``G = min(R, B)``.
 """
 
 from __future__ import annotations
@@ -165,22 +181,28 @@ def percent_beyond(values: ArrayLike, bound: float) -> float:
 #: 45 s blocks (longer than the seconds over which odometry errors persist on MRCLAM).
 INTERVAL_BATCHES = 10
 
+#: How :func:`percent_beyond_interval` forms its clusters (module docstring).
+CLUSTERINGS = ("time blocks", "runs", "runs and time blocks")
+
 
 @dataclass(frozen=True)
 class BeyondShare:
     """A share (%) of values beyond a bound with its interval (of confidence ``confidence``) by
-    batch means (:func:`percent_beyond_interval`): ``samples`` N, ``effective_samples``
-    ``N_eff`` (at most N), ``batches`` (non-empty blocks), ``batch_s`` (block duration),
-    ``expected_percent`` (what a consistent filter leaves beyond the bound: 5 for a
-    ``χ²(0.95)`` bound). ``interval`` and ``effective_samples`` are ``None`` with fewer than two
-    non-empty blocks."""
+    cluster means (:func:`percent_beyond_interval`): ``samples`` N, ``effective_samples``
+    ``N_eff`` (at most N), ``clustering`` (one of :data:`CLUSTERINGS`), ``clusters`` ``G``
+    (non-empty clusters; ``min(R, B)`` for two-way clustering), ``runs`` R, ``batch_s`` (time
+    block duration, ``None`` when clustered by runs alone), ``expected_percent`` (what a consistent
+    filter leaves beyond the bound: 5 for a ``χ²(0.95)`` bound). ``interval`` and
+    ``effective_samples`` are ``None`` with fewer than two clusters."""
 
     percent: float
     interval: tuple[float, float] | None
     samples: int
     effective_samples: float | None
-    batches: int
-    batch_s: float
+    clustering: str
+    clusters: int
+    runs: int
+    batch_s: float | None
     expected_percent: float
     confidence: float
 
@@ -200,10 +222,31 @@ class BeyondShare:
             "interval": list(self.interval) if self.interval is not None else None,
             "samples": self.samples,
             "effective_samples": self.effective_samples,
-            "batches": self.batches,
+            "clustering": self.clustering,
+            "clusters": self.clusters,
+            "runs": self.runs,
             "batch_s": self.batch_s,
             "verdict": self.verdict,
         }
+
+
+def _cluster_variance(labels: NDArray[np.int64], beyond: Array, p_hat: float) -> tuple[float, int]:
+    """``(V̂, G)`` of the ratio estimator over the clusters ``labels`` (module docstring)."""
+    _, which = np.unique(labels, return_inverse=True)
+    n_g = np.bincount(which).astype(float)
+    k_g = np.bincount(which, weights=beyond)
+    g = int(n_g.size)
+    if g < 2:
+        return 0.0, g
+    return g / (g - 1) * float(np.sum((k_g - p_hat * n_g) ** 2)) / float(np.sum(n_g)) ** 2, g
+
+
+def _time_blocks(t: Array, batches: int) -> tuple[NDArray[np.int64], float]:
+    """Each sample's block of ``batches`` contiguous blocks of equal duration, and the duration."""
+    width = float(t.max() - t.min()) / batches
+    if width > 0:
+        return np.minimum((t - t.min()) / width, batches - 1).astype(np.int64), width
+    return np.zeros(t.size, dtype=np.int64), width
 
 
 def percent_beyond_interval(
@@ -211,17 +254,21 @@ def percent_beyond_interval(
     times: ArrayLike,
     bound: float | ArrayLike,
     *,
+    runs: ArrayLike | None = None,
+    shared_recording: bool = False,
     expected_percent: float = 5.0,
     batches: int = INTERVAL_BATCHES,
     confidence: float = 0.95,
 ) -> BeyondShare:
     """Percentage of finite ``values`` above ``bound`` with its interval of confidence
-    ``confidence`` by batch means over ``times`` (module docstring): the samples of any number
-    of subjects of one run, each with its time; ``bound`` a scalar or one per value;
-    ``expected_percent`` what a consistent filter leaves beyond it (5 for ``χ²(0.95)``), for
-    the verdict. When every block sits at ``p̂`` (e.g. none beyond anywhere) there is no spread
-    to measure: ``N_eff`` is then the number of blocks and the interval Clopper–Pearson's for
-    ``B p̂`` in ``B``.
+    ``confidence`` by cluster means (module docstring): samples of any number of subjects, each
+    with its time and, with ``runs``, the run it belongs to; ``bound`` a scalar or one per
+    value; ``expected_percent`` what a consistent filter leaves beyond it (5 for ``χ²(0.95)``),
+    for the verdict. The clusters: ``batches`` time blocks for one run (``runs`` omitted or
+    holding one run); the runs when there are several, independent; the runs and the time
+    blocks, two-way, when ``shared_recording`` says the runs replay one recording. When every
+    cluster sits at ``p̂`` (e.g. none beyond anywhere) there is no spread to measure: ``N_eff``
+    is then ``G`` and the interval Clopper–Pearson's for ``G p̂`` in ``G``.
     """
     c = _check_probability(confidence)
     expected = 100.0 * _check_probability(expected_percent / 100.0)
@@ -233,6 +280,12 @@ def percent_beyond_interval(
         raise ConfigError(
             f"percent_beyond_interval: {t.size} times for {v.size} values; one time per value"
         )
+    r = np.zeros(v.size, dtype=np.int64) if runs is None else np.asarray(runs).reshape(-1)
+    if r.shape != v.shape or not np.issubdtype(r.dtype, np.integer):
+        raise ConfigError(
+            f"percent_beyond_interval: {r.size} run indices ({r.dtype}) for {v.size} values; "
+            "one integer per value"
+        )
     b = np.asarray(bound, dtype=float)
     if b.size != 1 and b.shape != v.shape:
         raise ConfigError(
@@ -240,36 +293,48 @@ def percent_beyond_interval(
         )
     b = np.broadcast_to(b.reshape(-1) if b.size == 1 else b, v.shape)
     ok = np.isfinite(v) & np.isfinite(t)
-    v, t, b = v[ok], t[ok], b[ok]
+    v, t, b, r = v[ok], t[ok], b[ok], r[ok].astype(np.int64)
+    n_runs = int(np.unique(r).size)
+    nan = float("nan")
     if v.size == 0:
-        return BeyondShare(float("nan"), None, 0, None, 0, float("nan"), expected, c)
+        return BeyondShare(nan, None, 0, None, "time blocks", 0, 0, None, expected, c)
     beyond = (v > b).astype(float)
     percent = float(100.0 * np.count_nonzero(beyond) / v.size)  # as percent_beyond rounds it
     p_hat = percent / 100.0
-    width = float(t.max() - t.min()) / batches
-    if width > 0:
-        block = np.minimum((t - t.min()) / width, batches - 1).astype(np.int64)
+    block, width = _time_blocks(t, batches)
+    batch_s: float | None = width
+    if n_runs < 2:
+        clustering = "time blocks"
+        var, g = _cluster_variance(block, beyond, p_hat)
+    elif not shared_recording:
+        clustering, batch_s = "runs", None
+        var, g = _cluster_variance(r, beyond, p_hat)
     else:
-        block = np.zeros(v.size, dtype=np.int64)
-    n_b = np.bincount(block, minlength=batches).astype(float)
-    k_b = np.bincount(block, weights=beyond, minlength=batches)
-    used = n_b > 0
-    n_b, k_b = n_b[used], k_b[used]
-    m = int(n_b.size)
-    if m < 2:
-        return BeyondShare(percent, None, int(v.size), None, m, width, expected, c)
+        clustering = "runs and time blocks"
+        v_runs, g_runs = _cluster_variance(r, beyond, p_hat)
+        v_blocks, g_blocks = _cluster_variance(block, beyond, p_hat)
+        v_cells, _ = _cluster_variance(r * batches + block, beyond, p_hat)
+        var = v_runs + v_blocks - v_cells
+        if var <= 0.0:
+            var = max(v_runs, v_blocks)
+        g = min(g_runs, g_blocks)
+    if g < 2:
+        return BeyondShare(
+            percent, None, int(v.size), None, clustering, g, n_runs, batch_s, expected, c
+        )
     from scipy.stats import beta
     from scipy.stats import t as student_t
 
-    var = m / (m - 1) * float(np.sum((k_b - p_hat * n_b) ** 2)) / float(np.sum(n_b)) ** 2
     if var > 0.0:
-        half = float(student_t.ppf((1.0 + c) / 2.0, m - 1) * np.sqrt(var))
-        lo, hi = max(0.0, p_hat - half), min(1.0, p_hat + half)
         n_eff = min(float(v.size), p_hat * (1.0 - p_hat) / var)
+        q = (1.0 + c) / 2.0
+        size = n_eff * (student_t.ppf(q, v.size - 1) / student_t.ppf(q, g - 1)) ** 2
     else:
-        k = p_hat * m
-        lo = float(beta.ppf((1.0 - c) / 2.0, k, m - k + 1)) if k > 0 else 0.0
-        hi = float(beta.ppf((1.0 + c) / 2.0, k + 1, m - k)) if k < m else 1.0
-        n_eff = float(m)
+        n_eff = size = float(g)
+    k = p_hat * size
+    lo = float(beta.ppf((1.0 - c) / 2.0, k, size - k + 1)) if k > 0 else 0.0
+    hi = float(beta.ppf((1.0 + c) / 2.0, k + 1, size - k)) if k < size else 1.0
     interval = (100.0 * lo, 100.0 * hi)
-    return BeyondShare(percent, interval, int(v.size), n_eff, m, width, expected, c)
+    return BeyondShare(
+        percent, interval, int(v.size), n_eff, clustering, g, n_runs, batch_s, expected, c
+    )

@@ -12,8 +12,9 @@ against the recording's ground truth in the series' frame (:mod:`relloc.pipeline
 :func:`accuracy_and_consistency` pools evaluations (runs, pairs) over their steady-state samples
 (track age ≥ ``settle_s``): RMSE of position, yaw and every state; the share of errors inside
 ±3σ; ANEES and the share of NEES beyond the single-run bound ``χ²(n, 0.95)`` (about 5 % for a
-consistent filter), with its 95 % interval by batch means over time (the samples of one run are
-correlated in time; :func:`relloc.metrics.consistency.percent_beyond_interval`); ANIS and the
+consistent filter), with its 95 % interval by cluster means (the samples of one run are
+correlated in time: time blocks of one run, the runs when they are independent, both when they
+replay one recording; :func:`relloc.metrics.consistency.percent_beyond_interval`); ANIS and the
 share of NIS beyond ``χ²(m, 0.95)``.
 :func:`run_averaged_nees` gives the NEES averaged over *independent runs at one instant* — the
 only average whose 95 % band (:func:`relloc.metrics.consistency.mean_chi2_band`) is valid;
@@ -173,18 +174,30 @@ def _percent_beyond_bound(values: Array, dof: IntArray, p: float = 0.95) -> floa
 
 
 def accuracy_and_consistency(
-    evaluations: Sequence[SeriesEvaluation], *, settle_s: float
+    evaluations: Sequence[SeriesEvaluation],
+    *,
+    settle_s: float,
+    runs: Sequence[int] | None = None,
+    shared_recording: bool = False,
 ) -> dict[str, Any]:
     """Pooled accuracy and consistency of evaluations in one frame (module docstring).
 
-    Keys: ``samples``, ``position_rmse_m``, ``yaw_rmse_rad``, ``rmse`` and
+    ``runs``: the run of each evaluation (omitted: all of one run); ``shared_recording``: the
+    runs replay one recording (fresh measurement noise on the same odometry) rather than being
+    independent. Keys: ``samples``, ``position_rmse_m``, ``yaw_rmse_rad``, ``rmse`` and
     ``within_3sigma_percent`` per state, ``anees``, ``nees_bound``, ``nees_percent_beyond``,
-    ``nees_beyond_interval`` (that share's interval by batch means over the record times,
+    ``nees_beyond_interval`` (that share's interval by cluster means — time blocks of one
+    run, the independent runs, or both ways for runs of one recording —,
     :func:`relloc.metrics.consistency.percent_beyond_interval`, with its verdict), ``anis``,
     ``nis_bound`` (the bound of the most common NIS dof), ``nis_percent_beyond``.
     """
     if not evaluations:
         raise ConfigError("accuracy_and_consistency: nothing to pool")
+    if runs is not None and len(runs) != len(evaluations):
+        raise ConfigError(
+            f"accuracy_and_consistency: {len(runs)} run indices for {len(evaluations)} "
+            "evaluations; one per evaluation"
+        )
     frames = {e.frame for e in evaluations}
     if len(frames) != 1:
         raise ConfigError(f"accuracy_and_consistency: mixed frames {sorted(frames)}")
@@ -199,7 +212,14 @@ def accuracy_and_consistency(
     )
     ne = np.concatenate([e.nees[s] for e, s in zip(evaluations, steady, strict=True)])
     ne_t = np.concatenate([e.t[s] for e, s in zip(evaluations, steady, strict=True)])
-    nees_share = percent_beyond_interval(ne, ne_t, chi2_upper(n, 0.95))
+    ne_run = (
+        None
+        if runs is None
+        else np.repeat(np.asarray(runs, dtype=np.int64), [int(np.sum(s)) for s in steady])
+    )
+    nees_share = percent_beyond_interval(
+        ne, ne_t, chi2_upper(n, 0.95), runs=ne_run, shared_recording=shared_recording
+    )
     keep_nis = [e.update_age >= settle_s for e in evaluations]
     ni = np.concatenate([e.nis[k] for e, k in zip(evaluations, keep_nis, strict=True)])
     ni_dof = np.concatenate(

@@ -15,8 +15,8 @@ over all runs on the *steady-state* samples (track age ≥ ``settle_s``):
 - ``within_3sigma_percent`` per state: share of samples with ``|e_i| ≤ 3σ_i``;
 - ``anees`` (ideal 1) and ``nees_percent_beyond`` the single-run bound ``χ²(4, 0.95)``
   (seed 000 Table 4; about 5 % for a consistent filter), ``nees_beyond_interval`` its 95 %
-  interval by batch means over the record times, with the verdict
-  (:func:`relloc.metrics.consistency.percent_beyond_interval`);
+  interval by cluster means (the independent runs; one run's record times in blocks), with
+  the verdict (:func:`relloc.metrics.consistency.percent_beyond_interval`);
 - ``nees_run_average_in_band_percent``: share of recording times at which the NEES averaged
   over the ``N`` runs lies in the two-sided 95 % band of such an average (``band``; needs
   ``N ≥ 2``; about 95 % for a consistent filter) — :func:`relloc.pipeline.evaluation.
@@ -159,7 +159,7 @@ def _pair_summary(
         "observer": first.owner,
         "observed": first.subject,
         "observed_kind": first.platform,
-        **accuracy_and_consistency(runs, settle_s=settle_s),
+        **accuracy_and_consistency(runs, settle_s=settle_s, runs=range(len(runs))),
     }
     if len(runs) >= 2:
         band = nees_band_check(runs, rate_hz=rate, settle_s=settle_s)
@@ -248,6 +248,7 @@ def summarise(
         for lab in labels
     }
     everything = [e for r in results for e in r.evaluations]
+    run_of = [k for k, r in enumerate(results) for _ in r.evaluations]
     summary = {
         **(dict(meta) if meta else {}),
         "runs": len(results),
@@ -255,7 +256,7 @@ def summarise(
         "record_rate_hz": record_rate_hz,
         "pairs": pairs,
         "team": {
-            **accuracy_and_consistency(everything, settle_s=settle_s),
+            **accuracy_and_consistency(everything, settle_s=settle_s, runs=run_of),
             **_team_spread(results, settle_s=settle_s),
         },
         "events_run0": [
@@ -647,9 +648,10 @@ def report_markdown(
         "(NIS) values above χ²(4, 0.95) = 9.49 (χ²(3, 0.95) = 7.81), and its run-averaged "
         "NEES inside the 95 % band about 95 % of the time. Samples of one run are correlated "
         "in time, so these shares fluctuate more than independent draws would: the NEES "
-        "share's 95 % interval is by batch means (the steady-state span cut into 10 blocks, "
-        "each a sample), and its verdict says whether it holds the 5 % of a consistent "
-        "filter, lies above (over-confident) or below (conservative).",
+        "share's 95 % interval is by cluster means (each independent run one cluster; one "
+        "run's steady-state span cut into 10 blocks, each a cluster), and its verdict says "
+        "whether it holds the 5 % of a consistent filter, lies above (over-confident) or "
+        "below (conservative).",
         "",
         "## Spread over runs and convergence from the unknown start",
         "",
