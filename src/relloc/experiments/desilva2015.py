@@ -376,8 +376,10 @@ def metrics(results: list[LeaderRunScores]) -> dict[str, Any]:
         "nees_percent_beyond_chi2_95": percent_beyond(
             ne_pairs[..., steady], chi2_upper(NEES_DOF, 0.95)
         ),
-        # (runs, pairs, scans): the NEES averaged over the independent runs at each scan
-        "nees_run_average": run_average_band(np.moveaxis(ne_pairs[..., steady], 1, 0), NEES_DOF),
+        # (runs, scans, pairs): the NEES averaged over the independent runs at each scan
+        "nees_run_average": run_average_band(
+            np.transpose(ne_pairs[..., steady], (1, 2, 0)), NEES_DOF
+        ),
         "joint_wrong_association_rate": float(
             j_wrong[leaders_idx, robots_idx].sum() / max(j_used[leaders_idx, robots_idx].sum(), 1)
         ),

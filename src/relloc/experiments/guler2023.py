@@ -792,9 +792,11 @@ def _report(s: dict[str, Any], files: dict[str, str]) -> str:
         "",
         "Consistency of the relative position: at every tick the 2-DOF NEES averaged over the "
         "independent runs, against the two-sided 95 % band of such a mean (share of ticks and "
-        "followers inside / below / above; *consistent* when at least 80 % are inside, else "
-        "*conservative* or *over-confident* after the side outside more often; needs ≥ 2 "
-        "runs). ANEES (mean over everything, ideal 1) is descriptive only: its samples are "
+        "followers inside / below / above; *over-confident* when the share above is "
+        "significantly more than the 2.5 % a consistent filter leaves there — its 95 % "
+        "interval by batch means over the ticks lies wholly above —, *conservative* when the "
+        "share below is, else *consistent*; needs ≥ 2 runs). ANEES (mean over everything, "
+        "ideal 1) is descriptive only: its samples are "
         "correlated in time, so it has no valid band. Mean NIS per degree of freedom of the "
         "range and camera blocks.",
         "",

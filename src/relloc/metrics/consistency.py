@@ -116,23 +116,25 @@ def anees_band(dof: int, n_samples: int, p: float = 0.95) -> tuple[float, float]
     return lo / dof, hi / dof
 
 
-#: Verdict rule of :func:`run_average_band`: consistent when at least this share (%) of the
-#: run-averaged values lies inside the band (95 % expected; instants are correlated in time, so
-#: the share fluctuates more than for independent draws).
-CONSISTENT_IN_BAND_PERCENT = 80.0
-
-
 def run_average_band(nees_runs: ArrayLike, dof: int, p: float = 0.95) -> dict[str, object]:
-    """The averaged test done right: ``nees_runs (R, ...)`` holds NEES values of ``R``
-    independent runs (axis 0) at the same instants (and subjects) on the other axes. At every
-    instant the mean over the runs is compared with the two-sided ``p`` band of the mean of
-    ``R`` independent χ²(dof) values (:func:`mean_chi2_band`); nothing correlated is pooled.
+    """The averaged test done right: ``nees_runs (R, T, ...)`` holds NEES values of ``R``
+    independent runs (axis 0) at the same ``T`` instants (axis 1, in time order) and subjects
+    (further axes). At every instant the mean over the runs is compared with the two-sided
+    ``p`` band of the mean of ``R`` independent χ²(dof) values (:func:`mean_chi2_band`);
+    nothing correlated is pooled.
+
+    The run-averaged values of neighbouring instants are correlated, so the shares of instants
+    below and above the band fluctuate more than binomial counts: each gets its 95 % interval
+    by batch means over the instants (:func:`percent_beyond_interval`, ten blocks of
+    consecutive instants, every subject of an instant in its block), against the
+    ``(1 − p)/2`` a consistent filter leaves on each side.
 
     Returns the shares (%) of instants inside, below (conservative) and above (over-confident)
-    the band, the band, ``runs``, ``instants``, and a ``verdict``: ``"consistent"`` when the
-    share inside is at least :data:`CONSISTENT_IN_BAND_PERCENT`, else ``"conservative"`` or
-    ``"over-confident"`` after the side with the larger share; ``None`` (with ``reason``) for
-    fewer than two runs.
+    the band, ``below_band_interval`` and ``above_band_interval`` (the shares' intervals and
+    verdicts), the band, ``runs``, ``instants``, and a ``verdict``: ``"over-confident"`` when
+    the share above lies significantly above ``(1 − p)/2`` (its interval wholly above),
+    ``"conservative"`` when the share below does, the side with the larger share when both
+    do, else ``"consistent"``; ``None`` (with ``reason``) for fewer than two runs.
     """
     v = np.asarray(nees_runs, dtype=float)
     runs = int(v.shape[0]) if v.ndim else 0
@@ -140,7 +142,12 @@ def run_average_band(nees_runs: ArrayLike, dof: int, p: float = 0.95) -> dict[st
         return {"verdict": None, "runs": runs, "reason": "needs at least two independent runs"}
     lo, hi = mean_chi2_band(dof, runs, p)
     avg = v.mean(axis=0)
-    avg = avg[np.isfinite(avg)]
+    instant = np.broadcast_to(
+        np.arange(avg.shape[0] if avg.ndim else 1, dtype=float).reshape(-1, *[1] * (avg.ndim - 1)),
+        avg.shape,
+    )
+    finite = np.isfinite(avg)
+    avg, instant = avg[finite], instant[finite]
     if avg.size == 0:
         return {
             "in_band_percent": float("nan"),
@@ -150,17 +157,25 @@ def run_average_band(nees_runs: ArrayLike, dof: int, p: float = 0.95) -> dict[st
             "verdict": None,
             "reason": "no instant with a value in every run",
         }
-    inside = float(100.0 * np.mean((avg >= lo) & (avg <= hi)))
-    below = float(100.0 * np.mean(avg < lo))
-    above = float(100.0 * np.mean(avg > hi))
-    if inside >= CONSISTENT_IN_BAND_PERCENT:
-        verdict = "consistent"
-    else:
+    side = 100.0 * (1.0 - p) / 2.0
+    below_share = percent_beyond_interval(-avg, instant, -lo, expected_percent=side)
+    above_share = percent_beyond_interval(avg, instant, hi, expected_percent=side)
+    below, above = below_share.percent, above_share.percent
+    inside = 100.0 - below - above
+    too_many = {
+        "over-confident": above_share.verdict == "over-confident",
+        "conservative": below_share.verdict == "over-confident",
+    }
+    if too_many["over-confident"] and too_many["conservative"]:
         verdict = "conservative" if below > above else "over-confident"
+    else:
+        verdict = next((k for k, flagged in too_many.items() if flagged), "consistent")
     return {
         "in_band_percent": inside,
         "below_band_percent": below,
         "above_band_percent": above,
+        "below_band_interval": below_share.to_dict(),
+        "above_band_interval": above_share.to_dict(),
         "band": [lo, hi],
         "runs": runs,
         "instants": int(avg.size),
