@@ -36,14 +36,19 @@ directions, and the NEES checks exactly that.
 How far ten runs carry the NEES share. A run's share is heavy-tailed: most runs of the
 observability-aware filters leave about 1 % beyond the bound and a few leave 20–50 %, so the
 runs are the clusters of the share's interval and ten runs say little. With the default seed
-2026 the OC EIF's no-landmark share is 9.78 % with interval 0.2–44.6 % (``N_eff`` 13); with
-seed 91, 1.73 % (0.6–4.0 %). ``relloc reproduce sharma2013 --runs 60 --seed 20261204`` (about
-13 min on 2 cores) gives for the OC EIF 3.79 % (2.2–6.2 %, ANEES 0.99) with no landmark and
-4.76 % (3.0–7.2 %, ANEES 1.00) with one; a run's own share has median 1.0 % and 2.5 %, and 5
-and 6 of the 60 runs leave more than 10 %. The FEJ EIF gives 3.42 % and 4.78 %; the plain EIF
-43.6 % (33.1–54.5 %) and 22.5 % (14.6–32.1 %). In the worst no-landmark runs the filter's
-heading error drifts to about 2.6 σ (run 3 of that seed: −0.19 rad at 300 s against σ 0.072)
-and the share grows through the run, from 3 % in its first minute to 56 % in its ninth.
+2026 the OC EIF's no-landmark share is 9.78 % with interval 0.2–44.6 % (``N_eff`` 13); with seed
+91, 1.73 % (0.6–4.0 %). ``relloc reproduce sharma2013 --runs 60 --seed 20261204`` (about 13 min
+on 2 cores) gives for the OC EIF 3.79 % (2.2–6.2 %, ANEES 0.99) with no landmark and 4.76 %
+(3.0–7.2 %, ANEES 1.00) with one; a run's own share has median 1.0 % and 2.5 %, and 5 and 6 of
+the 60 runs leave more than 10 %. The FEJ EIF gives 3.42 % and 4.78 %; the plain EIF 43.6 %
+(33.1–54.5 %) and 22.5 % (14.6–32.1 %). In the worst no-landmark runs the heading error (RMS
+over the robots, all of one sign at the end) sits at 2.5–2.6 times the filter's σ: in run 7 of
+seed 2026 (83.4 % beyond; the other nine runs 0.2–4.9 %) from the first 30 s on (0.16 rad
+against σ 0.063, then 0.18 against 0.069 at 300 s), as if the first updates, made while 5 m
+errors make the bearings strongly nonlinear, had turned the formation along the unobservable
+rotation, which no later bearing can undo; in run 3 of seed 20261204 (20.9 %) it grows through
+the run instead (0.11 to 0.19 rad against σ 0.066 to 0.072) and the share with it, from 3 % in
+the first minute to 56 % in the ninth. Neither cause was tested further.
 
 summary.json keys
 -----------------
@@ -56,12 +61,13 @@ robot ("1"…"5") → RMSE over runs and time, plus ``"mean"`` (RMS over robots)
 about 5 % for a consistent filter; ``nees_beyond_interval`` its 95 % interval by cluster
 means, each independent run one cluster, with the verdict), ``nees_pct_beyond_per_run`` (each
 run's own share) and ``anees``;
-``nees_run_average``: the NEES averaged over
-the independent runs at each output instant, per robot, against the two-sided 95 % band of such
-a mean (:func:`relloc.metrics.run_average_band`: ``in_band_percent``, about 95 % when
-consistent, ``below_band_percent``, ``above_band_percent``, ``band``, ``runs``, ``verdict``;
-needs ≥ 2 runs); ``used`` / ``rejected`` measurement counts (mean per run); in ``cases`` only,
-``observability_rank`` with ``full_rank`` and the paper's predicted rank (Theorems 2–4).
+``nees_run_average``: the NEES averaged over the independent runs at each output instant, per
+robot, against the two-sided 95 % band of such a mean (:func:`relloc.metrics.run_average_band`:
+``in_band_percent``, about 95 % when consistent, ``below_band_percent``,
+``above_band_percent`` with their intervals ``below_band_interval``, ``above_band_interval``,
+``band``, ``runs``, ``verdict``; needs ≥ 2 runs); ``used`` / ``rejected`` measurement counts
+(mean per run); in ``cases`` only, ``observability_rank`` with ``full_rank`` and the paper's
+predicted rank (Theorems 2–4).
 ``observability_aware``: the headline observability-aware filter (``block``, ``filter``),
 whether it meets the target (``target_met``, ``target``: NEES beyond ≤ 10 % in
 ``no_landmark`` and ``one_landmark`` with position RMSE not above the plain EIF's), each
