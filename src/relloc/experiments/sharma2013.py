@@ -41,14 +41,18 @@ runs are the clusters of the share's interval and ten runs say little. With the 
 on 2 cores) gives for the OC EIF 3.79 % (2.2–6.2 %, ANEES 0.99) with no landmark and 4.76 %
 (3.0–7.2 %, ANEES 1.00) with one; a run's own share has median 1.0 % and 2.5 %, and 5 and 6 of
 the 60 runs leave more than 10 %. The FEJ EIF gives 3.42 % and 4.78 %; the plain EIF 43.6 %
-(33.1–54.5 %) and 22.5 % (14.6–32.1 %). In the worst no-landmark runs the heading error (RMS
-over the robots, all of one sign at the end) sits at 2.5–2.6 times the filter's σ: in run 7 of
-seed 2026 (83.4 % beyond; the other nine runs 0.2–4.9 %) from the first 30 s on (0.16 rad
-against σ 0.063, then 0.18 against 0.069 at 300 s), as if the first updates, made while 5 m
-errors make the bearings strongly nonlinear, had turned the formation along the unobservable
-rotation, which no later bearing can undo; in run 3 of seed 20261204 (20.9 %) it grows through
-the run instead (0.11 to 0.19 rad against σ 0.066 to 0.072) and the share with it, from 3 % in
-the first minute to 56 % in the ninth. Neither cause was tested further.
+(33.1–54.5 %) and 22.5 % (14.6–32.1 %). Why the tail: the world frame's translation and rotation
+are unobservable with no landmark, so what the initial estimate's draw puts along them stays for
+the whole run, in every robot's error, and a run's NEES samples share it. Projected on those
+directions (generalised least squares under the prior, where the rotation's σ is 0.056 rad), the
+draw's squared Mahalanobis length ranks with the run's share (Spearman 0.64 over the 60 runs
+above). Run 7 of seed 2026 (83.4 % beyond; the other nine runs 0.2–4.9 %) drew the largest of
+its ten (7.91 of χ²₃, p 0.048), a rotation of −0.153 rad: the robots' heading errors stay near
+it from the first second on (−0.14 rad at 0.5 s, −0.18 at 300 s, against the filter's σ of
+0.061–0.069), as a consistent filter keeps them. Some runs are not explained so: run 53 of seed
+20261204 (28.3 %) drew 1.74, and in run 3 (20.9 %, drew 4.34) the heading error grows through
+the run (0.11 to 0.19 rad RMS over the robots, against σ 0.066 to 0.072) and the share with it,
+from 3 % in the first minute to 56 % in the ninth; those were not examined further.
 
 summary.json keys
 -----------------
