@@ -117,6 +117,9 @@ def test_run_average_band_judges_independent_runs_at_each_instant():
     assert run_average_band(0.4 * consistent, 2)["verdict"] == "conservative"
     # one run gives no valid band: no verdict instead of a pooled one
     assert run_average_band(consistent[:1], 2)["verdict"] is None
+    # one instant: the shares have no spread over time to be judged by
+    single = run_average_band(consistent[:, :1, 0], 2)
+    assert single["verdict"] is None and "one instant" in single["reason"]
 
 
 def _run_average_verdicts(rho: float, scale: float = 1.0, draws: int = 200) -> list[str]:

@@ -31,8 +31,8 @@
   - one run: ``B`` contiguous blocks of equal duration, each block (every subject's samples in
     it) one cluster — valid when a block is long against the correlation time;
   - independent runs (Monte Carlo): each run one cluster, ``G = R``. Blocks of time pooled over
-    the runs would miss what persists through a run (a run whose filter locked onto a wrong
-    geometry stays over-confident in every block), and the interval would be too narrow;
+    the runs would miss what persists through a run (an error drawn once along a direction no
+    measurement sees stays in every block of its run), and the interval would be too narrow;
   - runs that replay one recording (fresh measurement noise on shared odometry): correlated
     both through a run and across the runs at one time, so the variance is two-way clustered
     (Cameron, Gelbach & Miller 2011), ``V̂ = V̂_runs + V̂_blocks − V̂_cells`` with the cells
@@ -134,17 +134,17 @@ def run_average_band(nees_runs: ArrayLike, dof: int, p: float = 0.95) -> dict[st
     verdicts), the band, ``runs``, ``instants``, and a ``verdict``: ``"over-confident"`` when
     the share above lies significantly above ``(1 − p)/2`` (its interval wholly above),
     ``"conservative"`` when the share below does, the side with the larger share when both
-    do, else ``"consistent"``; ``None`` (with ``reason``) for fewer than two runs.
+    do, else ``"consistent"``; ``None`` (with ``reason``) for fewer than two runs, and
+    ``None`` for a single instant.
     """
     v = np.asarray(nees_runs, dtype=float)
     runs = int(v.shape[0]) if v.ndim else 0
     if runs < 2:
         return {"verdict": None, "runs": runs, "reason": "needs at least two independent runs"}
     lo, hi = mean_chi2_band(dof, runs, p)
-    avg = v.mean(axis=0)
+    avg = np.atleast_1d(v.mean(axis=0))
     instant = np.broadcast_to(
-        np.arange(avg.shape[0] if avg.ndim else 1, dtype=float).reshape(-1, *[1] * (avg.ndim - 1)),
-        avg.shape,
+        np.arange(avg.shape[0], dtype=float).reshape(-1, *[1] * (avg.ndim - 1)), avg.shape
     )
     finite = np.isfinite(avg)
     avg, instant = avg[finite], instant[finite]
@@ -166,7 +166,12 @@ def run_average_band(nees_runs: ArrayLike, dof: int, p: float = 0.95) -> dict[st
         "over-confident": above_share.verdict == "over-confident",
         "conservative": below_share.verdict == "over-confident",
     }
-    if too_many["over-confident"] and too_many["conservative"]:
+    verdict: str | None
+    reason = {}
+    if above_share.interval is None:
+        verdict = None
+        reason = {"reason": "one instant: no spread over time to judge the shares by"}
+    elif too_many["over-confident"] and too_many["conservative"]:
         verdict = "conservative" if below > above else "over-confident"
     else:
         verdict = next((k for k, flagged in too_many.items() if flagged), "consistent")
@@ -180,6 +185,7 @@ def run_average_band(nees_runs: ArrayLike, dof: int, p: float = 0.95) -> dict[st
         "runs": runs,
         "instants": int(avg.size),
         "verdict": verdict,
+        **reason,
     }
 
 
@@ -196,19 +202,17 @@ def percent_beyond(values: ArrayLike, bound: float) -> float:
 #: 45 s blocks (longer than the seconds over which odometry errors persist on MRCLAM).
 INTERVAL_BATCHES = 10
 
-#: How :func:`percent_beyond_interval` forms its clusters (module docstring).
-CLUSTERINGS = ("time blocks", "runs", "runs and time blocks")
-
 
 @dataclass(frozen=True)
 class BeyondShare:
     """A share (%) of values beyond a bound with its interval (of confidence ``confidence``) by
     cluster means (:func:`percent_beyond_interval`): ``samples`` N, ``effective_samples``
-    ``N_eff`` (at most N), ``clustering`` (one of :data:`CLUSTERINGS`), ``clusters`` ``G``
-    (non-empty clusters; ``min(R, B)`` for two-way clustering), ``runs`` R, ``batch_s`` (time
-    block duration, ``None`` when clustered by runs alone), ``expected_percent`` (what a consistent
-    filter leaves beyond the bound: 5 for a ``χ²(0.95)`` bound). ``interval`` and
-    ``effective_samples`` are ``None`` with fewer than two clusters."""
+    ``N_eff`` (at most N), ``clustering`` (``"time blocks"``, ``"runs"`` or ``"runs and time
+    blocks"``), ``clusters`` ``G`` (non-empty clusters; ``min(R, B)`` for two-way clustering),
+    ``runs`` R, ``batch_s`` (time block duration, ``None`` when clustered by runs alone),
+    ``expected_percent`` (what a consistent filter leaves beyond the bound: 5 for a
+    ``χ²(0.95)`` bound). ``interval`` and ``effective_samples`` are ``None`` with fewer than two
+    clusters."""
 
     percent: float
     interval: tuple[float, float] | None
