@@ -18,8 +18,10 @@ over all runs on the *steady-state* samples (track age ≥ ``settle_s``):
   interval by cluster means (the independent runs; one run's record times in blocks), with
   the verdict (:func:`relloc.metrics.consistency.percent_beyond_interval`);
 - ``nees_run_average_in_band_percent``: share of recording times at which the NEES averaged
-  over the ``N`` runs lies in the two-sided 95 % band of such an average (``band``; needs
-  ``N ≥ 2``; about 95 % for a consistent filter) — :func:`relloc.pipeline.evaluation.
+  over the ``N`` runs lies in the two-sided 95 % band of such an average
+  (``nees_run_average_band``; needs ``N ≥ 2``; about 95 % for a consistent filter), and
+  ``nees_run_average_verdict``, whether the shares below and above the band exceed the 2.5 %
+  each side leaves by more than their intervals allow — :func:`relloc.pipeline.evaluation.
   nees_band_check`;
 - ``anis`` (NIS/3, ideal 1) and ``nis_percent_beyond`` ``χ²(3, 0.95)``;
 - ``max_condition_log10`` of ``P``, ``R`` and ``S`` (seed 000 §7.3; > 6 is ill-conditioned);
