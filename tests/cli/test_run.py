@@ -69,6 +69,11 @@ def test_run_default_scenario_writes_summary_report_and_figures(tmp_path, capsys
     share = summary["team"]["nees_beyond_interval"]
     lo, hi = share["interval"]
     assert f"| {lo:.1f}–{hi:.1f} {share['verdict']} |" in report
+    # the run-averaged NEES's verdict beside its share in band (two runs: a verdict per pair)
+    assert "| avg NEES in band % | its verdict |" in report
+    for s in summary["pairs"].values():
+        assert s["nees_run_average_verdict"] in {"consistent", "conservative", "over-confident"}
+        assert f"| {s['nees_run_average_verdict']} |" in report
     pngs = sorted(p.name for p in out.glob("*.png"))
     assert {"errors_all.png", "nees_nis.png", "conditioning.png", "trajectories.png"} <= set(pngs)
     for name in pngs:

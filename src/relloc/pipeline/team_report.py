@@ -324,6 +324,7 @@ def summary_rows(summary: Mapping[str, Any]) -> tuple[list[str], list[list[Any]]
         "NEES>χ²₉₅ %",
         "its 95 % interval",
         "avg NEES in band %",
+        "its verdict",
         "ANIS",
         "NIS>χ²₉₅ %",
     ]
@@ -342,6 +343,7 @@ def summary_rows(summary: Mapping[str, Any]) -> tuple[list[str], list[list[Any]]
                 s["nees_percent_beyond"],
                 interval_text(s.get("nees_beyond_interval")),
                 s.get("nees_run_average_in_band_percent"),
+                s.get("nees_run_average_verdict") or "—",
                 s["anis"],
                 s["nis_percent_beyond"],
             ]
@@ -653,7 +655,10 @@ def report_markdown(
         "share's 95 % interval is by cluster means (each independent run one cluster; one "
         "run's steady-state span cut into 10 blocks, each a cluster), and its verdict says "
         "whether it holds the 5 % of a consistent filter, lies above (over-confident) or "
-        "below (conservative).",
+        "below (conservative). The run-averaged NEES's verdict is over-confident (conservative) "
+        "when the share of times above (below) the band is more than the 2.5 % a consistent "
+        "filter leaves there by more than its 95 % interval allows (batch means over the "
+        "times); it needs two runs or more.",
         "",
         "## Spread over runs and convergence from the unknown start",
         "",
