@@ -49,10 +49,14 @@ draw's squared Mahalanobis length ranks with the run's share (Spearman 0.64 over
 above). Run 7 of seed 2026 (83.4 % beyond; the other nine runs 0.2–4.9 %) drew the largest of
 its ten (7.91 of χ²₃, p 0.048), a rotation of −0.153 rad: the robots' heading errors stay near
 it from the first second on (−0.14 rad at 0.5 s, −0.18 at 300 s, against the filter's σ of
-0.061–0.069), as a consistent filter keeps them. Some runs are not explained so: run 53 of seed
-20261204 (28.3 %) drew 1.74, and in run 3 (20.9 %, drew 4.34) the heading error grows through
-the run (0.11 to 0.19 rad RMS over the robots, against σ 0.066 to 0.072) and the share with it,
-from 3 % in the first minute to 56 % in the ninth; those were not examined further.
+0.061–0.069), as a consistent filter keeps them. Some runs are not explained so. Run 53 of seed
+20261204 (28.3 %) drew 1.74; its error is mostly one translation shared by the robots (6.5 m at
+300 s), its position RMSE 7.3–11.0 m through the run, and its share 57–98 % from 60 to 150 s,
+2–19 % in the other 30 s blocks, while the filter's position σ (√(σ_x² + σ_y²), mean over the
+robots) swings between 5.3 and 10.3 m with the team's place on its loop. In run 3 (20.9 %, drew
+4.34) the heading error grows through the run (0.11 to 0.19 rad RMS over the robots, against σ
+0.066 to 0.072) and the share with it, from 3 % in the first minute to 56 % in the ninth.
+Neither was examined further.
 
 summary.json keys
 -----------------
