@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import re
 import shutil
 from pathlib import Path
 
@@ -78,6 +79,15 @@ def test_a_row_is_the_one_pair_reproduction(short_dataset: Path, tmp_path: Path)
         assert cell["calibrated"]["position_rmse_m"] == targets["position_rmse_m"]
         assert cell["raw"]["position_rmse_m"] == targets["raw_position_rmse_m"]
         assert cell["met"] == all(targets[k] for k in ("yaw_ok", "nees_ok", "position_ok"))
+    # the report's cells mark the share's verdict: ↑ over-confident, ↓ conservative
+    report = (tmp_path / "pairs" / "report.md").read_text()
+    for kind in ("calibrated", "raw"):
+        c = row["cases"]["case1"][kind]
+        mark = {"over-confident": "↑", "conservative": "↓"}.get(
+            c["nees_beyond_interval"]["verdict"]
+        )
+        text = f"{c['yaw_rmse_rad']:.3f} / {c['nees_percent_beyond']:.1f}{mark or ''}"
+        assert re.search(re.escape(text) + r"( ✓)? \|", report)
     on_disk = json.loads((tmp_path / "pairs" / "summary.json").read_text())
     assert on_disk["pairs"][0]["cases"]["case1"]["yaw_bound_rad"] == pytest.approx(
         row["cases"]["case1"]["yaw_bound_rad"]

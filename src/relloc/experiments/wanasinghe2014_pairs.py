@@ -340,6 +340,10 @@ def build_report(summary: dict[str, Any], figures: dict[str, str], *, elapsed_s:
         "",
         "## Per pair: calibrated PLKF yaw RMSE (rad) / % NEES beyond",
         "",
+        "↑: the NEES share's 95 % interval (cluster means two ways, over the draws and over "
+        "time) lies wholly above the 5 % of a consistent filter (over-confident); ↓: wholly "
+        "below (conservative); ✓: the yaw and NEES targets both met.",
+        "",
     ]
     lines += _pair_table(rows, "calibrated")
     lines += ["", "## Per pair: raw odometry (the same draws)", ""]
@@ -417,16 +421,23 @@ def build_report(summary: dict[str, Any], figures: dict[str, str], *, elapsed_s:
     return "\n".join(lines)
 
 
+#: Report marks of the NEES share's verdict (:func:`relloc.metrics.percent_beyond_interval`).
+VERDICT_MARKS = {"over-confident": "↑", "conservative": "↓"}
+
+
 def _pair_table(rows: list[dict[str, Any]], kind: str) -> list[str]:
-    """Pair, mean range, and per case ``yaw / % NEES`` of ``kind`` odometry (✓: both met)."""
+    """Pair, mean range, and per case ``yaw / % NEES`` of ``kind`` odometry, the share's
+    verdict marked (:data:`VERDICT_MARKS`; ✓: both targets met)."""
     body = []
     for row in rows:
         cells = []
         for case in TABLE2:
             c = row["cases"][case]
+            verdict = VERDICT_MARKS.get(c[kind]["nees_beyond_interval"]["verdict"], "")
             mark = " ✓" if kind == "calibrated" and _both(c) else ""
             cells.append(
-                f"{c[kind]['yaw_rmse_rad']:.3f} / {c[kind]['nees_percent_beyond']:.1f}{mark}"
+                f"{c[kind]['yaw_rmse_rad']:.3f} / "
+                f"{c[kind]['nees_percent_beyond']:.1f}{verdict}{mark}"
             )
         body.append([_name(row), f"{row['steady_state_range_m']:.1f} m", *cells])
     return [markdown_table(["pair", "range", *TABLE2], body)]
