@@ -16,7 +16,12 @@ from wanasinghe_small import small_config
 from relloc.errors import ConfigError
 from relloc.experiments.wanasinghe2014 import run_reproduction
 from relloc.experiments.wanasinghe2014_mrclam import TABLE2
-from relloc.experiments.wanasinghe2014_pairs import chosen_pairs, default_pairs, run_pairs
+from relloc.experiments.wanasinghe2014_pairs import (
+    VERDICT_MARKS,
+    chosen_pairs,
+    default_pairs,
+    run_pairs,
+)
 
 
 @pytest.fixture(scope="module")
@@ -83,10 +88,8 @@ def test_a_row_is_the_one_pair_reproduction(short_dataset: Path, tmp_path: Path)
     report = (tmp_path / "pairs" / "report.md").read_text()
     for kind in ("calibrated", "raw"):
         c = row["cases"]["case1"][kind]
-        mark = {"over-confident": "↑", "conservative": "↓"}.get(
-            c["nees_beyond_interval"]["verdict"]
-        )
-        text = f"{c['yaw_rmse_rad']:.3f} / {c['nees_percent_beyond']:.1f}{mark or ''}"
+        mark = VERDICT_MARKS.get(c["nees_beyond_interval"]["verdict"], "")
+        text = f"{c['yaw_rmse_rad']:.3f} / {c['nees_percent_beyond']:.1f}{mark}"
         assert re.search(re.escape(text) + r"( ✓)? \|", report)
     on_disk = json.loads((tmp_path / "pairs" / "summary.json").read_text())
     assert on_disk["pairs"][0]["cases"]["case1"]["yaw_bound_rad"] == pytest.approx(
