@@ -442,7 +442,13 @@ def _growth(errors: Array, cov: Array) -> dict[str, float]:
 
 def summarise(results: list[dict[str, Any]], n: int, block: str = "cases") -> dict[str, Any]:
     """Per-case accuracy, boundedness and consistency over all runs of one filter (``block``)."""
-    from relloc.metrics import chi2_upper, nees, percent_beyond_interval, run_average_band
+    from relloc.metrics import (
+        chi2_upper,
+        nees,
+        percent_beyond,
+        percent_beyond_interval,
+        run_average_band,
+    )
 
     cases: dict[str, Any] = {}
     for case in CASES:
@@ -476,9 +482,7 @@ def summarise(results: list[dict[str, Any]], n: int, block: str = "cases") -> di
             "final_pos_err_m": float(np.sqrt(np.mean(np.sum(err[:, -1, :, :2] ** 2, axis=-1)))),
             "nees_pct_beyond": share.percent,
             "nees_beyond_interval": share.to_dict(),
-            "nees_pct_beyond_per_run": [
-                float(100.0 * np.mean(run_nees > bound)) for run_nees in ne
-            ],
+            "nees_pct_beyond_per_run": [percent_beyond(run_nees, bound) for run_nees in ne],
             "anees": float(np.mean(ne) / 3.0),
             "nees_run_average": run_average_band(ne, 3),
             "used": float(np.mean([r[block][case]["used"] for r in results])),
