@@ -9,7 +9,8 @@ from scipy.signal import lfilter
 from scipy.stats import norm
 
 from relloc.errors import ConfigError
-from relloc.metrics import percent_beyond, percent_beyond_interval
+from relloc.metrics import integrated_time, percent_beyond, percent_beyond_interval
+from relloc.pipeline.output import interval_text
 
 #: The bound a standard normal value exceeds with probability 5 %.
 Z95 = float(norm.ppf(0.95))
@@ -126,22 +127,34 @@ def test_effective_samples_shrink_with_the_correlation():
 
 
 def test_the_interval_by_hand():
-    # 50 samples at t = 0..49 s, 5 blocks of 9.8 s: 10 samples each, with 1, 2, 3, 2 and 2
-    # beyond. p = 10/50 = 0.2; deviations k_b - p n_b = (-1, 0, 1, 0, 0), so
-    # V = 5/4 * 2 / 50**2 = 0.001 and N_eff = min(50, 0.16 / 0.001) = 50. Korn-Graubard:
-    # N_df = 50 (t_49(0.975) / t_4(0.975))^2 = 50 (2.009575 / 2.776445)^2 = 26.1939, and the
-    # Clopper-Pearson interval for 0.2 N_df = 5.2388 in 26.1939 is 7.0588-40.1340 %
-    # (scipy.stats.beta.ppf(0.025, 5.2388, 21.9551), beta.ppf(0.975, 6.2388, 20.9551)).
-    beyond = np.zeros((5, 10))
-    for block, k in enumerate((1, 2, 3, 2, 2)):
-        beyond[block, :k] = 1.0
-    share = percent_beyond_interval(beyond.reshape(-1), np.arange(50.0), 0.5, batches=5)
+    # 500 samples at t = 0..499 s, 5 blocks of 99.8 s: 100 samples each, with 10, 20, 30, 20
+    # and 20 beyond, spread evenly through the block (so the series' correlation time is one
+    # sample and all five blocks fit). p = 100/500 = 0.2; deviations k_b - p n_b =
+    # (-10, 0, 10, 0, 0), so V = 5/4 * 200 / 500**2 = 0.001 and N_eff = 0.16 / 0.001 = 160.
+    # Korn-Graubard: N_df = 160 (t_499(0.975) / t_4(0.975))^2 = 160 (1.964729 / 2.776445)^2
+    # = 80.1212, and the Clopper-Pearson interval for 0.2 N_df = 16.0242 in 80.1212 is
+    # 11.8914-30.4278 % (scipy.stats.beta.ppf(0.025, 16.0242, 65.0970),
+    # beta.ppf(0.975, 17.0242, 64.0970)).
+    beyond = np.zeros((5, 100))
+    for block, k in enumerate((10, 20, 30, 20, 20)):
+        beyond[block, np.linspace(0, 99, k).round().astype(int)] = 1.0
+    share = percent_beyond_interval(beyond.reshape(-1), np.arange(500.0), 0.5, batches=5)
     assert share.percent == pytest.approx(20.0)
-    assert share.interval == pytest.approx((7.0588, 40.1340), abs=1e-3)
-    assert share.clusters == 5 and share.batch_s == pytest.approx(9.8) and share.samples == 50
-    # blocks closer together than binomial draws would be: N_eff is capped at N
-    assert share.effective_samples == 50.0
+    assert share.interval == pytest.approx((11.8914, 30.4278), abs=1e-3)
+    assert share.clusters == 5 and share.batch_s == pytest.approx(99.8) and share.samples == 500
+    assert share.correlation_time_s == pytest.approx(1.0)
+    assert share.effective_samples == pytest.approx(160.0)
     assert share.verdict == "over-confident"
+
+
+def test_blocks_closer_together_than_binomial_draws_cap_n_eff_at_n():
+    # 2 blocks of 100 instants with 19 and 21 beyond: V = 2 * 2 / 200**2 = 1e-4 and
+    # p(1 - p) / V = 1600, so N_eff is capped at N = 200.
+    beyond = np.zeros((2, 100))
+    for block, k in enumerate((19, 21)):
+        beyond[block, np.linspace(0, 99, k).round().astype(int)] = 1.0
+    share = percent_beyond_interval(beyond.reshape(-1), np.arange(200.0), 0.5, batches=2)
+    assert share.effective_samples == 200.0 and share.clusters == 2
 
 
 def test_nothing_beyond_gives_the_clopper_pearson_interval_of_the_blocks():
@@ -279,3 +292,58 @@ def test_any_samples_give_a_share_inside_its_interval(samples, bound, batches, r
     assert 0.0 <= lo <= share.percent + 1e-9 and share.percent - 1e-9 <= hi <= 100.0
     assert share.effective_samples is not None
     assert 0.0 < share.effective_samples <= share.samples
+
+
+def test_the_correlation_time_of_white_and_ar1_series():
+    # tau = (1 + rho) / (1 - rho) for AR(1): 1 when white, 9 at rho 0.8; 20000 samples.
+    rng = np.random.default_rng(np.random.SeedSequence(90419))
+    assert integrated_time(rng.normal(size=20000)) == pytest.approx(1.0, abs=0.15)
+    assert integrated_time(ar1(rng, 0.8, 1, 20000)[0]) == pytest.approx(9.0, rel=0.15)
+    assert integrated_time(np.ones(50)) == 1.0 and integrated_time([1.0, 2.0]) == 1.0
+
+
+def nees_ar1(rng: np.random.Generator, rho: float, n: int) -> np.ndarray:
+    """A 3-DOF NEES series of one run: the squared norm of three AR(1) errors (χ²₃ marginal)."""
+    return np.sum(ar1(rng, rho, 3, n) ** 2, axis=0)
+
+
+CHI2_3_95 = 7.814727903251178
+
+
+def test_the_reported_correlation_time_tells_blocks_too_short_for_the_errors():
+    # One run of 4500 samples (0.1 s apart) of a 3-DOF NEES whose errors are AR(1): the
+    # squared errors' correlation time (1 + rho^2) / (1 - rho^2) is 0.1 s white, 0.95 s at
+    # rho 0.9 and 20 s at rho 0.995, against 45 s blocks. On root 5 (50 draws) the ranks' time
+    # had medians 0.1, 0.81 and 15.1 s (5-95 %: 8.8-33 s at rho 0.995). Root 90419 was not used
+    # while developing.
+    t = np.arange(4500) * 0.1
+    seqs = np.random.SeedSequence([90419, 1]).spawn(3 * 20)
+
+    def median_time(rho: float, draws: list[np.random.SeedSequence]) -> float:
+        times = []
+        for seq in draws:
+            share = percent_beyond_interval(
+                nees_ar1(np.random.default_rng(seq), rho, 4500), t, CHI2_3_95
+            )
+            assert share.clusters == 10 and share.batch_s == pytest.approx(44.99)
+            assert share.correlation_time_s is not None
+            times.append(share.correlation_time_s)
+        return float(np.median(times))
+
+    assert median_time(0.0, seqs[:20]) == pytest.approx(0.1, rel=0.2)
+    assert 0.5 < median_time(0.9, seqs[20:40]) < 1.5
+    # blocks under ten correlation times, where the interval is too narrow (module docstring)
+    assert median_time(0.995, seqs[40:]) > 44.99 / 10
+    slow = percent_beyond_interval(
+        nees_ar1(np.random.default_rng(seqs[40]), 0.995, 4500), t, CHI2_3_95
+    )
+    white = percent_beyond_interval(
+        nees_ar1(np.random.default_rng(seqs[0]), 0.0, 4500), t, CHI2_3_95
+    )
+    assert slow.blocks_short and white.blocks_short is False
+    assert "likely too narrow" in interval_text(slow.to_dict())
+    assert interval_text(white.to_dict()).endswith(white.verdict or "")
+    by_runs = percent_beyond_interval(
+        np.arange(20.0), np.arange(20.0) % 10, 5.0, runs=np.arange(20) // 10
+    )
+    assert by_runs.correlation_time_s is None and by_runs.to_dict()["blocks_short"] is None

@@ -97,11 +97,19 @@ def fmt(value: Any, digits: int = 4) -> str:
 def interval_text(share: Mapping[str, Any] | None) -> str:
     """A share beyond a χ² bound's interval and verdict for a table cell, from
     :meth:`relloc.metrics.consistency.BeyondShare.to_dict`: ``"3.1–7.4 consistent"``
-    (``—`` without one)."""
+    (``—`` without one); when its time blocks are short against the values' correlation time
+    (``blocks_short``) it adds both, ``"1.5–16.4 consistent (45 s blocks, errors correlated
+    over 29 s: likely too narrow)"``."""
     if not share or share.get("interval") is None:
         return "—"
     lo, hi = share["interval"]
-    return f"{lo:.1f}–{hi:.1f} {share['verdict']}"
+    text = f"{lo:.1f}–{hi:.1f} {share['verdict']}"
+    if share.get("blocks_short"):
+        text += (
+            f" ({share['batch_s']:.2g} s blocks, errors correlated over "
+            f"{share['correlation_time_s']:.2g} s: likely too narrow)"
+        )
+    return text
 
 
 def markdown_table(headers: Sequence[str], rows: Sequence[Sequence[Any]], digits: int = 4) -> str:
