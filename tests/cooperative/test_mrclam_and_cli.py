@@ -305,3 +305,13 @@ def test_sharma2013_cli_writes_the_acceptance_keys(tmp_path, monkeypatch):
     lo, hi = share["interval"]
     assert f"{lo:.1f}–{hi:.1f} {share['verdict']}" in (out / "report.md").read_text()
     assert (out / "fig3_topology.png").is_file() and (out / "report.md").is_file()
+    # the final NEES along the unobservable directions: d = 3, 1, none, none
+    for block in ("cases", "cases_first_estimates", "cases_observability_constrained"):
+        frame = {case: c["frame_nees"] for case, c in summary[block].items()}
+        assert frame["two_landmarks"] is None and frame["gps_robot1"] is None
+        for case, dof in (("no_landmark", 3), ("one_landmark", 1)):
+            f = frame[case]
+            assert f["dof"] == dof and len(f["per_run"]) == 1 and f["mean"] == f["per_run"][0]
+            assert f["band"][0] < dof < f["band"][1]
+            assert f["verdict"] in ("consistent", "over-confident", "conservative")
+    assert "the final frame NEES" in (out / "report.md").read_text()

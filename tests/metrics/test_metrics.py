@@ -16,6 +16,7 @@ from relloc.metrics import (
     nis,
     paper_thresholds,
     percent_beyond,
+    projected_nees,
     radial_errors,
     rmse,
     run_average_band,
@@ -157,3 +158,41 @@ def test_run_average_band_verdict_sees_a_filter_off_by_a_fifth():
     assert over.count("over-confident") >= 0.8 * len(over)
     under = _run_average_verdicts(0.8, 0.8)
     assert under.count("conservative") >= 0.8 * len(under)
+
+
+def test_projected_nees_by_hand():
+    # P = [[2, 1], [1, 2]], N = (1, 0), e = (1, 1): P^-1 = [[2, -1], [-1, 2]] / 3, so
+    # y = N' P^-1 e = 1/3, M = N' P^-1 N = 2/3 and the NEES is y^2 / M = 1/6: the GLS
+    # estimate of e's first component given the second (1 - 1/2) over its variance (3/2).
+    P = np.array([[2.0, 1.0], [1.0, 2.0]])
+    assert projected_nees([1.0, 1.0], P, [[1.0], [0.0]]) == pytest.approx(1.0 / 6.0)
+    # independent states: the component's own NEES; all directions: the full NEES
+    assert projected_nees([2.0, 5.0], np.diag([4.0, 1.0]), [[1.0], [0.0]]) == pytest.approx(1.0)
+    e = np.array([1.0, -2.0])
+    assert projected_nees(e, P, np.eye(2)) == pytest.approx(float(e @ np.linalg.solve(P, e)))
+
+
+def test_projected_nees_is_chi2_of_the_directions_count():
+    # 4000 errors drawn from a random 6-state covariance, two directions: the values must be
+    # chi2(2) (Kolmogorov-Smirnov). Root 90420 was not used while developing.
+    from scipy.stats import kstest
+
+    rng = np.random.default_rng(np.random.SeedSequence(90420))
+    A = rng.normal(size=(6, 6))
+    P = A @ A.T + 0.5 * np.eye(6)
+    N = rng.normal(size=(6, 2))
+    e = rng.multivariate_normal(np.zeros(6), P, size=4000)
+    values = np.array([projected_nees(x, P, N) for x in e])
+    assert kstest(values, chi2(2).cdf).pvalue > 0.01
+    # a filter claiming half the covariance is over-confident along N too
+    halved = np.array([projected_nees(x, 0.5 * P, N) for x in e[:400]])
+    assert kstest(halved, chi2(2).cdf).pvalue < 1e-6
+
+
+def test_projected_nees_refuses_bad_shapes_and_a_singular_covariance():
+    with pytest.raises(ConfigError, match="projected_nees"):
+        projected_nees([1.0, 2.0], np.eye(3), [[1.0], [0.0], [0.0]])
+    with pytest.raises(ConfigError, match="projected_nees"):
+        projected_nees([1.0, 2.0], np.eye(2), np.zeros((2, 0)))
+    with pytest.raises(ModelError, match="singular"):
+        projected_nees([1.0, 2.0], np.zeros((2, 2)), [[1.0], [0.0]])

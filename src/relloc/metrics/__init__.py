@@ -14,6 +14,7 @@ from relloc.metrics.consistency import (
     normalised_squared,
     percent_beyond,
     percent_beyond_interval,
+    projected_nees,
     run_average_band,
 )
 from relloc.metrics.convergence import (
@@ -43,6 +44,7 @@ __all__ = [
     "paper_thresholds",
     "percent_beyond",
     "percent_beyond_interval",
+    "projected_nees",
     "radial_errors",
     "rmse",
     "run_average_band",

@@ -91,6 +91,31 @@ def nees(errors: ArrayLike, cov: ArrayLike) -> Array:
     return normalised_squared(errors, cov)
 
 
+def projected_nees(error: ArrayLike, cov: ArrayLike, directions: ArrayLike) -> float:
+    """NEES of an error along the ``d`` columns of ``directions`` ``N (n, d)`` only:
+
+        ε_N = yᵀ M⁻¹ y,   y = Nᵀ P⁻¹ e,   M = Nᵀ P⁻¹ N,
+
+    the NEES of the generalised-least-squares estimate of ``e``'s components along ``N``
+    (``M⁻¹ y``, of covariance ``M⁻¹``). It is χ²(d) when ``e ~ N(0, P)``: ``y`` then has
+    covariance ``M``. With ``N`` a team's unobservable directions it tests the filter along
+    exactly those, where a linearised filter gains spurious information."""
+    e = np.asarray(error, dtype=float).reshape(-1)
+    P = np.asarray(cov, dtype=float)
+    N = np.asarray(directions, dtype=float)
+    if P.shape != (e.size, e.size) or N.ndim != 2 or N.shape[0] != e.size or N.shape[1] < 1:
+        raise ConfigError(
+            f"projected_nees: error {e.shape}, covariance {P.shape} and directions {N.shape} "
+            "must be (n,), (n, n) and (n, d ≥ 1)"
+        )
+    try:
+        Pinv_N = np.linalg.solve(P, N)
+    except np.linalg.LinAlgError as exc:
+        raise ModelError("projected_nees: singular covariance") from exc
+    y = Pinv_N.T @ e
+    return float(y @ np.linalg.solve(N.T @ Pinv_N, y))
+
+
 def nis(residual: ArrayLike, innovation_cov: ArrayLike) -> Array:
     """NIS ``νᵀ S⁻¹ ν`` (seed 000 Eq. 35)."""
     return normalised_squared(residual, innovation_cov)
