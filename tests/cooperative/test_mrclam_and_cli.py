@@ -314,4 +314,8 @@ def test_sharma2013_cli_writes_the_acceptance_keys(tmp_path, monkeypatch):
             assert f["dof"] == dof and len(f["per_run"]) == 1 and f["mean"] == f["per_run"][0]
             assert f["band"][0] < dof < f["band"][1]
             assert f["verdict"] in ("consistent", "over-confident", "conservative")
-    assert "the final frame NEES" in (out / "report.md").read_text()
+    assert (
+        aware["frame_nees"]["no_landmark"] == summary[aware["block"]]["no_landmark"]["frame_nees"]
+    )
+    report = (out / "report.md").read_text()
+    assert "the final frame NEES" in report and "Along the unobservable directions" in report

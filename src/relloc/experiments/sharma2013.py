@@ -101,7 +101,7 @@ against the 95 % ``band`` of a mean of that many χ²(d) values and the ``verdic
 whether it meets the target (``target_met``, ``target``: NEES beyond ≤ 10 % in
 ``no_landmark`` and ``one_landmark`` with position RMSE not above the plain EIF's), each
 filter's ``meets_target`` and ``worst_nees_pct_beyond``, and the headline filter's
-``nees_beyond_interval`` and ``nees_pct_beyond_per_run`` in those cases.
+``nees_beyond_interval``, ``nees_pct_beyond_per_run`` and ``frame_nees`` in those cases.
 ``filters``: what each block ran; ``nees_on``: what the NEES is computed on; ``departures``: every
 choice that departs from the paper.
 ``rpmg``: fraction of time the robot graph is connected and the fraction with β(G₅²) = 1
@@ -604,6 +604,7 @@ def headline_aware(plain: dict[str, Any], aware: dict[str, dict[str, Any]]) -> d
         "nees_pct_beyond_per_run": {
             c: aware[block][c]["nees_pct_beyond_per_run"] for c in AWARE_CASES
         },
+        "frame_nees": {c: aware[block][c]["frame_nees"] for c in AWARE_CASES},
     }
 
 
@@ -776,6 +777,13 @@ def _headline_text(headline: dict[str, Any]) -> str:
         + "; ".join(
             f"{CASE_LABELS[c]} {np.median(v):.1f} %, {max(v):.1f} %"
             for c, v in headline["nees_pct_beyond_per_run"].items()
+        )
+        + ". Along the unobservable directions (the runs' final frame NEES, below): "
+        + "; ".join(
+            f"{CASE_LABELS[c]} mean {f['mean']:.3g} against {f['band'][0]:.3g}–{f['band'][1]:.3g}, "
+            f"{f['verdict']}"
+            for c, f in headline["frame_nees"].items()
+            if f is not None
         )
         + "."
     )
