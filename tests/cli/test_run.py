@@ -73,7 +73,9 @@ def test_run_default_scenario_writes_summary_report_and_figures(tmp_path, capsys
     assert "| avg NEES in band % | its verdict |" in report
     for s in summary["pairs"].values():
         assert s["nees_run_average_verdict"] in {"consistent", "conservative", "over-confident"}
-        assert f"| {s['nees_run_average_verdict']} |" in report
+        short = " (blocks short)" if s["nees_run_average_blocks_short"] else ""
+        assert isinstance(s["nees_run_average_blocks_short"], bool)
+        assert f"| {s['nees_run_average_verdict']}{short} |" in report
     pngs = sorted(p.name for p in out.glob("*.png"))
     assert {"errors_all.png", "nees_nis.png", "conditioning.png", "trajectories.png"} <= set(pngs)
     for name in pngs:

@@ -24,6 +24,7 @@ from relloc.metrics import (
     updates_to_converge,
     updates_to_converge_per_state,
 )
+from relloc.pipeline.output import run_average_verdict_text
 
 
 def test_state_errors_wrap_only_the_yaw() -> None:
@@ -121,6 +122,23 @@ def test_run_average_band_judges_independent_runs_at_each_instant():
     # one instant: the shares have no spread over time to be judged by
     single = run_average_band(consistent[:, :1, 0], 2)
     assert single["verdict"] is None and "one instant" in single["reason"]
+    # independent instants: 120-instant blocks are many correlation times long
+    assert out["blocks_short"] is False and run_average_verdict_text(out) == "conservative"
+
+
+def test_run_average_band_marks_blocks_short_against_slow_errors():
+    # twelve runs whose NEES comes from AR(1) errors with rho 0.99 (a correlation time of
+    # about 100 instants) over 400 instants: ten blocks of 40 are short, and the report says so
+    from scipy.signal import lfilter
+
+    rng = np.random.default_rng(np.random.SeedSequence([90418, 7]))
+    e = rng.normal(size=(12, 2, 400)) * np.sqrt(1.0 - 0.99**2)
+    e[..., 0] = rng.normal(size=(12, 2))
+    out = run_average_band(np.sum(lfilter([1.0], [1.0, -0.99], e, axis=-1) ** 2, axis=1), 2)
+    assert out["blocks_short"] is True
+    assert run_average_verdict_text(out) == f"{out['verdict']} (blocks short)"
+    assert run_average_verdict_text(None) == "—"
+    assert run_average_verdict_text({"verdict": None, "reason": "x"}) == "—"
 
 
 def _run_average_verdicts(rho: float, scale: float = 1.0, draws: int = 200) -> list[str]:

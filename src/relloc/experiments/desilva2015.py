@@ -102,6 +102,7 @@ from relloc.pipeline.output import (
     figure_md,
     markdown_table,
     prepare_out_dir,
+    run_average_verdict_text,
     save_figure,
     write_report,
     write_summary,
@@ -669,7 +670,8 @@ def _band_verdict(band: dict[str, Any]) -> str:
     if band["verdict"] is None:
         return f"not judged ({band['reason']})"
     return (
-        f"{band['verdict']} by the NEES averaged over the {band['runs']} runs at each scan: "
+        f"{run_average_verdict_text(band)} by the NEES averaged over the {band['runs']} runs at "
+        "each scan: "
         f"{band['in_band_percent']:.0f} % of the scans inside its 95 % band "
         f"[{band['band'][0]:.2f}, {band['band'][1]:.2f}], {band['below_band_percent']:.0f} % "
         f"below, {band['above_band_percent']:.0f} % above"

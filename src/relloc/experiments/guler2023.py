@@ -89,6 +89,7 @@ from relloc.pipeline.output import (
     figure_md,
     markdown_table,
     prepare_out_dir,
+    run_average_verdict_text,
     save_figure,
     write_report,
     write_summary,
@@ -835,7 +836,7 @@ def _report(s: dict[str, Any], files: dict[str, str]) -> str:
                 p["rmse_m_worst"],
                 p["mode_fraction"]["sw1"],
                 p["mode_fraction"]["sw3"],
-                p["nees_run_average"]["verdict"],
+                run_average_verdict_text(p["nees_run_average"]),
             ]
             for p in sw["points"]
         ]
@@ -854,7 +855,7 @@ def _report(s: dict[str, Any], files: dict[str, str]) -> str:
             s[k]["rmse_m_mean"],
             s[k]["rmse_m_worst"],
             s[k]["anees_position"],
-            s[k]["nees_run_average"]["verdict"],
+            run_average_verdict_text(s[k]["nees_run_average"]),
             s[k]["gate_rejections"]["range"]["rejected"],
         ]
         for k in ("ablation_uwb_link_bias", "ablation_no_gate", "ablation_white_range_model")
@@ -866,7 +867,7 @@ def _report(s: dict[str, Any], files: dict[str, str]) -> str:
             s["two_drones"]["rmse_m_mean"],
             s["two_drones"]["rmse_m_worst"],
             s["two_drones"]["anees_position"],
-            s["two_drones"]["nees_run_average"]["verdict"],
+            run_average_verdict_text(s["two_drones"]["nees_run_average"]),
             s["two_drones"]["gate_rejections"]["range"]["rejected"],
         ],
     )
@@ -916,7 +917,7 @@ def _band_text(band: dict[str, Any]) -> str:
         return f"— ({band['reason']})"
     return (
         f"{band['in_band_percent']:.0f} / {band['below_band_percent']:.0f} / "
-        f"{band['above_band_percent']:.0f}: {band['verdict']}"
+        f"{band['above_band_percent']:.0f}: {run_average_verdict_text(band)}"
     )
 
 

@@ -136,6 +136,7 @@ from relloc.pipeline.output import (
     interval_text,
     markdown_table,
     prepare_out_dir,
+    run_average_verdict_text,
     save_figure,
     write_report,
     write_summary,
@@ -905,7 +906,7 @@ def _report(summary: dict[str, Any], figures: list[tuple[str, str]]) -> str:
                 interval_text(c["nees_beyond_interval"]),
                 c["anees"],
                 c["nees_run_average"].get("in_band_percent"),
-                c["nees_run_average"]["verdict"],
+                run_average_verdict_text(c["nees_run_average"]),
                 c["bounded"],
             ]
             for case in CASES

@@ -169,11 +169,13 @@ def run_average_band(nees_runs: ArrayLike, dof: int, p: float = 0.95) -> dict[st
 
     Returns the shares (%) of instants inside, below (conservative) and above (over-confident)
     the band, ``below_band_interval`` and ``above_band_interval`` (the shares' intervals and
-    verdicts), the band, ``runs``, ``instants``, and a ``verdict``: ``"over-confident"`` when
-    the share above lies significantly above ``(1 − p)/2`` (its interval wholly above),
-    ``"conservative"`` when the share below does, the side with the larger share when both
-    do, else ``"consistent"``; ``None`` (with ``reason``) for fewer than two runs, and
-    ``None`` for a single instant.
+    verdicts), the band, ``runs``, ``instants``, ``blocks_short`` (either interval's blocks
+    last less than ten correlation times of the run averages, :attr:`BeyondShare.blocks_short`,
+    so its verdict leans on a likely too narrow interval), and a ``verdict``:
+    ``"over-confident"`` when the share above lies significantly above ``(1 − p)/2`` (its
+    interval wholly above), ``"conservative"`` when the share below does, the side with the
+    larger share when both do, else ``"consistent"``; ``None`` (with ``reason``) for fewer
+    than two runs, and ``None`` for a single instant.
     """
     v = np.asarray(nees_runs, dtype=float)
     runs = int(v.shape[0]) if v.ndim else 0
@@ -223,6 +225,7 @@ def run_average_band(nees_runs: ArrayLike, dof: int, p: float = 0.95) -> dict[st
         "runs": runs,
         "instants": int(avg.size),
         "verdict": verdict,
+        "blocks_short": bool(below_share.blocks_short or above_share.blocks_short),
         **reason,
     }
 

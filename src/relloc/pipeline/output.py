@@ -112,6 +112,16 @@ def interval_text(share: Mapping[str, Any] | None) -> str:
     return text
 
 
+def run_average_verdict_text(band: Mapping[str, Any] | None) -> str:
+    """The verdict of a :func:`relloc.metrics.run_average_band` result for a report, marked
+    ``"(blocks short)"`` when its intervals' blocks of times last less than ten correlation
+    times (``blocks_short``; the interval behind the verdict is then likely too narrow);
+    ``—`` without a verdict."""
+    if not band or band.get("verdict") is None:
+        return "—"
+    return f"{band['verdict']} (blocks short)" if band.get("blocks_short") else band["verdict"]
+
+
 def markdown_table(headers: Sequence[str], rows: Sequence[Sequence[Any]], digits: int = 4) -> str:
     """A GitHub-flavoured markdown table."""
     head = "| " + " | ".join(headers) + " |"

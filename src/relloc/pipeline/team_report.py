@@ -22,7 +22,8 @@ over all runs on the *steady-state* samples (track age ≥ ``settle_s``):
   (``nees_run_average_band``; needs ``N ≥ 2``; about 95 % for a consistent filter), and
   ``nees_run_average_verdict``, whether the shares below and above the band exceed the 2.5 %
   each side leaves by more than their intervals allow — :func:`relloc.pipeline.evaluation.
-  nees_band_check`;
+  nees_band_check` — with ``nees_run_average_blocks_short``, whether those intervals' blocks of
+  times last less than ten correlation times (:attr:`relloc.metrics.BeyondShare.blocks_short`);
 - ``anis`` (NIS/3, ideal 1) and ``nis_percent_beyond`` ``χ²(3, 0.95)``;
 - ``max_condition_log10`` of ``P``, ``R`` and ``S`` (seed 000 §7.3; > 6 is ill-conditioned);
 - ``track_events``: created / deleted / re-created counts over all runs;
@@ -72,6 +73,7 @@ from relloc.pipeline.output import (
     interval_text,
     markdown_table,
     prepare_out_dir,
+    run_average_verdict_text,
     save_figure,
     write_report,
     write_summary,
@@ -168,6 +170,7 @@ def _pair_summary(
         out["nees_run_average_in_band_percent"] = band["in_band_percent"]
         out["nees_run_average_band"] = band["band"]
         out["nees_run_average_verdict"] = band["verdict"]
+        out["nees_run_average_blocks_short"] = bool(band.get("blocks_short"))
     out["max_condition_log10"] = {
         "P": max((float(np.max(r.cond_p)) for r in runs if r.cond_p.size), default=float("nan")),
         "R": max((float(np.max(r.cond_r)) for r in runs if r.cond_r.size), default=float("nan")),
@@ -343,7 +346,12 @@ def summary_rows(summary: Mapping[str, Any]) -> tuple[list[str], list[list[Any]]
                 s["nees_percent_beyond"],
                 interval_text(s.get("nees_beyond_interval")),
                 s.get("nees_run_average_in_band_percent"),
-                s.get("nees_run_average_verdict") or "—",
+                run_average_verdict_text(
+                    {
+                        "verdict": s.get("nees_run_average_verdict"),
+                        "blocks_short": s.get("nees_run_average_blocks_short"),
+                    }
+                ),
                 s["anis"],
                 s["nis_percent_beyond"],
             ]
@@ -658,7 +666,9 @@ def report_markdown(
         "below (conservative). The run-averaged NEES's verdict is over-confident (conservative) "
         "when the share of times above (below) the band is more than the 2.5 % a consistent "
         "filter leaves there by more than its 95 % interval allows (batch means over the "
-        "times); it needs two runs or more.",
+        "times); it needs two runs or more. *Blocks short*: the blocks of times last less "
+        "than ten correlation times of the values they hold, so the interval behind the "
+        "verdict is likely too narrow (`relloc.metrics.consistency`).",
         "",
         "## Spread over runs and convergence from the unknown start",
         "",
