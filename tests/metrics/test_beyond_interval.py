@@ -127,34 +127,22 @@ def test_effective_samples_shrink_with_the_correlation():
 
 
 def test_the_interval_by_hand():
-    # 500 samples at t = 0..499 s, 5 blocks of 99.8 s: 100 samples each, with 10, 20, 30, 20
-    # and 20 beyond, spread evenly through the block (so the series' correlation time is one
-    # sample and all five blocks fit). p = 100/500 = 0.2; deviations k_b - p n_b =
-    # (-10, 0, 10, 0, 0), so V = 5/4 * 200 / 500**2 = 0.001 and N_eff = 0.16 / 0.001 = 160.
-    # Korn-Graubard: N_df = 160 (t_499(0.975) / t_4(0.975))^2 = 160 (1.964729 / 2.776445)^2
-    # = 80.1212, and the Clopper-Pearson interval for 0.2 N_df = 16.0242 in 80.1212 is
-    # 11.8914-30.4278 % (scipy.stats.beta.ppf(0.025, 16.0242, 65.0970),
-    # beta.ppf(0.975, 17.0242, 64.0970)).
-    beyond = np.zeros((5, 100))
-    for block, k in enumerate((10, 20, 30, 20, 20)):
-        beyond[block, np.linspace(0, 99, k).round().astype(int)] = 1.0
-    share = percent_beyond_interval(beyond.reshape(-1), np.arange(500.0), 0.5, batches=5)
+    # 50 samples at t = 0..49 s, 5 blocks of 9.8 s: 10 samples each, with 1, 2, 3, 2 and 2
+    # beyond. p = 10/50 = 0.2; deviations k_b - p n_b = (-1, 0, 1, 0, 0), so
+    # V = 5/4 * 2 / 50**2 = 0.001 and N_eff = min(50, 0.16 / 0.001) = 50. Korn-Graubard:
+    # N_df = 50 (t_49(0.975) / t_4(0.975))^2 = 50 (2.009575 / 2.776445)^2 = 26.1939, and the
+    # Clopper-Pearson interval for 0.2 N_df = 5.2388 in 26.1939 is 7.0588-40.1340 %
+    # (scipy.stats.beta.ppf(0.025, 5.2388, 21.9551), beta.ppf(0.975, 6.2388, 20.9551)).
+    beyond = np.zeros((5, 10))
+    for block, k in enumerate((1, 2, 3, 2, 2)):
+        beyond[block, :k] = 1.0
+    share = percent_beyond_interval(beyond.reshape(-1), np.arange(50.0), 0.5, batches=5)
     assert share.percent == pytest.approx(20.0)
-    assert share.interval == pytest.approx((11.8914, 30.4278), abs=1e-3)
-    assert share.clusters == 5 and share.batch_s == pytest.approx(99.8) and share.samples == 500
-    assert share.correlation_time_s == pytest.approx(1.0)
-    assert share.effective_samples == pytest.approx(160.0)
+    assert share.interval == pytest.approx((7.0588, 40.1340), abs=1e-3)
+    assert share.clusters == 5 and share.batch_s == pytest.approx(9.8) and share.samples == 50
+    # blocks closer together than binomial draws would be: N_eff is capped at N
+    assert share.effective_samples == 50.0
     assert share.verdict == "over-confident"
-
-
-def test_blocks_closer_together_than_binomial_draws_cap_n_eff_at_n():
-    # 2 blocks of 100 instants with 19 and 21 beyond: V = 2 * 2 / 200**2 = 1e-4 and
-    # p(1 - p) / V = 1600, so N_eff is capped at N = 200.
-    beyond = np.zeros((2, 100))
-    for block, k in enumerate((19, 21)):
-        beyond[block, np.linspace(0, 99, k).round().astype(int)] = 1.0
-    share = percent_beyond_interval(beyond.reshape(-1), np.arange(200.0), 0.5, batches=2)
-    assert share.effective_samples == 200.0 and share.clusters == 2
 
 
 def test_nothing_beyond_gives_the_clopper_pearson_interval_of_the_blocks():
