@@ -106,6 +106,7 @@ from numpy.typing import NDArray
 
 from relloc.association.gating import mahalanobis_batch
 from relloc.core.contract import BeliefStack, HeldOdometry, Silent, UpdateRecord
+from relloc.core.events import TIME_TOL
 from relloc.core.gaussian import Gaussian
 from relloc.core.kalman import chi2_threshold, prepare_gates
 from relloc.core.recording import NO_TARGET, Measurements, kind_code
@@ -754,6 +755,9 @@ class CooperativeEstimator(Silent):
     first :meth:`advance`; ``landmarks (L, 2 or 3)`` are the world positions the detections'
     ``landmark`` indices refer to (:attr:`Recording.landmarks`). ``record_updates=False`` skips
     the per-detection update records (a few µs each: worth skipping where nobody reads them).
+    ``joint_times``: when beliefs are read at one of these times, the joint belief of the team
+    (:meth:`team_belief`) is kept too, in :attr:`joint_beliefs` as ``(t, N(X̂, P))`` — for a
+    test of the whole team's error that the robots' marginals cannot give.
 
     Every batch is one epoch at the current time: the prediction pending since the previous
     epoch is applied, then every detection and fix of the batch is gated and used in one update
@@ -774,6 +778,7 @@ class CooperativeEstimator(Silent):
         landmarks: Array | None = None,
         *,
         record_updates: bool = True,
+        joint_times: Sequence[float] | Array = (),
     ) -> None:
         self.robots = tuple(str(r) for r in robots)
         n = len(self.robots)
@@ -800,6 +805,8 @@ class CooperativeEstimator(Silent):
         self._group_offset = 0
         self._record_updates = record_updates
         self._updates: list[UpdateRecord] = []
+        self._joint_times = np.asarray(joint_times, dtype=float).reshape(-1)
+        self.joint_beliefs: list[tuple[float, Gaussian]] = []
         self._t_start = np.nan
         self._t = np.nan
         self._t_applied = np.nan
@@ -890,7 +897,17 @@ class CooperativeEstimator(Silent):
         if not np.isfinite(cov.sum() + p.pose.sum()):
             raise ModelError("cooperative filter produced non-finite estimates")
         age = 0.0 if np.isnan(self._t) else self._t - self._t_start
+        if self._joint_due():
+            self.joint_beliefs.append(self.team_belief())
         return BeliefStack(self.robots, FRAME, p.pose, cov, age)
+
+    def _joint_due(self) -> bool:
+        """Whether now is one of ``joint_times`` whose joint belief is not kept yet."""
+        if not self._joint_times.size or np.isnan(self._t):
+            return False
+        if self.joint_beliefs and self.joint_beliefs[-1][0] == self._t:
+            return False
+        return bool(np.any(np.abs(self._joint_times - self._t) <= TIME_TOL))
 
     def take_updates(self) -> list[UpdateRecord]:
         out, self._updates = self._updates, []

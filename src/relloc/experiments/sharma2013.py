@@ -78,9 +78,13 @@ run in 30 beyond χ²_d(0.95) in each, consistent; FEJ EIF the same to two digit
 its NEES samples beyond) has the OC EIF's largest, 11.1 (p 0.011 for χ²₃); over the 30 runs
 the frame NEES ranks with a run's share beyond (Spearman 0.79): the tail runs are the runs
 whose error along the unobservable directions is large, as a consistent filter's are in a few
-runs. ``tests/cooperative/test_observability_behaviour.py`` checks the same on twelve 150 s
-runs of a root not used while developing (OC 3.44 within the 99.9 % band 1.20–5.88, plain
-17.1 above it).
+runs. Along the run (every 30 s, ``frame_nees.along_the_run``, the joint beliefs kept by
+``CooperativeEstimator(joint_times=…)``) the OC EIF's mean over the runs stays at 2.86–3.10
+with no landmark and 0.76–1.09 with one, inside the band at every one of the ten times; the
+plain EIF's at 28.1–36.8 and 11.0–21.7, above it at every one: the plain filter is already
+over-confident along the frame at 30 s. ``tests/cooperative/test_observability_behaviour.py``
+checks the final value on twelve 150 s runs of a root not used while developing (OC 3.44
+within the 99.9 % band 1.20–5.88, plain 17.1 above it).
 
 summary.json keys
 -----------------
@@ -101,7 +105,8 @@ robot, against the two-sided 95 % band of such a mean (:func:`relloc.metrics.run
 (mean per run); ``frame_nees`` (``None`` with two landmarks or GPS): each run's final NEES
 along the unobservable directions (:func:`frame_nees`; ``dof`` d, ``per_run``, their ``mean``
 against the 95 % ``band`` of a mean of that many χ²(d) values and the ``verdict``,
-``pct_beyond`` χ²_d(0.95) with its ``beyond_interval``); in ``cases`` only,
+``pct_beyond`` χ²_d(0.95) with its ``beyond_interval``, and ``along_the_run``: ``t``, the
+``mean_over_runs`` at each and :func:`relloc.metrics.run_average_band`'s keys); in ``cases`` only,
 ``observability_rank`` with ``full_rank`` and the paper's predicted rank (Theorems 2–4).
 ``observability_aware``: the headline observability-aware filter (``block``, ``filter``),
 whether it meets the target (``target_met``, ``target``: NEES beyond ≤ 10 % in
@@ -151,6 +156,8 @@ Array = NDArray[np.float64]
 DEFAULT_RUNS = 30
 DURATION_S = 300.0
 OUTPUT_EVERY_S = 0.5
+#: The frame NEES (:func:`frame_nees`) is taken this often (s) along each run, and at its end.
+FRAME_EVERY_S = 30.0
 GROWTH_LIMIT = 1.2
 CASES: dict[str, dict[str, Any]] = {
     "no_landmark": {"anchors": ()},
@@ -280,37 +287,54 @@ def _case_estimates(
 
     rec = sim.recording
     estimator = CooperativeEstimator(
-        rec.robots, sim.prior, settings, rec.landmarks, record_updates=False
+        rec.robots,
+        sim.prior,
+        settings,
+        rec.landmarks,
+        record_updates=False,
+        joint_times=frame_times(out_t),
     )
     estimates = replay(rec, [estimator], record_times=out_t, start=0.0, end=float(out_t[-1]))
     return estimates, estimator
 
 
+def frame_times(out_t: Array) -> Array:
+    """The output times at which the frame NEES is taken: every :data:`FRAME_EVERY_S` after the
+    start, and the last."""
+    since = out_t - out_t[0]
+    k = np.round(since / FRAME_EVERY_S)
+    picked = out_t[(k >= 1) & np.isclose(since, k * FRAME_EVERY_S, atol=1e-6)]
+    return np.unique(np.append(picked, out_t[-1]))
+
+
 def frame_nees(
     sim: CooperativeSim, settings: CooperativeSettings, estimator: Any
-) -> tuple[float, int] | None:
-    """The NEES of the team's final joint error along its unobservable directions
+) -> tuple[Array, int] | None:
+    """The NEES of the team's joint error along its unobservable directions
     (:func:`relloc.metrics.projected_nees`; translation and rotation with no landmark, the
-    rotation about the landmark with one), from the filter's joint belief at its last time
-    (:meth:`~relloc.estimators.cooperative.CooperativeEstimator.team_belief`) against the truth
-    then, with ``d``; ``None`` where the case has no unobservable direction. χ²(d) for a
-    consistent filter, and one value per independent run."""
+    rotation about the landmark with one) at each of :func:`frame_times`, from the filter's
+    joint beliefs then (``CooperativeEstimator.joint_beliefs``) against the truth, with ``d``;
+    ``None`` where the case has no unobservable direction. Each value is χ²(d) for a
+    consistent filter; the runs are independent."""
     from relloc.core.angles import wrap_angle
     from relloc.estimators.observability_constrained import unobservable_directions
     from relloc.metrics import projected_nees
 
     rec = sim.recording
     anchors_xy = rec.landmarks[list(settings.anchors), :2]
-    t_end, belief = estimator.team_belief()
-    X = belief.mean.reshape(-1, 3)
-    N = unobservable_directions(X, anchors_xy, settings.use_fixes)
-    if N.shape[1] == 0:
-        return None
-    truth = rec.require_truth("sharma2013")
-    k = int(np.argmin(np.abs(truth[0].t - t_end)))
-    error = X - _poses(rec, 1)[k]
-    error[:, 2] = wrap_angle(error[:, 2])
-    return projected_nees(error.reshape(-1), belief.cov, N), int(N.shape[1])
+    truth_t = rec.require_truth("sharma2013")[0].t
+    poses = _poses(rec, 1)
+    values, dof = [], 0
+    for t, belief in estimator.joint_beliefs:
+        X = belief.mean.reshape(-1, 3)
+        N = unobservable_directions(X, anchors_xy, settings.use_fixes)
+        if N.shape[1] == 0:
+            return None
+        error = X - poses[int(np.argmin(np.abs(truth_t - t)))]
+        error[:, 2] = wrap_angle(error[:, 2])
+        values.append(projected_nees(error.reshape(-1), belief.cov, N))
+        dof = int(N.shape[1])
+    return np.array(values), dof
 
 
 def run_case(sim: CooperativeSim, settings: CooperativeSettings, out_t: Array) -> dict[str, Any]:
@@ -544,36 +568,48 @@ def summarise(results: list[dict[str, Any]], n: int, block: str = "cases") -> di
             "nees_run_average": run_average_band(ne, 3),
             "used": float(np.mean([r[block][case]["used"] for r in results])),
             "rejected": float(np.mean([r[block][case]["rejected"] for r in results])),
-            "frame_nees": frame_nees_summary([r[block][case]["frame_nees"] for r in results]),
+            "frame_nees": frame_nees_summary(
+                [r[block][case]["frame_nees"] for r in results], frame_times(results[0]["t"])
+            ),
         }
     return cases
 
 
-def frame_nees_summary(values: list[tuple[float, int] | None]) -> dict[str, Any] | None:
-    """The runs' final NEES along the unobservable directions (:func:`frame_nees`, χ²(d) each
-    and independent across runs): their mean against the two-sided 95 % band of a mean of ``R``
-    such values (verdict *over-confident* above it, *conservative* below), and the share beyond
-    χ²_d(0.95) with its interval (each run one cluster). ``None`` without such directions."""
-    from relloc.metrics import chi2_upper, mean_chi2_band, percent_beyond_interval
+def frame_nees_summary(
+    series: list[tuple[Array, int] | None], times: Array
+) -> dict[str, Any] | None:
+    """The runs' NEES along the unobservable directions (:func:`frame_nees` at ``times``, χ²(d)
+    each, independent across runs). At the end: their mean against the two-sided 95 % band of
+    a mean of ``R`` such values (verdict *over-confident* above it, *conservative* below), and
+    the share beyond χ²_d(0.95) with its interval (each run one cluster). Along the run: the
+    mean over the runs at each of ``times`` against the same band
+    (:func:`relloc.metrics.run_average_band`). ``None`` without such directions."""
+    from relloc.metrics import chi2_upper, mean_chi2_band, percent_beyond_interval, run_average_band
 
-    if not values or any(v is None for v in values):
+    if not series or any(v is None for v in series):
         return None
-    nees = np.array([v[0] for v in values if v is not None])
-    dof = {v[1] for v in values if v is not None}.pop()
-    lo, hi = mean_chi2_band(dof, nees.size)
-    mean = float(np.mean(nees))
+    table = np.stack([v[0] for v in series if v is not None])  # (R, K)
+    dof = {v[1] for v in series if v is not None}.pop()
+    final = table[:, -1]
+    lo, hi = mean_chi2_band(dof, final.size)
+    mean = float(np.mean(final))
     share = percent_beyond_interval(
-        nees, np.zeros(nees.size), chi2_upper(dof, 0.95), runs=np.arange(nees.size)
+        final, np.zeros(final.size), chi2_upper(dof, 0.95), runs=np.arange(final.size)
     )
     verdict = "over-confident" if mean > hi else "conservative" if mean < lo else "consistent"
     return {
         "dof": dof,
-        "per_run": nees.tolist(),
+        "per_run": final.tolist(),
         "mean": mean,
         "band": [lo, hi],
         "verdict": verdict,
         "pct_beyond": share.percent,
         "beyond_interval": share.to_dict(),
+        "along_the_run": {
+            "t": [float(t) for t in times],
+            "mean_over_runs": table.mean(axis=0).tolist(),
+            **run_average_band(table, dof),
+        },
     }
 
 
@@ -814,6 +850,8 @@ def _frame_table(summary: dict[str, Any]) -> str:
                     f["verdict"],
                     f["pct_beyond"],
                     interval_text(f["beyond_interval"]),
+                    f["along_the_run"].get("in_band_percent"),
+                    run_average_verdict_text(f["along_the_run"]),
                 ]
             )
     return markdown_table(
@@ -826,6 +864,8 @@ def _frame_table(summary: dict[str, Any]) -> str:
             "verdict",
             "% beyond χ²_d(.95)",
             "its 95 % interval",
+            f"along the run: mean in band (%, every {FRAME_EVERY_S:g} s)",
+            "its verdict",
         ],
         rows,
     )
@@ -986,7 +1026,10 @@ def _report(summary: dict[str, Any], figures: list[tuple[str, str]]) -> str:
         "(`relloc.metrics.projected_nees`): χ²(d) for a consistent filter, one value per "
         "independent run, so the runs' mean has an exact band (verdict *over-confident* above "
         "it, *conservative* below) and the share beyond χ²_d(0.95) should be about 5 %. It "
-        "tests the filters exactly where a linearised filter gains spurious information.",
+        "tests the filters exactly where a linearised filter gains spurious information. "
+        f"*Along the run*: the same NEES every {FRAME_EVERY_S:g} s, averaged over the runs at "
+        "each of those times against the same band (`relloc.metrics.run_average_band`, with "
+        "its verdict).",
         "## Per-robot RMSE, plain EIF (position m / heading rad)",
         per_robot,
         "## How this compares with the paper",
