@@ -409,13 +409,15 @@ def percent_beyond_interval(
     p_hat = percent / 100.0
     block, width = _time_blocks(t, batches)
     batch_s: float | None = width
-    tau, instants = _correlation_instants(t, v - b)
-    tau_s: float | None = tau * width * batches / max(instants - 1, 1)
+    tau_s: float | None = None
+    if n_runs < 2 or shared_recording:  # time blocks: their values' correlation time beside
+        tau, instants = _correlation_instants(t, v - b)
+        tau_s = tau * float(t.max() - t.min()) / max(instants - 1, 1)
     if n_runs < 2:
         clustering = "time blocks"
         var, g = _cluster_variance(block, beyond, p_hat)
     elif not shared_recording:
-        clustering, batch_s, tau_s = "runs", None, None
+        clustering, batch_s = "runs", None
         var, g = _cluster_variance(r, beyond, p_hat)
     else:
         clustering = "runs and time blocks"
