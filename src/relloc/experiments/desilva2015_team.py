@@ -27,8 +27,9 @@ every robot process simulates the same sensing robots and each of them runs a fu
 figures and the agreement are those of every sensing robot's filters) and ``paper_sensing``
 (the paper's, L1, L2); ``secure``
 (mutual TLS and access control: ``--secure``); ``messages`` per robot and per run
-(sent, received, rejected by reason) and what the collector rejected
-(``collector_rejected_by_reason``); per run ``fault_outcomes`` (accuracy before / during /
+(sent, received, rejected by reason, windows filtered overdue) and what the collector
+rejected (``collector_rejected_by_reason``); per run the acks the clock stopped waiting for
+(``clock_ack_timeouts``); per run ``fault_outcomes`` (accuracy before / during /
 after each fault, tracks kept, deleted and re-found: :mod:`relloc.runtime.outcomes`);
 ``wall_s``.
 
@@ -64,7 +65,12 @@ from relloc.experiments.team_sources import desilva_recording, desilva_scenario
 from relloc.pipeline.output import fmt, markdown_table, prepare_out_dir, write_report, write_summary
 from relloc.runtime.launcher import ProcessTeam, TeamLauncher
 from relloc.runtime.outcomes import figure_agreement, figure_difference, outcomes_of
-from relloc.runtime.summary import agreement, assemble_estimates, robot_messages
+from relloc.runtime.summary import (
+    agreement,
+    assemble_estimates,
+    clock_report,
+    robot_messages,
+)
 from relloc.sim.multihypothesis import ROBOT_NAMES
 
 AGREEMENT_TOLERANCE = 1e-6
@@ -130,6 +136,7 @@ def run_desilva_team(s: DeSilvaTeamSettings) -> dict[str, Any]:
                 "wall_s": collected.wall_s,
                 "agreement": {k: agree[k] for k in ("max_abs_mean_diff", "max_abs_cov_diff")},
                 "messages": robot_messages(collected, recording.robots),
+                "clock_ack_timeouts": clock_report(settings.out_dir).get("ack_timeouts", {}),
                 "collector_rejected_by_reason": dict(collected.rejected_by_reason),
                 "exit_codes": collected.exit_codes,
             }
@@ -272,13 +279,31 @@ def report_markdown(summary: Mapping[str, Any]) -> str:
                     m["sent"].get("mail", 0),
                     sum(m["received_delivered"].values()),
                     m["rejected"],
+                    m["overdue_windows"],
+                    run["clock_ack_timeouts"].get(robot, 0),
                     m["estimates"],
                 ]
             )
     lines.append(
         markdown_table(
-            ["run", "robot", "odom sent", "mail sent", "delivered", "rejected", "estimates"],
+            [
+                "run",
+                "robot",
+                "odom sent",
+                "mail sent",
+                "delivered",
+                "rejected",
+                "windows overdue",
+                "acks timed out",
+                "estimates",
+            ],
             msg_rows,
         )
     )
+    lines += [
+        "",
+        "A window filtered overdue (held velocities, without the other leader's progress) or "
+        "an ack the clock stopped waiting for is where a run on a perfect network can part "
+        "from the in-process one.",
+    ]
     return "\n".join(lines)

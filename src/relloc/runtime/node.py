@@ -93,6 +93,22 @@ END_DRAIN_S = 3.0
 TIME_TOL = 1e-9
 
 
+def window_overdue(window_end: float, t: float, dt: float, max_lag_ticks: int) -> bool:
+    """Whether a window ending at ``window_end`` is overdue at the tick of time ``t``: it ended
+    ``max_lag_ticks`` ticks or more before, ``t ≥ window_end + max_lag_ticks·dt``. An overdue
+    window is filtered with what has arrived (held velocities, no teammate progress)."""
+    return t >= window_end + max_lag_ticks * dt - TIME_TOL
+
+
+def ack_must_wait(window_end: float, t: float, dt: float, max_lag_ticks: int) -> bool:
+    """Whether a talking node must hold its acknowledgement of the tick of time ``t`` while
+    its oldest pending window ends at ``window_end``: the clock's next tick, at ``t + dt``,
+    would find the window overdue (:func:`window_overdue`). With ``L = max_lag_ticks`` the
+    ack of ``t_k`` waits for every window ending at or before ``t_{k+1−L}``; so, as long as
+    the clock waits for acks, no window of a talking node becomes overdue."""
+    return window_overdue(window_end, t + dt, dt, max_lag_ticks)
+
+
 @dataclass(frozen=True, kw_only=True)
 class NodeSettings:
     """One robot process. ``roster`` is the whole team (this robot included)."""
@@ -375,7 +391,7 @@ class RobotNode:
             self._next_report_s += self.s.report_period_s
         if self.estimator.busy:  # waiting for a teammate: repeat our progress, in case the
             self._send_mail(repeat=True)  # teammate waits for it and the last one was lost
-        self._acks_due.append((k, t - self._dt))
+        self._acks_due.append((k, t))
         self._send_due_acks()
 
     def _finish(self) -> None:
@@ -552,7 +568,7 @@ class RobotNode:
             self._handoff.give_up()
         while self._pending and not self._handoff.waiting:
             w = self._pending[0]
-            overdue = self._t >= w.end + self.s.max_lag_ticks * self._dt - TIME_TOL
+            overdue = window_overdue(w.end, self._t, self._dt, self.s.max_lag_ticks)
             if not w.started:
                 ready = self._inputs_in(w)
                 if not (force or overdue or ready):
@@ -589,14 +605,17 @@ class RobotNode:
 
     def _send_due_acks(self) -> None:
         """Acknowledge the ticks that are done. A node whose estimator talks acknowledges tick
-        ``k`` only once every window up to ``max_lag_ticks − 1`` ticks before ``t_{k−1}`` is
-        filtered: its teammates' progress comes between ticks, and the clock must not run so
-        far ahead of the filters that a window waiting for it is overdue; any other node at
-        once."""
-        slack = (self.s.max_lag_ticks - 1) * self._dt
+        ``k`` only once its oldest pending window would not be overdue at tick ``k + 1``
+        (:func:`ack_must_wait`): its teammates' progress comes between ticks, and the clock
+        must not run so far ahead of the filters that a window waiting for it is overdue; any
+        other node at once."""
         while self._acks_due:
-            k, due = self._acks_due[0]
-            if self.talks and self._pending and self._pending[0].end <= due - slack + TIME_TOL:
+            k, t = self._acks_due[0]
+            if (
+                self.talks
+                and self._pending
+                and ack_must_wait(self._pending[0].end, t, self._dt, self.s.max_lag_ticks)
+            ):
                 return
             self._acks_due.popleft()
             self._send("ack", {"k": k})

@@ -4,14 +4,17 @@
 very record the in-process run produces — from the robots' ``est``/``evt`` streams, so the
 distributed run is scored by the same functions as ``relloc run``. :func:`robot_messages` and
 :func:`team_message_totals` add what only a distributed run has: per-robot message counts
-(sent, received, rejected), estimate counts, latencies; :func:`agreement` compares the
-distributed beliefs with the in-process ones.
+(sent, received, rejected), estimate counts, windows filtered overdue, latencies;
+:func:`clock_report` reads what the clock process observed (acks it stopped waiting for);
+:func:`agreement` compares the distributed beliefs with the in-process ones.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import json
 from collections.abc import Mapping, Sequence
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -96,6 +99,7 @@ def robot_messages(collected: Collected, roster: Sequence[str]) -> dict[str, dic
             "faults": {k.split(".", 1)[1]: v for k, v in c.items() if k.startswith("fault.")},
             "tracks": {k.split(".", 1)[1]: v for k, v in c.items() if k.startswith("tracks.")},
             "ticks": c.get("ticks", 0),
+            "overdue_windows": c.get("overdue_windows", 0),
             "listens": bool(last.get("listens", 1)),
             "cpu_s": c.get("cpu_ms", 0) / 1000.0,
             "teammate_departures_seen": c.get("teammate.departures", 0),
@@ -142,6 +146,13 @@ def team_message_totals(
         "rejected": sum(r["rejected"] for r in per_robot.values()),
         "estimates": sum(r["estimates"] for r in per_robot.values()),
     }
+
+
+def clock_report(run_dir: Path) -> dict[str, Any]:
+    """What the clock process observed in a run (``<run_dir>/clock.json``: ticks, wall time,
+    ``ack_timeouts`` per robot, arrivals and departures); empty if it wrote nothing."""
+    path = run_dir / "clock.json"
+    return dict(json.loads(path.read_text())) if path.is_file() else {}
 
 
 def agreement(distributed: Estimates, in_process: Estimates) -> dict[str, Any]:

@@ -52,6 +52,7 @@ from relloc.runtime.scenario import Team, load_team, run_seeds
 from relloc.runtime.summary import (
     agreement,
     assemble_estimates,
+    clock_report,
     robot_messages,
     team_message_totals,
 )
@@ -86,8 +87,7 @@ def run_team(settings: TeamSettings, *, export: ExportRequest | None = None) -> 
         [in_process], [recording], settle_s=SETTLE_S, record_rate_hz=RECORD_RATE_HZ
     )
     per_robot = robot_messages(collected, recording.robots)
-    clock_path = out / "clock.json"
-    clock = json.loads(clock_path.read_text()) if clock_path.is_file() else {}
+    clock = clock_report(out)
     agree = agreement(distributed, in_process)
     agree["tolerance"] = AGREEMENT_TOLERANCE
     agree["within_tolerance"] = bool(
