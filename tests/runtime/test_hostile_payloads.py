@@ -10,6 +10,11 @@ subject and landmark or sensor index, extreme and tiny values and σ, absurd and
 stamps, non-positive-definite covariances, wrong lengths — and the node must count each as
 rejected or use it, never raise, and keep filtering to the end of the run (run with
 ``-W error::RuntimeWarning`` these tests also show that no overflow reaches a filter).
+
+The same path with well-formed messages from a teammate whose appearance (its liveliness
+token) has not reached the node yet — liveliness and data travel separately, so a restarted
+teammate's first messages can come first: they are held and delivered, in order, when it
+appears, and counted as not delivered if it never does.
 """
 
 from __future__ import annotations
@@ -219,3 +224,42 @@ def test_hostile_mail_is_counted_or_fused_and_never_crashes_a_leader(session, da
         )
     )
     _run(node, "L2", "mail", drawn)
+
+
+def _odom(sender: str, seq: int, t: float) -> Incoming:
+    body = {"stamps": [t - DT / 2], "u": np.full((1, 4), 0.1)}
+    return Incoming(keys.robot_key(TEAM, sender, "odom"), encode("odom", sender, seq, t, body))
+
+
+def test_a_teammate_heard_before_its_appearance_is_delivered_when_it_appears(session):
+    parts = sharma_node_parts("1", 5, 0, DURATION_S, "two_landmarks")
+    node = _node(parts, "1", session, share_rows=True)
+    for k in (1, 2, 3):
+        _tick(node, k)
+    node._on_presence("3", False)  # killed: its token went
+    mate = node.teammates["3"]
+    assert not mate.present and node.counters["teammate.departures"] == 1
+    _tick(node, 4)
+    delivered = node.counters["delivered.odom"]
+    # restarted: its first messages (sequence numbers from 0 again) before its token
+    node._on_incoming(_odom("3", 0, 0.4))
+    node._on_incoming(_odom("3", 1, 0.5))
+    assert node.counters["held_from_absent.odom"] == 2
+    assert node.counters["delivered.odom"] == delivered and mate.heard_until_s is None
+    node._on_presence("3", True)
+    assert node.counters["delivered.odom"] == delivered + 2 and mate.held == []
+    assert mate.heard_until_s == 0.5 and mate.odometry.last_stamp == 0.45
+    assert node.counters["from_absent.odom"] == 0
+
+
+def test_what_a_teammate_that_never_appears_again_sent_is_counted_at_the_end(session):
+    parts = sharma_node_parts("1", 5, 0, DURATION_S, "two_landmarks")
+    node = _node(parts, "1", session, share_rows=True)
+    _tick(node, 1)
+    node._on_presence("3", False)
+    node._on_incoming(_odom("3", 0, 0.2))  # sent before it died, heard after its token went
+    for k in range(2, TICKS + 1):
+        _tick(node, k)
+    node._finish()
+    assert node.counters["held_from_absent.odom"] == 1
+    assert node.counters["from_absent.odom"] == 1 and node.teammates["3"].held == []

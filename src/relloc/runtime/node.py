@@ -42,11 +42,16 @@ requests once its estimator has reached the time asked for.
 
 Teammates appear and disappear through Zenoh liveliness. Measurements of a teammate that is gone
 are not fused (its motion cannot be predicted without its odometry), so its track expires after
-the keep window; when it is back and seen again the track is re-found. A message that fails
-validation is dropped and counted by reason (see :mod:`relloc.runtime.messages` and
-:mod:`relloc.runtime.admission`: roles, ticks, time bound, rate); nothing a teammate — or
-anyone else on the network — sends can crash the node. On ``ctl(end)`` — or if the clock
-vanishes — the node filters what is left, ships its last report and exits cleanly.
+the keep window; when it is back and seen again the track is re-found. Liveliness and data
+travel separately, so a restarted teammate's first messages can arrive before its appearance
+is heard: they are held (up to :data:`HELD_FROM_ABSENT`, counted ``held_from_absent``) and
+delivered, in order, when it is; what is still held at the end is counted ``from_absent``.
+
+A message that fails validation is dropped and counted by reason (see
+:mod:`relloc.runtime.messages` and :mod:`relloc.runtime.admission`: roles, ticks, time bound,
+rate); nothing a teammate — or anyone else on the network — sends can crash the node. On
+``ctl(end)`` — or if the clock vanishes — the node filters what is left, ships its last report
+and exits cleanly.
 """
 
 from __future__ import annotations
@@ -88,6 +93,10 @@ from relloc.runtime.transport import (
 )
 
 LATENCY_SAMPLES = 200_000
+HELD_FROM_ABSENT = 1000
+"""Messages kept per teammate that arrive while it is not present (a restarted teammate's
+first messages can arrive before its liveliness token is heard); beyond that, dropped and
+counted (``from_absent``)."""
 END_DRAIN_S = 3.0
 """Wall seconds a node waits after ``ctl(end)`` for teammates' last odometry."""
 TIME_TOL = 1e-9
@@ -336,6 +345,10 @@ class RobotNode:
                 mate.present = True
                 mate.joins += 1
                 self.counters["teammate.joins"] += 1
+                if mate.held:  # what it sent before its appearance reached us, in order
+                    held, mate.held = mate.held, []
+                    self._deliver(held)
+                    self._filter_ready(force=False)
             elif (
                 not joined
                 and mate.present
@@ -406,6 +419,10 @@ class RobotNode:
             last.final = True
             last.rows.append(self._own_rows(last.end, last.end, inclusive=True))
         self._filter_ready(force=True)
+        for mate in self.teammates.values():  # never heard appearing: not delivered
+            for msg in mate.held:
+                self.counters[f"from_absent.{msg.kind}"] += 1
+            mate.held = []
         self.counters["final"] = 1
         self._done = True
 
@@ -413,6 +430,14 @@ class RobotNode:
         late_rows: list[Measurements] = []
         late_odometry: list[np.ndarray] = []
         for msg in messages:
+            mate = self.teammates[msg.sender]
+            if not mate.present:  # its appearance is not heard yet: held until it is
+                if len(mate.held) < HELD_FROM_ABSENT:
+                    mate.held.append(msg)
+                    self.counters[f"held_from_absent.{msg.kind}"] += 1
+                else:
+                    self.counters[f"from_absent.{msg.kind}"] += 1
+                continue
             try:
                 new = self._seen.is_new(msg.sender, msg.kind, msg.seq, self._ticks.k or 0)
             except MessageRejected as exc:
@@ -420,10 +445,6 @@ class RobotNode:
                 continue
             if not new:
                 self.counters["duplicates"] += 1
-                continue
-            mate = self.teammates[msg.sender]
-            if not mate.present:
-                self.counters[f"from_absent.{msg.kind}"] += 1
                 continue
             self.counters[f"delivered.{msg.kind}"] += 1
             if msg.kind == "odom":

@@ -77,7 +77,8 @@ def _sum_counters(incarnations: Sequence[Mapping[str, int]]) -> dict[str, int]:
 
 def robot_messages(collected: Collected, roster: Sequence[str]) -> dict[str, dict[str, Any]]:
     """Per robot: messages sent / received (on the wire, delivered after faults) / rejected,
-    estimates, track events, latency percentiles (of its last incarnation)."""
+    those of a teammate not present (held until it appeared, or never delivered), windows
+    filtered overdue, estimates, track events, latency percentiles (of its last incarnation)."""
     out: dict[str, dict[str, Any]] = {}
     for robot in roster:
         lives = collected.stats.get(robot, [])
@@ -96,6 +97,9 @@ def robot_messages(collected: Collected, roster: Sequence[str]) -> dict[str, dic
             "duplicates_dropped": c.get("duplicates", 0),
             "late_odometry_samples": c.get("late_samples", 0),
             "from_absent_teammate": sum(v for k, v in c.items() if k.startswith("from_absent.")),
+            "held_until_appearance": sum(
+                v for k, v in c.items() if k.startswith("held_from_absent.")
+            ),
             "faults": {k.split(".", 1)[1]: v for k, v in c.items() if k.startswith("fault.")},
             "tracks": {k.split(".", 1)[1]: v for k, v in c.items() if k.startswith("tracks.")},
             "ticks": c.get("ticks", 0),

@@ -20,7 +20,7 @@ from numpy.typing import NDArray
 
 from relloc.core.events import TIME_TOL
 from relloc.core.recording import Measurements
-from relloc.runtime.messages import MessageRejected
+from relloc.runtime.messages import Message, MessageRejected
 
 Array = NDArray[np.float64]
 
@@ -125,6 +125,9 @@ class Teammate:
     """End of the latest window of shared readings received (the header time of its ``rows``)."""
     rows: list[Measurements] = field(default_factory=list)
     """Its shared readings received and not yet filtered."""
+    held: list[Message] = field(default_factory=list)
+    """Its messages that arrived while it was not present, in arrival order (delivered when
+    its appearance is heard: :mod:`relloc.runtime.node`)."""
 
     def take_rows(self, t0: float, t1: float, *, inclusive: bool = False) -> list[Measurements]:
         """The shared readings stamped in ``[t0, t1)`` (``[t0, t1]``); earlier ones are
