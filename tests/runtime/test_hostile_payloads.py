@@ -31,7 +31,7 @@ from relloc.core.recording import KIND_NAMES, KINDS
 from relloc.experiments.team_sources import named_node_parts, sharma_node_parts
 from relloc.runtime import keys
 from relloc.runtime.messages import SCHEMA, SCHEMA_VERSION, encode
-from relloc.runtime.node import NodeSettings, RobotNode
+from relloc.runtime.node import HELD_FROM_ABSENT, NodeSettings, RobotNode
 from relloc.runtime.transport import Incoming, TransportSettings, declare_publisher, open_session
 
 TEAM = "team"
@@ -263,3 +263,22 @@ def test_what_a_teammate_that_never_appears_again_sent_is_counted_at_the_end(ses
     node._finish()
     assert node.counters["held_from_absent.odom"] == 1
     assert node.counters["from_absent.odom"] == 1 and node.teammates["3"].held == []
+
+
+def test_what_is_held_for_an_absent_teammate_is_bounded(session):
+    """An impostor (or a teammate whose token never comes) sending at its rate budget fills at
+    most :data:`HELD_FROM_ABSENT` messages; the rest are dropped and counted."""
+    parts = sharma_node_parts("1", 5, 0, DURATION_S, "two_landmarks")
+    node = _node(parts, "1", session, share_rows=True)
+    _tick(node, 1)
+    node._on_presence("3", False)
+    sent = 0
+    for k in range(2, 12):
+        _tick(node, k)
+        for _ in range(30):
+            node._on_incoming(_odom("3", sent, k * DT))
+            sent += 1
+    assert sent > HELD_FROM_ABSENT and node.counters["rejected"] == 0
+    assert len(node.teammates["3"].held) == HELD_FROM_ABSENT
+    assert node.counters["held_from_absent.odom"] == HELD_FROM_ABSENT
+    assert node.counters["from_absent.odom"] == sent - HELD_FROM_ABSENT
