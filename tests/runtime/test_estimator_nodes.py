@@ -166,6 +166,7 @@ def test_desilva_leaders_as_processes_match_in_process_and_refind_the_kidnapped_
                 "overdue_windows": m["overdue_windows"],
                 "messages_late": m["tracks"].get("messages_late"),
                 "departures_seen": m["teammate_departures_seen"],
+                "held_until_appearance": m["held_until_appearance"],
                 "rejected": m["rejected_by_reason"],
             }
             for robot, m in run["messages"].items()
