@@ -1,4 +1,5 @@
-"""Speed and scale benchmarks, runnable as ``relloc bench NAME`` or ``benchmarks/run_all.py``.
+"""Speed, scale and interval-coverage benchmarks, runnable as ``relloc bench NAME`` or
+``benchmarks/run_all.py``.
 
 Each module ``relloc.bench.<name>`` exposes ``run(quiet: bool = False) -> dict`` returning the
 numbers it measured (and the named baseline measured in the same run), printing a table unless
@@ -13,4 +14,5 @@ BENCHMARKS: dict[str, str] = {
     "multihypothesis": "relloc.bench.multihypothesis",
     "runtime": "relloc.bench.runtime",
     "secure": "relloc.bench.secure",
+    "intervals": "relloc.bench.intervals",
 }

@@ -1,4 +1,4 @@
-"""``relloc bench NAME [--json FILE]`` — run a speed benchmark and print/write its numbers."""
+"""``relloc bench NAME [--json FILE]`` — run a benchmark and print/write its numbers."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ from relloc.errors import ConfigError
 def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p = subparsers.add_parser(
         "bench",
-        help="speed benchmarks against a named baseline measured in the same run",
+        help="benchmarks (speed, scale, interval coverage) against a baseline run beside",
         description="Benchmarks: " + ", ".join(BENCHMARKS),
     )
     p.add_argument("name", help="benchmark: " + ", ".join(BENCHMARKS))

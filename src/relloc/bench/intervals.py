@@ -1,0 +1,259 @@
+"""``relloc bench intervals``: how often the NEES-share intervals hold the true share.
+
+Every consistency verdict on a single run or a shared recording rests on the interval of
+:func:`relloc.metrics.consistency.percent_beyond_interval`. This benchmark measures its
+coverage by seeded Monte Carlo on values whose share beyond the bound is known exactly: the
+NEES ``ε_t = |e_t|²`` of a consistent filter's 3-DOF errors, each error component an AR(1)
+series of unit stationary variance,
+
+    e_t = ρ e_{t−1} + √(1 − ρ²) w_t,   w_t ~ N(0, I₃),   e_0 ~ N(0, I₃),
+
+so every ``ε_t`` is χ²(3) and exactly 5 % of them lie beyond ``χ²₃(0.95)``, while neighbours
+are correlated: ``corr(ε_t, ε_{t+k}) = ρ^{2k}`` (for a Gaussian ``e``, ``cov(e², e'²) =
+2 cov(e, e')²``), an integrated correlation time of ``τ = (1 + ρ²)/(1 − ρ²)`` samples. One
+sample is one second.
+
+Designs, each ``draws`` times:
+
+* ``one_run``: one run of ``samples`` values per ρ of ``rhos``, ten time blocks (the default
+  of every report). Beside the coverage: the mean estimated correlation time
+  (``correlation_time_s``, :func:`~relloc.metrics.consistency.integrated_time` on ranks)
+  against the true ``τ``, a block's length in true ``τ``, the share of draws flagged
+  ``blocks_short`` and the coverage among flagged and unflagged draws — whether the flag
+  marks the intervals that are too narrow.
+* ``independent_runs``: ``runs`` independent runs of ``run_samples`` values at ρ
+  ``runs_rho``, each run a cluster (Monte Carlo experiments).
+* ``shared_recording``: ``shared_runs`` runs of ``samples`` values replaying one recording,
+  half of each error's variance shared by every run at the same instant (the recording's
+  odometry) and half the run's own (fresh sensor noise), both AR(1) with ρ ``runs_rho``;
+  two-way clustered by runs and time blocks (``shared_recording=True``).
+
+The named baseline, measured on the same draws: the binomial interval that takes every value
+as independent (the same function given each value as its own run: ``N_eff = N``), which is
+what a report quoting ``√(p(1−p)/N)`` would claim. A valid interval covers 5 % in about 95 %
+of draws; the Monte Carlo error of a coverage is about ``√(0.95·0.05/draws)`` (0.013 for 300).
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from functools import partial
+from typing import Any
+
+import numpy as np
+from scipy.signal import lfilter
+
+from relloc.errors import ConfigError
+from relloc.metrics.consistency import (
+    INTERVAL_BATCHES,
+    BeyondShare,
+    chi2_upper,
+    percent_beyond_interval,
+)
+
+DOF = 3
+TRUE_PERCENT = 5.0
+"""The share (%) of χ²(3) values beyond χ²₃(0.95): what every interval should hold."""
+SEED = 20261206
+"""The Monte Carlo's seed root (printed and written with the numbers)."""
+
+
+@dataclass(frozen=True, kw_only=True)
+class IntervalBenchSize:
+    """The Monte Carlo's size (module docstring)."""
+
+    draws: int = 300
+    samples: int = 4500
+    rhos: tuple[float, ...] = (0.9, 0.97, 0.99, 0.995, 0.997)
+    runs: int = 30
+    run_samples: int = 150
+    runs_rho: float = 0.97
+    shared_runs: int = 5
+
+    def __post_init__(self) -> None:
+        for name in ("draws", "samples", "runs", "run_samples", "shared_runs"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int) or value < 2:
+                raise ConfigError(
+                    f"IntervalBenchSize.{name}: must be an integer ≥ 2, got {value!r}"
+                )
+        for rho in (*self.rhos, self.runs_rho):
+            if not 0.0 <= rho < 1.0:
+                raise ConfigError(f"IntervalBenchSize: ρ {rho!r} outside [0, 1)")
+        if not self.rhos:
+            raise ConfigError("IntervalBenchSize.rhos: at least one ρ")
+
+
+def ar1_errors(rng: np.random.Generator, rho: float, shape: tuple[int, ...]) -> np.ndarray:
+    """Errors of ``shape`` (time on axis −2, the DOF on axis −1), AR(1) along time with unit
+    stationary variance (module docstring)."""
+    w = rng.standard_normal(shape)
+    w[..., 1:, :] *= np.sqrt(1.0 - rho**2)
+    return lfilter([1.0], [1.0, -rho], w, axis=-2)
+
+
+def correlation_time(rho: float) -> float:
+    """``τ = (1 + ρ²)/(1 − ρ²)``: the integrated correlation time (samples) of the NEES."""
+    return (1.0 + rho**2) / (1.0 - rho**2)
+
+
+def _covers(share: BeyondShare) -> bool:
+    return share.interval is not None and share.interval[0] <= TRUE_PERCENT <= share.interval[1]
+
+
+def _independent_baseline(values: np.ndarray) -> BeyondShare:
+    """The baseline: every value taken as its own independent run."""
+    v = values.reshape(-1)
+    return percent_beyond_interval(v, np.zeros(v.size), chi2_upper(DOF), runs=np.arange(v.size))
+
+
+def _coverage(draws: int, draw: Callable[[], tuple[BeyondShare, BeyondShare]]) -> dict[str, Any]:
+    """Coverage of the interval and of the baseline over ``draws`` draws, with the mean
+    interval widths and, for time blocks, the correlation-time figures."""
+    shares = [draw() for _ in range(draws)]
+    ours = [s for s, _ in shares]
+    base = [b for _, b in shares]
+    covered = np.array([_covers(s) for s in ours])
+    out: dict[str, Any] = {
+        "coverage": float(covered.mean()),
+        "baseline_coverage": float(np.mean([_covers(b) for b in base])),
+        "mean_width_pct": float(
+            np.mean([s.interval[1] - s.interval[0] for s in ours if s.interval])
+        ),
+        "baseline_mean_width_pct": float(
+            np.mean([b.interval[1] - b.interval[0] for b in base if b.interval])
+        ),
+        "mean_effective_samples": float(np.mean([s.effective_samples or 0.0 for s in ours])),
+    }
+    if ours[0].batch_s is not None and ours[0].correlation_time_s is not None:
+        short = np.array([bool(s.blocks_short) for s in ours])
+        out |= {
+            "mean_correlation_time_s": float(np.mean([s.correlation_time_s for s in ours])),
+            "blocks_short_share": float(short.mean()),
+            "blocks_short_draws": int(short.sum()),
+            "coverage_blocks_short": float(covered[short].mean()) if short.any() else None,
+            "coverage_blocks_long": float(covered[~short].mean()) if (~short).any() else None,
+        }
+    return out
+
+
+def _one_run(rng: np.random.Generator, rho: float, n: int) -> tuple[BeyondShare, BeyondShare]:
+    v = np.sum(ar1_errors(rng, rho, (n, DOF)) ** 2, axis=-1)
+    return percent_beyond_interval(v, np.arange(n, dtype=float), chi2_upper(DOF)), (
+        _independent_baseline(v)
+    )
+
+
+def _independent_runs(
+    rng: np.random.Generator, rho: float, runs: int, n: int
+) -> tuple[BeyondShare, BeyondShare]:
+    v = np.sum(ar1_errors(rng, rho, (runs, n, DOF)) ** 2, axis=-1)
+    t = np.broadcast_to(np.arange(n, dtype=float), v.shape)
+    r = np.broadcast_to(np.arange(runs)[:, None], v.shape)
+    share = percent_beyond_interval(
+        v.reshape(-1), t.reshape(-1), chi2_upper(DOF), runs=r.reshape(-1)
+    )
+    return share, _independent_baseline(v)
+
+
+def _shared_recording(
+    rng: np.random.Generator, rho: float, runs: int, n: int
+) -> tuple[BeyondShare, BeyondShare]:
+    shared = ar1_errors(rng, rho, (n, DOF))
+    own = ar1_errors(rng, rho, (runs, n, DOF))
+    v = np.sum((np.sqrt(0.5) * (shared[None] + own)) ** 2, axis=-1)
+    t = np.broadcast_to(np.arange(n, dtype=float), v.shape)
+    r = np.broadcast_to(np.arange(runs)[:, None], v.shape)
+    share = percent_beyond_interval(
+        v.reshape(-1),
+        t.reshape(-1),
+        chi2_upper(DOF),
+        runs=r.reshape(-1),
+        shared_recording=True,
+    )
+    return share, _independent_baseline(v)
+
+
+def run(
+    quiet: bool = False, size: IntervalBenchSize | None = None, seed: int = SEED
+) -> dict[str, Any]:
+    size = size or IntervalBenchSize()
+    rngs = [
+        np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(len(size.rhos) + 2)
+    ]
+    started = time.perf_counter()
+    one_run = {}
+    for rho, rng in zip(size.rhos, rngs, strict=False):
+        figures = _coverage(size.draws, partial(_one_run, rng, rho, size.samples))
+        tau = correlation_time(rho)
+        block = size.samples / INTERVAL_BATCHES
+        one_run[f"{rho:g}"] = {
+            "rho": rho,
+            "true_correlation_time_s": tau,
+            "block_s": block,
+            "block_in_correlation_times": block / tau,
+            **figures,
+        }
+    independent = _coverage(
+        size.draws,
+        partial(_independent_runs, rngs[-2], size.runs_rho, size.runs, size.run_samples),
+    )
+    shared = _coverage(
+        size.draws,
+        partial(_shared_recording, rngs[-1], size.runs_rho, size.shared_runs, size.samples),
+    )
+    result: dict[str, Any] = {
+        "seed": seed,
+        "true_percent": TRUE_PERCENT,
+        "size": size.__dict__,
+        "one_run": one_run,
+        "independent_runs": {"rho": size.runs_rho, "runs": size.runs, **independent},
+        "shared_recording": {"rho": size.runs_rho, "runs": size.shared_runs, **shared},
+        "baseline": "binomial: every value taken as independent (N_eff = N)",
+        "monte_carlo_error": float(np.sqrt(0.95 * 0.05 / size.draws)),
+        "wall_s": time.perf_counter() - started,
+        "load_average": list(os.getloadavg()),
+    }
+    if not quiet:
+        _print(result)
+    return result
+
+
+def _print(r: dict[str, Any]) -> None:
+    print(
+        f"coverage of the 95 % NEES-share interval (true share {r['true_percent']:g} %), "
+        f"seed {r['seed']}, {r['size']['draws']} draws each (Monte Carlo error "
+        f"±{r['monte_carlo_error']:.3f}); baseline: {r['baseline']}"
+    )
+    print(
+        f"{'one run, 10 blocks':>22} {'τ (s)':>7} {'τ̂ (s)':>7} {'block/τ':>8} "
+        f"{'coverage':>9} {'baseline':>9} {'short':>6} {'cov|short':>12} {'cov|long':>12}"
+    )
+    for v in r["one_run"].values():
+        short, long = v["blocks_short_draws"], r["size"]["draws"] - v["blocks_short_draws"]
+        short_cov, long_cov = (
+            _of(v["coverage_blocks_short"], short),
+            _of(v["coverage_blocks_long"], long),
+        )
+        print(
+            f"{'ρ = ' + format(v['rho'], 'g'):>22} {v['true_correlation_time_s']:7.1f} "
+            f"{v['mean_correlation_time_s']:7.1f} {v['block_in_correlation_times']:8.1f} "
+            f"{v['coverage']:9.3f} {v['baseline_coverage']:9.3f} {short:6d} "
+            f"{short_cov:>12} {long_cov:>12}"
+        )
+    for name in ("independent_runs", "shared_recording"):
+        v = r[name]
+        print(
+            f"{name.replace('_', ' ')} ({v['runs']} runs, ρ {v['rho']:g}): coverage "
+            f"{v['coverage']:.3f}, baseline {v['baseline_coverage']:.3f}; mean width "
+            f"{v['mean_width_pct']:.2f} % against {v['baseline_mean_width_pct']:.2f} %"
+        )
+    print(f"wall {r['wall_s']:.1f} s, load average {r['load_average'][0]:.2f}")
+
+
+def _of(coverage: float | None, draws: int) -> str:
+    """A coverage with the number of draws it is measured on."""
+    return "—" if coverage is None else f"{coverage:.3f} ({draws})"
