@@ -8,6 +8,17 @@ import pytest
 
 pytest.importorskip("zenoh", reason="extra 'runtime' (eclipse-zenoh) not installed")
 
+
+@pytest.fixture(scope="module")
+def session():
+    """A real Zenoh session connected to nothing, for nodes driven by hand (``node_harness``)."""
+    from relloc.runtime.transport import TransportSettings, open_session
+
+    s = open_session(TransportSettings())
+    yield s
+    s.close()
+
+
 THREE_ROBOTS = """
 name = "runtime-test-trio"
 description = "one observing ground robot, one aerial and one ground teammate"

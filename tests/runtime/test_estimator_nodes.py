@@ -164,6 +164,7 @@ def test_desilva_leaders_as_processes_match_in_process_and_refind_the_kidnapped_
         **{
             robot: {
                 "overdue_windows": m["overdue_windows"],
+                "acks_held": (m["acks_held"], m["acks_held_expired"]),
                 "messages_late": m["tracks"].get("messages_late"),
                 "departures_seen": m["teammate_departures_seen"],
                 "held_until_appearance": m["held_until_appearance"],

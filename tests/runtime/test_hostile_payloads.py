@@ -23,21 +23,16 @@ from typing import Any
 
 import msgpack
 import numpy as np
-import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from node_harness import DT, DURATION_S, TEAM, TICKS, hand_node, odom, tick
 
 from relloc.core.recording import KIND_NAMES, KINDS
 from relloc.experiments.team_sources import named_node_parts, sharma_node_parts
 from relloc.runtime import keys
-from relloc.runtime.messages import SCHEMA, SCHEMA_VERSION, encode
-from relloc.runtime.node import HELD_FROM_ABSENT, NodeSettings, RobotNode
-from relloc.runtime.transport import Incoming, TransportSettings, declare_publisher, open_session
-
-TEAM = "team"
-DT = 0.1
-TICKS = 20
-DURATION_S = DT * TICKS
+from relloc.runtime.messages import SCHEMA, SCHEMA_VERSION
+from relloc.runtime.node import HELD_FROM_ABSENT, RobotNode
+from relloc.runtime.transport import Incoming
 
 EXTREME = [0.0, -0.0, 1.0, -1.0, 1e-300, -1e-300, 1e300, -1e300, 2.0**63, 1e12, -1e12, 0.5]
 numbers = st.one_of(st.sampled_from(EXTREME), st.floats(-1e3, 1e3, allow_nan=False))
@@ -47,39 +42,6 @@ offsets = st.one_of(
 )
 """Stamps as offsets from the tick they are sent at."""
 SHARED_FIELDS = tuple(SCHEMA["rows"])
-
-
-@pytest.fixture(scope="module")
-def session():
-    s = open_session(TransportSettings())
-    yield s
-    s.close()
-
-
-def _node(parts: Any, robot: str, session: Any, **extra: Any) -> RobotNode:
-    s = NodeSettings(
-        team=TEAM,
-        robot=robot,
-        roster=parts.roster,
-        transport=TransportSettings(),
-        **extra,
-    )
-    node = RobotNode(s, parts.source, parts.driver)
-    node._session = session
-    for kind in keys.ROBOT_KINDS:
-        node._pubs[kind] = declare_publisher(session, keys.robot_key(TEAM, f"fuzz{robot}", kind))
-    node._on_presence("clock", True)
-    for mate in parts.roster:
-        if mate != robot:
-            node._on_presence(mate, True)
-    return node
-
-
-def _tick(node: RobotNode, k: int) -> None:
-    body = {"k": k, "n": TICKS, "dt": DT}
-    node._on_incoming(
-        Incoming(keys.clock_key(TEAM, "tick"), encode("tick", "clock", k, k * DT, body))
-    )
 
 
 def _raw(kind: str, sender: str, seq: int, t: float, body: dict[str, Any]) -> bytes:
@@ -95,7 +57,7 @@ def _run(node: RobotNode, sender: str, kind: str, drawn: list[tuple[dict, int, f
     filtered by the end (overdue ones too: the teammates send nothing else)."""
     key = keys.robot_key(TEAM, sender, kind)
     for k in range(1, TICKS + 1):
-        _tick(node, k)
+        tick(node, k)
         if k <= len(drawn):
             body, seq, offset = drawn[k - 1]
             body = body | {"stamps": [k * DT + s for s in body["stamps"]]}
@@ -159,7 +121,7 @@ def rows_bodies(draw: Any, roster: tuple[str, ...]) -> dict[str, Any]:
 @given(data=st.data())
 def test_hostile_rows_are_counted_or_fused_and_never_crash_an_agent(session, data):
     parts = sharma_node_parts("1", 5, 0, DURATION_S, "two_landmarks")
-    node = _node(parts, "1", session, share_rows=True)
+    node = hand_node(parts, "1", session, share_rows=True)
     drawn = data.draw(
         st.lists(
             st.tuples(rows_bodies(parts.roster), st.integers(0, 40), offsets),
@@ -215,7 +177,7 @@ def mail_bodies(draw: Any, roster: tuple[str, ...]) -> dict[str, Any]:
 @given(data=st.data())
 def test_hostile_mail_is_counted_or_fused_and_never_crashes_a_leader(session, data):
     parts = named_node_parts("desilva2015", "L1", 5, 0, DURATION_S)
-    node = _node(parts, "L1", session, talkers=parts.talkers)
+    node = hand_node(parts, "L1", session, talkers=parts.talkers)
     drawn = data.draw(
         st.lists(
             st.tuples(mail_bodies(parts.roster), st.integers(0, 40), offsets),
@@ -226,24 +188,19 @@ def test_hostile_mail_is_counted_or_fused_and_never_crashes_a_leader(session, da
     _run(node, "L2", "mail", drawn)
 
 
-def _odom(sender: str, seq: int, t: float) -> Incoming:
-    body = {"stamps": [t - DT / 2], "u": np.full((1, 4), 0.1)}
-    return Incoming(keys.robot_key(TEAM, sender, "odom"), encode("odom", sender, seq, t, body))
-
-
 def test_a_teammate_heard_before_its_appearance_is_delivered_when_it_appears(session):
     parts = sharma_node_parts("1", 5, 0, DURATION_S, "two_landmarks")
-    node = _node(parts, "1", session, share_rows=True)
+    node = hand_node(parts, "1", session, share_rows=True)
     for k in (1, 2, 3):
-        _tick(node, k)
+        tick(node, k)
     node._on_presence("3", False)  # killed: its token went
     mate = node.teammates["3"]
     assert not mate.present and node.counters["teammate.departures"] == 1
-    _tick(node, 4)
+    tick(node, 4)
     delivered = node.counters["delivered.odom"]
     # restarted: its first messages (sequence numbers from 0 again) before its token
-    node._on_incoming(_odom("3", 0, 0.4))
-    node._on_incoming(_odom("3", 1, 0.5))
+    node._on_incoming(odom("3", 0, 0.4))
+    node._on_incoming(odom("3", 1, 0.5))
     assert node.counters["held_from_absent.odom"] == 2
     assert node.counters["delivered.odom"] == delivered and mate.heard_until_s is None
     node._on_presence("3", True)
@@ -254,12 +211,12 @@ def test_a_teammate_heard_before_its_appearance_is_delivered_when_it_appears(ses
 
 def test_what_a_teammate_that_never_appears_again_sent_is_counted_at_the_end(session):
     parts = sharma_node_parts("1", 5, 0, DURATION_S, "two_landmarks")
-    node = _node(parts, "1", session, share_rows=True)
-    _tick(node, 1)
+    node = hand_node(parts, "1", session, share_rows=True)
+    tick(node, 1)
     node._on_presence("3", False)
-    node._on_incoming(_odom("3", 0, 0.2))  # sent before it died, heard after its token went
+    node._on_incoming(odom("3", 0, 0.2))  # sent before it died, heard after its token went
     for k in range(2, TICKS + 1):
-        _tick(node, k)
+        tick(node, k)
     node._finish()
     assert node.counters["held_from_absent.odom"] == 1
     assert node.counters["from_absent.odom"] == 1 and node.teammates["3"].held == []
@@ -269,14 +226,14 @@ def test_what_is_held_for_an_absent_teammate_is_bounded(session):
     """An impostor (or a teammate whose token never comes) sending at its rate budget fills at
     most :data:`HELD_FROM_ABSENT` messages; the rest are dropped and counted."""
     parts = sharma_node_parts("1", 5, 0, DURATION_S, "two_landmarks")
-    node = _node(parts, "1", session, share_rows=True)
-    _tick(node, 1)
+    node = hand_node(parts, "1", session, share_rows=True)
+    tick(node, 1)
     node._on_presence("3", False)
     sent = 0
     for k in range(2, 12):
-        _tick(node, k)
+        tick(node, k)
         for _ in range(30):
-            node._on_incoming(_odom("3", sent, k * DT))
+            node._on_incoming(odom("3", sent, k * DT))
             sent += 1
     assert sent > HELD_FROM_ABSENT and node.counters["rejected"] == 0
     assert len(node.teammates["3"].held) == HELD_FROM_ABSENT

@@ -64,6 +64,7 @@ from relloc.experiments.desilva2015 import (
 from relloc.experiments.team_sources import desilva_recording, desilva_scenario
 from relloc.pipeline.output import fmt, markdown_table, prepare_out_dir, write_report, write_summary
 from relloc.runtime.launcher import ProcessTeam, TeamLauncher
+from relloc.runtime.node import ACK_HOLD_S
 from relloc.runtime.outcomes import figure_agreement, figure_difference, outcomes_of
 from relloc.runtime.summary import (
     agreement,
@@ -280,6 +281,7 @@ def report_markdown(summary: Mapping[str, Any]) -> str:
                     sum(m["received_delivered"].values()),
                     m["rejected"],
                     m["overdue_windows"],
+                    f"{m['acks_held']} ({m['acks_held_expired']})",
                     run["clock_ack_timeouts"].get(robot, 0),
                     m["estimates"],
                 ]
@@ -294,6 +296,7 @@ def report_markdown(summary: Mapping[str, Any]) -> str:
                 "delivered",
                 "rejected",
                 "windows overdue",
+                "acks held (ran out)",
                 "acks timed out",
                 "estimates",
             ],
@@ -304,6 +307,9 @@ def report_markdown(summary: Mapping[str, Any]) -> str:
         "",
         "A window filtered overdue (held velocities, without the other leader's progress) or "
         "an ack the clock stopped waiting for is where a run on a perfect network can part "
-        "from the in-process one.",
+        "from the in-process one. On a network without emulated faults a robot holds its ack "
+        "while a window of its would be overdue at the next tick, until what it waits for "
+        f"arrives or {ACK_HOLD_S:g} s have passed (ran out); with emulated faults it never "
+        "holds.",
     ]
     return "\n".join(lines)

@@ -16,7 +16,9 @@ Protocol (key expressions in :mod:`relloc.runtime.keys`):
 
 The barrier is what makes a distributed run comparable with the in-process run: everything a
 robot published for ``[t_{k−1}, t_k)`` left before its ``ack(k)``, and nodes filter one tick
-behind the clock, so in a perfect network every input has normally arrived before it is needed.
+behind the clock, so in a perfect network every input has normally arrived before it is needed;
+a node whose window still waits when the next tick would find it overdue holds its ack until
+the input comes (bounded: :meth:`relloc.runtime.node.RobotNode._send_due_acks`).
 A robot that does not acknowledge within ``ack_timeout_s`` of wall time is not waited for (the
 clock counts it); a robot that disappears is dropped from the barrier.
 """

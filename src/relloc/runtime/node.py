@@ -31,7 +31,10 @@ Per clock tick ``k`` (simulated time ``t_k``; see :mod:`relloc.runtime.clock`) a
    whose inputs are in is filtered then, not at the next tick;
 4. every ``eqm_period_s`` broadcasts its belief of each teammate as an equivalent measurement
    (monitoring, 1 Hz); every ``report_period_s`` ships its new estimates (``est``), track events
-   (``evt``) and counters (``stats``) to the collector; finally it acknowledges ``k``.
+   (``evt``) and counters (``stats``) to the collector; finally it acknowledges ``k`` — at
+   once, unless a window of its still waits for inputs on their way and would be overdue at
+   the next tick (then, on a network without emulated faults, the ack waits for them, at most
+   :data:`ACK_HOLD_S`: :meth:`RobotNode._send_due_acks`).
 
 The last tick's window is ``[t_{n−1}, t_n]``: it holds the run's last instant.
 
@@ -99,6 +102,10 @@ first messages can arrive before its liveliness token is heard); beyond that, dr
 counted (``from_absent``). At a teammate's usual two or three messages a tick that is about
 ten seconds of a liveliness lag (0.3 s held 43 in a test), and at most 256 × the message size
 limit of memory per teammate, whatever an impostor sends."""
+ACK_HOLD_S = 5.0
+"""Wall seconds a node on a network without emulated faults holds the ack of a tick whose next
+tick would find a window of its overdue (:meth:`RobotNode._send_due_acks`); half the clock's
+ack timeout, so that a held ack is never counted as timed out."""
 END_DRAIN_S = 3.0
 """Wall seconds a node waits after ``ctl(end)`` for teammates' last odometry."""
 TIME_TOL = 1e-9
@@ -202,6 +209,8 @@ class RobotNode:
         if self.talks:
             estimator.mark_talking()
         self._acks_due: deque[tuple[int, float]] = deque()
+        self._hold_deadline: float | None = None
+        """Wall time (monotonic) at which a held ack goes anyway (:data:`ACK_HOLD_S`)."""
         self._tick_wall: dict[float, float] = {}
         self.paced = (
             EstimateTiming(1.0 / settings.paced_factor) if settings.paced_factor > 0 else None
@@ -275,7 +284,13 @@ class RobotNode:
                     break
                 item = inbox.get(timeout=min(wait, 0.05))
             else:
-                item = inbox.get(timeout=s.clock_timeout_s)
+                timeout = s.clock_timeout_s
+                if self._hold_deadline is not None:  # wake up when the held ack is due
+                    timeout = min(timeout, max(0.0, self._hold_deadline - time.monotonic()))
+                item = inbox.get(timeout=timeout)
+                if item is None and self._hold_deadline is not None:
+                    self._send_due_acks()
+                    continue
                 if item is None:
                     self.counters["exit.clock_silent"] += 1
                     self._finish()
@@ -356,6 +371,8 @@ class RobotNode:
                 mate.departures += 1
                 self.counters["teammate.departures"] += 1
                 self._seen.forget(member)
+                if self._session is not None:  # windows that waited for it need it no more
+                    self._filter_ready(force=False)
         everyone = self._clock_seen and all(m.joins for m in self.teammates.values())
         if everyone and len(self._tokens) == 1 and self._session is not None:
             ready = keys.ready_key(self.s.team, self.s.robot)
@@ -618,15 +635,27 @@ class RobotNode:
         self._send_due_acks()
 
     def _send_due_acks(self) -> None:
-        """Acknowledge the ticks that are done. A node whose estimator talks holds the ack of
-        tick ``k`` while its oldest pending window is overdue at ``t_k``
-        (:func:`window_overdue`). Overdue windows are filtered at the tick, before its ack, so
-        this holds only while the node waits for a teammate's team belief (a restarted node:
-        :mod:`relloc.runtime.handoff`). Every other ack goes at once. Holding the ack while a
-        window waits for a teammate's progress, one tick before it is overdue, would keep the
-        clock from reaching the tick at which it is; it was tried, and on a lossy link a lost
-        progress mail then stalls the team until the clock's ack timeout (``team up
-        desilva2015 --drop 0.2 --duration 10``: 86 s of wall time and 8 timeouts, against 7 s)."""
+        """Acknowledge the ticks that are done; two rules hold an ack back.
+
+        - A node whose estimator talks holds the ack of tick ``k`` while its oldest pending
+          window is overdue at ``t_k`` (:func:`window_overdue`). Overdue windows are filtered
+          at the tick, before its ack, so this holds only while the node waits for a
+          teammate's team belief (a restarted node: :mod:`relloc.runtime.handoff`).
+        - On a network without emulated faults (``faults.network_faulty`` false) any node
+          holds the ack of tick ``k`` while its oldest pending window would be overdue at the
+          next tick, ``t_k + Δt``, for at most :data:`ACK_HOLD_S` of wall time (counted
+          ``acks_held``; ``acks_held_expired`` when the time ran out). Its missing inputs —
+          a teammate's odometry or, for a talker, its progress — were sent before the
+          teammate's ack of an earlier tick and are on their way: the hold keeps a link that
+          stalls for a moment (a starved process, a busy core) from letting the clock run
+          ``max_lag_ticks`` ahead, so that the window is never filtered without them and the
+          run still performs the in-process arithmetic. Not while the node waits for a team
+          belief (its retries count ticks), and not where faults are emulated: the emulator
+          releases what it delays at ticks, and a lost progress mail is repeated only at a
+          tick, so a hold there would stall the team (tried without the time bound and on
+          talkers only: ``team up desilva2015 --drop 0.2 --duration 10`` took 86 s and 8 of
+          the clock's ack timeouts, against 7 s).
+        """
         while self._acks_due:
             k, t = self._acks_due[0]
             if (
@@ -634,9 +663,29 @@ class RobotNode:
                 and self._pending
                 and window_overdue(self._pending[0].end, t, self._dt, self.s.max_lag_ticks)
             ):
+                self._hold_deadline = None  # held by this rule alone: nothing to wake up for
                 return
+            if self._hold_for_next_tick(t):
+                now = time.monotonic()
+                if self._hold_deadline is None:
+                    self._hold_deadline = now + ACK_HOLD_S
+                    self.counters["acks_held"] += 1
+                if now < self._hold_deadline:
+                    return
+                self.counters["acks_held_expired"] += 1
+            self._hold_deadline = None
             self._acks_due.popleft()
             self._send("ack", {"k": k})
+
+    def _hold_for_next_tick(self, t: float) -> bool:
+        """Whether the second rule of :meth:`_send_due_acks` holds the ack of the tick at
+        ``t``."""
+        return (
+            not self.s.faults.network_faulty
+            and not self._handoff.waiting
+            and bool(self._pending)
+            and window_overdue(self._pending[0].end, t + self._dt, self._dt, self.s.max_lag_ticks)
+        )
 
     def _window_done(self, window: _Window) -> None:
         """A window was filtered: on a paced clock, time it (module :mod:`~relloc.runtime.timing`;

@@ -78,7 +78,10 @@ def _sum_counters(incarnations: Sequence[Mapping[str, int]]) -> dict[str, int]:
 def robot_messages(collected: Collected, roster: Sequence[str]) -> dict[str, dict[str, Any]]:
     """Per robot: messages sent / received (on the wire, delivered after faults) / rejected,
     those of a teammate not present (held until it appeared, or never delivered), windows
-    filtered overdue, estimates, track events, latency percentiles (of its last incarnation)."""
+    filtered overdue, acks held for a window that would have been overdue at the next tick
+    (and of those, held until the wall-time bound ran out: :meth:`RobotNode._send_due_acks`
+    in :mod:`relloc.runtime.node`), estimates, track events, latency percentiles (of its last
+    incarnation)."""
     out: dict[str, dict[str, Any]] = {}
     for robot in roster:
         lives = collected.stats.get(robot, [])
@@ -104,6 +107,8 @@ def robot_messages(collected: Collected, roster: Sequence[str]) -> dict[str, dic
             "tracks": {k.split(".", 1)[1]: v for k, v in c.items() if k.startswith("tracks.")},
             "ticks": c.get("ticks", 0),
             "overdue_windows": c.get("overdue_windows", 0),
+            "acks_held": c.get("acks_held", 0),
+            "acks_held_expired": c.get("acks_held_expired", 0),
             "listens": bool(last.get("listens", 1)),
             "cpu_s": c.get("cpu_ms", 0) / 1000.0,
             "teammate_departures_seen": c.get("teammate.departures", 0),
