@@ -201,6 +201,33 @@ def test_desilva_leaders_as_processes_match_in_process_and_refind_the_kidnapped_
     assert (out / "report.md").read_text().startswith("# relloc team up — desilva2015-kidnapped")
 
 
+def test_a_stalled_link_holds_the_team_and_the_leaders_still_match_in_process(tmp_path):
+    """``--stall P1,L2@3:0.5``: from 3 s on, L2 hears nothing from P1 for half a second of wall
+    time, then everything in order. L2's windows wait for P1's odometry, L1's for L2's
+    progress; both hold their acks until it comes (:meth:`RobotNode._send_due_acks`), so the
+    clock never runs far enough ahead to force a window through, and the run still matches
+    the in-process one exactly. Without the hold the same stall (injected by hand) made them
+    differ by 5.5."""
+    out = tmp_path / "out"
+    argv = ["team", "up", "desilva2015-kidnapped", "--out", str(out), "--duration", "6"]
+    assert main([*argv, "--seed", "0", "--stall", "P1,L2@3:0.5", "--quiet"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["faults"]["stalls"] == [
+        {"sender": "P1", "receiver": "L2", "at_s": 3.0, "wall_s": 0.5}
+    ]
+    run = summary["per_run"][0]
+    m = run["messages"]
+    assert m["L2"]["faults"]["stalled"] > 0 and m["L1"]["faults"]["stalled"] == 0
+    held = {robot: (m[robot]["acks_held"], m[robot]["acks_held_expired"]) for robot in m}
+    assert held["L2"][0] >= 1 and all(expired == 0 for _, expired in held.values()), held
+    assert all(m[robot]["overdue_windows"] == 0 for robot in m), held
+    assert not run["clock_ack_timeouts"]
+    agree = summary["agreement"]
+    assert agree["perfect_network"] and agree["within_tolerance"], (agree, held)
+    assert agree["max_abs_diff"] < 1e-9
+    assert all(codes == [0] for codes in run["exit_codes"].values())
+
+
 @pytest.mark.slow
 def test_a_sharing_policy_reaches_the_leader_processes(tmp_path):
     """``--sharing-policy mutual-confirmed``: both leader processes skip the other's beliefs of

@@ -1,4 +1,5 @@
-"""Link emulator and fault settings: loss, delay, duplicates, reordering, partitions, parsing."""
+"""Link emulator and fault settings: loss, delay, duplicates, reordering, partitions, stalls,
+parsing (by hand and fuzzed)."""
 
 from __future__ import annotations
 
@@ -6,13 +7,21 @@ import itertools
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
+from relloc.cli import main
 from relloc.errors import ConfigError
 from relloc.runtime.faults import (
     FaultSettings,
     LinkEmulator,
+    LinkStall,
+    Partition,
+    RobotEvent,
+    Stall,
     parse_partition,
     parse_robot_event,
+    parse_stall,
 )
 
 
@@ -78,3 +87,88 @@ def test_parsing_and_validation_name_the_flag():
         FaultSettings(restarts=(parse_robot_event("a@5", "--restart"),))
     with pytest.raises(ConfigError, match="unknown robot"):
         FaultSettings(kills=(parse_robot_event("zz@5", "--kill"),)).check_robots(("a", "b"))
+
+
+def test_a_stall_holds_one_link_from_its_time_then_releases_it_in_order():
+    stall = parse_stall("a,me@10:0.5")
+    assert stall == Stall(sender="a", receiver="me", at_s=10.0, wall_s=0.5)
+    link = LinkStall("me", (stall, parse_stall("a,other@0:1")))
+    assert not link.hold("a", 9.9, "early", wall_s=100.0)  # before its time: not held
+    assert link.next_due is None
+    assert link.hold("a", 10.0, "a1", wall_s=100.0)  # the stall starts: held 0.5 wall s
+    assert not link.hold("b", 10.0, "b1", wall_s=100.1)  # another sender: never held
+    assert link.hold("a", 10.1, "a2", wall_s=100.2)
+    assert link.next_due == 100.5 and link.due(100.49) == []
+    assert link.due(100.5) == ["a1", "a2"] and link.held == 2
+    assert not link.hold("a", 10.2, "a3", wall_s=100.6)  # over: the link is fine again
+    assert link.next_due is None
+
+
+def test_what_a_stall_holds_at_the_end_of_a_run_is_released():
+    link = LinkStall("me", (parse_stall("a,me@0:60"),))
+    assert link.hold("a", 0.0, "a1", wall_s=0.0)
+    assert link.due(None) == ["a1"] and link.due(None) == []
+
+
+def test_stalls_lose_nothing_so_the_network_stays_perfect():
+    settings = FaultSettings(stalls=(parse_stall("a,b@1:0.5"),))
+    assert not settings.network_faulty
+    assert settings.to_dict()["stalls"] == [
+        {"sender": "a", "receiver": "b", "at_s": 1.0, "wall_s": 0.5}
+    ]
+    with pytest.raises(ConfigError, match="unknown robot 'zz'"):
+        FaultSettings(stalls=(parse_stall("a,zz@1:0.5"),)).check_robots(("a", "b"))
+
+
+@pytest.mark.parametrize(
+    ("text", "why"),
+    [
+        ("a,b@1", "missing"),
+        ("a@1:2", "missing"),
+        ("a,a@1:2", "both"),
+        ("a,b@-1:2", "≥ 0"),
+        ("a,b@1:0", "outside"),
+        ("a,b@1:61", "outside"),
+        ("a,b@nan:1", "≥ 0"),
+        ("a,b c@1:1", "valid id"),
+    ],
+)
+def test_a_bad_stall_names_the_flag_and_why(text, why):
+    with pytest.raises(ConfigError, match=f"--stall.*{why}"):
+        parse_stall(text)
+
+
+FLAG_TEXT = st.text(alphabet="ab,@:-.0123456789 einf", max_size=16)
+
+
+@settings(max_examples=300, deadline=None, derandomize=True)
+@given(text=FLAG_TEXT)
+def test_fault_flags_parse_or_name_the_flag(text):
+    """Whatever is typed after ``--stall``, ``--partition`` or ``--kill``: a valid fault, or a
+    ConfigError naming the flag — never another exception."""
+    for parse, flag, kind in (
+        (parse_stall, "--stall", Stall),
+        (parse_partition, "--partition", Partition),
+        (lambda t: parse_robot_event(t, "--kill"), "--kill", RobotEvent),
+    ):
+        try:
+            assert isinstance(parse(text), kind)
+        except ConfigError as exc:
+            assert flag in str(exc)
+
+
+@pytest.mark.parametrize(
+    ("scenario", "flags", "message"),
+    [
+        ("desilva2015", ["--kill", "ZZ@1"], "unknown robot 'ZZ'"),
+        ("sharma2013", ["--stall", "1,ZZ@1:0.5"], "unknown robot 'ZZ'"),
+        ("default", ["--partition", "ZZ@1-2"], "unknown robot 'ZZ'"),
+        ("guler2023", ["--stall", "a,b@1:0.5"], "do not emulate link stalls"),
+    ],
+)
+def test_team_up_refuses_a_fault_it_cannot_apply_before_starting(
+    tmp_path, capsys, scenario, flags, message
+):
+    argv = ["team", "up", scenario, "--out", str(tmp_path / "out"), "--duration", "2"]
+    assert main([*argv, *flags, "--quiet"]) == 2
+    assert message in capsys.readouterr().err

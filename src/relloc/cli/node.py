@@ -46,12 +46,20 @@ def add_network_fault_arguments(p: argparse.ArgumentParser) -> argparse._Argumen
         metavar="A,B@T1-T2",
         help="robots A,B cut off from the rest of the team from T1 to T2 s (repeatable)",
     )
+    g.add_argument(
+        "--stall",
+        action="append",
+        default=[],
+        metavar="SENDER,RECEIVER@T:WALL_S",
+        help="from T s on, what RECEIVER gets from SENDER is held WALL_S wall seconds, then "
+        "delivered in order (nothing lost: still a perfect network; repeatable)",
+    )
     return g
 
 
 def network_faults_from_args(args: argparse.Namespace, **robot_events: object):  # type: ignore[no-untyped-def]
     """:class:`FaultSettings` from the flags above (plus kills/restarts from ``team up``)."""
-    from relloc.runtime.faults import FaultSettings, parse_partition
+    from relloc.runtime.faults import FaultSettings, parse_partition, parse_stall
 
     return FaultSettings(
         drop=args.drop,
@@ -60,6 +68,7 @@ def network_faults_from_args(args: argparse.Namespace, **robot_events: object): 
         duplicate=args.duplicate,
         reorder=args.reorder,
         partitions=tuple(parse_partition(p) for p in args.partition),
+        stalls=tuple(parse_stall(st) for st in args.stall),
         **robot_events,  # type: ignore[arg-type]
     )
 

@@ -174,10 +174,13 @@ class GulerTeamSettings(ProcessTeam):
     case: str = DEFAULT_CASE
 
     def __post_init__(self) -> None:
+        super().__post_init__()
         if self.runs < 1:
             raise ConfigError(f"--runs: {self.runs} must be ≥ 1")
         if self.case not in CASES:
             raise ConfigError(f"--case: {self.case!r} is not one of {', '.join(CASES)}")
+        if self.faults.stalls:
+            raise ConfigError("--stall: the air-ground team's robots do not emulate link stalls")
 
 
 class AirGroundLauncher(TeamLauncher):
@@ -401,7 +404,6 @@ def run_guler_team(s: GulerTeamSettings) -> dict[str, Any]:
     """Every run's team beside the in-process run; ``summary.json`` and ``report.md``."""
     out = prepare_out_dir(s.out_dir)
     case = team_case(s.case, s.duration_s)
-    s.faults.check_robots(robot_names(case.scenario))
     distributed: list[RunSummary] = []
     in_process: list[RunSummary] = []
     runs: list[dict[str, Any]] = []

@@ -372,6 +372,8 @@ class RobotSettings:
         keys.check_id(self.robot, "--robot")
         if not self.input_timeout_s > 0:
             raise ConfigError("robot.input_timeout_s: must be > 0")
+        if self.faults.stalls:
+            raise ConfigError("--stall: the air-ground team's robots do not emulate link stalls")
 
 
 @dataclass(frozen=True)

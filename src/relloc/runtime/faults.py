@@ -1,5 +1,5 @@
 """Fault injection for the robot runtime: loss, delay/jitter, duplicates, reordering, partitions,
-and robot kills/restarts.
+link stalls, and robot kills/restarts.
 
 Network faults are applied by each *receiving* node to the robot-to-robot data streams
 (``odom``, ``meas``, ``eqm``) through its own :class:`LinkEmulator`, so every link loses, delays
@@ -17,6 +17,12 @@ in wall-clock milliseconds would mean nothing to the estimators):
 - ``partitions``: during ``[start, end)`` the listed robots and the rest of the team cannot hear
   each other (the side lists are robot ids; everyone not listed is on the other side). Liveliness
   is not cut — the processes are alive — so the estimators see silence, not a departure;
+- ``stalls``: a link that stops for a moment and then delivers everything — a starved process,
+  a congested or retransmitting link (:class:`Stall`). Its hold is in *wall* seconds, and it
+  loses, duplicates and reorders nothing, so a team with stalls alone still counts as a perfect
+  network (:attr:`FaultSettings.network_faulty` is false): its robots must still reproduce the
+  in-process run. It is how the runtime's guard against a clock running ahead of a waiting
+  window (:meth:`relloc.runtime.node.RobotNode._send_due_acks`) is shown end to end;
 - ``kills``/``restarts``: the clock process asks the launcher to SIGKILL a robot's process at a
   simulated time and to start it again later (``ROBOT@SECONDS``); the node's liveliness token
   vanishes with the process, which is how teammates notice.
@@ -61,6 +67,32 @@ class Partition:
         return self.start_s <= t < self.end_s and ((a in self.side) != (b in self.side))
 
 
+MAX_STALL_S = 60.0
+"""Longest stall, wall seconds."""
+
+
+@dataclass(frozen=True, kw_only=True)
+class Stall:
+    """From the first message robot ``receiver`` gets from ``sender`` once its clock has reached
+    ``at_s`` (simulated s), every message of that link is held for ``wall_s`` wall seconds and
+    then delivered, in order (module docstring)."""
+
+    sender: str
+    receiver: str
+    at_s: float
+    wall_s: float
+
+    def __post_init__(self) -> None:
+        check_id(self.sender, "stall sender")
+        check_id(self.receiver, "stall receiver")
+        if self.sender == self.receiver:
+            raise ConfigError(f"stall: sender and receiver are both {self.sender!r}")
+        if not (math.isfinite(self.at_s) and self.at_s >= 0):
+            raise ConfigError(f"stall: time {self.at_s} must be ≥ 0 s")
+        if not (0 < self.wall_s <= MAX_STALL_S):
+            raise ConfigError(f"stall: {self.wall_s} wall s outside (0, {MAX_STALL_S:g}]")
+
+
 @dataclass(frozen=True, kw_only=True)
 class RobotEvent:
     """A robot process killed or restarted at simulated time ``at_s``."""
@@ -85,6 +117,7 @@ class FaultSettings:
     reorder: float = 0.0
     reorder_hold_s: float = 0.5
     partitions: tuple[Partition, ...] = ()
+    stalls: tuple[Stall, ...] = ()
     kills: tuple[RobotEvent, ...] = ()
     restarts: tuple[RobotEvent, ...] = ()
 
@@ -109,6 +142,8 @@ class FaultSettings:
 
     @property
     def network_faulty(self) -> bool:
+        """Whether messages are lost, delayed in simulated time, duplicated, reordered or cut
+        off (stalls are not: they deliver everything, in order)."""
         return bool(
             self.drop or self.delay_ms or self.jitter_ms or self.duplicate or self.reorder
         ) or bool(self.partitions)
@@ -117,6 +152,7 @@ class FaultSettings:
         """Every robot named by an event or partition must be on the team."""
         named = [e.robot for e in (*self.kills, *self.restarts)]
         named += [r for p in self.partitions for r in p.side]
+        named += [r for st in self.stalls for r in (st.sender, st.receiver)]
         for robot in named:
             if robot not in roster:
                 raise ConfigError(
@@ -134,6 +170,10 @@ class FaultSettings:
             "partitions": [
                 {"side": list(p.side), "start_s": p.start_s, "end_s": p.end_s}
                 for p in self.partitions
+            ],
+            "stalls": [
+                {"sender": st.sender, "receiver": st.receiver, "at_s": st.at_s, "wall_s": st.wall_s}
+                for st in self.stalls
             ],
             "kills": [{"robot": e.robot, "at_s": e.at_s} for e in self.kills],
             "restarts": [{"robot": e.robot, "at_s": e.at_s} for e in self.restarts],
@@ -165,6 +205,64 @@ def parse_partition(text: str) -> Partition:
         )
     except (ValueError, ConfigError) as exc:
         raise ConfigError(f"--partition: expected A,B@T1-T2, got {text!r} ({exc})") from None
+
+
+def parse_stall(text: str) -> Stall:
+    """``SENDER,RECEIVER@T:WALL_S`` → what RECEIVER gets from SENDER held for WALL_S wall
+    seconds from simulated time T (:class:`Stall`)."""
+    pair, sep, when = text.partition("@")
+    at, colon, wall = when.partition(":")
+    sender, comma, receiver = pair.partition(",")
+    try:
+        if not (sep and colon and comma):
+            raise ValueError("missing ',', '@' or ':'")
+        return Stall(
+            sender=sender.strip(), receiver=receiver.strip(), at_s=float(at), wall_s=float(wall)
+        )
+    except (ValueError, ConfigError) as exc:
+        raise ConfigError(
+            f"--stall: expected SENDER,RECEIVER@T:WALL_S, got {text!r} ({exc})"
+        ) from None
+
+
+class LinkStall:
+    """The stalls of the links into robot ``owner``, in wall time (module docstring).
+
+    ``hold(sender, now_s, item, wall_s)`` keeps ``item`` (True) while the link from ``sender``
+    is stalled — a stall starts with the first message heard at or after its ``at_s``;
+    ``due(wall_s)`` returns what a stall that has run out held, in arrival order (``due(None)``:
+    everything held, at the end of a run); ``next_due`` is the wall time of the next release.
+    """
+
+    def __init__(self, owner: str, stalls: Sequence[Stall]) -> None:
+        self._waiting = sorted((st for st in stalls if st.receiver == owner), key=lambda s: s.at_s)
+        self._active: dict[str, tuple[float, list[Any]]] = {}
+        self.held = 0
+
+    def hold(self, sender: str, now_s: float, item: Any, wall_s: float) -> bool:
+        if sender not in self._active:
+            start = next(
+                (st for st in self._waiting if st.sender == sender and st.at_s <= now_s), None
+            )
+            if start is None:
+                return False
+            self._waiting.remove(start)
+            self._active[sender] = (wall_s + start.wall_s, [])
+        self._active[sender][1].append(item)
+        self.held += 1
+        return True
+
+    def due(self, wall_s: float | None) -> list[Any]:
+        out: list[Any] = []
+        for sender, (until, items) in list(self._active.items()):
+            if wall_s is None or wall_s >= until:
+                del self._active[sender]
+                out += items
+        return out
+
+    @property
+    def next_due(self) -> float | None:
+        return min((until for until, _ in self._active.values()), default=None)
 
 
 @dataclass

@@ -154,6 +154,8 @@ def node_command(
     ]
     for p in f.partitions:
         cmd += ["--partition", f"{','.join(p.side)}@{p.start_s!r}-{p.end_s!r}"]
+    for st in f.stalls:
+        cmd += ["--stall", f"{st.sender},{st.receiver}@{st.at_s!r}:{st.wall_s!r}"]
     if settings.realtime_factor > 0:
         cmd += ["--paced", repr(settings.realtime_factor)]
     return cmd + list(settings.node_args)
@@ -284,6 +286,7 @@ class TeamLauncher:
     """Start, supervise and collect a team (see module docstring)."""
 
     def __init__(self, settings: TeamSettings, roster: tuple[str, ...], duration_s: float) -> None:
+        settings.faults.check_robots(roster)  # a fault naming no robot of the team is refused
         self.s = settings
         self.roster = roster
         self.duration_s = duration_s

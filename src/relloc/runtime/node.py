@@ -72,7 +72,7 @@ from relloc.estimators.relative import FRAME
 from relloc.runtime import keys
 from relloc.runtime.admission import SenderBudget, TickGuard, admit, check_not_future
 from relloc.runtime.estimation import WindowDriver
-from relloc.runtime.faults import FAULTED_KINDS, FaultSettings, LinkEmulator
+from relloc.runtime.faults import FAULTED_KINDS, FaultSettings, LinkEmulator, LinkStall
 from relloc.runtime.handoff import Handoff
 from relloc.runtime.mail import mail_body, mail_items
 from relloc.runtime.messages import (
@@ -222,6 +222,7 @@ class RobotNode:
         self.link = LinkEmulator.of_member(
             settings.robot, settings.faults, settings.fault_seed, settings.roster
         )
+        self.stall = LinkStall(settings.robot, settings.faults.stalls)
         self._latency_us: list[float] = []
         self._session: Any = None
         self._pubs: dict[str, Any] = {}
@@ -276,6 +277,7 @@ class RobotNode:
         while not self._done:
             if self._end_deadline is not None:
                 # what teammates sent before their last ack is due now: file it and filter
+                self._release_stalled(time.monotonic())
                 self._deliver(self.link.release(self._t))
                 self._filter_ready(force=False)
                 wait = self._end_deadline - time.monotonic()
@@ -284,11 +286,14 @@ class RobotNode:
                     break
                 item = inbox.get(timeout=min(wait, 0.05))
             else:
+                # wake up when a held ack or a stalled link is due: that is no silent clock
+                due = [d for d in (self._hold_deadline, self.stall.next_due) if d is not None]
                 timeout = s.clock_timeout_s
-                if self._hold_deadline is not None:  # wake up when the held ack is due
-                    timeout = min(timeout, max(0.0, self._hold_deadline - time.monotonic()))
+                if due:
+                    timeout = min(timeout, max(0.0, min(due) - time.monotonic()))
                 item = inbox.get(timeout=timeout)
-                if item is None and self._hold_deadline is not None:
+                self._release_stalled(time.monotonic())
+                if item is None and due:
                     self._send_due_acks()
                     continue
                 if item is None:
@@ -298,7 +303,24 @@ class RobotNode:
             if item is not None:
                 self._on_incoming(item)
 
+    def _release_stalled(self, wall_s: float | None) -> None:
+        """Handle what a stalled link held, once its stall has run out (``None``: at once)."""
+        for item in self.stall.due(wall_s):
+            self._receive(item)
+
     def _on_incoming(self, item: Incoming) -> None:
+        """One record of the inbox: held if its link is stalled (:mod:`relloc.runtime.faults`),
+        else handled."""
+        parsed = keys.parse_robot_key(item.key) if item.presence == "data" else None
+        if (
+            parsed is not None
+            and parsed[1] in FAULTED_KINDS
+            and self.stall.hold(parsed[0], self._t, item, time.monotonic())
+        ):
+            return
+        self._receive(item)
+
+    def _receive(self, item: Incoming) -> None:
         if item.presence != "data":
             _, member = keys.parse_presence_key(item.key)
             self._on_presence(member, item.presence == "joined")
@@ -421,6 +443,7 @@ class RobotNode:
         """End of run: filter everything left (teammates published it before their last ack)."""
         if self._done:
             return
+        self._release_stalled(None)
         self._deliver(self.link.release(np.inf))
         self._handoff.give_up()
         last = self._pending[-1] if self._pending else None
@@ -777,6 +800,7 @@ class RobotNode:
         out["cpu_ms"] = int(time.process_time() * 1000)
         for name, value in self.link.counters.as_dict().items():
             out[f"fault.{name}"] = value
+        out["fault.stalled"] = self.stall.held
         for name, value in self.estimator.counters().items():
             out[f"tracks.{name}"] = value
         if self._latency_us:

@@ -69,7 +69,6 @@ def run_team(settings: TeamSettings, *, export: ExportRequest | None = None) -> 
     out = prepare_out_dir(settings.out_dir)
     team = load_team(settings.scenario, settings.seed)
     recording = team.recording
-    settings.faults.check_robots(recording.robots)
     t0, t1 = recording.span
     tracker = TrackManagerSettings(filter=settings.filter_kind, init=InitPolicy())
     launcher = TeamLauncher(settings, recording.robots, t1 - t0)
