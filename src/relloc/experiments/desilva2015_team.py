@@ -27,7 +27,8 @@ every robot process simulates the same sensing robots and each of them runs a fu
 figures and the agreement are those of every sensing robot's filters) and ``paper_sensing``
 (the paper's, L1, L2); ``secure``
 (mutual TLS and access control: ``--secure``); ``messages`` per robot and per run
-(sent, received, rejected by reason, windows filtered overdue) and what the collector
+(sent, received, rejected by reason, windows filtered overdue, acks held for a waiting
+window and how many of those ran out of time) and what the collector
 rejected (``collector_rejected_by_reason``); per run the acks the clock stopped waiting for
 (``clock_ack_timeouts``); per run ``fault_outcomes`` (accuracy before / during /
 after each fault, tracks kept, deleted and re-found: :mod:`relloc.runtime.outcomes`);
@@ -37,8 +38,11 @@ Tolerance. On a perfect network every leader processes the in-process event sequ
 each equivalent measurement at the event the in-process loop does (see
 :mod:`relloc.runtime.estimation`), so the beliefs agree to floating-point round-off;
 :data:`AGREEMENT_TOLERANCE` bounds any belief entry, and the headline figures must then be
-equal within :data:`FIGURE_TOLERANCE`. With faults (``--drop`` ...) what was lost is the point:
-the differences are reported, not held to the tolerance.
+equal within :data:`FIGURE_TOLERANCE`. That holds when a link stops for a moment and then
+delivers (``--stall``, still a perfect network): a leader whose window waits holds its ack, so
+the clock never forces the window through without what it waits for
+(:meth:`relloc.runtime.node.RobotNode._send_due_acks`). With faults (``--drop`` ...) what was
+lost is the point: the differences are reported, not held to the tolerance.
 """
 
 from __future__ import annotations
