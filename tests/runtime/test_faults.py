@@ -92,22 +92,34 @@ def test_parsing_and_validation_name_the_flag():
 def test_a_stall_holds_one_link_from_its_time_then_releases_it_in_order():
     stall = parse_stall("a,me@10:0.5")
     assert stall == Stall(sender="a", receiver="me", at_s=10.0, wall_s=0.5)
-    link = LinkStall("me", (stall, parse_stall("a,other@0:1")))
-    assert not link.hold("a", 9.9, "early", wall_s=100.0)  # before its time: not held
+    link = LinkStall("me", (stall, parse_stall("a,other@0:1")), max_records=9, max_bytes=99)
+    assert not link.hold("a", 9.9, "early", wall_s=100.0, size=1)  # before its time: not held
     assert link.next_due is None
-    assert link.hold("a", 10.0, "a1", wall_s=100.0)  # the stall starts: held 0.5 wall s
-    assert not link.hold("b", 10.0, "b1", wall_s=100.1)  # another sender: never held
-    assert link.hold("a", 10.1, "a2", wall_s=100.2)
+    assert link.hold("a", 10.0, "a1", wall_s=100.0, size=1)  # the stall starts: 0.5 wall s
+    assert not link.hold("b", 10.0, "b1", wall_s=100.1, size=1)  # another sender: never held
+    assert link.hold("a", 10.1, "a2", wall_s=100.2, size=1)
     assert link.next_due == 100.5 and link.due(100.49) == []
     assert link.due(100.5) == ["a1", "a2"] and link.held == 2
-    assert not link.hold("a", 10.2, "a3", wall_s=100.6)  # over: the link is fine again
+    assert not link.hold("a", 10.2, "a3", wall_s=100.6, size=1)  # over: the link is fine again
     assert link.next_due is None
 
 
 def test_what_a_stall_holds_at_the_end_of_a_run_is_released():
-    link = LinkStall("me", (parse_stall("a,me@0:60"),))
-    assert link.hold("a", 0.0, "a1", wall_s=0.0)
+    link = LinkStall("me", (parse_stall("a,me@0:60"),), max_records=9, max_bytes=99)
+    assert link.hold("a", 0.0, "a1", wall_s=0.0, size=1)
     assert link.due(None) == ["a1"] and link.due(None) == []
+
+
+def test_a_flood_on_a_stalled_link_is_bounded_and_counted():
+    link = LinkStall("me", (parse_stall("a,me@0:60"),), max_records=3, max_bytes=25)
+    for i in range(10):  # taken either way: held up to the bounds, the rest dropped
+        assert link.hold("a", 0.0, f"a{i}", wall_s=0.0, size=10)
+    assert link.held == 2 and link.dropped == 8  # 2 × 10 bytes fit in 25
+    assert link.due(None) == ["a0", "a1"]
+    link = LinkStall("me", (parse_stall("a,me@0:60"),), max_records=3, max_bytes=10**6)
+    for i in range(5):
+        link.hold("a", 0.0, f"a{i}", wall_s=0.0, size=10)
+    assert link.held == 3 and link.dropped == 2
 
 
 def test_stalls_lose_nothing_so_the_network_stays_perfect():

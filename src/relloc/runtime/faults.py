@@ -228,18 +228,26 @@ def parse_stall(text: str) -> Stall:
 class LinkStall:
     """The stalls of the links into robot ``owner``, in wall time (module docstring).
 
-    ``hold(sender, now_s, item, wall_s)`` keeps ``item`` (True) while the link from ``sender``
-    is stalled — a stall starts with the first message heard at or after its ``at_s``;
-    ``due(wall_s)`` returns what a stall that has run out held, in arrival order (``due(None)``:
-    everything held, at the end of a run); ``next_due`` is the wall time of the next release.
+    ``hold(sender, now_s, item, wall_s, size)`` takes ``item`` (True) while the link from
+    ``sender`` is stalled — a stall starts with the first message heard at or after its
+    ``at_s``; ``due(wall_s)`` returns what a stall that has run out held, in arrival order
+    (``due(None)``: everything held, at the end of a run); ``next_due`` is the wall time of the
+    next release. What is held is bounded like the node's inbox (``max_records``, ``max_bytes``
+    of ``size`` each): a sender that floods a stalled link has the excess dropped and counted
+    (``dropped``), never held without bound.
     """
 
-    def __init__(self, owner: str, stalls: Sequence[Stall]) -> None:
+    def __init__(
+        self, owner: str, stalls: Sequence[Stall], *, max_records: int, max_bytes: int
+    ) -> None:
         self._waiting = sorted((st for st in stalls if st.receiver == owner), key=lambda s: s.at_s)
         self._active: dict[str, tuple[float, list[Any]]] = {}
+        self._max = (max_records, max_bytes)
+        self._records = self._bytes = 0
         self.held = 0
+        self.dropped = 0
 
-    def hold(self, sender: str, now_s: float, item: Any, wall_s: float) -> bool:
+    def hold(self, sender: str, now_s: float, item: Any, wall_s: float, size: int) -> bool:
         if sender not in self._active:
             start = next(
                 (st for st in self._waiting if st.sender == sender and st.at_s <= now_s), None
@@ -248,7 +256,12 @@ class LinkStall:
                 return False
             self._waiting.remove(start)
             self._active[sender] = (wall_s + start.wall_s, [])
-        self._active[sender][1].append(item)
+        if self._records >= self._max[0] or self._bytes + size > self._max[1]:
+            self.dropped += 1
+            return True
+        self._active[sender][1].append((item, size))
+        self._records += 1
+        self._bytes += size
         self.held += 1
         return True
 
@@ -257,7 +270,9 @@ class LinkStall:
         for sender, (until, items) in list(self._active.items()):
             if wall_s is None or wall_s >= until:
                 del self._active[sender]
-                out += items
+                out += [item for item, _ in items]
+                self._records -= len(items)
+                self._bytes -= sum(size for _, size in items)
         return out
 
     @property

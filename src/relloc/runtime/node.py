@@ -88,6 +88,8 @@ from relloc.runtime.sources import SensorSource, batch_rows
 from relloc.runtime.teammates import ReceivedOdometry, SeenSequences, Teammate
 from relloc.runtime.timing import EstimateTiming
 from relloc.runtime.transport import (
+    INBOX_BYTES,
+    INBOX_RECORDS,
     Inbox,
     Incoming,
     TransportSettings,
@@ -222,7 +224,9 @@ class RobotNode:
         self.link = LinkEmulator.of_member(
             settings.robot, settings.faults, settings.fault_seed, settings.roster
         )
-        self.stall = LinkStall(settings.robot, settings.faults.stalls)
+        self.stall = LinkStall(
+            settings.robot, settings.faults.stalls, max_records=INBOX_RECORDS, max_bytes=INBOX_BYTES
+        )
         self._latency_us: list[float] = []
         self._session: Any = None
         self._pubs: dict[str, Any] = {}
@@ -315,7 +319,7 @@ class RobotNode:
         if (
             parsed is not None
             and parsed[1] in FAULTED_KINDS
-            and self.stall.hold(parsed[0], self._t, item, time.monotonic())
+            and self.stall.hold(parsed[0], self._t, item, time.monotonic(), len(item.payload))
         ):
             return
         self._receive(item)
@@ -801,6 +805,7 @@ class RobotNode:
         for name, value in self.link.counters.as_dict().items():
             out[f"fault.{name}"] = value
         out["fault.stalled"] = self.stall.held
+        out["fault.stall_dropped"] = self.stall.dropped
         for name, value in self.estimator.counters().items():
             out[f"tracks.{name}"] = value
         if self._latency_us:
