@@ -24,6 +24,7 @@ def test_the_interval_covers_the_true_share_where_the_binomial_one_does_not() ->
     assert 6.0 < one["mean_correlation_time_s"] < 13.0
     assert one["blocks_short_share"] <= 0.05
     # 80 draws: a coverage of 0.95 has a Monte Carlo σ of 0.024; 0.85 is four of them below
+    assert one["effective_size_coverage"] >= 0.85
     for design in (one, result["independent_runs"], result["shared_recording"]):
         assert design["coverage"] >= 0.85, design
         assert design["baseline_coverage"] <= 0.75, design

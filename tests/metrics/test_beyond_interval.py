@@ -9,7 +9,12 @@ from scipy.signal import lfilter
 from scipy.stats import norm
 
 from relloc.errors import ConfigError
-from relloc.metrics import integrated_time, percent_beyond, percent_beyond_interval
+from relloc.metrics.consistency import (
+    clopper_pearson,
+    integrated_time,
+    percent_beyond,
+    percent_beyond_interval,
+)
 from relloc.pipeline.output import interval_text
 
 #: The bound a standard normal value exceeds with probability 5 %.
@@ -335,3 +340,16 @@ def test_the_reported_correlation_time_tells_blocks_too_short_for_the_errors():
         np.arange(20.0), np.arange(20.0) % 10, 5.0, runs=np.arange(20) // 10
     )
     assert by_runs.correlation_time_s is None and by_runs.to_dict()["blocks_short"] is None
+
+
+def test_clopper_pearson_by_hand():
+    """0 of 10: upper end 1 − 0.025^(1/10); 5 of 10: the textbook 0.187–0.813; fractional
+    sizes (an effective sample size) are allowed; nonsense is refused."""
+    lo, hi = clopper_pearson(0, 10, 0.95)
+    assert lo == 0.0 and hi == pytest.approx(1 - 0.025 ** (1 / 10), rel=1e-9)
+    assert clopper_pearson(5, 10, 0.95) == pytest.approx((0.18709, 0.81291), abs=1e-5)
+    assert clopper_pearson(10, 10, 0.95)[1] == 1.0
+    lo, hi = clopper_pearson(0.5, 7.5, 0.95)
+    assert 0.0 < lo < 0.5 / 7.5 < hi < 1.0
+    with pytest.raises(ConfigError, match="clopper_pearson"):
+        clopper_pearson(11, 10, 0.95)

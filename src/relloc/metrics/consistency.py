@@ -45,7 +45,10 @@
     real run, whose NEES ranks stay correlated for tens of seconds (mrclam-cl's held-out
     450 s: about 30 s), it leaves two blocks and an interval of nearly 0–100 %, which no filter
     could fail. So the blocks stay fixed, and ``blocks_short`` says when they last less than
-    ten ``τ̂`` (reports mark such intervals);
+    ten ``τ̂`` (reports mark such intervals). Clopper–Pearson's interval on ``N/τ̂`` values,
+    measured beside (:func:`clopper_pearson`), held the true share in 0.990–1.000 of draws at
+    every one of these correlation times, 13–50 % wider: a candidate for short blocks, not
+    adopted here;
   - independent runs (Monte Carlo): each run one cluster, ``G = R``. Blocks of time pooled over
     the runs would miss what persists through a run (an error drawn once along a direction no
     measurement sees stays in every block of its run), and the interval would be too narrow;
@@ -358,6 +361,21 @@ def _time_blocks(t: Array, batches: int) -> tuple[NDArray[np.int64], float]:
     return np.zeros(t.size, dtype=np.int64), width
 
 
+def clopper_pearson(successes: float, size: float, confidence: float) -> tuple[float, float]:
+    """Clopper–Pearson's two-sided ``confidence`` interval of a proportion with ``successes``
+    in ``size`` trials, both possibly fractional (an effective sample size):
+    ``[B⁻¹((1−c)/2; k, n−k+1), B⁻¹((1+c)/2; k+1, n−k)]`` with the Beta quantile ``B⁻¹``, 0 and
+    1 at the ends."""
+    from scipy.stats import beta
+
+    k, n, c = float(successes), float(size), _check_probability(confidence)
+    if not (n > 0 and 0 <= k <= n):
+        raise ConfigError(f"clopper_pearson: need 0 ≤ successes ≤ size and size > 0, got {k}, {n}")
+    lo = float(beta.ppf((1.0 - c) / 2.0, k, n - k + 1)) if k > 0 else 0.0
+    hi = float(beta.ppf((1.0 + c) / 2.0, k + 1, n - k)) if k < n else 1.0
+    return lo, hi
+
+
 def percent_beyond_interval(
     values: ArrayLike,
     times: ArrayLike,
@@ -435,7 +453,6 @@ def percent_beyond_interval(
         return BeyondShare(
             percent, None, int(v.size), None, clustering, g, n_runs, batch_s, tau_s, expected, c
         )
-    from scipy.stats import beta
     from scipy.stats import t as student_t
 
     if var > 0.0:
@@ -444,9 +461,7 @@ def percent_beyond_interval(
         size = n_eff * (student_t.ppf(q, v.size - 1) / student_t.ppf(q, g - 1)) ** 2
     else:
         n_eff = size = float(g)
-    k = p_hat * size
-    lo = float(beta.ppf((1.0 - c) / 2.0, k, size - k + 1)) if k > 0 else 0.0
-    hi = float(beta.ppf((1.0 + c) / 2.0, k + 1, size - k)) if k < size else 1.0
+    lo, hi = clopper_pearson(p_hat * size, size, c)
     interval = (100.0 * lo, 100.0 * hi)
     return BeyondShare(
         percent, interval, int(v.size), n_eff, clustering, g, n_runs, batch_s, tau_s, expected, c
