@@ -183,6 +183,14 @@ def test_observability_measurement_typo_is_a_config_error(capsys):
     assert "--measurements: unknown 'rnage'" in capsys.readouterr().err
 
 
+def test_an_unwritable_json_path_names_the_flag(tmp_path, capsys):
+    blocker = tmp_path / "file"
+    blocker.write_text("")  # a file where the folder should be
+    argv = ["observability", "relative-pseudo-linear", "--json", str(blocker / "out.json")]
+    assert main(argv) == 2
+    assert f"--json: cannot write {blocker / 'out.json'}" in capsys.readouterr().err
+
+
 def test_node_and_team_help_are_plain_text(capsys):
     for argv in (["node", "--help"], ["team", "--help"]):
         with pytest.raises(SystemExit):

@@ -174,13 +174,22 @@ def test_fault_flags_parse_or_name_the_flag(text):
     [
         ("desilva2015", ["--kill", "ZZ@1"], "unknown robot 'ZZ'"),
         ("sharma2013", ["--stall", "1,ZZ@1:0.5"], "unknown robot 'ZZ'"),
-        ("default", ["--partition", "ZZ@1-2"], "unknown robot 'ZZ'"),
+        ("runtime-test-trio", ["--partition", "ZZ@1-2"], "unknown robot 'ZZ'"),
         ("guler2023", ["--stall", "a,b@1:0.5"], "do not emulate link stalls"),
+        ("desilva2015", ["--kill", "L1@50"], "--kill L1@50: begins at or after the run's end"),
+        ("runtime-test-trio", ["--partition", "observer@2-3"], "--partition observer@2-3: begins"),
+        ("default", ["--duration", "2"], "--duration: only the reproductions and MRCLAM teams"),
+        ("sharma2013", ["--stall", "1,2@2.5:1"], "--stall 1,2@2.5:1: begins at or after"),
     ],
 )
 def test_team_up_refuses_a_fault_it_cannot_apply_before_starting(
-    tmp_path, capsys, scenario, flags, message
+    tmp_path, capsys, trio_scenario, scenario, flags, message
 ):
-    argv = ["team", "up", scenario, "--out", str(tmp_path / "out"), "--duration", "2"]
+    """Reproductions run 2 s here; the three-robot scenario file 2 s of its own."""
+    if scenario == "runtime-test-trio":
+        scenario = str(trio_scenario(2.0))
+    else:
+        flags = ["--duration", "2", *flags] if scenario != "default" else flags
+    argv = ["team", "up", scenario, "--out", str(tmp_path / "out")]
     assert main([*argv, *flags, "--quiet"]) == 2
     assert message in capsys.readouterr().err

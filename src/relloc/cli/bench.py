@@ -24,7 +24,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
 
 
 def run(args: argparse.Namespace) -> int:
-    from relloc.pipeline.output import to_jsonable
+    from relloc.pipeline.output import write_json_file
 
     module_name = BENCHMARKS.get(args.name)
     if module_name is None or importlib.util.find_spec(module_name) is None:
@@ -32,8 +32,5 @@ def run(args: argparse.Namespace) -> int:
         raise ConfigError(f"unknown benchmark {args.name!r}; available: {', '.join(have)}")
     result = importlib.import_module(module_name).run(quiet=args.quiet)
     if args.json is not None:
-        import json
-
-        args.json.parent.mkdir(parents=True, exist_ok=True)
-        args.json.write_text(json.dumps(to_jsonable(result), indent=2) + "\n")
+        write_json_file(args.json, result, "--json")
     return 0

@@ -69,12 +69,10 @@ def _assignments(text: str | None, names: tuple[str, ...], what: str) -> list[fl
 
 
 def run(args: argparse.Namespace) -> int:
-    import json
-
     from relloc.models.symbolic import AIRGROUND_MODES
     from relloc.observability.analysis import analyse, rank_at
     from relloc.observability.builtin import ModelOptions, resolve_models
-    from relloc.pipeline.output import to_jsonable
+    from relloc.pipeline.output import write_json_file
 
     if args.order < 0 or args.samples < 1:
         raise ConfigError("--order must be ≥ 0 and --samples ≥ 1")
@@ -122,6 +120,5 @@ def run(args: argparse.Namespace) -> int:
         print()
         results.append(out)
     if args.json is not None:
-        args.json.parent.mkdir(parents=True, exist_ok=True)
-        args.json.write_text(json.dumps(to_jsonable(results), indent=2) + "\n")
+        write_json_file(args.json, results, "--json")
     return 0

@@ -156,6 +156,13 @@ def run_up(args: argparse.Namespace) -> int:
         return run_reproduction(args)
     if args.estimator == "cooperative":
         return run_mrclam(args)
+    if args.duration is not None:
+        from relloc.errors import ConfigError
+
+        raise ConfigError(
+            "--duration: only the reproductions and MRCLAM teams take it; a scenario runs for "
+            "its own duration_s"
+        )
     from relloc.runtime.launcher import TeamSettings
     from relloc.runtime.team import run_team
 

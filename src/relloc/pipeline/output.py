@@ -46,6 +46,18 @@ def prepare_out_dir(out_dir: Path | str) -> Path:
     return path
 
 
+def write_json_file(path: Path, data: Any, flag: str) -> Path:
+    """Write ``data`` as JSON to ``path`` (its folder created); a path that cannot be written
+    raises ConfigError naming ``flag``."""
+    text = json.dumps(to_jsonable(data), indent=2) + "\n"
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(text)
+    except OSError as exc:
+        raise ConfigError(f"{flag}: cannot write {path} ({exc.strerror or exc})") from None
+    return path
+
+
 def write_summary(out_dir: Path, summary: Mapping[str, Any]) -> Path:
     """Write ``summary.json`` (sorted keys kept in insertion order, 2-space indent)."""
     path = prepare_out_dir(out_dir) / "summary.json"

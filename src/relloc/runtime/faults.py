@@ -159,6 +159,26 @@ class FaultSettings:
                     f"faults: unknown robot {robot!r}; the team is {', '.join(roster)}"
                 )
 
+    def check_times(self, duration_s: float) -> None:
+        """Every event, partition and stall must begin before the run's end (``duration_s``,
+        simulated s): one after it would never happen."""
+        starts = [(f"--kill {e.robot}@{e.at_s:g}", e.at_s) for e in self.kills]
+        starts += [(f"--restart {e.robot}@{e.at_s:g}", e.at_s) for e in self.restarts]
+        starts += [
+            (f"--partition {','.join(p.side)}@{p.start_s:g}-{p.end_s:g}", p.start_s)
+            for p in self.partitions
+        ]
+        starts += [
+            (f"--stall {st.sender},{st.receiver}@{st.at_s:g}:{st.wall_s:g}", st.at_s)
+            for st in self.stalls
+        ]
+        for flag, start in starts:
+            if start >= duration_s:
+                raise ConfigError(
+                    f"{flag}: begins at or after the run's end ({duration_s:g} s), so it would "
+                    "never happen"
+                )
+
     def to_dict(self) -> dict[str, object]:
         """Plain form for summary.json."""
         return {

@@ -286,7 +286,8 @@ class TeamLauncher:
     """Start, supervise and collect a team (see module docstring)."""
 
     def __init__(self, settings: TeamSettings, roster: tuple[str, ...], duration_s: float) -> None:
-        settings.faults.check_robots(roster)  # a fault naming no robot of the team is refused
+        settings.faults.check_robots(roster)  # a fault naming no robot of the team, or
+        settings.faults.check_times(duration_s)  # beginning after the run, is refused
         self.s = settings
         self.roster = roster
         self.duration_s = duration_s
