@@ -149,7 +149,7 @@ class FaultSettings:
         ) or bool(self.partitions)
 
     def check_robots(self, roster: tuple[str, ...]) -> None:
-        """Every robot named by an event or partition must be on the team."""
+        """Every robot named by an event, partition or stall must be on the team."""
         named = [e.robot for e in (*self.kills, *self.restarts)]
         named += [r for p in self.partitions for r in p.side]
         named += [r for st in self.stalls for r in (st.sender, st.receiver)]
