@@ -329,13 +329,22 @@ def test_an_agent_refilters_late_readings_from_a_checkpoint_and_matches_the_in_p
 
 
 @pytest.mark.slow
-def test_sharma_agents_as_processes_each_equal_the_in_process_eif(tmp_path):
+@pytest.mark.parametrize("stall", [None, "2,1@1:0.5"])
+def test_sharma_agents_as_processes_each_equal_the_in_process_eif(tmp_path, stall):
+    """Also when agent 1 hears nothing from agent 2 for half a second of wall time from 1 s on
+    (``--stall``): agent 1 holds its ack until agent 2's odometry and readings come, so the
+    clock never forces its window through without them."""
     out = tmp_path / "out"
-    assert main(["team", "up", "sharma2013", "--out", str(out), "--duration", "3", "--quiet"]) == 0
+    argv = ["team", "up", "sharma2013", "--out", str(out), "--duration", "3", "--quiet"]
+    assert main(argv + (["--stall", stall] if stall else [])) == 0
     summary = json.loads((out / "summary.json").read_text())
     agree = summary["agreement"]
     assert agree["perfect_network"] and agree["within_tolerance"], agree
     run = summary["per_run"][0]
+    if stall:
+        first = run["messages"]["1"]
+        assert first["faults"]["stalled"] > 0 and first["acks_held"] >= 1
+        assert first["acks_held_expired"] == 0 and first["overdue_windows"] == 0
     assert set(run["agents"]) == {"1", "2", "3", "4", "5"}
     for robot, a in run["agents"].items():
         assert a["pos_rmse_m"] == pytest.approx(run["in_process"]["pos_rmse_m"], abs=1e-9), robot
