@@ -122,6 +122,14 @@ def test_a_flood_on_a_stalled_link_is_bounded_and_counted():
     assert link.held == 3 and link.dropped == 2
 
 
+def test_every_fault_writes_the_argument_it_was_parsed_from():
+    assert parse_partition("a,b@0.1-2.5").arg == "a,b@0.1-2.5"
+    assert parse_stall("a,b@3.0:0.5").arg == "a,b@3.0:0.5"
+    assert parse_robot_event("x@3.25", "--kill").arg == "x@3.25"
+    stall = parse_stall("a,b@0.30000000000000004:1e-05")
+    assert parse_stall(stall.arg) == stall  # exact, whatever the float
+
+
 def test_stalls_lose_nothing_so_the_network_stays_perfect():
     settings = FaultSettings(stalls=(parse_stall("a,b@1:0.5"),))
     assert not settings.network_faulty
@@ -176,10 +184,10 @@ def test_fault_flags_parse_or_name_the_flag(text):
         ("sharma2013", ["--stall", "1,ZZ@1:0.5"], "unknown robot 'ZZ'"),
         ("runtime-test-trio", ["--partition", "ZZ@1-2"], "unknown robot 'ZZ'"),
         ("guler2023", ["--stall", "a,b@1:0.5"], "do not emulate link stalls"),
-        ("desilva2015", ["--kill", "L1@50"], "--kill L1@50: begins at or after the run's end"),
-        ("runtime-test-trio", ["--partition", "observer@2-3"], "--partition observer@2-3: begins"),
+        ("desilva2015", ["--kill", "L1@50"], "--kill L1@50.0: begins at or after the run's end"),
+        ("runtime-test-trio", ["--partition", "observer@2-3"], "observer@2.0-3.0: begins at or"),
         ("default", ["--duration", "2"], "--duration: only the reproductions and MRCLAM teams"),
-        ("sharma2013", ["--stall", "1,2@2.5:1"], "--stall 1,2@2.5:1: begins at or after"),
+        ("sharma2013", ["--stall", "1,2@2.5:1"], "--stall 1,2@2.5:1.0: begins at or after"),
     ],
 )
 def test_team_up_refuses_a_fault_it_cannot_apply_before_starting(

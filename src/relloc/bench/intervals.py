@@ -108,10 +108,6 @@ def _holds(interval: tuple[float, float] | None) -> bool:
     return interval is not None and interval[0] <= TRUE_PERCENT <= interval[1]
 
 
-def _covers(share: BeyondShare) -> bool:
-    return _holds(share.interval)
-
-
 def _effective_size_interval(share: BeyondShare) -> tuple[float, float]:
     """The second comparison: Clopper–Pearson's interval on ``N/τ̂`` values taken as
     independent, ``τ̂`` the share's own correlation time (one value a second here, so
@@ -134,10 +130,10 @@ def _coverage(draws: int, draw: Callable[[], tuple[BeyondShare, BeyondShare]]) -
     shares = [draw() for _ in range(draws)]
     ours = [s for s, _ in shares]
     base = [b for _, b in shares]
-    covered = np.array([_covers(s) for s in ours])
+    covered = np.array([_holds(s.interval) for s in ours])
     out: dict[str, Any] = {
         "coverage": float(covered.mean()),
-        "baseline_coverage": float(np.mean([_covers(b) for b in base])),
+        "baseline_coverage": float(np.mean([_holds(b.interval) for b in base])),
         "mean_width_pct": float(
             np.mean([s.interval[1] - s.interval[0] for s in ours if s.interval])
         ),
@@ -168,32 +164,20 @@ def _one_run(rng: np.random.Generator, rho: float, n: int) -> tuple[BeyondShare,
     )
 
 
-def _independent_runs(
-    rng: np.random.Generator, rho: float, runs: int, n: int
+def _several_runs(
+    rng: np.random.Generator, rho: float, runs: int, n: int, *, shared: bool
 ) -> tuple[BeyondShare, BeyondShare]:
-    v = np.sum(ar1_errors(rng, rho, (runs, n, DOF)) ** 2, axis=-1)
+    """``runs`` runs of ``n`` values: independent, or (``shared``) replaying one recording,
+    half of each error's variance common to every run at the same instant."""
+    common = ar1_errors(rng, rho, (n, DOF)) if shared else None
+    e = ar1_errors(rng, rho, (runs, n, DOF))
+    if common is not None:
+        e = np.sqrt(0.5) * (common[None] + e)
+    v = np.sum(e**2, axis=-1)
     t = np.broadcast_to(np.arange(n, dtype=float), v.shape)
     r = np.broadcast_to(np.arange(runs)[:, None], v.shape)
     share = percent_beyond_interval(
-        v.reshape(-1), t.reshape(-1), chi2_upper(DOF), runs=r.reshape(-1)
-    )
-    return share, _independent_baseline(v)
-
-
-def _shared_recording(
-    rng: np.random.Generator, rho: float, runs: int, n: int
-) -> tuple[BeyondShare, BeyondShare]:
-    shared = ar1_errors(rng, rho, (n, DOF))
-    own = ar1_errors(rng, rho, (runs, n, DOF))
-    v = np.sum((np.sqrt(0.5) * (shared[None] + own)) ** 2, axis=-1)
-    t = np.broadcast_to(np.arange(n, dtype=float), v.shape)
-    r = np.broadcast_to(np.arange(runs)[:, None], v.shape)
-    share = percent_beyond_interval(
-        v.reshape(-1),
-        t.reshape(-1),
-        chi2_upper(DOF),
-        runs=r.reshape(-1),
-        shared_recording=True,
+        v.reshape(-1), t.reshape(-1), chi2_upper(DOF), runs=r.reshape(-1), shared_recording=shared
     )
     return share, _independent_baseline(v)
 
@@ -220,11 +204,13 @@ def run(
         }
     independent = _coverage(
         size.draws,
-        partial(_independent_runs, rngs[-2], size.runs_rho, size.runs, size.run_samples),
+        partial(_several_runs, rngs[-2], size.runs_rho, size.runs, size.run_samples, shared=False),
     )
     shared = _coverage(
         size.draws,
-        partial(_shared_recording, rngs[-1], size.runs_rho, size.shared_runs, size.samples),
+        partial(
+            _several_runs, rngs[-1], size.runs_rho, size.shared_runs, size.samples, shared=True
+        ),
     )
     result: dict[str, Any] = {
         "seed": seed,

@@ -214,9 +214,9 @@ class AirGroundLauncher(TeamLauncher):
         argv += ["--report", str(self.s.out_dir / "world.json")]
         argv += ["--realtime", repr(self.team.realtime_factor)]
         for e in f.kills:
-            argv += ["--kill", f"{e.robot}@{e.at_s!r}"]
+            argv += ["--kill", e.arg]
         for e in f.restarts:
-            argv += ["--restart", f"{e.robot}@{e.at_s!r}"]
+            argv += ["--restart", e.arg]
         return argv
 
     def robot_argv(self, robot: str) -> list[str]:
@@ -226,7 +226,7 @@ class AirGroundLauncher(TeamLauncher):
         argv += ["--drop", repr(f.drop), "--delay", repr(f.delay_ms), "--jitter", repr(f.jitter_ms)]
         argv += ["--duplicate", repr(f.duplicate), "--reorder", repr(f.reorder)]
         for p in f.partitions:
-            argv += ["--partition", f"{','.join(p.side)}@{p.start_s!r}-{p.end_s!r}"]
+            argv += ["--partition", p.arg]
         return argv
 
     def _spawn(self, name: str, argv: list[str]) -> Any:

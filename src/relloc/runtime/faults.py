@@ -62,6 +62,11 @@ class Partition:
         if not (0 <= self.start_s < self.end_s) or not math.isfinite(self.end_s):
             raise ConfigError(f"partition: need 0 ≤ start < end, got {self.start_s}–{self.end_s} s")
 
+    @property
+    def arg(self) -> str:
+        """Its ``--partition`` argument, ``A,B@T1-T2`` (parses back to the same partition)."""
+        return f"{','.join(self.side)}@{self.start_s!r}-{self.end_s!r}"
+
     def separates(self, a: str, b: str, t: float) -> bool:
         """True if ``a`` and ``b`` cannot hear each other at simulated time ``t``."""
         return self.start_s <= t < self.end_s and ((a in self.side) != (b in self.side))
@@ -92,6 +97,11 @@ class Stall:
         if not (0 < self.wall_s <= MAX_STALL_S):
             raise ConfigError(f"stall: {self.wall_s} wall s outside (0, {MAX_STALL_S:g}]")
 
+    @property
+    def arg(self) -> str:
+        """Its ``--stall`` argument, ``SENDER,RECEIVER@T:WALL_S`` (parses back to it)."""
+        return f"{self.sender},{self.receiver}@{self.at_s!r}:{self.wall_s!r}"
+
 
 @dataclass(frozen=True, kw_only=True)
 class RobotEvent:
@@ -104,6 +114,11 @@ class RobotEvent:
         check_id(self.robot, "robot event")
         if not (math.isfinite(self.at_s) and self.at_s >= 0):
             raise ConfigError(f"robot event {self.robot}: time {self.at_s} must be ≥ 0 s")
+
+    @property
+    def arg(self) -> str:
+        """Its ``--kill``/``--restart`` argument, ``ROBOT@SECONDS`` (parses back to it)."""
+        return f"{self.robot}@{self.at_s!r}"
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -162,16 +177,10 @@ class FaultSettings:
     def check_times(self, duration_s: float) -> None:
         """Every event, partition and stall must begin before the run's end (``duration_s``,
         simulated s): one after it would never happen."""
-        starts = [(f"--kill {e.robot}@{e.at_s:g}", e.at_s) for e in self.kills]
-        starts += [(f"--restart {e.robot}@{e.at_s:g}", e.at_s) for e in self.restarts]
-        starts += [
-            (f"--partition {','.join(p.side)}@{p.start_s:g}-{p.end_s:g}", p.start_s)
-            for p in self.partitions
-        ]
-        starts += [
-            (f"--stall {st.sender},{st.receiver}@{st.at_s:g}:{st.wall_s:g}", st.at_s)
-            for st in self.stalls
-        ]
+        starts = [(f"--kill {e.arg}", e.at_s) for e in self.kills]
+        starts += [(f"--restart {e.arg}", e.at_s) for e in self.restarts]
+        starts += [(f"--partition {p.arg}", p.start_s) for p in self.partitions]
+        starts += [(f"--stall {st.arg}", st.at_s) for st in self.stalls]
         for flag, start in starts:
             if start >= duration_s:
                 raise ConfigError(

@@ -153,9 +153,9 @@ def node_command(
         repr(f.reorder),
     ]
     for p in f.partitions:
-        cmd += ["--partition", f"{','.join(p.side)}@{p.start_s!r}-{p.end_s!r}"]
+        cmd += ["--partition", p.arg]
     for st in f.stalls:
-        cmd += ["--stall", f"{st.sender},{st.receiver}@{st.at_s!r}:{st.wall_s!r}"]
+        cmd += ["--stall", st.arg]
     if settings.realtime_factor > 0:
         cmd += ["--paced", repr(settings.realtime_factor)]
     return cmd + list(settings.node_args)
@@ -188,9 +188,9 @@ def clock_command(
         str(report),
     ]
     for e in settings.faults.kills:
-        cmd += ["--kill", f"{e.robot}@{e.at_s!r}"]
+        cmd += ["--kill", e.arg]
     for e in settings.faults.restarts:
-        cmd += ["--restart", f"{e.robot}@{e.at_s!r}"]
+        cmd += ["--restart", e.arg]
     return cmd
 
 
