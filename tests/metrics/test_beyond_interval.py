@@ -334,12 +334,43 @@ def test_the_reported_correlation_time_tells_blocks_too_short_for_the_errors():
         nees_ar1(np.random.default_rng(seqs[0]), 0.0, 4500), t, CHI2_3_95
     )
     assert slow.blocks_short and white.blocks_short is False
-    assert "likely too narrow" in interval_text(slow.to_dict())
+    assert "widened to" in interval_text(slow.to_dict())
     assert interval_text(white.to_dict()).endswith(white.verdict or "")
+    # long blocks: the interval is the batch means' one; short: it holds it and is wider
+    assert white.interval == white.batch_means_interval
+    assert slow.interval is not None and slow.batch_means_interval is not None
+    assert slow.interval[0] <= slow.batch_means_interval[0]
+    assert slow.interval[1] >= slow.batch_means_interval[1]
+    assert slow.interval != slow.batch_means_interval
     by_runs = percent_beyond_interval(
         np.arange(20.0), np.arange(20.0) % 10, 5.0, runs=np.arange(20) // 10
     )
     assert by_runs.correlation_time_s is None and by_runs.to_dict()["blocks_short"] is None
+
+
+def test_the_correlation_samples_count_correlated_instants_once_and_independent_subjects_each():
+    # N_τ, the effective sample size behind the widened interval, is about n / τ for one
+    # subject (τ = (1 + ρ²)/(1 − ρ²) = 99.5 samples at ρ 0.99 for the squared errors), about
+    # S times that for S independent subjects and about n / τ again when the subjects' errors
+    # are the same. Root 90431 was not used while developing.
+    n, rho = 6000, 0.99
+    tau = (1 + rho**2) / (1 - rho**2)
+    t = np.arange(n, dtype=float)
+    rng = np.random.default_rng(90431)
+
+    def samples(subject_errors: np.ndarray) -> float:
+        v = np.sum(subject_errors**2, axis=1).reshape(-1)  # (subjects, 3, n) -> (subjects n,)
+        times = np.tile(t, subject_errors.shape[0])
+        share = percent_beyond_interval(v, times, CHI2_3_95)
+        assert share.correlation_samples is not None
+        return share.correlation_samples
+
+    one = np.median([samples(ar1(rng, rho, 3, n)[None]) for _ in range(15)])
+    five = np.median([samples(ar1(rng, rho, 15, n).reshape(5, 3, n)) for _ in range(15)])
+    same = np.median([samples(np.repeat(ar1(rng, rho, 3, n)[None], 5, axis=0)) for _ in range(15)])
+    assert 0.7 * n / tau < one < 1.6 * n / tau
+    assert 3.0 < five / one < 7.0
+    assert same == pytest.approx(one, rel=0.5)
 
 
 def test_clopper_pearson_by_hand():

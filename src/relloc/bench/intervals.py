@@ -21,6 +21,11 @@ Designs, each ``draws`` times:
   against the true ``τ``, a block's length in true ``τ``, the share of draws flagged
   ``blocks_short`` and the coverage among flagged and unflagged draws — whether the flag
   marks the intervals that are too narrow.
+* ``subjects``: one run of ``samples`` values of ``subjects`` subjects (robots of one team) at
+  ρ ``subjects_rho``, a share ``c`` of each error's variance common to every subject at the
+  same instant (a shared landmark, a shared drift) and the rest each subject's own, for each
+  ``c`` of ``subject_shares`` — whether the correlation-time interval counts subjects right
+  (``N_τ`` from the spread of the share over the instants).
 * ``independent_runs``: ``runs`` independent runs of ``run_samples`` values at ρ
   ``runs_rho``, each run a cluster (Monte Carlo experiments).
 * ``shared_recording``: ``shared_runs`` runs of ``samples`` values replaying one recording,
@@ -30,11 +35,11 @@ Designs, each ``draws`` times:
 
 The named baseline, measured on the same draws: the binomial interval that takes every value
 as independent (the same function given each value as its own run: ``N_eff = N``), which is
-what a report quoting ``√(p(1−p)/N)`` would claim. For one run a second comparison
-(``effective_size_coverage``): Clopper–Pearson's interval on ``N/τ̂`` values taken as
-independent, ``τ̂`` the interval's own correlation time — a candidate for the runs whose blocks
-are short (it is not what the reports use). A valid interval covers 5 % in about 95 %
-of draws; the Monte Carlo error of a coverage is about ``√(0.95·0.05/draws)`` (0.013 for 300).
+what a report quoting ``√(p(1−p)/N)`` would claim. Where time blocks are clustered a second
+comparison (``batch_means_coverage``): the batch means' interval alone, before it is widened to
+the correlation-time interval on short blocks (what the reports used until that widening). A
+valid interval covers 5 % in about 95 % of draws; the Monte Carlo error of a coverage is about
+``√(0.95·0.05/draws)`` (0.013 for 300).
 """
 
 from __future__ import annotations
@@ -54,7 +59,6 @@ from relloc.metrics.consistency import (
     INTERVAL_BATCHES,
     BeyondShare,
     chi2_upper,
-    clopper_pearson,
     percent_beyond_interval,
 )
 
@@ -76,17 +80,23 @@ class IntervalBenchSize:
     run_samples: int = 150
     runs_rho: float = 0.97
     shared_runs: int = 5
+    subjects: int = 5
+    subjects_rho: float = 0.997
+    subject_shares: tuple[float, ...] = (0.0, 0.5, 0.9)
 
     def __post_init__(self) -> None:
-        for name in ("draws", "samples", "runs", "run_samples", "shared_runs"):
+        for name in ("draws", "samples", "runs", "run_samples", "shared_runs", "subjects"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < 2:
                 raise ConfigError(
                     f"IntervalBenchSize.{name}: must be an integer ≥ 2, got {value!r}"
                 )
-        for rho in (*self.rhos, self.runs_rho):
+        for rho in (*self.rhos, self.runs_rho, self.subjects_rho):
             if not 0.0 <= rho < 1.0:
                 raise ConfigError(f"IntervalBenchSize: ρ {rho!r} outside [0, 1)")
+        for share in self.subject_shares:
+            if not 0.0 <= share <= 1.0:
+                raise ConfigError(f"IntervalBenchSize.subject_shares: {share!r} outside [0, 1]")
         if not self.rhos:
             raise ConfigError("IntervalBenchSize.rhos: at least one ρ")
 
@@ -106,16 +116,6 @@ def correlation_time(rho: float) -> float:
 
 def _holds(interval: tuple[float, float] | None) -> bool:
     return interval is not None and interval[0] <= TRUE_PERCENT <= interval[1]
-
-
-def _effective_size_interval(share: BeyondShare) -> tuple[float, float]:
-    """The second comparison: Clopper–Pearson's interval on ``N/τ̂`` values taken as
-    independent, ``τ̂`` the share's own correlation time (one value a second here, so
-    ``N/τ̂`` is the number of correlation times the run spans)."""
-    assert share.correlation_time_s is not None
-    size = share.samples / share.correlation_time_s
-    lo, hi = clopper_pearson(share.percent / 100.0 * size, size, share.confidence)
-    return 100.0 * lo, 100.0 * hi
 
 
 def _independent_baseline(values: np.ndarray) -> BeyondShare:
@@ -144,10 +144,11 @@ def _coverage(draws: int, draw: Callable[[], tuple[BeyondShare, BeyondShare]]) -
     }
     if ours[0].batch_s is not None and ours[0].correlation_time_s is not None:
         short = np.array([bool(s.blocks_short) for s in ours])
-        effective = [_effective_size_interval(s) for s in ours]
+        batch = [s.batch_means_interval for s in ours if s.batch_means_interval]
         out |= {
-            "effective_size_coverage": float(np.mean([_holds(i) for i in effective])),
-            "effective_size_mean_width_pct": float(np.mean([hi - lo for lo, hi in effective])),
+            "batch_means_coverage": float(np.mean([_holds(s.batch_means_interval) for s in ours])),
+            "batch_means_mean_width_pct": float(np.mean([hi - lo for lo, hi in batch])),
+            "mean_correlation_samples": float(np.mean([s.correlation_samples for s in ours])),
             "mean_correlation_time_s": float(np.mean([s.correlation_time_s for s in ours])),
             "blocks_short_share": float(short.mean()),
             "blocks_short_draws": int(short.sum()),
@@ -160,6 +161,21 @@ def _coverage(draws: int, draw: Callable[[], tuple[BeyondShare, BeyondShare]]) -
 def _one_run(rng: np.random.Generator, rho: float, n: int) -> tuple[BeyondShare, BeyondShare]:
     v = np.sum(ar1_errors(rng, rho, (n, DOF)) ** 2, axis=-1)
     return percent_beyond_interval(v, np.arange(n, dtype=float), chi2_upper(DOF)), (
+        _independent_baseline(v)
+    )
+
+
+def _subjects(
+    rng: np.random.Generator, rho: float, subjects: int, common: float, n: int
+) -> tuple[BeyondShare, BeyondShare]:
+    """One run of ``subjects`` subjects' ``n`` values, a share ``common`` of each error's
+    variance the same for every subject at an instant."""
+    e = np.sqrt(common) * ar1_errors(rng, rho, (n, DOF))[None] + np.sqrt(1.0 - common) * (
+        ar1_errors(rng, rho, (subjects, n, DOF))
+    )
+    v = np.sum(e**2, axis=-1)
+    t = np.broadcast_to(np.arange(n, dtype=float), v.shape)
+    return percent_beyond_interval(v.reshape(-1), t.reshape(-1), chi2_upper(DOF)), (
         _independent_baseline(v)
     )
 
@@ -187,7 +203,8 @@ def run(
 ) -> dict[str, Any]:
     size = size or IntervalBenchSize()
     rngs = [
-        np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(len(size.rhos) + 2)
+        np.random.default_rng(s)
+        for s in np.random.SeedSequence(seed).spawn(len(size.rhos) + 2 + len(size.subject_shares))
     ]
     started = time.perf_counter()
     one_run = {}
@@ -204,19 +221,49 @@ def run(
         }
     independent = _coverage(
         size.draws,
-        partial(_several_runs, rngs[-2], size.runs_rho, size.runs, size.run_samples, shared=False),
+        partial(
+            _several_runs,
+            rngs[len(size.rhos)],
+            size.runs_rho,
+            size.runs,
+            size.run_samples,
+            shared=False,
+        ),
     )
     shared = _coverage(
         size.draws,
         partial(
-            _several_runs, rngs[-1], size.runs_rho, size.shared_runs, size.samples, shared=True
+            _several_runs,
+            rngs[len(size.rhos) + 1],
+            size.runs_rho,
+            size.shared_runs,
+            size.samples,
+            shared=True,
         ),
     )
+    subjects = {
+        f"{common:g}": {
+            "common_share": common,
+            **_coverage(
+                size.draws,
+                partial(_subjects, rng, size.subjects_rho, size.subjects, common, size.samples),
+            ),
+        }
+        for common, rng in zip(size.subject_shares, rngs[len(size.rhos) + 2 :], strict=True)
+    }
     result: dict[str, Any] = {
         "seed": seed,
         "true_percent": TRUE_PERCENT,
         "size": size.__dict__,
         "one_run": one_run,
+        "subjects": {
+            "subjects": size.subjects,
+            "rho": size.subjects_rho,
+            "block_in_correlation_times": size.samples
+            / INTERVAL_BATCHES
+            / correlation_time(size.subjects_rho),
+            "by_common_share": subjects,
+        },
         "independent_runs": {"rho": size.runs_rho, "runs": size.runs, **independent},
         "shared_recording": {"rho": size.runs_rho, "runs": size.shared_runs, **shared},
         "baseline": "binomial: every value taken as independent (N_eff = N)",
@@ -237,8 +284,8 @@ def _print(r: dict[str, Any]) -> None:
     )
     print(
         f"{'one run, 10 blocks':>22} {'τ (s)':>7} {'τ̂ (s)':>7} {'block/τ':>8} "
-        f"{'coverage':>9} {'baseline':>9} {'N/τ̂':>6} {'short':>6} "
-        f"{'cov|short':>12} {'cov|long':>12}"
+        f"{'coverage':>9} {'batch':>6} {'baseline':>9} {'width':>6} {'batch':>6} "
+        f"{'short':>6} {'cov|short':>12} {'cov|long':>12}"
     )
     for v in r["one_run"].values():
         short, long = v["blocks_short_draws"], r["size"]["draws"] - v["blocks_short_draws"]
@@ -249,9 +296,23 @@ def _print(r: dict[str, Any]) -> None:
         print(
             f"{'ρ = ' + format(v['rho'], 'g'):>22} {v['true_correlation_time_s']:7.1f} "
             f"{v['mean_correlation_time_s']:7.1f} {v['block_in_correlation_times']:8.1f} "
-            f"{v['coverage']:9.3f} {v['baseline_coverage']:9.3f} "
-            f"{v['effective_size_coverage']:6.3f} {short:6d} "
+            f"{v['coverage']:9.3f} {v['batch_means_coverage']:6.3f} "
+            f"{v['baseline_coverage']:9.3f} {v['mean_width_pct']:6.1f} "
+            f"{v['batch_means_mean_width_pct']:6.1f} {short:6d} "
             f"{short_cov:>12} {long_cov:>12}"
+        )
+    print(
+        "  (coverage: the interval the reports use; batch: batch means alone, before the "
+        "widening on short blocks; width: mean width, %)"
+    )
+    s = r["subjects"]
+    for v in s["by_common_share"].values():
+        print(
+            f"{s['subjects']} subjects, ρ {s['rho']:g} (blocks of "
+            f"{s['block_in_correlation_times']:.1f} τ), {v['common_share']:.0%} of the error "
+            f"common: coverage {v['coverage']:.3f}, batch means alone "
+            f"{v['batch_means_coverage']:.3f}, baseline {v['baseline_coverage']:.3f}; width "
+            f"{v['mean_width_pct']:.1f} % against {v['batch_means_mean_width_pct']:.1f} %"
         )
     for name in ("independent_runs", "shared_recording"):
         v = r[name]

@@ -278,7 +278,9 @@ def report(summary: dict[str, Any]) -> str:
     lines += [
         "RMSE over every record of the scored stretch (10 Hz), start transient included. NEES "
         "shares pool the records of one run, which are correlated in time, so their 95 % "
-        "interval is by batch means: the stretch cut into 10 blocks, each a sample "
+        "interval is by batch means: the stretch cut into 10 blocks, each a sample, widened "
+        "when a block lasts less than ten correlation times of the NEES to hold "
+        "Clopper–Pearson's interval for the effective sample size that time leaves "
         "(`relloc.metrics.consistency.percent_beyond_interval`); the verdict says whether it "
         "holds the 5 % of a consistent filter, lies above (over-confident) or below "
         "(conservative).",

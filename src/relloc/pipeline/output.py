@@ -110,8 +110,9 @@ def interval_text(share: Mapping[str, Any] | None) -> str:
     """A share beyond a χ² bound's interval and verdict for a table cell, from
     :meth:`relloc.metrics.consistency.BeyondShare.to_dict`: ``"3.1–7.4 consistent"``
     (``—`` without one); when its time blocks are short against the values' correlation time
-    (``blocks_short``) it adds both, ``"1.5–16.4 consistent (45 s blocks, errors correlated
-    over 29 s: likely too narrow)"``."""
+    (``blocks_short``, so the interval is the batch means' one widened to the correlation-time
+    interval) it adds both and that interval's effective sample size, ``"1.2–19.0 consistent
+    (45 s blocks, errors correlated over 29 s: widened to 78 effective samples)"``."""
     if not share or share.get("interval") is None:
         return "—"
     lo, hi = share["interval"]
@@ -119,7 +120,8 @@ def interval_text(share: Mapping[str, Any] | None) -> str:
     if share.get("blocks_short"):
         text += (
             f" ({share['batch_s']:.2g} s blocks, errors correlated over "
-            f"{share['correlation_time_s']:.2g} s: likely too narrow)"
+            f"{share['correlation_time_s']:.2g} s: widened to "
+            f"{share['correlation_samples']:.0f} effective samples)"
         )
     return text
 
@@ -127,7 +129,8 @@ def interval_text(share: Mapping[str, Any] | None) -> str:
 def run_average_verdict_text(band: Mapping[str, Any] | None) -> str:
     """The verdict of a :func:`relloc.metrics.run_average_band` result for a report, marked
     ``"(blocks short)"`` when its intervals' blocks of times last less than ten correlation
-    times (``blocks_short``; the interval behind the verdict is then likely too narrow);
+    times (``blocks_short``; the intervals behind the verdict are then widened to the
+    correlation-time interval, :func:`relloc.metrics.percent_beyond_interval`);
     ``—`` without a verdict."""
     if not band or band.get("verdict") is None:
         return "—"

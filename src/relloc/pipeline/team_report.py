@@ -23,7 +23,8 @@ over all runs on the *steady-state* samples (track age ≥ ``settle_s``):
   ``nees_run_average_verdict``, whether the shares below and above the band exceed the 2.5 %
   each side leaves by more than their intervals allow — :func:`relloc.pipeline.evaluation.
   nees_band_check` — with ``nees_run_average_blocks_short``, whether those intervals' blocks of
-  times last less than ten correlation times (:attr:`relloc.metrics.BeyondShare.blocks_short`);
+  times last less than ten correlation times (:attr:`relloc.metrics.BeyondShare.blocks_short`;
+  the intervals are then widened to the correlation-time interval);
 - ``anis`` (NIS/3, ideal 1) and ``nis_percent_beyond`` ``χ²(3, 0.95)``;
 - ``max_condition_log10`` of ``P``, ``R`` and ``S`` (seed 000 §7.3; > 6 is ill-conditioned);
 - ``track_events``: created / deleted / re-created counts over all runs;
@@ -667,8 +668,10 @@ def report_markdown(
         "when the share of times above (below) the band is more than the 2.5 % a consistent "
         "filter leaves there by more than its 95 % interval allows (batch means over the "
         "times); it needs two runs or more. *Blocks short*: the blocks of times last less "
-        "than ten correlation times of the values they hold, so the interval behind the "
-        "verdict is likely too narrow (`relloc.metrics.consistency`).",
+        "than ten correlation times of the values they hold, where batch means alone would "
+        "give too narrow an interval; it is then widened to hold Clopper–Pearson's interval "
+        "for the effective sample size that correlation time leaves "
+        "(`relloc.metrics.consistency`).",
         "",
         "## Spread over runs and convergence from the unknown start",
         "",
