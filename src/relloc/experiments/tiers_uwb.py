@@ -44,7 +44,8 @@ summary.json: ``bags.<name>``: ``loader`` (offsets header → bag time, unknown 
 by radio names, ``bias_drift_m``, ``range_sigma_m`` the filters use, ``heldout`` range errors
 raw and corrected), ``scored_window_s``, ``team.aligned`` and ``team.anchored`` (``pos_rmse_m``,
 ``nees_pct_beyond``: share of record times whose 2-DOF NEES exceeds χ²₂(0.95), with
-``nees_beyond_interval`` its 95 % interval by batch means over time and the verdict —
+``nees_beyond_interval`` its 95 % interval by batch means over time (widened on short blocks,
+:func:`relloc.metrics.percent_beyond_interval`) and the verdict —
 one run, whose records are correlated in time —, ``converged_after_s`` (error below 0.3 m for
 good), ``per_robot`` (anchored), ``baselines.uncalibrated`` / ``baselines.multilateration``
 ``pos_rmse_m``, ``anchors``, ``mode``, ``mirror_ambiguous``, ``mirror_image_scored``),

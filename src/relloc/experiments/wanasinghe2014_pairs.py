@@ -341,8 +341,9 @@ def build_report(summary: dict[str, Any], figures: dict[str, str], *, elapsed_s:
         "## Per pair: calibrated PLKF yaw RMSE (rad) / % NEES beyond",
         "",
         "↑: the NEES share's 95 % interval (cluster means two ways, over the draws and over "
-        "time) lies wholly above the 5 % of a consistent filter (over-confident); ↓: wholly "
-        "below (conservative); ✓: the yaw and NEES targets both met.",
+        "time, widened on blocks shorter than ten correlation times) lies wholly above the "
+        "5 % of a consistent filter (over-confident); ↓: wholly below (conservative); ✓: the "
+        "yaw and NEES targets both met.",
         "",
     ]
     lines += _pair_table(rows, "calibrated")

@@ -603,7 +603,9 @@ def _replay_tables(s: dict[str, Any], kind: str) -> list[str]:
         "consistency towards the sensor noise, not towards the odometry error. The share's "
         "95 % interval is by cluster means two ways, over the draws and over time (the "
         "steady state cut into 10 blocks), so it counts the errors the draws share at one "
-        "time and those that persist through a draw; its verdict says whether it holds the "
+        "time and those that persist through a draw, and widened, when a block lasts less "
+        "than ten correlation times of the NEES, to Clopper–Pearson's interval for the "
+        "effective sample size that time leaves; its verdict says whether it holds the "
         "5 % of a consistent filter, lies above (over-confident) or below (conservative).",
     ]
 
