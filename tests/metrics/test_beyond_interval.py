@@ -285,6 +285,13 @@ def test_any_samples_give_a_share_inside_its_interval(samples, bound, batches, r
     assert 0.0 <= lo <= share.percent + 1e-9 and share.percent - 1e-9 <= hi <= 100.0
     assert share.effective_samples is not None
     assert 0.0 < share.effective_samples <= share.samples
+    # the interval is the batch means' one, widened (never narrowed) on short blocks
+    assert share.batch_means_interval is not None
+    assert lo <= share.batch_means_interval[0] and share.batch_means_interval[1] <= hi
+    if not share.blocks_short:
+        assert share.interval == share.batch_means_interval
+    if share.correlation_samples is not None:
+        assert 0.0 < share.correlation_samples <= share.samples
 
 
 def test_the_correlation_time_of_white_and_ar1_series():
