@@ -34,7 +34,7 @@ from numpy.typing import NDArray
 from relloc.core.gaussian import Gaussian, InformationState
 from relloc.core.linalg import cholesky, symmetrise
 from relloc.errors import ModelError
-from relloc.estimators.joint_ekf import check_blocks, propagate_team_covariance
+from relloc.estimators.joint_ekf import TeamMoments, check_blocks, propagate_team_covariance
 from relloc.models.planar_measurement import LinearisedRows
 
 Array = NDArray[np.float64]
@@ -120,7 +120,7 @@ def eif_update(belief: TeamInformation, rows: LinearisedRows) -> TeamInformation
 
 
 @dataclass
-class ExtendedInformationFilter:
+class ExtendedInformationFilter(TeamMoments):
     """Thin stateful wrapper around :func:`eif_predict` / :func:`eif_update`."""
 
     belief: TeamInformation
@@ -128,18 +128,6 @@ class ExtendedInformationFilter:
     @staticmethod
     def from_prior(prior: Gaussian) -> ExtendedInformationFilter:
         return ExtendedInformationFilter(TeamInformation.from_gaussian(prior))
-
-    @property
-    def n_robots(self) -> int:
-        return self.belief.dim // 3
-
-    def mean(self) -> Array:
-        """Team mean as ``(n, 3)``."""
-        return self.belief.mean.reshape(-1, 3)
-
-    def covariance(self) -> Array:
-        """Joint covariance ``(3n, 3n)`` (``Y⁻¹``, from the last factorisation)."""
-        return self.belief.cov
 
     def predict(self, mean_pred: Array, F_blocks: Array, Q_blocks: Array) -> None:
         self.belief = eif_predict(self.belief, mean_pred.reshape(-1), F_blocks, Q_blocks)

@@ -24,6 +24,7 @@ Update (all rows of one epoch at once, linearised at the prior mean), the Joseph
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -92,11 +93,24 @@ def ekf_update(belief: Gaussian, rows: LinearisedRows) -> Gaussian:
     return Gaussian(mean=mean, cov=cov)
 
 
-@dataclass
-class JointEkf:
-    """Thin stateful wrapper around :func:`ekf_predict` / :func:`ekf_update`."""
+class _Moments(Protocol):
+    """A team belief that holds its mean ``(3n,)`` and covariance ``(3n, 3n)``."""
 
-    belief: Gaussian
+    @property
+    def dim(self) -> int: ...
+
+    @property
+    def mean(self) -> Array: ...
+
+    @property
+    def cov(self) -> Array: ...
+
+
+class TeamMoments:
+    """The team's mean and covariance read from a joint filter's ``belief`` (both
+    :class:`JointEkf` and :class:`relloc.estimators.eif.ExtendedInformationFilter` keep them)."""
+
+    belief: _Moments
 
     @property
     def n_robots(self) -> int:
@@ -107,8 +121,15 @@ class JointEkf:
         return self.belief.mean.reshape(-1, 3)
 
     def covariance(self) -> Array:
-        """Joint covariance ``(3n, 3n)``."""
+        """Joint covariance ``(3n, 3n)`` (for the EIF ``Y⁻¹``, from its last factorisation)."""
         return self.belief.cov
+
+
+@dataclass
+class JointEkf(TeamMoments):
+    """Thin stateful wrapper around :func:`ekf_predict` / :func:`ekf_update`."""
+
+    belief: Gaussian
 
     def predict(self, mean_pred: Array, F_blocks: Array, Q_blocks: Array) -> None:
         self.belief = ekf_predict(self.belief, mean_pred.reshape(-1), F_blocks, Q_blocks)
