@@ -60,7 +60,9 @@ def test_on_short_blocks_the_widened_interval_covers_where_batch_means_alone_fal
     for design in (one, common):
         assert design["blocks_short_share"] == 1.0, design
         assert design["coverage"] >= 0.85, design
-        assert design["coverage"] >= design["batch_means_coverage"], design
+        # the widening rescues draws batch means alone miss (at this root 0.988 against 0.875
+        # for one subject, 0.913 against 0.788 for five): the old rule fails this
+        assert design["coverage"] - design["batch_means_coverage"] >= 0.05, design
         assert design["mean_width_pct"] > design["batch_means_mean_width_pct"], design
 
 

@@ -365,11 +365,13 @@ def _cluster_variance(labels: NDArray[np.int64], beyond: Array, p_hat: float) ->
     return g / (g - 1) * float(np.sum((k_g - p_hat * n_g) ** 2)) / float(np.sum(n_g)) ** 2, g
 
 
-def _correlation_figures(t: Array, margin: Array, beyond: Array) -> tuple[float, float]:
+def _correlation_figures(
+    t: Array, margin: Array, beyond: Array, p_hat: float
+) -> tuple[float, float]:
     """``(τ̂ in seconds, N_τ)`` (module docstring): ``τ̂`` the integrated correlation time of the
     ranks of ``margin`` (value − bound; ties share their mean rank) averaged at each instant,
-    ``N_τ`` the effective sample size of the share ``beyond`` from it and the variance over
-    the instants of the share at each instant."""
+    ``N_τ`` the effective sample size of the share ``p̂`` of ``beyond`` from it and the
+    variance over the instants of the share at each instant."""
     from scipy.stats import rankdata
 
     instants, which = np.unique(t, return_inverse=True)
@@ -377,7 +379,6 @@ def _correlation_figures(t: Array, margin: Array, beyond: Array) -> tuple[float,
     tau = integrated_time(np.bincount(which, weights=rankdata(margin)) / counts)
     n_t = int(instants.size)
     tau_s = tau * float(t.max() - t.min()) / max(n_t - 1, 1)
-    p_hat = float(beyond.mean())
     spread = float(np.var(np.bincount(which, weights=beyond) / counts))
     if spread <= 0.0:
         return tau_s, n_t / tau
@@ -463,7 +464,7 @@ def percent_beyond_interval(
     batch_s: float | None = width
     tau_s = n_tau = None
     if n_runs < 2 or shared_recording:  # time blocks: their values' correlation time beside
-        tau_s, n_tau = _correlation_figures(t, v - b, beyond)
+        tau_s, n_tau = _correlation_figures(t, v - b, beyond, p_hat)
     if n_runs < 2:
         clustering = "time blocks"
         var, g = _cluster_variance(block, beyond, p_hat)
