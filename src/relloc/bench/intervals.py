@@ -82,7 +82,7 @@ class IntervalBenchSize:
     shared_runs: int = 5
     subjects: int = 5
     subjects_rho: float = 0.997
-    subject_shares: tuple[float, ...] = (0.0, 0.5, 0.9)
+    subject_shares: tuple[float, ...] = (0.0, 0.5, 0.9, 0.97, 0.99, 1.0)
 
     def __post_init__(self) -> None:
         for name in ("draws", "samples", "runs", "run_samples", "shared_runs", "subjects"):
