@@ -272,3 +272,49 @@ def test_world_file_round_trip_and_bad_file(tmp_path):
     np.savez(tmp_path / "part.npz", truth=np.zeros(3))
     with pytest.raises(DataError, match="missing"):
         load_world(tmp_path / "part.npz", SC)
+
+
+def _process(robot: str, session: object) -> RobotProcess:
+    """Robot ``robot``'s process with publishers on a real, unconnected Zenoh session."""
+    from relloc.runtime.airground import DroneRole
+    from relloc.runtime.transport import declare_publisher
+
+    role = DroneRole(SC, 0) if robot == "D_1" else LeaderRole(SC)
+    proc = RobotProcess(RobotSettings(team=TEAM, robot=robot, transport=TRANSPORT), SC, role)
+    for kind in ("rows", "odom", "cmd", "est", "stats"):
+        proc._pubs[kind] = declare_publisher(session, keys.robot_key(TEAM, f"x{robot}", kind))
+    return proc
+
+
+def test_a_sense_that_does_not_fit_the_robot_is_refused_and_does_not_use_up_its_tick(session):
+    """A decodable ``sense`` whose position or marker fix does not fit the team once crashed
+    a drone's guidance (an empty position, a leader fix without heading, a fix of a drone),
+    and one with readings that fail to decode used up the tick before it was refused, so the
+    world's genuine ``sense`` of that tick was then refused. Both are refused first now."""
+    world = AirGroundWorld.start(SC, np.random.default_rng(5))
+    key = keys.clock_key(TEAM, "sense")
+    drone = _process("D_1", session)
+    genuine = sense_body(world, 3, 0, drone=0)
+    hostile = [
+        {"position": np.zeros(0)},
+        {"fix_subject": "R_0", "fix": np.array([1.0, 2.0])},  # the leader's needs a heading
+        {"fix_subject": "D_1", "fix": np.array([1.0, 2.0])},  # only UGVs carry markers
+        {"fix_subject": "R_1", "fix": np.array([1.0, 2.0, 0.3])},  # a follower's has none
+    ]
+    for changes in hostile:
+        drone._handle(Incoming(key, encode("sense", CLOCK_SENDER, 0, 0.0, genuine | changes)))
+    assert drone.counters["rejected.shape"] == len(hostile) and drone._last_k is None
+    follower_fix = {"fix_subject": "R_1", "fix": np.array([1.0, 2.0])}
+    drone._handle(Incoming(key, encode("sense", CLOCK_SENDER, 0, 0.0, genuine | follower_fix)))
+    drone._progress()
+    assert drone.counters["ticks"] == 1 and drone._tick is None  # acted on tick 0
+
+    leader = _process("R_0", session)
+    good = sense_body(world, 0, 0, drone=None)
+    bad_rows = {"stamps": [0.0], "kinds": ["bogus"], "subjects": [""], "landmarks": [-1.0]}
+    bad_rows |= {"sensors": [0.0], "values": [1.0], "sigmas": [0.1]}
+    for changes in (bad_rows, {"position": np.zeros(3)}):  # a UGV has no position sent
+        leader._handle(Incoming(key, encode("sense", CLOCK_SENDER, 0, 0.0, good | changes)))
+    assert leader.counters["rejected"] == 2 and leader._last_k is None
+    leader._handle(Incoming(key, encode("sense", CLOCK_SENDER, 0, 0.0, good)))
+    assert leader.counters["ticks"] == 1 and leader.counters["sent.cmd"] == 1

@@ -188,6 +188,74 @@ def test_hostile_mail_is_counted_or_fused_and_never_crashes_a_leader(session, da
     _run(node, "L2", "mail", drawn)
 
 
+@st.composite
+def odom_bodies(draw: Any) -> dict[str, Any]:
+    """A teammate's odometry: 1–3 samples at stamps around the current tick, velocities of
+    any size (absurd ones included) and, for half of them, with lateral or vertical velocity
+    (what seed 001's unicycle filter cannot take)."""
+    n = draw(st.integers(1, 3))
+    stamps = sorted(draw(st.lists(offsets, min_size=n, max_size=n, unique=True)))
+    u = draw(st.lists(st.lists(numbers, min_size=4, max_size=4), min_size=n, max_size=n))
+    if draw(st.booleans()):
+        for row in u:
+            row[1] = row[2] = 0.0
+    return {"stamps": stamps, "u": u}
+
+
+def _node_of(which: str, session: Any) -> tuple[RobotNode, str]:
+    """Seed 001's agent ``1`` (a unicycle team filter, teammate ``2``) or seed 002's leader
+    ``L1`` with a pod ``P1`` or a leader ``L2`` as the teammate."""
+    if which == "sharma":
+        return hand_node(
+            sharma_node_parts("1", 5, 0, DURATION_S, "two_landmarks"), "1", session
+        ), "2"
+    parts = named_node_parts("desilva2015", "L1", 5, 0, DURATION_S)
+    return hand_node(parts, "L1", session, talkers=parts.talkers), which
+
+
+@settings(
+    derandomize=True,
+    max_examples=30,
+    deadline=None,
+    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
+)
+@given(data=st.data())
+def test_hostile_odometry_is_counted_or_used_and_never_crashes_a_node(session, data):
+    """One teammate's decodable odometry once killed a node: a lateral velocity raised in seed
+    001's unicycle filter, and 1e154 m/s reached seed 002's fuser as NaN. Now every such
+    message is refused (``not_unicycle``, ``out_of_range``, ``past``) or used, the node
+    filters to the end and its beliefs stay finite."""
+    node, sender = _node_of(data.draw(st.sampled_from(["sharma", "P1", "L2"])), session)
+    drawn = data.draw(
+        st.lists(st.tuples(odom_bodies(), st.integers(0, 40), offsets), min_size=1, max_size=8)
+    )
+    _run(node, sender, "odom", drawn)
+    for belief in node.estimator.beliefs():
+        assert np.all(np.isfinite(belief.mean)) and np.all(np.isfinite(belief.cov))
+
+
+def test_a_lateral_velocity_is_refused_for_a_unicycle_team_and_a_repeated_stamp_counted(session):
+    node, sender = _node_of("sharma", session)
+    key = keys.robot_key(TEAM, sender, "odom")
+    tick(node, 1)
+    lateral = {"stamps": [0.05], "u": [[0.1, 0.05, 0.0, 0.0]]}
+    node._on_incoming(Incoming(key, _raw("odom", sender, 0, 0.1, lateral)))
+    assert node.counters["rejected.not_unicycle"] == 1 and node.counters["delivered.odom"] == 0
+    for seq, v in ((1, 0.1), (2, 0.2)):  # two messages, one stamp: the second is not filed
+        node._on_incoming(
+            Incoming(
+                key,
+                _raw("odom", sender, seq, 0.1, {"stamps": [0.06]} | {"u": [[v, 0.0, 0.0, 0.0]]}),
+            )
+        )
+    for k in range(2, TICKS + 1):
+        tick(node, k)
+    node._finish()
+    counters = node.final_counters()
+    assert counters["delivered.odom"] == 2 and counters["duplicate_samples"] == 1
+    assert node.teammates[sender].odometry.held_at(np.array([0.07]))[0, 0] == 0.1
+
+
 def test_a_teammate_heard_before_its_appearance_is_delivered_when_it_appears(session):
     parts = sharma_node_parts("1", 5, 0, DURATION_S, "two_landmarks")
     node = hand_node(parts, "1", session, share_rows=True)

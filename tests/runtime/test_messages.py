@@ -165,6 +165,7 @@ def test_spoofed_sender_and_inconsistent_batches():
         ({"frame": "nowhere"}, "is not a frame"),
         ({"update_dofs": [0]}, "update_dofs must be integers"),
         ({"update_dofs": [2.5]}, "update_dofs must be integers"),
+        ({"update_dofs": [1e300]}, "update_dofs must be integers"),  # an int64 cast of garbage
         ({"update_dofs": [3, 3]}, "update batch lengths differ"),
         ({"ages": [0.0]}, "record batch lengths differ"),
         ({"track": 7}, "expected str"),
@@ -204,3 +205,30 @@ def test_estimates_travel_as_est_bodies_and_come_back_whole():
     # a restarted sender's second life follows its first whatever the arrival order
     swapped = estimates_from_bodies("plkf", [reports[3], reports[0]])
     np.testing.assert_array_equal(swapped.series("obs", "air1").t, [0.0, 0.2])
+
+
+@pytest.mark.parametrize(
+    ("kind", "body", "what"),
+    [
+        ("odom", {"stamps": [0.0], "u": [[1e154, 0.0, 0.0, 0.0]]}, "velocity"),
+        ("odom", {"stamps": [0.0], "u": [[0.1, 0.0, 0.0, -101.0]]}, "turn rate"),
+        ("cmd", {"k": 1, "u": [0.0, 0.0, 100.5, 0.0]}, "velocity"),
+        (
+            "sense",
+            {"k": 1, "n": 2, "dt": 0.1, "target": "air1", "position": [0.0, 0.0, 2e9]}
+            | {"fix_subject": "", "fix": []}
+            | {name: [] for name in ("stamps", "kinds", "subjects", "landmarks", "sensors")}
+            | {"values": [], "sigmas": []},
+            "position",
+        ),
+    ],
+)
+def test_finite_but_absurd_velocities_and_positions_are_out_of_range(kind, body, what):
+    """Finite numbers that no robot reports (beyond a scenario's limits, 100 m/s and 100
+    rad/s, or ±1e9 m) would overflow a teammate's filter or guidance: refused on decoding."""
+    sender = "clock" if kind == "sense" else "obs"
+    with pytest.raises(MessageRejected) as info:
+        encode(kind, sender, 0, 0.0, body)
+    assert info.value.reason == "out_of_range" and what in str(info.value)
+    limit = {"stamps": [0.0], "u": [[100.0, -100.0, 0.0, 100.0]]}
+    assert decode(encode("odom", "obs", 0, 0.0, limit), roster=ROSTER).body["u"].shape == (1, 4)

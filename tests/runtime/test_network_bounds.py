@@ -67,7 +67,7 @@ def _est(n: int, target: str = "flyer") -> dict:
         "target": target,
         "track": "",
         "frame": "relative_pose4",
-        "stamps": np.arange(n) * 0.1,
+        "stamps": np.arange(n) * 0.01,  # inside the 4 s run
         "means": np.zeros((n, 4)),
         "covs": np.broadcast_to(np.eye(4), (n, 4, 4)).copy(),
         "ages": np.zeros(n),
@@ -106,3 +106,40 @@ def test_the_collector_keeps_at_most_a_quota_of_reports_per_sender(tmp_path):
         launcher._on_item(Incoming(keys.robot_key(TEAM, "flyer", "evt"), payload))
     per_message = len(payload) + OBJECT_BYTES * 1000
     assert len(launcher.collected.events) == 500 * (quota // per_message)
+
+
+def test_the_collector_refuses_estimates_it_could_not_join_or_score(tmp_path):
+    """One spoofed ``est`` once aborted the whole run's summary: a series whose increments
+    change frame cannot be joined, a frame other than the team's cannot be scored, and a
+    record outside the run has no ground truth. Each is counted, the genuine ones kept."""
+    launcher = TeamLauncher(
+        TeamSettings(scenario="default", out_dir=tmp_path),
+        ROSTER,
+        4.0,
+        est_frame="relative_pose4",
+    )
+    key = keys.robot_key(TEAM, "observer", "est")
+
+    def send(seq: int, **changes: object) -> None:
+        body = _est(2) | changes
+        launcher._on_item(Incoming(key, encode("est", "observer", seq, 1.0, body)))
+
+    send(0)
+    send(1, frame="world_pose2", means=np.zeros((2, 3)), covs=np.tile(np.eye(3), (2, 1, 1)))
+    send(2, stamps=[1.0, 1e12])
+    send(3, stamps=[-1e12, 1.0])
+    send(4)
+    assert len(launcher.collected.estimates) == 2
+    assert dict(launcher.collected.rejected_by_reason) == {
+        "wrong_frame": 1,
+        "future": 1,
+        "past": 1,
+    }
+    # without a team frame, a series keeps the frame of its first increment
+    free = TeamLauncher(TeamSettings(scenario="default", out_dir=tmp_path), ROSTER, 4.0)
+    for seq, frame, dim in ((0, "relative_pose4", 4), (1, "world_pose2", 3)):
+        body = _est(2) | {"frame": frame, "means": np.zeros((2, dim))}
+        body["covs"] = np.tile(np.eye(dim), (2, 1, 1))
+        free._on_item(Incoming(key, encode("est", "observer", seq, 1.0, body)))
+    assert len(free.collected.estimates) == 1
+    assert dict(free.collected.rejected_by_reason) == {"frame_changed": 1}

@@ -21,7 +21,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from relloc.runtime import keys
-from relloc.runtime.admission import SenderBudget, TickGuard, admit, check_not_future
+from relloc.runtime.admission import SenderBudget, TickGuard, admit, check_stamps
 from relloc.runtime.faults import FaultSettings, parse_robot_event
 from relloc.runtime.launcher import TeamLauncher, TeamSettings
 from relloc.runtime.messages import Message, MessageRejected, encode
@@ -140,14 +140,18 @@ def test_ticks_advance_one_at_a_time_and_end_only_after_the_last():
     last.check_end(end)
 
 
-def test_future_stamps_and_floods_are_refused():
+def test_future_and_past_stamps_and_floods_are_refused():
     key = keys.robot_key(TEAM, "flyer", "odom")
     future = _msg(
         encode("odom", "flyer", 0, 1.0, {"stamps": [1.0, 9e6], "u": np.zeros((2, 4))}), key
     )
     with pytest.raises(MessageRejected, match="future"):
-        check_not_future(future, now_s=1.0)
-    check_not_future(_msg(VALID[0], key), now_s=0.0)
+        check_stamps(future, now_s=1.0)
+    check_stamps(_msg(VALID[0], key), now_s=0.0)
+    # held from before the run's start, a sample would be stale by an unbounded age
+    past = _msg(encode("odom", "flyer", 0, 1.0, {"stamps": [-1e12], "u": np.zeros((1, 4))}), key)
+    with pytest.raises(MessageRejected, match="past"):
+        check_stamps(past, now_s=1.0)
     budget = SenderBudget.for_team(3)
     for _ in range(budget.capacity):
         budget.take("flyer")

@@ -133,8 +133,12 @@ def test_a_reply_is_taken_only_from_the_teammate_asked_with_the_team_dimensions(
     assert h.accept("2", {**good, "stamp": 9.0}, 5.2, 0.1) is None  # ahead of the clock
     singular = np.diag([1.0] * 8 + [0.0])
     assert h.accept("2", {**good, "cov": singular}, 5.2, 0.1) is None
+    # finite but absurd: a team belief of 1e300 m, or of a variance whose inverse is 0
+    assert h.accept("2", {**good, "mean": np.full(9, 1e300)}, 5.2, 0.1) is None
+    assert h.accept("2", {**good, "cov": 1e300 * np.eye(9)}, 5.2, 0.1) is None
     assert counters["rejected.sync_unasked"] == 1 and counters["rejected.shape"] == 1
-    assert counters["rejected.sync_stamp"] == 2 and counters["rejected.bad_covariance"] == 1
+    assert counters["rejected.sync_stamp"] == 2 and counters["rejected.bad_covariance"] == 2
+    assert counters["rejected.out_of_range"] == 1
     stamp, belief = h.accept("2", good, 5.2, 0.1)
     assert stamp == 5.2 and belief.dim == 9
     h.resumed()

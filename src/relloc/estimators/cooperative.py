@@ -769,6 +769,9 @@ class CooperativeEstimator(Silent):
     """
 
     owner = "team"
+    planar_unicycles = True
+    """Odometry with lateral or vertical velocity is an error here (a robot node refuses such
+    a teammate's message: :meth:`relloc.runtime.estimation.WindowDriver.refuses_odometry`)."""
 
     def __init__(
         self,

@@ -16,10 +16,12 @@ reason, which the receiver counts (``rejected_by_reason`` in the summary):
   message does not even reach this code; without TLS anyone on the network can still claim a
   roster robot's identity on that robot's own keys, and these checks only keep a node safe and
   bounded, not authenticated.
-- **time** (:func:`check_not_future`): a teammate's data stamped more than
+- **time** (:func:`check_stamps`): a teammate's data stamped more than
   :data:`FUTURE_BOUND_S` ahead of the receiver's clock is rejected (``future``) — teammates are
   at most one tick ahead under the clock's barrier, and kept future samples would never be
-  released;
+  released — and so is data stamped before the run's start at robot time 0 (``past``: held
+  odometry of an age beyond the run would inflate a filter's noise without bound); the
+  collector checks ``est`` and ``evt`` against the run's end;
 - **ticks** (:class:`TickGuard`): ticks advance one at a time (``k`` by one, ``t`` by ``dt``,
   the same ``n`` and ``dt``, ``t`` within the run) — a tick at t = 10¹² would make the node
   publish every remaining sample in one message (``bad_tick``); ``ctl(end)`` is accepted only
@@ -82,17 +84,24 @@ def admit(
     return msg
 
 
-def check_not_future(msg: Message, now_s: float, bound_s: float = FUTURE_BOUND_S) -> None:
-    """Reject a message whose header time or any stamp is more than ``bound_s`` after
-    ``now_s`` (the receiver's latest tick time)."""
-    latest = msg.t
+def check_stamps(msg: Message, now_s: float, bound_s: float = FUTURE_BOUND_S) -> None:
+    """Reject a message whose header time or any stamp is before the run's start (robot time
+    0: ``past``) or more than ``bound_s`` after ``now_s`` (``future``): the receiver's latest
+    tick time, or the run's end for a collector, which hears no ticks."""
+    times = [np.array([msg.t])]
     for name in ("stamps", "update_stamps"):
         stamps = msg.body.get(name)
         if isinstance(stamps, np.ndarray) and stamps.size:
-            latest = max(latest, float(stamps.max()))
+            times.append(stamps)
+    every = np.concatenate(times)
+    earliest, latest = float(every.min()), float(every.max())
     if latest > now_s + bound_s + TIME_TOL:
         raise MessageRejected(
             "future", f"{msg.kind} from {msg.sender!r} stamped {latest:g} s, clock at {now_s:g} s"
+        )
+    if earliest < -TIME_TOL:
+        raise MessageRejected(
+            "past", f"{msg.kind} from {msg.sender!r} stamped {earliest:g} s, before the start"
         )
 
 

@@ -58,7 +58,7 @@ its filter: it starts again from its start-of-run guess with the covariance of
 :data:`RESTART_SIGMAS` (it does not know where it is) and is re-found through the drones'
 sightings; a restarted drone hovers until its camera fixes a marker; the leader has no state.
 Every message passes :func:`relloc.runtime.admission.admit` (roster and role), teammates'
-messages also :func:`~relloc.runtime.admission.check_not_future` and a per-tick
+messages also :func:`~relloc.runtime.admission.check_stamps` and a per-tick
 :class:`~relloc.runtime.admission.SenderBudget`; rejections are counted by reason.
 """
 
@@ -80,7 +80,7 @@ from relloc.core.recording import Measurements, Recording, empty_measurements
 from relloc.errors import ConfigError, DataError, RellocError
 from relloc.estimators.switching_ekf import FRAME
 from relloc.runtime import keys
-from relloc.runtime.admission import CLOCK_SENDER, SenderBudget, admit, check_not_future
+from relloc.runtime.admission import CLOCK_SENDER, SenderBudget, admit, check_stamps
 from relloc.runtime.faults import FaultSettings, LinkEmulator, RobotEvent
 from relloc.runtime.messages import DEFAULT_MAX_BYTES, Message, MessageRejected, encode, est_bodies
 from relloc.runtime.shared_rows import rows_body, rows_from_body
@@ -673,15 +673,11 @@ class RobotProcess:
             raise MessageRejected("bad_tick", f"sense k={k} at t={msg.t:g}, dt={b['dt']:g}")
         if self._tick is not None:
             raise MessageRejected("bad_tick", f"sense k={k} before tick {self._tick.k} was done")
-        fix = None
-        if b["fix_subject"]:
-            f = b["fix"]
-            subject = self.roster.index(b["fix_subject"])
-            fix = MarkerFix(subject, f[:2].copy(), float(f[2]) if f.size == 3 else None)
+        fix = self._fix_of(b)
+        readings = rows_from_body(b, self.roster, self.s.robot)
         self._last_k = k
         self._budget.new_interval()
         self.counters["ticks"] += 1
-        readings = rows_from_body(b, self.roster, self.s.robot)
         t = float(self.times[k])
         self._tick = Sensed(k, t, readings, b["position"], fix)
         self._present_at_tick = set(self.present)
@@ -694,6 +690,27 @@ class RobotProcess:
             self._send("cmd", {"k": k, "u": u}, t)
             self._tick_done()
 
+    def _fix_of(self, b: Mapping[str, Any]) -> MarkerFix | None:
+        """The marker fix of a ``sense`` body, checked against the team: a drone has its
+        position (3 numbers) and may have a fix of a UGV — the leader with its heading, a
+        follower without — and a UGV has neither (``MessageRejected``, ``shape``)."""
+        ugvs = self.sc.n_followers + 1
+        drone = self.roster.index(self.s.robot) >= ugvs
+        if b["position"].size != (3 if drone else 0):
+            raise MessageRejected(
+                "shape", f"sense: position of {self.s.robot} has {b['position'].size} numbers"
+            )
+        if not b["fix_subject"]:
+            return None
+        subject = self.roster.index(b["fix_subject"])
+        f = b["fix"]
+        if not drone or subject >= ugvs or f.size != (3 if subject == 0 else 2):
+            raise MessageRejected(
+                "shape",
+                f"sense: {self.s.robot} cannot have a fix of {b['fix_subject']} of {f.size} values",
+            )
+        return MarkerFix(subject, f[:2].copy(), float(f[2]) if subject == 0 else None)
+
     def _on_ctl(self, msg: Message) -> None:
         if msg.body["action"] != "end":
             return  # kills and restarts are the launcher's
@@ -703,7 +720,7 @@ class RobotProcess:
 
     def _on_teammate(self, msg: Message) -> None:
         now = self._tick.t if self._tick is not None else self._last_t()
-        check_not_future(msg, now)
+        check_stamps(msg, now)
         self._budget.take(msg.sender)
         self.counters[f"wire.{msg.kind}"] += 1
         key = (msg.sender, msg.kind)

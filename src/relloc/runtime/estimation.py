@@ -242,6 +242,12 @@ class WindowDriver:
         """The estimator's messages go to teammates (no re-filtering: what it sent is out)."""
         self._talks = True
 
+    def refuses_odometry(self, u: Array) -> bool:
+        """Whether body velocities ``u`` ``(n, 4)`` cannot drive the estimator: one of planar
+        unicycles (optional attribute ``planar_unicycles``: seed 001's team filter) takes no
+        lateral or vertical velocity."""
+        return bool(getattr(self.estimator, "planar_unicycles", False) and np.any(u[:, 1:3]))
+
     # ------------------------------------------------------------------ rejoining the team
     @property
     def hands_off(self) -> bool:

@@ -38,6 +38,7 @@ import numpy as np
 from relloc.core.gaussian import Gaussian
 from relloc.errors import ModelError
 from relloc.runtime.estimation import WindowDriver
+from relloc.runtime.messages import MessageRejected, check_state_bounds
 
 RETRY_TICKS = 5
 """Ticks a node waits for a teammate's reply before asking the next one."""
@@ -107,9 +108,12 @@ class Handoff:
             self.counters["rejected.sync_stamp"] += 1
             return None
         try:
+            check_state_bounds("sync", body["mean"], body["cov"])  # the filter inverts it
             belief = Gaussian(body["mean"], body["cov"])
-            np.linalg.cholesky(belief.cov)  # positive definite: the filter inverts it
-        except (ModelError, np.linalg.LinAlgError):
+        except MessageRejected as exc:
+            self.counters[f"rejected.{exc.reason}"] += 1
+            return None
+        except ModelError:
             self.counters["rejected.bad_covariance"] += 1
             return None
         return stamp, belief

@@ -41,9 +41,9 @@ from typing import Any
 from relloc.errors import ConfigError, RellocError
 from relloc.runtime import keys
 from relloc.runtime.access import SecureTeam, secure_team
-from relloc.runtime.admission import admit
+from relloc.runtime.admission import admit, check_stamps
 from relloc.runtime.faults import FaultSettings, RobotEvent
-from relloc.runtime.messages import DEFAULT_MAX_BYTES, MessageRejected
+from relloc.runtime.messages import DEFAULT_MAX_BYTES, Message, MessageRejected
 from relloc.runtime.quota import ReportQuota
 from relloc.runtime.scenario import check_source
 from relloc.runtime.transport import (
@@ -285,7 +285,14 @@ def _fork_context(extra: tuple[str, ...]) -> Any:
 class TeamLauncher:
     """Start, supervise and collect a team (see module docstring)."""
 
-    def __init__(self, settings: TeamSettings, roster: tuple[str, ...], duration_s: float) -> None:
+    def __init__(
+        self,
+        settings: TeamSettings,
+        roster: tuple[str, ...],
+        duration_s: float,
+        *,
+        est_frame: str | None = None,
+    ) -> None:
         settings.faults.check_robots(roster)  # a fault naming no robot of the team, or
         settings.faults.check_times(duration_s)  # beginning after the run, is refused
         self.s = settings
@@ -300,6 +307,9 @@ class TeamLauncher:
         self._finished: list[tuple[str, Any]] = []
         self._dead: set[str] = set()
         self._received: Counter[tuple[str, str]] = Counter()
+        self._frames: dict[tuple[str, str, str], str] = {}
+        self.est_frame = est_frame
+        """The frame of every robot's estimates, where the team's estimators share one."""
         self._scheduled: dict[str, list[RobotEvent]] = {
             "kill": sorted(settings.faults.kills, key=lambda e: e.at_s),
             "restart": sorted(settings.faults.restarts, key=lambda e: e.at_s),
@@ -432,6 +442,9 @@ class TeamLauncher:
             self._received[(msg.sender, msg.kind)] += 1
             if msg.kind in ("est", "evt"):
                 self._quota.take(msg, len(item.payload))
+                check_stamps(msg, self.duration_s)
+            if msg.kind == "est":
+                self._check_frame(msg)
         except MessageRejected as exc:
             self._reject(exc.reason)
             return
@@ -447,6 +460,22 @@ class TeamLauncher:
             while len(per_robot) <= index:
                 per_robot.append({})
             per_robot[index] = dict(msg.body["counters"])
+
+    def _check_frame(self, msg: Message) -> None:
+        """An ``est`` is in the team's frame, where it has one (``wrong_frame``), and every
+        ``est`` of one series (sender, target, track) in the frame of its first
+        (``frame_changed``): the collected increments are joined into one series."""
+        b = msg.body
+        if self.est_frame is not None and b["frame"] != self.est_frame:
+            raise MessageRejected(
+                "wrong_frame", f"est of {msg.sender}→{b['target']} in {b['frame']!r}"
+            )
+        first = self._frames.setdefault((msg.sender, b["target"], b["track"]), b["frame"])
+        if b["frame"] != first:
+            raise MessageRejected(
+                "frame_changed",
+                f"est of {msg.sender}→{b['target']} in {b['frame']!r} after {first!r}",
+            )
 
     def _reject(self, reason: str) -> None:
         self.collected.rejected += 1

@@ -30,12 +30,6 @@ from relloc.fusion.messages import EquivalentMeasurement
 TRACK_BYTES = 400
 """Upper bound of one track's size in an encoded mail (41 floats of at most 9 bytes)."""
 HEADER_BYTES = 1024
-MIN_VARIANCE = 1e-18
-MAX_VARIANCE = 1e12
-"""Eigenvalues a received track's covariance must lie within: positive definite, and its
-inverse (the information a fuser adds) and its products stay finite."""
-MAX_STATE = 1e9
-"""Largest |entry| of a received track's state (m, rad)."""
 
 
 def mail_body(
@@ -94,24 +88,19 @@ def mail_items(
 ) -> list[tuple[float, list[EquivalentMeasurement]]]:
     """The messages of a validated ``mail`` body, grouped by stamp (in order). A body whose
     messages cannot be rebuilt — a subject off the roster (``unknown_target``) or that is the
-    sender, a covariance that is not positive definite with eigenvalues in
-    [:data:`MIN_VARIANCE`, :data:`MAX_VARIANCE`] (``bad_covariance``), a state entry beyond
-    :data:`MAX_STATE` (``out_of_range``) — raises
+    sender, a state or covariance out of bounds
+    (:func:`~relloc.runtime.messages.check_state_bounds`) — raises
     :class:`~relloc.runtime.messages.MessageRejected`."""
-    from relloc.runtime.messages import MessageRejected
+    from relloc.runtime.messages import MessageRejected, check_state_bounds
 
     unknown = sorted(set(body["subjects"]) - set(roster))
     if unknown:
         raise MessageRejected("unknown_target", f"mail: subjects {unknown} are not on the roster")
-    covs = np.concatenate([body["covs"], body["prior_covs"]])
-    eig = np.linalg.eigvalsh(covs) if covs.size else np.ones((1, 1))
-    if not (np.all(eig >= MIN_VARIANCE) and np.all(eig <= MAX_VARIANCE)):
-        raise MessageRejected(
-            "bad_covariance", "mail: a covariance is not positive definite within the bounds"
-        )
-    means = np.concatenate([body["means"], body["prior_means"]])
-    if np.any(np.abs(means) > MAX_STATE):
-        raise MessageRejected("out_of_range", f"mail: a state beyond ±{MAX_STATE:g}")
+    check_state_bounds(
+        "mail",
+        np.concatenate([body["means"], body["prior_means"]]),
+        np.concatenate([body["covs"], body["prior_covs"]]),
+    )
     ends = np.cumsum(body["sizes"].astype(np.int64))
     starts = ends - body["sizes"].astype(np.int64)
     out: list[tuple[float, EquivalentMeasurement]] = []

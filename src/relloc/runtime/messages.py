@@ -75,6 +75,7 @@ import numpy as np
 from relloc.core.estimates import BeliefSeries, Estimates, SeriesKey, UpdateSeries, concatenate
 from relloc.errors import DataError
 from relloc.pipeline.frames import FRAMES
+from relloc.sim.scenario import MAX_SPEED_M_S, MAX_YAW_RATE_RAD_S
 
 SCHEMA_VERSION = 4
 """The wire layout's version (what each one introduced: :data:`VERSION_CHANGES`). A message of
@@ -89,6 +90,14 @@ DEFAULT_MAX_BYTES = 65_536
 """Default size limit of one encoded message (bytes); larger payloads are rejected unread."""
 
 STATE_DIM = 4
+MIN_VARIANCE = 1e-18
+MAX_VARIANCE = 1e12
+"""Eigenvalues a received covariance that a filter fuses or starts from (``mail``, ``sync``)
+must lie within: positive definite, and its inverse and its products stay finite."""
+MAX_STATE = 1e9
+"""Largest |entry| of a received state, position or marker fix (m, rad)."""
+MAX_DOF = 10_000
+"""Largest degrees of freedom of one reported NIS (``est.update_dofs``)."""
 """Relative state (x, y, z, φ) of seed 000 carried by ``eqm`` and ``mail`` (``est`` carries
 the states of its frame)."""
 
@@ -383,6 +392,9 @@ def _check_consistency(kind: str, body: dict[str, Any]) -> None:
             raise MessageRejected("shape", "odom: stamps and u lengths differ")
         if np.any(np.diff(body["stamps"]) <= 0):
             raise MessageRejected("malformed", "odom: stamps not strictly increasing")
+        _check_velocities(body["u"], kind)
+    elif kind == "cmd":
+        _check_velocities(body["u"][None], kind)
     elif kind == "meas":
         m = body["stamps"].shape[0]
         if not (len(body["targets"]) == body["z"].shape[0] == body["sigma"].shape[0] == m):
@@ -410,8 +422,8 @@ def _check_consistency(kind: str, body: dict[str, Any]) -> None:
         if body["info"].shape[0] != n * len(body["info_names"]):
             raise MessageRejected("shape", "est: info is not one value per record and name")
         dofs = body["update_dofs"]
-        if np.any((dofs < 1) | (dofs != np.round(dofs))):
-            raise MessageRejected("malformed", "est: update_dofs must be integers ≥ 1")
+        if np.any((dofs < 1) | (dofs > MAX_DOF) | (dofs != np.round(dofs))):
+            raise MessageRejected("malformed", f"est: update_dofs must be integers in 1…{MAX_DOF}")
     elif kind == "mail":
         sizes = body["sizes"]
         k = body["means"].shape[0]
@@ -442,6 +454,10 @@ def _check_consistency(kind: str, body: dict[str, Any]) -> None:
         raise MessageRejected("shape", "sense: position must hold 0 or 3 numbers")
     elif kind == "sense" and body["fix"].size not in ((2, 3) if body["fix_subject"] else (0,)):
         raise MessageRejected("shape", "sense: fix must hold x, y (and a heading) of its subject")
+    elif kind == "sense" and np.any(
+        np.abs(np.concatenate([body["position"], body["fix"]])) > MAX_STATE
+    ):
+        raise MessageRejected("out_of_range", f"sense: a position or fix beyond ±{MAX_STATE:g}")
     covs = body.get("cov")
     if kind == "est":
         covs = body["covs"]
@@ -454,6 +470,31 @@ def _check_consistency(kind: str, body: dict[str, Any]) -> None:
         scale = max(1.0, float(np.abs(covs).max(initial=0.0)))
         if asym > 1e-9 * scale or np.any(np.diagonal(covs, axis1=-2, axis2=-1) < 0):
             raise MessageRejected("bad_covariance", f"{kind}: covariance not symmetric PSD-like")
+
+
+def _check_velocities(u: np.ndarray, kind: str) -> None:
+    """Body velocities ``(n, 4)`` within the limits a scenario may ask for (m/s, rad/s)."""
+    if np.any(np.abs(u[:, :3]) > MAX_SPEED_M_S) or np.any(np.abs(u[:, 3]) > MAX_YAW_RATE_RAD_S):
+        raise MessageRejected(
+            "out_of_range",
+            f"{kind}: a velocity beyond ±{MAX_SPEED_M_S:g} m/s or a turn rate beyond "
+            f"±{MAX_YAW_RATE_RAD_S:g} rad/s",
+        )
+
+
+def check_state_bounds(kind: str, means: np.ndarray, covs: np.ndarray) -> None:
+    """Raise :class:`MessageRejected` unless every entry of ``means`` lies within
+    ±:data:`MAX_STATE` (``out_of_range``) and every covariance of ``covs`` (…, d, d) is positive
+    definite with eigenvalues in [:data:`MIN_VARIANCE`, :data:`MAX_VARIANCE`]
+    (``bad_covariance``): what a filter that fuses a received belief or starts from one needs."""
+    if np.any(np.abs(means) > MAX_STATE):
+        raise MessageRejected("out_of_range", f"{kind}: a state beyond ±{MAX_STATE:g}")
+    if covs.size:
+        eig = np.linalg.eigvalsh(covs)
+        if not (np.all(eig >= MIN_VARIANCE) and np.all(eig <= MAX_VARIANCE)):
+            raise MessageRejected(
+                "bad_covariance", f"{kind}: a covariance is not positive definite within the bounds"
+            )
 
 
 def est_bodies(increment: Estimates, *, frame: str) -> list[dict[str, Any]]:

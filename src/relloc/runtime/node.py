@@ -70,7 +70,7 @@ from relloc.core.recording import Measurements, Recording, empty_measurements
 from relloc.errors import ConfigError, DataError
 from relloc.estimators.relative import FRAME
 from relloc.runtime import keys
-from relloc.runtime.admission import SenderBudget, TickGuard, admit, check_not_future
+from relloc.runtime.admission import SenderBudget, TickGuard, admit, check_stamps
 from relloc.runtime.estimation import WindowDriver
 from relloc.runtime.faults import FAULTED_KINDS, FaultSettings, LinkEmulator, LinkStall
 from relloc.runtime.handoff import Handoff
@@ -339,7 +339,7 @@ class RobotNode:
             elif msg.kind == "ctl" and msg.body["action"] == "end":
                 self._ticks.check_end(msg)
             elif msg.kind in FAULTED_KINDS:
-                check_not_future(msg, self._t)
+                check_stamps(msg, self._t)
                 self._budget.take(msg.sender)
         except MessageRejected as exc:
             self._count_rejected(exc)
@@ -482,6 +482,11 @@ class RobotNode:
                 continue
             if not new:
                 self.counters["duplicates"] += 1
+                continue
+            if msg.kind == "odom" and self.estimator.refuses_odometry(msg.body["u"]):
+                self._count_rejected(
+                    MessageRejected("not_unicycle", f"odom of {msg.sender}: lateral velocity")
+                )
                 continue
             self.counters[f"delivered.{msg.kind}"] += 1
             if msg.kind == "odom":
@@ -797,6 +802,9 @@ class RobotNode:
                 out["rejected.oversized"] = out.get("rejected.oversized", 0) + self._inbox.oversized
                 out["rejected"] = out.get("rejected", 0) + self._inbox.oversized
         out["late_samples"] = sum(m.odometry.late for m in self.teammates.values())
+        out["duplicate_samples"] = sum(
+            m.odometry.duplicate_samples for m in self.teammates.values()
+        )
         out["late_rows"] = sum(m.late_rows for m in self.teammates.values())
         out["listens"] = int(self.listens)
         if self.paced is not None:

@@ -77,7 +77,8 @@ def _sum_counters(incarnations: Sequence[Mapping[str, int]]) -> dict[str, int]:
 
 def robot_messages(collected: Collected, roster: Sequence[str]) -> dict[str, dict[str, Any]]:
     """Per robot: messages sent / received (on the wire, delivered after faults) / rejected,
-    those of a teammate not present (held until it appeared, or never delivered), windows
+    those of a teammate not present (held until it appeared, or never delivered), odometry
+    samples late or at a time stamp already filed (a second sample of one time is dropped), windows
     filtered overdue, acks held for a window that would have been overdue at the next tick
     (and of those, held until the wall-time bound ran out: :meth:`RobotNode._send_due_acks`
     in :mod:`relloc.runtime.node`), estimates, track events, latency percentiles (of its last
@@ -99,6 +100,7 @@ def robot_messages(collected: Collected, roster: Sequence[str]) -> dict[str, dic
             "rejected_by_reason": rejected,
             "duplicates_dropped": c.get("duplicates", 0),
             "late_odometry_samples": c.get("late_samples", 0),
+            "duplicate_odometry_samples": c.get("duplicate_samples", 0),
             "from_absent_teammate": sum(v for k, v in c.items() if k.startswith("from_absent.")),
             "held_until_appearance": sum(
                 v for k, v in c.items() if k.startswith("held_from_absent.")

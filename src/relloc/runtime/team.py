@@ -35,6 +35,7 @@ import numpy as np
 
 from relloc.core.estimates import Estimates
 from relloc.estimators.initialisation import InitPolicy
+from relloc.estimators.relative import FRAME
 from relloc.estimators.track_manager import TrackManagerSettings
 from relloc.pipeline.export import ExportRequest, export_estimates
 from relloc.pipeline.output import fmt, markdown_table, prepare_out_dir, write_report
@@ -71,7 +72,7 @@ def run_team(settings: TeamSettings, *, export: ExportRequest | None = None) -> 
     recording = team.recording
     t0, t1 = recording.span
     tracker = TrackManagerSettings(filter=settings.filter_kind, init=InitPolicy())
-    launcher = TeamLauncher(settings, recording.robots, t1 - t0)
+    launcher = TeamLauncher(settings, recording.robots, t1 - t0, est_frame=FRAME)
     # the in-process reference runs in a process of its own while the team runs
     with ProcessPoolExecutor(max_workers=1, mp_context=launcher.context) as pool:
         reference_run = pool.submit(in_process_estimates, settings.scenario, settings.seed, tracker)
