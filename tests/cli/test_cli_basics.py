@@ -34,11 +34,15 @@ def test_unknown_experiment_is_config_error(tmp_path, capsys):
         (["--calibration-window", "first-half"], "--calibration-window: sharma2013 does not"),
         (["--bag", "b"], "--bag: sharma2013 does not read it; read by tiers-uwb"),
         (["--sensing", "all"], "--sensing: sharma2013 does not read it; read by desilva2015"),
+        (["--runs", "7"], "--runs: mrclam-cl does not read it"),  # one replay of one run
+        (["--runs", "7"], "--runs: tiers-uwb does not read it"),
+        (["--runs", "0"], "--runs must be in 1…1000000, got 0"),
     ],
 )
 def test_a_flag_the_experiment_does_not_read_is_refused(tmp_path, capsys, flags, message):
     out = tmp_path / "out"
-    assert main(["reproduce", "sharma2013", "--out", str(out), *flags]) == 2
+    name = message.split()[1] if "does not read" in message else "sharma2013"
+    assert main(["reproduce", name, "--out", str(out), *flags]) == 2
     assert message in capsys.readouterr().err
     assert not out.exists()  # refused before anything ran
 

@@ -120,7 +120,10 @@ def test_bad_toml_exits_2_naming_the_field(tmp_path, capsys):
 def test_bad_options_exit_2_naming_the_option(tmp_path, capsys):
     out = str(tmp_path / "o")
     for argv, message in (
-        (["--runs", "0"], "--runs: must be an integer ≥ 1"),
+        (["--runs", "0"], "--runs: must be an integer in 1…1000000"),
+        (["--runs", "99999999999"], "--runs: must be an integer in 1…1000000"),  # hung seeding
+        (["--executor", "dask://"], "--executor: 'dask://' is not dask://HOST:PORT"),
+        (["--executor", "dask://localhost:abc"], "is not dask://HOST:PORT (a port 1…65535)"),
         (["--duration", "-1"], "--duration: duration_s: must be in (0, ∞)"),
         (["--yaw-bank", "1"], "--yaw-bank: 0 (off) or"),
     ):

@@ -156,6 +156,29 @@ def test_mrclam_cl_on_a_cut_of_run6_states_its_windows(mrclam_run6_cut, tmp_path
     assert f"the window ends {held['end_s']:.0f} s after it" in report
 
 
+def test_mrclam_cl_scores_up_to_the_last_ground_truth_and_needs_two_landmarks(
+    mrclam_run6_cut, tmp_path, capsys
+):
+    """One measurement row stamped 500 s after the rest once put the held-out half where no
+    robot has ground truth (a traceback); a landmark table of one landmark, an IndexError."""
+    folder = mrclam_run6_cut(tmp_path / "cut", robots=(2, 4, 5), keep_s=120.0)
+    path = folder / "Robot2_Measurement.dat"
+    rows = path.read_text().splitlines()
+    stray = rows[-1].split()
+    stray[0] = f"{float(stray[0]) + 500.0:.3f}"
+    path.write_text("\n".join([*rows, "\t".join(stray)]) + "\n")
+    out = tmp_path / "out"
+    args = ["reproduce", "mrclam-cl", "--dataset", str(folder), "--executor", "serial", "--quiet"]
+    assert main([*args, "--out", str(out)]) == 0
+    held = json.loads((out / "summary.json").read_text())["scored_on"]
+    assert 60.0 < held["end_s"] <= 120.5
+    landmarks = folder / "Landmark_Groundtruth.dat"
+    lines = landmarks.read_text().splitlines()
+    landmarks.write_text("\n".join(lines[:5]) + "\n")  # the header and one landmark
+    assert main([*args, "--out", str(tmp_path / "one")]) == 3
+    assert "on two landmarks; Landmark_Groundtruth.dat has 1" in capsys.readouterr().err
+
+
 def test_mrclam_cl_figures_do_not_depend_on_the_world_frame_clock_or_barcodes(
     mrclam_run6_cut, mrclam_run6_moved, tmp_path
 ):

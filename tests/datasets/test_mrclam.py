@@ -216,7 +216,10 @@ def test_unusable_folders_and_options(tmp_path: Path) -> None:
         load_mrclam(tmp_path / "empty")
     folder = _small_dataset(tmp_path / "nobarcode")
     _write(folder, "Barcodes.dat", ["1 5", "3 63"])
-    with pytest.raises(DataError, match="robot 2 has no barcode"):
+    with pytest.raises(DataError, match=r"robot 2 has no barcode$"):
+        load_mrclam(folder)
+    _write(folder, "Barcodes.dat", ["1 5", "2 1x4", "3 63"])  # its row unreadable: said where
+    with pytest.raises(DataError, match=r"robot 2 has no barcode; rows skipped: line 6 \("):
         load_mrclam(folder)
     with pytest.raises(ConfigError, match="gap_threshold"):
         MrclamOptions(gap_threshold=0.0)
@@ -313,6 +316,18 @@ def test_a_landmark_listed_twice_is_an_error(tmp_path: Path) -> None:
             DataError, match=r"Landmark_Groundtruth.dat:6: landmark subject 3 listed twice \(first"
         ):
             load_mrclam(folder, MrclamOptions(on_bad_row=mode))  # type: ignore[arg-type]
+
+
+def test_a_clock_jump_of_more_than_a_day_is_an_error_naming_the_file(tmp_path: Path) -> None:
+    """One ground-truth row 10⁸ s late once made mrclam-cl and wanasinghe2014 try to sample the
+    whole span on a grid (18–37 GiB)."""
+    folder = _small_dataset(tmp_path / "jump")
+    path = folder / "Robot2_Groundtruth.dat"
+    _replace_line(path, 99, f"{T0 + 1e8:.3f} 9.9 2.0 0.1")
+    with pytest.raises(DataError, match=r"Robot2_Groundtruth.dat: a row stamped .* 1e\+08 s after"):
+        load_mrclam(folder)
+    _replace_line(path, 99, f"{T0 + 86_000:.3f} 9.9 2.0 0.1")  # under a day: a long run
+    assert load_mrclam(folder).duration == pytest.approx(86_000)
 
 
 def test_a_barcode_listed_twice_names_both_lines(tmp_path: Path) -> None:

@@ -110,6 +110,13 @@ def test_an_existing_destination_is_refused(tmp_path: Path) -> None:
         cut_mrclam(src, tmp_path / "part")
 
 
+def test_a_destination_under_a_file_is_a_data_error_naming_it(tmp_path: Path) -> None:
+    src = _folder(tmp_path / "run")
+    (tmp_path / "afile").write_text("")
+    with pytest.raises(DataError, match="afile/part: cannot create the folder"):
+        cut_mrclam(src, tmp_path / "afile" / "part")
+
+
 def test_a_part_that_is_not_a_usable_run_names_the_file_and_leaves_nothing(tmp_path: Path) -> None:
     src = _folder(tmp_path / "run")
     # [9.6, 20) s holds no ground-truth row (they end at 9.5 s): no robot can be scored

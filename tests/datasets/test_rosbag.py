@@ -138,6 +138,22 @@ def test_a_written_bag_reads_back_with_every_bad_message_counted(tmp_path, stora
     assert bag.time_origin_ns == T0
 
 
+def test_messages_the_metadata_lists_but_the_storage_lacks_are_counted(tmp_path):
+    """Messages whose stored topic id no topic of the bag has were lost without a count."""
+    import sqlite3
+
+    path = write_bag(tmp_path / "bag", _messages())
+    db = next(path.glob("*.db3"))
+    with sqlite3.connect(db) as con:
+        (odom_id,) = con.execute("SELECT id FROM topics WHERE name = '/alpha/odom'").fetchone()
+        ids = [r[0] for r in con.execute(f"SELECT id FROM messages WHERE topic_id = {odom_id}")]
+        con.execute(f"UPDATE messages SET topic_id = 9999 WHERE id IN ({ids[1]}, {ids[2]})")
+    bag = load_bag(path, parse_mapping(MAPPING, "sample.toml"))
+    skips = {f.file.split(":")[-1]: dict(f.skipped) for f in bag.recording.skips.files}
+    assert skips["/alpha/odom"]["not in storage"] == 2
+    assert bag.recording.odometry[0].t.size == 4  # of the 6 read before
+
+
 def test_inspect_lists_every_topic(tmp_path):
     path = write_bag(tmp_path / "bag", _messages())
     infos = {i.topic: i for i in inspect_bag(path)}
@@ -168,6 +184,9 @@ def test_a_missing_or_wrong_topic_names_the_key(tmp_path):
         load_bag(path, parse_mapping(missing, "m.toml"))
     with pytest.raises(DataError, match="no such bag"):
         load_bag(tmp_path / "absent", parse_mapping(MAPPING, "m.toml"))
+    # robots that name no topic: the reader once took "no topics" for "every topic"
+    with pytest.raises(DataError, match="no usable message on the mapped topics"):
+        load_bag(path, parse_mapping('[[robots]]\nname = "a"\n', "m.toml"))
     (tmp_path / "junk.mcap").write_bytes(b"not a bag")
     with pytest.raises(DataError, match=r"junk\.mcap"):
         load_bag(tmp_path / "junk.mcap", parse_mapping(MAPPING, "m.toml"))
@@ -184,6 +203,10 @@ def test_a_missing_or_wrong_topic_names_the_key(tmp_path):
         (('name = "n_4"', 'name = "n_3"'), r"uwb\.nodes\[3\]\.name: 'n_3' is named twice"),
         (("position = [0.0, 5.0, 0.0]", "position = [0.0, 5.0]"), r"uwb\.nodes\[2\]\.position"),
         (('name = "sample"', 'name = "sample"\nstamp = "gps"'), r"stamp: must be one of"),
+        (
+            ('"/mocap/beta"', '"/mocap/alpha"'),
+            r"robots\[1\]\.truth: '/mocap/alpha' is robots\[0\]'s",
+        ),
     ],
 )
 def test_mapping_errors_name_the_key(edit, key):
@@ -341,3 +364,29 @@ def test_fuzzed_messages_convert_or_are_bad(v, drop):
             continue
         flat = np.hstack([np.ravel(x) for x in (out if isinstance(out, tuple) else (out,))])
         assert np.isfinite(flat.astype(float)).all()
+        assert np.all(np.abs(flat.astype(float)) <= 1e5)  # nothing a filter would overflow on
+
+
+@pytest.mark.parametrize(
+    ("convert", "msg"),
+    [
+        (odometry_sample, "odometry"),
+        (truth_sample, "truth"),
+        (range_sample, "range"),
+    ],
+)
+def test_finite_but_absurd_values_are_out_of_bounds(convert, msg):
+    """1e300 m/s of odometry once ended, many steps later, in "covariance contains NaN or inf"
+    naming no topic; a 3e38 m range in an outlier figure of 1.7e38 m."""
+    p = _ns(position=_ns(x=1.0, y=2e5, z=0.0), orientation=_ns(x=0.0, y=0.0, z=0.0, w=1.0))
+    message = {
+        "odometry": _ns(
+            pose=_ns(pose=_ns(position=_ns(x=0.0, y=0.0, z=0.0), orientation=p.orientation)),
+            twist=_ns(twist=_ns(linear=_ns(x=1e300, y=0.0, z=0.0), angular=_ns(z=0.0))),
+        ),
+        "truth": _ns(pose=p),
+        "range": _ns(range=3e38, min_range=0.0, max_range=0.0),
+    }[msg]
+    with pytest.raises(BadMessage) as bad:
+        convert(message)
+    assert bad.value.reason == "out of bounds"

@@ -130,6 +130,8 @@ def test_a_message_of_an_older_schema_is_refused_naming_what_changed_since():
         (_raw(mean=[0.0, math.nan, 0.0, 0.0]), "non_finite"),
         (_raw(t=math.inf), "non_finite"),
         (_raw(mean="1,2,3,4"), "malformed"),
+        (_raw(mean=["1e5", 0.0, 0.0, 0.0]), "malformed"),  # a string is not a number
+        (_raw(mean=[True, False, True, False]), "malformed"),
         (_raw(seq=-1), "malformed"),
         (_raw(cov=[[1, 5, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]), "bad_covariance"),
         (_raw(cov=(-np.eye(4)).tolist()), "bad_covariance"),

@@ -288,6 +288,13 @@ def mapping_from_dict(data: Mapping[str, Any], source: str = "") -> BagMapping:
     for i, name in enumerate(names):
         if name in names[:i]:
             raise ConfigError(f"robots[{i}].name: {name!r} is named twice")
+    for stream in ("odometry", "truth"):  # one robot's messages would drive two
+        topics = [getattr(r, stream) for r in robots]
+        for i, topic in enumerate(topics):
+            if topic is not None and topic in topics[:i]:
+                raise ConfigError(
+                    f"robots[{i}].{stream}: {topic!r} is robots[{topics.index(topic)}]'s too"
+                )
     stamp = _string(t.get("stamp", "header"), "stamp")
     if stamp not in STAMP_SOURCES:
         raise ConfigError(f"stamp: must be one of {STAMP_SOURCES}, got {stamp!r:.60}")

@@ -61,7 +61,9 @@ What the loader guarantees
   2 in each ground-truth file); a subject or barcode listed twice in ``Barcodes.dat``; a robot
   without a barcode; a landmark listed twice in ``Landmark_Groundtruth.dat`` (a surveyed table
   giving one landmark two positions contradicts itself, and no rule can say which one is true,
-  so the loader refuses the file rather than pick one).
+  so the loader refuses the file rather than pick one); a row stamped more than a day
+  (:data:`MAX_RUN_S`) after the run's first stamp (a clock jump, which would make every use
+  that samples the run on a grid allocate without bound).
 - **Ground truth at query times** (:meth:`GroundTruth.at`): x, y linearly interpolated, θ on the
   circle (unwrap, interpolate, wrap); each query is flagged when it lies outside the recorded span
   or inside a gap between consecutive samples longer than ``gap_threshold`` (the robot moved
@@ -85,6 +87,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from relloc.core import recording as rec
 from relloc.core.angles import circular_interp
+from relloc.core.limits import MAX_ABS_POSITION_M, MAX_SPEED_M_S, MAX_YAW_RATE_RAD_S
 from relloc.datasets.paths import DATA_HINT
 from relloc.errors import ConfigError, DataError
 
@@ -102,9 +105,8 @@ MAX_UNIX_TIME_S = 2.0**32
 MAX_ID = 2**31 - 1
 MAX_RANGE_M = 100.0
 MAX_ABS_ANGLE_RAD = 2.0 * math.pi
-MAX_ABS_POSITION_M = 1e5
-MAX_ABS_SPEED_M_S = 100.0
-MAX_ABS_TURN_RATE_RAD_S = 100.0
+MAX_RUN_S = 86_400.0
+"""Longest span of one run's stamps (a day; MRCLAM's runs last 15–70 minutes)."""
 
 
 # ----------------------------------------------------------------------------------------------
@@ -326,8 +328,8 @@ _LANDMARK_COLUMNS = (
 _GROUNDTRUTH_COLUMNS = (_TIME, _X, _Y, _Column("theta", -MAX_ABS_ANGLE_RAD, MAX_ABS_ANGLE_RAD))
 _ODOMETRY_COLUMNS = (
     _TIME,
-    _Column("v", -MAX_ABS_SPEED_M_S, MAX_ABS_SPEED_M_S),
-    _Column("omega", -MAX_ABS_TURN_RATE_RAD_S, MAX_ABS_TURN_RATE_RAD_S),
+    _Column("v", -MAX_SPEED_M_S, MAX_SPEED_M_S),
+    _Column("omega", -MAX_YAW_RATE_RAD_S, MAX_YAW_RATE_RAD_S),
 )
 _MEASUREMENT_COLUMNS = (
     _TIME,
@@ -697,6 +699,12 @@ class MrclamDataset:
         truth = [self.robots[s].groundtruth.t for s in self.robot_ids]
         return max(float(t[0]) for t in truth), min(float(t[-1]) for t in truth)
 
+    @property
+    def truth_end(self) -> float:
+        """The latest ground-truth stamp of any robot (s since ``t0_unix``): where a replay
+        can still be scored (rows of other files after it have no truth to score against)."""
+        return max(float(r.groundtruth.t[-1]) for r in self.robots.values())
+
     def robot(self, subject: int) -> RobotData:
         """The data of robot ``subject`` (DataError naming the loaded ones if unknown)."""
         if subject not in self.robots:
@@ -781,7 +789,12 @@ def load_mrclam(folder: Path | str, options: MrclamOptions | None = None) -> Mrc
     subject_to_barcode = {s: b for b, s in barcode_to_subject.items()}
     for n in robot_ids:
         if n not in subject_to_barcode:
-            raise DataError(f"{folder / BARCODES_FILE}: robot {n} has no barcode")
+            skipped = report.files[BARCODES_FILE].examples
+            lines = sorted(
+                f"line {e.line} ({reason})" for reason, ex in skipped.items() for e in ex
+            )
+            also = f"; rows skipped: {', '.join(lines)}" if lines else ""
+            raise DataError(f"{folder / BARCODES_FILE}: robot {n} has no barcode{also}")
 
     on_unix_clock = {
         n: RobotData(
@@ -797,6 +810,7 @@ def load_mrclam(folder: Path | str, options: MrclamOptions | None = None) -> Mrc
     }
     # The common clock: the earliest time stamp of any row kept (every ground truth has one).
     t0 = min(_earliest_time(robot) for robot in on_unix_clock.values())
+    _check_run_length(folder, on_unix_clock, t0)
     decimals = _clock_decimals(on_unix_clock.values())
     return MrclamDataset(
         path=folder,
@@ -806,6 +820,20 @@ def load_mrclam(folder: Path | str, options: MrclamOptions | None = None) -> Mrc
         landmarks=landmarks,
         report=report,
     )
+
+
+def _check_run_length(folder: Path, robots: Mapping[int, RobotData], t0: float) -> None:
+    """DataError naming the file of a row stamped more than :data:`MAX_RUN_S` after the run's
+    first stamp ``t0``: a clock jump (every later use samples the whole span on a grid)."""
+    for n, robot in robots.items():
+        for kind, t in zip(ROBOT_KINDS, _tables(robot), strict=True):
+            if len(t) and float(t[-1]) - t0 > MAX_RUN_S:
+                late = float(t[np.argmax(t - t0 > MAX_RUN_S)])
+                raise DataError(
+                    f"{folder / f'Robot{n}_{kind}.dat'}: a row stamped {late:.3f} lies "
+                    f"{late - t0:.6g} s after the run's first stamp {t0:.3f}; a run lasts at "
+                    f"most {MAX_RUN_S:g} s (a clock jump?)"
+                )
 
 
 def _earliest_time(robot: RobotData) -> float:

@@ -116,7 +116,10 @@ def staged_write(destination: Path, write: Callable[[Path], None], failure: str)
     nothing behind."""
     staging = destination.with_name(f".{destination.name}.partial")
     shutil.rmtree(staging, ignore_errors=True)
-    staging.mkdir(parents=True)
+    try:
+        staging.mkdir(parents=True)
+    except OSError as exc:
+        raise DataError(f"{destination}: cannot create the folder ({exc.strerror})") from None
     written = False
     try:
         write(staging)

@@ -59,11 +59,11 @@ from dataclasses import dataclass
 from decimal import Context, Decimal
 from pathlib import Path
 
+from relloc.core.limits import MAX_ABS_POSITION_M
 from relloc.datasets.mrclam import (
     BARCODES_FILE,
     LANDMARKS_FILE,
     MAX_ABS_ANGLE_RAD,
-    MAX_ABS_POSITION_M,
     MAX_CLOCK_DECIMALS,
     MAX_ID,
     MAX_UNIX_TIME_S,

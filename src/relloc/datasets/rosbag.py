@@ -28,10 +28,14 @@ Bad messages
 ------------
 Per topic, in receive order, a message is skipped and counted by reason (its 1-based index in
 the topic is the ``line`` of the :class:`~relloc.core.recording.SkippedRow`): it cannot be
-deserialised; a value is not finite; a quaternion of zero norm; a range ≤ 0 or outside the
-message's own ``[min_range, max_range]`` (when ``max_range > 0``); a time not after the
-previous kept message of the topic (unsorted or duplicate stamps). A link published in both
-directions is read from one direction when ``fold_directions`` is set — the one with more
+deserialised; a value is not finite, or finite but beyond what any robot reports (a speed,
+turn rate or position beyond :mod:`relloc.core.limits`, a range beyond :data:`MAX_RANGE_M`:
+``out of bounds``, which would overflow a filter); a quaternion of zero norm; a range ≤ 0 or
+outside the message's own ``[min_range, max_range]`` (when ``max_range > 0``); a time not
+after the previous kept message of the topic (unsorted or duplicate stamps); listed by the
+bag's metadata but not found in its storage (``not in storage``: a topic whose stored type or
+id disagrees with the metadata). A link published in both directions is read from one
+direction when ``fold_directions`` is set — the one with more
 messages, the first topic in sorted order on a tie — and the other direction's messages are
 counted as ``folded: other direction``. Topics the mapping does not name are listed in
 :attr:`BagRecording.unknown_topics`; a UWB topic naming a radio the mapping lacks
@@ -52,6 +56,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.core.limits import MAX_ABS_POSITION_M, MAX_SPEED_M_S, MAX_YAW_RATE_RAD_S
 from relloc.core.recording import (
     NO_TARGET,
     FileSkips,
@@ -75,6 +80,8 @@ POSE_TYPE = "geometry_msgs/msg/PoseStamped"
 RANGE_TYPE = "sensor_msgs/msg/Range"
 #: How many skipped messages per topic are kept as examples.
 MAX_SKIP_EXAMPLES = 5
+MAX_RANGE_M = 1e4
+"""Largest range (m): ten times the reach of any UWB radio."""
 
 
 class BadMessage(Exception):
@@ -102,13 +109,18 @@ def stamp_ns(msg: Any) -> int:
     return sec * 1_000_000_000 + nsec
 
 
-def _finite(values: tuple[float, ...], what: str) -> tuple[float, ...]:
+def _finite(
+    values: tuple[float, ...], what: str, limits: tuple[float, ...] | None = None
+) -> tuple[float, ...]:
+    """The values as floats; each finite and, with ``limits``, within ± its limit."""
     try:
         out = tuple(float(v) for v in values)
     except (TypeError, ValueError) as exc:
         raise BadMessage("not a number", f"{what}: {exc}") from None
     if not all(math.isfinite(v) for v in out):
         raise BadMessage("not finite", f"{what} = {out}")
+    if limits is not None and any(abs(v) > lim for v, lim in zip(out, limits, strict=True)):
+        raise BadMessage("out of bounds", f"{what} = {out} beyond ±{limits}")
     return out
 
 
@@ -125,7 +137,7 @@ def yaw_of(qx: float, qy: float, qz: float, qw: float) -> float:
 def _pose4(pose: Any) -> tuple[float, float, float, float]:
     try:
         p, q = pose.position, pose.orientation
-        xyz = _finite((p.x, p.y, p.z), "position")
+        xyz = _finite((p.x, p.y, p.z), "position", (MAX_ABS_POSITION_M,) * 3)
         yaw = yaw_of(q.x, q.y, q.z, q.w)
     except AttributeError as exc:
         raise BadMessage("malformed pose", str(exc)) from None
@@ -136,7 +148,9 @@ def odometry_sample(msg: Any) -> tuple[tuple[float, ...], tuple[float, float, fl
     """``(v_x, v_y, v_z, ω_z)`` of a ``nav_msgs/Odometry`` and its pose ``(x, y, z, ψ)``."""
     try:
         lin, ang = msg.twist.twist.linear, msg.twist.twist.angular
-        velocity = _finite((lin.x, lin.y, lin.z, ang.z), "twist")
+        velocity = _finite(
+            (lin.x, lin.y, lin.z, ang.z), "twist", (*(MAX_SPEED_M_S,) * 3, MAX_YAW_RATE_RAD_S)
+        )
     except AttributeError as exc:
         raise BadMessage("malformed odometry", str(exc)) from None
     return velocity, _pose4(msg.pose.pose)
@@ -159,6 +173,8 @@ def range_sample(msg: Any) -> float:
         raise BadMessage("malformed range", str(exc)) from None
     if not r > 0:
         raise BadMessage("range ≤ 0", f"range = {r}")
+    if r > MAX_RANGE_M:
+        raise BadMessage("out of bounds", f"range {r} beyond {MAX_RANGE_M:g} m")
     if hi > 0 and not lo <= r <= hi:
         raise BadMessage("range out of bounds", f"range {r} outside [{lo}, {hi}]")
     return r
@@ -235,6 +251,8 @@ class _Bag:
     def messages(self, topics: list[str]) -> Iterator[tuple[str, _Message | BadMessage]]:
         """Every message of ``topics`` in receive order, deserialised (or the failure)."""
         cons = [c for c in self.reader.connections if c.topic in set(topics)]
+        if not cons:  # the reader takes no connections as "every topic"
+            return
         index: Counter[str] = Counter()
         for con, t, raw in self.reader.messages(connections=cons):
             index[con.topic] += 1
@@ -247,6 +265,17 @@ class _Bag:
                 )
                 continue
             yield con.topic, _Message(index[con.topic], int(t), msg)
+        listed: Counter[str] = Counter()
+        for con in cons:
+            listed[con.topic] += con.msgcount
+        for topic in sorted(listed):  # listed by the bag's metadata, not in its storage
+            for k in range(index[topic] + 1, listed[topic] + 1):
+                yield (
+                    topic,
+                    BadMessage(
+                        "not in storage", f"message {k} of the {listed[topic]} the metadata lists"
+                    ),
+                )
 
 
 def inspect_bag(path: Path | str) -> tuple[TopicInfo, ...]:

@@ -21,9 +21,11 @@ Modes × anchors (``cases`` keys ``<mode>/<anchors>``):
 Error models, fitted by :mod:`relloc.calibration` on one side of the same run and checked on
 the other (``heldout`` entries). ``--calibration-window``
 (:func:`relloc.calibration.window.split_span`) picks the sides of the span from the first
-common ground-truth time to the end: ``first-half`` (the default: fit on the first half, score
-the second), ``second-half`` (fit on the second half, score the first), ``:T`` (fit up to
-``T`` s, score after) or ``T:`` (fit from ``T`` s, score before); summary.json states both,
+common ground-truth time to the last ground-truth stamp (``MrclamDataset.truth_end``: a stray
+row of another file after it has no truth to be scored against): ``first-half`` (the default:
+fit on the first half, score the second), ``second-half`` (fit on the second half, score
+the first), ``:T`` (fit up to ``T`` s, score after) or ``T:`` (fit from ``T`` s, score
+before); summary.json states both,
 ``fit.calibration_window`` and ``scored_on``.
 
 - odometry (:func:`relloc.calibration.odometry.fit_odometry_model`): one latency ``τ`` and one
@@ -336,7 +338,7 @@ def build_recording(ds: Any, fit: FittedModels, rng: np.random.Generator) -> Pre
 
     raw = to_recording(ds)
     t_start = ds.truth_span[0]
-    t_end = float(ds.duration)
+    t_end = ds.truth_end
     out_t = np.arange(t_start, t_end, OUTPUT_DT_S)
     recording = replace(
         raw,
@@ -370,6 +372,11 @@ def gps_fixes(ds: Any, t_start: float, t_end: float, rng: np.random.Generator) -
 def _two_landmarks(m: Measurements, ds: Any) -> tuple[int, int]:
     """The most-detected landmark and the most-detected one at least 1 m from it (indices)."""
     assert m.landmark is not None
+    if len(ds.landmarks.subject) < 2:
+        raise DataError(
+            f"{ds.path}: mrclam-cl anchors its two_landmarks cases on two landmarks; "
+            f"Landmark_Groundtruth.dat has {len(ds.landmarks.subject)}"
+        )
     counts = np.bincount(m.landmark[m.landmark >= 0], minlength=len(ds.landmarks.subject))
     order = np.argsort(-counts, kind="stable")
     first = int(order[0])
@@ -525,7 +532,7 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
     ds = load_mrclam(folder)
     t0 = ds.truth_span[0]
     spec = args.calibration_window if args.calibration_window is not None else SPLIT_CHOICES[0]
-    window, scored = split_span(spec, t0, float(ds.duration), str(folder))
+    window, scored = split_span(spec, t0, ds.truth_end, str(folder))
     fit = fit_models(ds, window)
     prepared = build_recording(ds, fit, np.random.default_rng(args.seed))
     heldout = CalibrationWindow(

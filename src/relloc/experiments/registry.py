@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from relloc.errors import ConfigError
+from relloc.pipeline.montecarlo import MAX_RUNS
 
 if TYPE_CHECKING:
     from relloc.pipeline.export import ExportRequest
@@ -71,8 +72,8 @@ class ReproduceArgs:
     sensing: str | None = None
 
     def __post_init__(self) -> None:
-        if self.runs is not None and self.runs < 1:
-            raise ConfigError(f"--runs must be ≥ 1, got {self.runs}")
+        if self.runs is not None and not 1 <= self.runs <= MAX_RUNS:
+            raise ConfigError(f"--runs must be in 1…{MAX_RUNS}, got {self.runs}")
         if self.seed < 0:
             raise ConfigError(f"--seed must be ≥ 0, got {self.seed}")
         if self.pairs is not None:
@@ -87,6 +88,15 @@ class ReproduceArgs:
 
 #: :class:`ReproduceArgs` inputs read by only some experiments → those experiments.
 READ_BY: dict[str, tuple[str, ...]] = {
+    "runs": (
+        "wanasinghe2014",
+        "wanasinghe-observability",
+        "sharma-observability",
+        "sharma2013",
+        "desilva2015",
+        "mrclam-association",
+        "guler2023",
+    ),
     "dataset": ("wanasinghe2014", "wanasinghe2014-pairs", "mrclam-cl", "mrclam-association"),
     "bag": ("tiers-uwb",),
     "map": ("tiers-uwb",),

@@ -25,7 +25,7 @@ from relloc.errors import ConfigError
 from relloc.estimators.track_manager import TrackManagerSettings
 from relloc.estimators.yaw_bank import YawBankSettings
 from relloc.pipeline.export import ExportRequest, export_estimates
-from relloc.pipeline.montecarlo import run_monte_carlo, spawn_seeds
+from relloc.pipeline.montecarlo import MAX_RUNS, run_monte_carlo, spawn_seeds
 from relloc.pipeline.team_report import (
     RECORD_RATE_HZ,
     SETTLE_S,
@@ -70,8 +70,12 @@ class TeamRunSettings:
     quiet: bool = False
 
     def __post_init__(self) -> None:
-        if isinstance(self.runs, bool) or not isinstance(self.runs, int) or self.runs < 1:
-            raise ConfigError(f"--runs: must be an integer ≥ 1, got {self.runs!r}")
+        if (
+            isinstance(self.runs, bool)
+            or not isinstance(self.runs, int)
+            or not 1 <= self.runs <= MAX_RUNS
+        ):
+            raise ConfigError(f"--runs: must be an integer in 1…{MAX_RUNS}, got {self.runs!r}")
         if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
             raise ConfigError(f"--seed: must be an integer ≥ 0, got {self.seed!r}")
         if not (np.isfinite(self.settle_s) and self.settle_s >= 0):

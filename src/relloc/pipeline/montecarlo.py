@@ -57,8 +57,11 @@ def executor_from_spec(
         yield SerialExecutor()
         return
     if isinstance(spec, str) and spec.startswith("dask://"):
+        host, _, port = spec[len("dask://") :].rpartition(":")
+        if not host or not port.isdigit() or not 0 < int(port) < 65536:
+            raise ConfigError(f"--executor: {spec!r} is not dask://HOST:PORT (a port 1…65535)")
         distributed = require("distributed", "cluster")
-        address = "tcp://" + spec[len("dask://") :]
+        address = f"tcp://{host}:{port}"
         try:
             client = distributed.Client(address, timeout=20)
         except OSError as exc:
@@ -75,10 +78,14 @@ def executor_from_spec(
     )
 
 
+MAX_RUNS = 1_000_000
+"""Most Monte-Carlo runs of one experiment (more would hang in seeding before any output)."""
+
+
 def spawn_seeds(seed: int, n_runs: int) -> list[np.random.SeedSequence]:
     """Independent child seed sequences, one per run (``SeedSequence(seed).spawn(n_runs)``)."""
-    if n_runs < 1:
-        raise ConfigError(f"runs must be ≥ 1, got {n_runs}")
+    if not 1 <= n_runs <= MAX_RUNS:
+        raise ConfigError(f"runs: must be in 1…{MAX_RUNS}, got {n_runs}")
     return np.random.SeedSequence(seed).spawn(n_runs)
 
 

@@ -73,9 +73,9 @@ import msgpack
 import numpy as np
 
 from relloc.core.estimates import BeliefSeries, Estimates, SeriesKey, UpdateSeries, concatenate
+from relloc.core.limits import MAX_SPEED_M_S, MAX_YAW_RATE_RAD_S
 from relloc.errors import DataError
 from relloc.pipeline.frames import FRAMES
-from relloc.sim.scenario import MAX_SPEED_M_S, MAX_YAW_RATE_RAD_S
 
 SCHEMA_VERSION = 4
 """The wire layout's version (what each one introduced: :data:`VERSION_CHANGES`). A message of
@@ -370,9 +370,12 @@ def _as_array(value: Any, shape: Shape, where: str) -> np.ndarray:
         got = type(value).__name__
         raise MessageRejected("malformed", f"{where}: expected an array, got {got}")
     try:
-        arr = np.asarray(value, dtype=float)
+        raw = np.asarray(value)
     except (ValueError, TypeError):
         raise MessageRejected("malformed", f"{where}: not a rectangular numeric array") from None
+    if raw.size and raw.dtype.kind not in "iuf":  # strings, bytes, booleans, huge integers
+        raise MessageRejected("malformed", f"{where}: not a rectangular numeric array")
+    arr = raw.astype(float)
     if arr.size == 0 and shape[0] == -1:
         arr = arr.reshape((0, *(max(s, 0) for s in shape[1:])))
     fits = arr.ndim == len(shape) and all(

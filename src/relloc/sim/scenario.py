@@ -33,9 +33,9 @@ stays inside these bounds (module constants):
   within ±:data:`MAX_EXTENT_M` (10⁶ m); consecutive way-points (and, on a closed path, the
   last and the first) at least :data:`MIN_SEGMENT_M` (1 mm) apart; at most
   :data:`MAX_WAYPOINTS` (1000) way-points per path;
-- motion: speeds and linear-velocity commands within ±:data:`MAX_SPEED_M_S` (100 m/s), yaw
-  rates within ±:data:`MAX_YAW_RATE_RAD_S` (100 rad/s), angles (yaw, phase) within ±2π,
-  oscillation periods at least :data:`MIN_PERIOD_S` (1 ms);
+- motion: speeds and linear-velocity commands within ±:data:`~relloc.core.limits.MAX_SPEED_M_S`
+  (100 m/s), yaw rates within ±:data:`~relloc.core.limits.MAX_YAW_RATE_RAD_S` (100 rad/s),
+  angles (yaw, phase) within ±2π, oscillation periods at least :data:`MIN_PERIOD_S` (1 ms);
 - noise: odometry σ within the same speed and yaw-rate bounds; sensor σ_r, σ_θ, σ_α at least
   :data:`MIN_SENSOR_SIGMA` (10⁻⁶ m or rad: the filters square them, and a vanishing σ makes the
   innovation covariance singular), σ_r ≤ ``MAX_EXTENT_M`` and σ_θ, σ_α ≤ π (a wider bearing
@@ -59,6 +59,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any, Literal
 
+from relloc.core.limits import MAX_SPEED_M_S, MAX_YAW_RATE_RAD_S
 from relloc.errors import ConfigError
 
 RobotKind = Literal["ground", "aerial"]
@@ -75,8 +76,6 @@ MIN_PROPAGATION_RATE_HZ = 1e-3
 MAX_EXTENT_M = 1e6
 MIN_SEGMENT_M = 1e-3
 MAX_WAYPOINTS = 1000
-MAX_SPEED_M_S = 100.0
-MAX_YAW_RATE_RAD_S = 100.0
 MAX_ANGLE_RAD = 2.0 * math.pi
 MIN_PERIOD_S = 1e-3
 MIN_SENSOR_SIGMA = 1e-6
