@@ -71,7 +71,7 @@ def fit_dataset(folder: Path) -> tuple[Any, FittedModels]:
 
     ds = load_mrclam(folder)
     t0 = ds.truth_span[0]
-    window = leading_fraction(t0, float(ds.duration), 0.5, str(folder))
+    window = leading_fraction(t0, ds.truth_end, 0.5, str(folder))
     return ds, fit_models(ds, window)
 
 
