@@ -117,6 +117,15 @@ def test_bad_toml_exits_2_naming_the_field(tmp_path, capsys):
     assert not (tmp_path / "o" / "summary.json").exists()
 
 
+def test_a_motion_leaving_the_arena_names_the_file_before_any_run(tmp_path, capsys):
+    path = tmp_path / "runaway.toml"
+    path.write_text(SMALL.replace("mean = [0.1, 0.0, 0.0, 0.0]", "mean = [5.0, 0.0, 0.0, 0.0]"))
+    code = main(["run", str(path), "--out", str(tmp_path / "o"), "--executor", "serial"])
+    assert code == 2
+    err = capsys.readouterr().err
+    assert f"{path}: robots[0].motion: robot 'leader' leaves the arena" in err
+
+
 def test_bad_options_exit_2_naming_the_option(tmp_path, capsys):
     out = str(tmp_path / "o")
     for argv, message in (

@@ -142,6 +142,7 @@ def run(args: argparse.Namespace) -> int:
     from relloc.estimators.track_manager import TrackManagerSettings
     from relloc.experiments.team_run import TeamRunSettings, run_scenario, write_run_report
     from relloc.sim.scenario import default_scenario, load_scenario
+    from relloc.sim.simulate import checked_motions
 
     if args.map is not None:
         return _run_bag(args)
@@ -151,6 +152,10 @@ def run(args: argparse.Namespace) -> int:
             scenario = dataclasses.replace(scenario, duration_s=args.duration)
         except ConfigError as exc:
             raise ConfigError(f"--duration: {exc}") from None
+    try:  # the motions are the file's: an error names it, before any run starts
+        checked_motions(scenario)
+    except ConfigError as exc:
+        raise ConfigError(f"{args.scenario or 'default.toml'}: {exc}") from None
     fov = _guess_view(scenario)
     with flag_errors():
         settings = TeamRunSettings(

@@ -57,14 +57,25 @@ def _check_motion(scenario: Scenario, index: int, t: np.ndarray, poses: np.ndarr
         )
 
 
+def checked_motions(scenario: Scenario) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Every robot's true poses and body-velocity commands on the propagation grid, each
+    checked (finite, inside the arena: ConfigError naming the robot and the time). No
+    randomness: a command line checks a scenario file with it before any run starts."""
+    t = propagation_grid(scenario)
+    motions = []
+    for i, spec in enumerate(scenario.robots):
+        poses, commands = robot_motion(spec, t)
+        _check_motion(scenario, i, t, poses)
+        motions.append((poses, commands))
+    return motions
+
+
 def simulate(scenario: Scenario, rng: np.random.Generator) -> Recording:
     """Simulate ``scenario`` with randomness from ``rng`` (see module docstring)."""
     t = propagation_grid(scenario)
     truth: list[GroundTruth] = []
     odometry: list[Odometry] = []
-    for i, spec in enumerate(scenario.robots):
-        poses, commands = robot_motion(spec, t)
-        _check_motion(scenario, i, t, poses)
+    for spec, (poses, commands) in zip(scenario.robots, checked_motions(scenario), strict=True):
         truth.append(GroundTruth(t=t, pose=poses, where=f"truth[{spec.name}]"))
         sigma = np.asarray(spec.odometry.sigma_for(spec.kind))
         noisy = commands + sigma * rng.standard_normal(commands.shape)
