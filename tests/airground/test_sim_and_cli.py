@@ -199,3 +199,19 @@ def test_cli_reproduce_smoke(tmp_path, monkeypatch):
     assert "paper [m]" in report and "estimates_two_drones.png" in report
     for png in ("traces_one_drone.png", "estimates_two_drones.png", "sweeps.png", "uwb_noise.png"):
         assert (out / png).is_file()
+
+
+def test_a_uwb_file_of_rows_out_of_order_says_what_was_skipped(tmp_path):
+    """A reversed CSV once ended in "empty window" alone, not saying that 8,706 rows were
+    skipped as out of order."""
+    from relloc.datasets.uwb import load_uwb_csv
+    from relloc.errors import DataError
+    from relloc.experiments.guler2023 import whole_recording
+
+    lines = default_uwb_csv().read_text().splitlines()
+    path = tmp_path / "reversed.csv"
+    path.write_text("\n".join([lines[0], *lines[:0:-1]]) + "\n")
+    with pytest.raises(
+        DataError, match=r"empty window .* rows of the file were skipped \(\d+ time"
+    ):
+        whole_recording(load_uwb_csv(path))

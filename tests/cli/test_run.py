@@ -3,6 +3,8 @@
 import json
 import textwrap
 
+import pytest
+
 from relloc.cli import main
 
 SMALL = """
@@ -124,6 +126,14 @@ def test_a_motion_leaving_the_arena_names_the_file_before_any_run(tmp_path, caps
     assert code == 2
     err = capsys.readouterr().err
     assert f"{path}: robots[0].motion: robot 'leader' leaves the arena" in err
+
+
+def test_an_empty_export_path_is_refused_not_the_current_folder(tmp_path, capsys):
+    for flag in ("--tum", "--mcap"):
+        with pytest.raises(SystemExit) as exit_:
+            main(["run", "--out", str(tmp_path / "o"), "--quiet", flag, ""])
+        assert exit_.value.code == 2
+        assert f"argument {flag}: an empty path" in capsys.readouterr().err
 
 
 def test_bad_options_exit_2_naming_the_option(tmp_path, capsys):

@@ -122,6 +122,13 @@ def test_relloc_run_on_a_bag(tmp_path, capsys):
     # /cali/turtle05 has unset header stamps: placed by their receive time, and said so
     assert set(summary["loader"]["stamps_from_receive"]) == {"/cali/turtle05/odom"}
     assert "turtlebot1->turtlebot3" in capsys.readouterr().out
+    # --no-plots is honoured; flags a single replay cannot use are refused, not ignored
+    plain = tmp_path / "plain"
+    assert main([*argv[:5], str(plain), "--no-plots", "--quiet"]) == 0
+    assert sorted(p.name for p in plain.iterdir()) == ["report.md", "summary.json"]
+    for flag, value in (("--runs", "3"), ("--duration", "5"), ("--executor", "serial")):
+        assert main([*argv[:5], str(tmp_path / "no"), flag, value, "--quiet"]) == 2
+        assert f"{flag}:" in capsys.readouterr().err
 
 
 def test_bag_inspect_on_a_real_bag(capsys):
@@ -140,6 +147,9 @@ def test_calibrating_on_the_scored_bag_is_refused(tmp_path):
             "tiers_relative", "--calibrate-on", bag, "--quiet"]  # fmt: skip
     assert main(argv) == 2
     assert main(["reproduce", "tiers-uwb", "--out", str(tmp_path), "--bag", bag]) == 2  # no --map
+    # the same recording named by its storage file was once taken for another bag
+    (db3,) = (TIERS / "relative_case4_test1").glob("*.db3")
+    assert main([*argv[:-2], str(db3), "--quiet"]) == 2
 
 
 def test_a_bag_of_the_layout_with_moving_robots(tmp_path):

@@ -260,6 +260,20 @@ def test_a_folder_as_mcap_file_is_a_config_error(tmp_path):  # type: ignore[no-u
         )
 
 
+def test_an_existing_file_of_another_kind_or_a_link_is_not_replaced(tmp_path, written):  # type: ignore[no-untyped-def]
+    """``--mcap victim.txt`` once overwrote the file with MCAP bytes."""
+    victim = tmp_path / "victim.txt"
+    victim.write_text("keep me")
+    with pytest.raises(ConfigError, match="exists and is not an MCAP file"):
+        ExportRequest(mcap=victim)
+    link = tmp_path / "link.mcap"
+    link.symlink_to(victim)
+    with pytest.raises(ConfigError, match="is a link"):
+        ExportRequest(mcap=link)
+    assert victim.read_text() == "keep me"
+    ExportRequest(mcap=written[0] / "out.mcap")  # an earlier export may be replaced
+
+
 def test_tum_files_hold_the_poses(written):  # type: ignore[no-untyped-def]
     _, rec, est, section = written
     expected = expected_poses(est, rec)

@@ -64,9 +64,13 @@ def _run_arguments(p: argparse.ArgumentParser) -> None:
 
 def run_world(args: argparse.Namespace) -> int:
     from relloc.experiments.guler2023_team import run_seed, start_world, team_case
+    from relloc.pipeline.output import check_writable_file
     from relloc.runtime.airground import WorldProcess, WorldSettings, save_world, write_report
     from relloc.runtime.faults import parse_robot_event
 
+    for path, flag in ((args.world_out, "--world-out"), (args.report, "--report")):
+        if path is not None:  # checked before the run, not after it
+            check_writable_file(path, flag)
     case = team_case(args.case, args.duration)
     world = start_world(case, run_seed(args.seed, args.case, args.run))
     settings = WorldSettings(

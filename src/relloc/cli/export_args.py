@@ -16,18 +16,25 @@ def add_export_arguments(p: argparse.ArgumentParser, which: str = "the estimates
     g = p.add_argument_group("ROS / evo output (extra 'ros')")
     g.add_argument(
         "--mcap",
-        type=Path,
+        type=_path,
         default=None,
         metavar="FILE",
         help=f"write {which} as a ROS 2 MCAP file (Foxglove, ros2 bag play)",
     )
     g.add_argument(
         "--tum",
-        type=Path,
+        type=_path,
         default=None,
         metavar="DIR",
         help=f"write {which} as TUM trajectory files per robot pair (evo_ape tum TRUTH EST)",
     )
+
+
+def _path(text: str) -> Path:
+    """A non-empty path (an empty one would silently mean the current folder)."""
+    if not text:
+        raise argparse.ArgumentTypeError("an empty path")
+    return Path(text)
 
 
 def export_request(args: argparse.Namespace) -> ExportRequest | None:

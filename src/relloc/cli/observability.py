@@ -11,9 +11,15 @@ when the rank is deficient, and a witness state; ``--json FILE`` writes the same
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 
 from relloc.errors import ConfigError
+
+MAX_SAMPLES = 1000
+"""Most random states for the generic rank (each is a numeric rank of the whole matrix)."""
+MAX_LANDMARKS = 10
+"""Most landmarks of the symbolic unicycle models (the Lie derivatives grow with each)."""
 
 
 def _builtin_help() -> str:
@@ -62,9 +68,12 @@ def _assignments(text: str | None, names: tuple[str, ...], what: str) -> list[fl
                 f"--{what}: expected NAME=VALUE with NAME in {list(names)}, got {item!r}"
             )
         try:
-            values[key] = float(val)
+            number = float(val)
         except ValueError as exc:
             raise ConfigError(f"--{what}: {key} must be a number, got {val!r}") from exc
+        if not math.isfinite(number):
+            raise ConfigError(f"--{what}: {key} must be finite, got {val!r}")
+        values[key] = number
     return list(values.values())
 
 
@@ -74,8 +83,12 @@ def run(args: argparse.Namespace) -> int:
     from relloc.observability.builtin import ModelOptions, resolve_models
     from relloc.pipeline.output import write_json_file
 
-    if args.order < 0 or args.samples < 1:
-        raise ConfigError("--order must be ≥ 0 and --samples ≥ 1")
+    if args.order < 0 or not 1 <= args.samples <= MAX_SAMPLES:
+        raise ConfigError(f"--order must be ≥ 0 and --samples in 1…{MAX_SAMPLES}")
+    if args.seed < 0:
+        raise ConfigError(f"--seed: must be ≥ 0, got {args.seed}")
+    if not 0 <= args.landmarks <= MAX_LANDMARKS:
+        raise ConfigError(f"--landmarks: must be in 0…{MAX_LANDMARKS}, got {args.landmarks}")
     opts = ModelOptions(
         measurements=tuple(args.measurements) if args.measurements else None,
         landmarks=args.landmarks,

@@ -65,8 +65,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     p.add_argument(
         "--runs",
         type=int,
-        default=defaults.runs,
-        help=f"Monte-Carlo runs (default {defaults.runs})",
+        default=None,
+        help=f"Monte-Carlo runs (default {defaults.runs}; a bag is one replay)",
     )
     p.add_argument(
         "--filter",
@@ -159,7 +159,7 @@ def run(args: argparse.Namespace) -> int:
     fov = _guess_view(scenario)
     with flag_errors():
         settings = TeamRunSettings(
-            runs=args.runs,
+            runs=TeamRunSettings().runs if args.runs is None else args.runs,
             seed=args.seed,
             tracker=TrackManagerSettings(
                 filter=args.filter,
@@ -249,6 +249,7 @@ def _yaw_bank(n_components: int) -> YawBankSettings | None:
 def _run_bag(args: argparse.Namespace) -> int:
     """``relloc run BAG --map MAP.toml``: one replay of a recorded bag (no Monte Carlo)."""
     from relloc.cli import console
+    from relloc.cli.extras import available
     from relloc.cli.flags import flag_errors
     from relloc.datasets.bag_mapping import load_mapping
     from relloc.errors import ConfigError
@@ -259,6 +260,11 @@ def _run_bag(args: argparse.Namespace) -> int:
 
     if args.scenario is None:
         raise ConfigError("--map: give the bag to run as SCENARIO (relloc run BAG --map MAP)")
+    for flag, value in (("--runs", args.runs), ("--duration", args.duration)):
+        if value is not None:  # a recording is replayed once, whole
+            raise ConfigError(f"{flag}: a bag is replayed once and whole; leave {flag} out")
+    if args.executor is not None:
+        raise ConfigError("--executor: a bag is one replay in this process; leave it out")
     with flag_errors():
         settings = TeamRunSettings(
             runs=1,
@@ -273,7 +279,12 @@ def _run_bag(args: argparse.Namespace) -> int:
             quiet=args.quiet,
         )
     summary, _ = run_bag(
-        args.scenario, load_mapping(args.map), settings, args.out, export=export_request(args)
+        args.scenario,
+        load_mapping(args.map),
+        settings,
+        args.out,
+        export=export_request(args),
+        plots=not args.no_plots and available("plot"),
     )
     if not args.quiet:
         print(console.team_summary_table(summary, width=console.terminal_width()))

@@ -66,8 +66,10 @@ def run_bag(
     out_dir: Path | None = None,
     *,
     export: ExportRequest | None = None,
+    plots: bool = True,
 ) -> tuple[dict[str, Any], list[RunResult]]:
-    """Read, track, score and (with ``out_dir``) write one bag (module docstring); write its
+    """Read, track, score and (with ``out_dir``) write one bag (module docstring), its figures
+    unless ``plots`` is false; write its
     estimates as MCAP/TUM files if ``export`` asks
     (:func:`relloc.pipeline.export.export_estimates`)."""
     bag = load_bag(path, mapping)
@@ -110,5 +112,7 @@ def run_bag(
             export, estimates, rec, run=f"the bag {path.name}", settle_s=settings.settle_s
         )
     if out_dir is not None:
-        write_team_report(Path(out_dir), summary, [result], title=f"relloc run — {path.name}")
+        write_team_report(
+            Path(out_dir), summary, [result], title=f"relloc run — {path.name}", plots=plots
+        )
     return summary, [result]

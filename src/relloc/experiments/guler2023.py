@@ -71,12 +71,12 @@ import numpy as np
 
 from relloc.calibration.inflation import gauss_markov_inflation
 from relloc.calibration.uwb import UwbNoiseFit, fit_uwb_noise, within_link_residuals
-from relloc.calibration.window import spanning
+from relloc.calibration.window import CalibrationWindow, spanning
 from relloc.control.formation import FormationController, FormationSettings
 from relloc.core.gaussian import Gaussian
 from relloc.datasets.paths import default_uwb_csv
-from relloc.datasets.uwb import load_uwb_csv
-from relloc.errors import ConfigError
+from relloc.datasets.uwb import UwbRecording, load_uwb_csv
+from relloc.errors import ConfigError, DataError, RellocError
 from relloc.estimators.switching_ekf import BLOCK_DIMS, BLOCKS, SwitchingEkf, SwitchingEkfSettings
 from relloc.experiments.registry import ReproduceArgs
 from relloc.geometry.triangle import side_of
@@ -464,11 +464,23 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
     return run_reproduction(args, default_plan(args.runs))
 
 
+def whole_recording(rec: UwbRecording) -> CalibrationWindow:
+    """The UWB recording's span, which its noise is fitted on; a recording whose kept rows
+    span no time says how many rows were skipped and why (its loader's counts)."""
+    try:
+        return spanning(rec.t, str(rec.path))
+    except RellocError as exc:
+        reasons = ", ".join(f"{n} {why}" for why, n in sorted(rec.skipped.skipped.items()))
+        raise DataError(
+            f"{exc}; {rec.skipped.n_skipped} rows of the file were skipped ({reasons or 'none'})"
+        ) from None
+
+
 def run_reproduction(args: ReproduceArgs, plan: Plan) -> dict[str, Any]:
     """Fit UWB noise, run every scenario, sweep and ablation; write summary, report, figures."""
     out = prepare_out_dir(args.out_dir)
     rec = load_uwb_csv(default_uwb_csv())
-    window = spanning(rec.t, str(rec.path))
+    window = whole_recording(rec)
     fit = fit_uwb_noise(rec, window)
 
     def scaled(built: dict[str, Case]) -> dict[str, Case]:

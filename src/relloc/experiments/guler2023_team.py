@@ -48,7 +48,6 @@ from typing import Any
 import numpy as np
 
 from relloc.calibration.uwb import fit_uwb_noise
-from relloc.calibration.window import spanning
 from relloc.control.formation import FormationController
 from relloc.core.gaussian import Gaussian
 from relloc.datasets.paths import default_uwb_csv
@@ -64,6 +63,7 @@ from relloc.experiments.guler2023 import (
     reduce_run,
     simulate_case,
     summarise,
+    whole_recording,
 )
 from relloc.pipeline.montecarlo import spawn_seeds
 from relloc.pipeline.output import fmt, markdown_table, prepare_out_dir, write_report, write_summary
@@ -79,6 +79,7 @@ from relloc.runtime.launcher import Collected, ProcessTeam, TeamLauncher, transp
 from relloc.runtime.outcomes import figure_agreement, outcomes_of
 from relloc.runtime.summary import agreement, assemble_estimates
 from relloc.sim.airground import AirGroundRun, AirGroundWorld, FollowerAgent, robot_names
+from relloc.sim.scenario import MAX_SIMULATED_STEPS
 
 CASES = ("one_drone", "two_drones", "formation")
 """The reproduction's paper scenarios, in the order its seed words are given out."""
@@ -110,11 +111,16 @@ def team_case(name: str, duration_s: float | None) -> Case:
     if name not in CASES:
         raise ConfigError(f"--case: {name!r} is not one of {', '.join(CASES)}")
     rec = load_uwb_csv(default_uwb_csv())
-    fit = fit_uwb_noise(rec, spanning(rec.t, str(rec.path)))
+    fit = fit_uwb_noise(rec, whole_recording(rec))
     case = build_cases(fit.model)[name]
     if duration_s is not None:
         if not duration_s >= case.scenario.dt:
             raise ConfigError(f"--duration: {duration_s} s is shorter than one tick")
+        ticks = duration_s / case.scenario.dt * len(robot_names(case.scenario))
+        if not ticks <= MAX_SIMULATED_STEPS:  # the world keeps every tick's state
+            raise ConfigError(
+                f"--duration: {duration_s:g} s is more than {MAX_SIMULATED_STEPS} robot-ticks"
+            )
         case = case.with_scenario(duration=float(duration_s))
     return case
 

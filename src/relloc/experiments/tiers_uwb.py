@@ -148,6 +148,14 @@ def _bags(args: ReproduceArgs) -> list[tuple[Path, BagMapping]]:
     return [(folder / name, load_mapping(mapping)) for name, mapping in SHIPPED]
 
 
+def _storage(bag: Path) -> set[Path]:
+    """The files holding a bag's messages: a bag folder's ``.db3``/``.mcap`` files, or the file
+    itself (the same recording named as a folder and as its file is one bag)."""
+    if bag.is_dir():
+        return {f.resolve() for f in bag.iterdir() if f.suffix in (".db3", ".mcap")}
+    return {bag.resolve()}
+
+
 def reproduce(args: ReproduceArgs) -> dict[str, Any]:
     out_dir = prepare_out_dir(args.out_dir)
     summary: dict[str, Any] = {"experiment": "tiers-uwb", "seed": None, "runs": 1, "bags": {}}
@@ -155,7 +163,7 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
     for path, mapping in bags:
         calibration_bag = None
         if args.calibrate_on is not None:
-            if args.calibrate_on.resolve() == path.resolve():
+            if _storage(args.calibrate_on) & _storage(path):
                 raise ConfigError(
                     f"--calibrate-on {args.calibrate_on}: that is the bag being scored; a fit "
                     "must be scored on data it was not fitted on (leave --calibrate-on out to "

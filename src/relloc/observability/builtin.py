@@ -63,7 +63,10 @@ def _load_entry_point(spec: str) -> list[S.SymbolicModel]:
     fn = getattr(module, attr, None)
     if not callable(fn):
         raise ConfigError(f"{spec!r}: {attr!r} is not a callable in {module_name!r}")
-    made = fn()
+    try:
+        made = fn()
+    except TypeError as exc:  # it needs arguments: not a model factory
+        raise ConfigError(f"{spec!r}: calling {attr}() failed ({exc})") from None
     models = list(made) if isinstance(made, (list, tuple)) else [made]
     for m in models:
         if not isinstance(m, S.SymbolicModel):

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -46,6 +47,19 @@ def prepare_out_dir(out_dir: Path | str) -> Path:
     return path
 
 
+def check_writable_file(path: Path, flag: str) -> None:
+    """ConfigError naming ``flag`` unless a file can be written at ``path``: not a folder,
+    its folder existing or creatable, writable (checked before a long run, not after it)."""
+    if path.is_dir():
+        raise ConfigError(f"{flag}: {path} is a folder; give a file name")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ConfigError(f"{flag}: cannot create {path.parent} ({exc.strerror or exc})") from None
+    if not os.access(path.parent, os.W_OK):
+        raise ConfigError(f"{flag}: {path.parent} is not writable")
+
+
 def write_json_file(path: Path, data: Any, flag: str) -> Path:
     """Write ``data`` as JSON to ``path`` (its folder created); a path that cannot be written
     raises ConfigError naming ``flag``."""
@@ -58,18 +72,27 @@ def write_json_file(path: Path, data: Any, flag: str) -> Path:
     return path
 
 
+def _write_out(out_dir: Path, name: str, text: str) -> Path:
+    """Write ``text`` to ``out_dir/name``; a path that cannot be written (a folder of that
+    name in the way, no permission) raises ConfigError naming it."""
+    path = prepare_out_dir(out_dir) / name
+    try:
+        path.write_text(text)
+    except OSError as exc:
+        raise ConfigError(f"--out: cannot write {path} ({exc.strerror or exc})") from None
+    return path
+
+
 def write_summary(out_dir: Path, summary: Mapping[str, Any]) -> Path:
     """Write ``summary.json`` (sorted keys kept in insertion order, 2-space indent)."""
-    path = prepare_out_dir(out_dir) / "summary.json"
-    path.write_text(json.dumps(to_jsonable(summary), indent=2, allow_nan=False) + "\n")
-    return path
+    return _write_out(
+        out_dir, "summary.json", json.dumps(to_jsonable(summary), indent=2, allow_nan=False) + "\n"
+    )
 
 
 def write_report(out_dir: Path, markdown: str) -> Path:
     """Write ``report.md``."""
-    path = prepare_out_dir(out_dir) / "report.md"
-    path.write_text(markdown.rstrip() + "\n")
-    return path
+    return _write_out(out_dir, "report.md", markdown.rstrip() + "\n")
 
 
 def save_figure(fig: Any, out_dir: Path, name: str, *, dpi: int = 110) -> str:
@@ -84,10 +107,15 @@ def save_figure(fig: Any, out_dir: Path, name: str, *, dpi: int = 110) -> str:
         with warnings.catch_warnings():  # "not compatible with tight_layout" for odd axes
             warnings.simplefilter("ignore", UserWarning)
             fig.tight_layout()
-    fig.savefig(prepare_out_dir(out_dir) / filename, dpi=dpi, bbox_inches="tight")
     from relloc.plotting.setup import pyplot
 
-    pyplot().close(fig)
+    path = prepare_out_dir(out_dir) / filename
+    try:
+        fig.savefig(path, dpi=dpi, bbox_inches="tight")
+    except OSError as exc:
+        raise ConfigError(f"--out: cannot write {path} ({exc.strerror or exc})") from None
+    finally:
+        pyplot().close(fig)
     return filename
 
 

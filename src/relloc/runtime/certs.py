@@ -75,7 +75,10 @@ def make_team_certs(
     if LAUNCHER_ID in robots or len(set(robots)) != len(robots):
         raise ConfigError(f"--robots: duplicate ids or the reserved id {LAUNCHER_ID!r}: {robots}")
     folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ConfigError(f"{folder}: cannot create the folder ({exc.strerror or exc})") from None
     ca_key, ca_cert = _certificate_authority(team)
     _write_key(folder / "ca.key", ca_key)
     _write_pem(folder / "ca.pem", ca_cert)

@@ -26,6 +26,7 @@ clock counts it); a robot that disappears is dropped from the barrier.
 from __future__ import annotations
 
 import json
+import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -69,13 +70,17 @@ class ClockSettings:
             raise ConfigError("clock.roster: no robots")
         for r in self.roster:
             keys.check_id(r, "clock.roster")
+        if not 0 < self.duration_s < math.inf:
+            raise ConfigError(f"--duration: must be a finite number > 0, got {self.duration_s}")
         if not (0 < self.tick_s <= self.duration_s):
             raise ConfigError(f"clock.tick_s: need 0 < tick_s ≤ duration_s, got {self.tick_s}")
-        if self.realtime_factor < 0:
-            raise ConfigError(f"clock.realtime_factor: {self.realtime_factor} < 0")
+        if not 0 <= self.realtime_factor < math.inf:
+            raise ConfigError(
+                f"--realtime: must be a finite number ≥ 0, got {self.realtime_factor}"
+            )
         for name in ("ack_timeout_s", "startup_timeout_s"):
-            if getattr(self, name) <= 0:
-                raise ConfigError(f"clock.{name}: must be > 0")
+            if not 0 < getattr(self, name) < math.inf:
+                raise ConfigError(f"clock.{name}: must be a finite number > 0")
 
     @property
     def n_ticks(self) -> int:

@@ -27,6 +27,7 @@ happens; each one's output goes to ``<out>/logs/<robot>.log``.
 
 from __future__ import annotations
 
+import math
 import multiprocessing
 import os
 import signal
@@ -88,8 +89,12 @@ class TeamSettings:
             raise ConfigError(f"--tick: {self.tick_s} s outside [0.001, 10]")
         if self.seed < 0:
             raise ConfigError(f"--seed: {self.seed} must be ≥ 0")
-        if self.wall_timeout_s <= 0:
-            raise ConfigError("--timeout: must be > 0")
+        if not 0 < self.wall_timeout_s < math.inf:
+            raise ConfigError(f"--timeout: must be a finite number > 0, got {self.wall_timeout_s}")
+        if not 0 <= self.realtime_factor < math.inf:  # before any process starts
+            raise ConfigError(
+                f"--realtime: must be a finite number ≥ 0, got {self.realtime_factor}"
+            )
         if self.certs_dir is not None and not self.secure:
             raise ConfigError("--certs: only with --secure")
 

@@ -164,6 +164,8 @@ class NodeSettings:
         for name in ("eqm_period_s", "report_period_s", "clock_timeout_s"):
             if not getattr(self, name) > 0:
                 raise ConfigError(f"node.{name}: {getattr(self, name)} must be > 0")
+        if not 0 <= self.paced_factor < np.inf:
+            raise ConfigError(f"--paced: must be a finite number ≥ 0, got {self.paced_factor}")
         if not (isinstance(self.max_lag_ticks, int) and 1 <= self.max_lag_ticks <= 1000):
             raise ConfigError(f"node.max_lag_ticks: {self.max_lag_ticks} outside [1, 1000]")
         if not (256 <= self.max_bytes <= 16 * 2**20):

@@ -76,10 +76,20 @@ class McapWritten:
         }
 
 
+MCAP_MAGIC = b"\x89MCAP0\r\n"
+"""The first bytes of every MCAP file (its specification's magic)."""
+
+
 def check_mcap_path(path: Path) -> Path:
     """``path`` if an MCAP file can be written there (ConfigError naming ``--mcap`` if not)."""
     if path.is_dir():
         raise ConfigError(f"--mcap: {path} is a folder; give a file name such as out.mcap")
+    if path.is_symlink():
+        raise ConfigError(f"--mcap: {path} is a link; give the file itself")
+    if path.exists():  # replace an earlier export, never a file of another kind
+        with path.open("rb") as f:
+            if f.read(len(MCAP_MAGIC)) != MCAP_MAGIC:
+                raise ConfigError(f"--mcap: {path} exists and is not an MCAP file; not replaced")
     return path
 
 

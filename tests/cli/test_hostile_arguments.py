@@ -1,0 +1,58 @@
+"""Arguments that once crashed a command, hung it, or were accepted with no effect: each is now
+refused before any work, with exit 2 and a message naming the flag or path."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from relloc.cli import main
+
+
+@pytest.fixture
+def a_file(tmp_path: Path) -> Path:
+    path = tmp_path / "a_file"
+    path.write_text("")
+    return path
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["observability", "os:system"], "'os:system': calling system() failed"),  # TypeError
+        (["observability", "relative-nonlinear", "--seed", "-1"], "--seed: must be ≥ 0"),
+        (
+            ["observability", "relative-nonlinear", "--at-state", "x=nan"],
+            "--at-state: x must be finite",
+        ),
+        (["observability", "unicycle-landmarks", "--landmarks", "1000000"], "--landmarks"),  # hung
+        (["observability", "relative-nonlinear", "--samples", "100000000000"], "--samples in"),
+        (["team", "up", "default", "--timeout", "nan"], "--timeout: must be a finite number"),
+        (["team", "up", "default", "--realtime", "nan"], "--realtime: must be a finite number"),
+        (["team", "up", "default", "--realtime", "-1"], "--realtime: must be a finite number"),
+        (["airground", "world", "--team", "ta", "--duration", "1e12"], "robot-ticks"),  # 146 TiB
+        (["node", "--scenario", "default", "--robot", "observer", "--paced", "nan"], "--paced:"),
+    ],
+)
+def test_a_bad_argument_is_refused_before_any_work(tmp_path, capsys, argv, message):
+    extra = ["--out", str(tmp_path / "o")] if argv[:2] == ["team", "up"] else []
+    extra += ["--world-out", str(tmp_path / "w.npz")] if argv[0] == "airground" else []
+    assert main([*argv, *extra]) == 2
+    err = capsys.readouterr().err
+    assert message in err and "Traceback" not in err
+    assert not (tmp_path / "o").exists() and not (tmp_path / "w.npz").exists()
+
+
+def test_an_output_path_under_a_file_is_refused_before_any_work(a_file, capsys):
+    """The world's file was once written only after the whole run, and failed then."""
+    assert main(["certs", str(a_file / "c"), "--team", "demo", "--robots", "a"]) == 2
+    assert f"{a_file / 'c'}: cannot create the folder" in capsys.readouterr().err
+    world = ["airground", "world", "--team", "ta", "--duration", "1"]
+    assert main([*world, "--world-out", str(a_file / "w.npz")]) == 2
+    assert "--world-out: cannot create" in capsys.readouterr().err
+    assert (
+        main([*world, "--world-out", str(a_file.parent / "w.npz"), "--report", str(a_file / "r")])
+        == 2
+    )
+    assert "--report: cannot create" in capsys.readouterr().err
