@@ -26,6 +26,11 @@ def a_file(tmp_path: Path) -> Path:
             ["observability", "relative-nonlinear", "--at-state", "x=nan"],
             "--at-state: x must be finite",
         ),
+        (
+            ["observability", "relative-nonlinear", "--at-state", "x=1,x=2"],
+            "--at-state: x is given twice",
+        ),
+        (["certs", "c", "--team", "demo", "--robots", "a,,b"], "--robots: an empty id"),
         (["observability", "unicycle-landmarks", "--landmarks", "1000000"], "--landmarks"),  # hung
         (["observability", "relative-nonlinear", "--samples", "100000000000"], "--samples in"),
         (["team", "up", "default", "--timeout", "nan"], "--timeout: must be a finite number"),
@@ -35,7 +40,8 @@ def a_file(tmp_path: Path) -> Path:
         (["node", "--scenario", "default", "--robot", "observer", "--paced", "nan"], "--paced:"),
     ],
 )
-def test_a_bad_argument_is_refused_before_any_work(tmp_path, capsys, argv, message):
+def test_a_bad_argument_is_refused_before_any_work(tmp_path, monkeypatch, capsys, argv, message):
+    monkeypatch.chdir(tmp_path)
     extra = ["--out", str(tmp_path / "o")] if argv[:2] == ["team", "up"] else []
     extra += ["--world-out", str(tmp_path / "w.npz")] if argv[0] == "airground" else []
     assert main([*argv, *extra]) == 2
@@ -56,3 +62,10 @@ def test_an_output_path_under_a_file_is_refused_before_any_work(a_file, capsys):
         == 2
     )
     assert "--report: cannot create" in capsys.readouterr().err
+
+
+def test_a_bag_folder_without_its_metadata_says_so(tmp_path, capsys):
+    (tmp_path / "bag").mkdir()
+    (tmp_path / "bag" / "x_0.db3").write_bytes(b"")
+    assert main(["bag", "inspect", str(tmp_path / "bag")]) == 3
+    assert "a rosbag2 folder needs its metadata.yaml, which is missing" in capsys.readouterr().err

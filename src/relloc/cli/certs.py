@@ -43,10 +43,13 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
 
 
 def run(args: argparse.Namespace) -> int:
+    from relloc.errors import ConfigError
     from relloc.runtime.access import write_member_configs
     from relloc.runtime.certs import make_team_certs
 
-    robots = tuple(r.strip() for r in args.robots.split(",") if r.strip())
+    robots = tuple(r.strip() for r in args.robots.split(","))
+    if not all(robots):
+        raise ConfigError(f"--robots: an empty id in {args.robots!r}")
     certs = make_team_certs(args.folder, args.team, robots, args.host)
     configs = write_member_configs(certs, args.folder / "zenoh")
     print(

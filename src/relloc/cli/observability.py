@@ -60,9 +60,13 @@ def _assignments(text: str | None, names: tuple[str, ...], what: str) -> list[fl
     values = dict.fromkeys(names, 0.0)
     if not text:
         return list(values.values())
+    given: set[str] = set()
     for item in text.split(","):
         key, sep, val = item.partition("=")
         key = key.strip()
+        if key in given:
+            raise ConfigError(f"--{what}: {key} is given twice in {text!r}")
+        given.add(key)
         if not sep or key not in values:
             raise ConfigError(
                 f"--{what}: expected NAME=VALUE with NAME in {list(names)}, got {item!r}"

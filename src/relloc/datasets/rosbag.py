@@ -220,6 +220,11 @@ class _Bag:
             self.reader = rosbags.AnyReader([path], default_typestore=store)
             self.reader.open()
         except FileNotFoundError:
+            if path.is_dir() and not (path / "metadata.yaml").exists():
+                raise DataError(
+                    f"{path}: a rosbag2 folder needs its metadata.yaml, which is missing "
+                    "(or give the .db3 / .mcap file itself)"
+                ) from None
             raise DataError(f"{path}: no such bag (a rosbag2 folder, .db3 or .mcap)") from None
         except Exception as exc:  # rosbags raises its own classes for unreadable bags
             raise DataError(f"{path}: cannot open as a ROS 2 bag: {exc}") from None
