@@ -38,6 +38,9 @@ def a_file(tmp_path: Path) -> Path:
         (["team", "up", "default", "--realtime", "-1"], "--realtime: must be a finite number"),
         (["airground", "world", "--team", "ta", "--duration", "1e12"], "robot-ticks"),  # 146 TiB
         (["node", "--scenario", "default", "--robot", "observer", "--paced", "nan"], "--paced:"),
+        (["node", "--robot", "observer", "--run", "-1"], "--run: must be ≥ 0"),
+        (["node", "--robot", "observer", "--tick", "nan"], "--tick: must be a finite number"),
+        (["node", "--robot", "observer", "--partition", "x,y@1-2"], "unknown robot 'x'"),
     ],
 )
 def test_a_bad_argument_is_refused_before_any_work(tmp_path, monkeypatch, capsys, argv, message):

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 from typing import TYPE_CHECKING
 
@@ -191,8 +192,14 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
 
 
 def run(args: argparse.Namespace) -> int:
+    from relloc.errors import ConfigError
     from relloc.runtime.node import RobotNode
 
+    if args.run < 0:
+        raise ConfigError(f"--run: must be ≥ 0, got {args.run}")
+    for flag, value in (("--duration", args.duration), ("--tick", args.tick)):
+        if value is not None and not 0 < value < math.inf:
+            raise ConfigError(f"{flag}: must be a finite number > 0, got {value}")
     parts = node_parts(args)
     if args.realtime:
         return run_realtime(args, parts)
@@ -207,12 +214,14 @@ def node_settings(args: argparse.Namespace, parts: NodeParts) -> NodeSettings:
     """The node's settings from its arguments and parts."""
     from relloc.runtime.node import NodeSettings
 
+    faults = network_faults_from_args(args)
+    faults.check_robots(parts.roster)  # as team up does: a partition of no robot is a typo
     return NodeSettings(
         team=args.team,
         robot=args.robot,
         roster=parts.roster,
         transport=transport_from_args(args),
-        faults=network_faults_from_args(args),
+        faults=faults,
         fault_seed=args.seed,
         eqm_period_s=args.eqm_period,
         max_bytes=args.max_bytes,
