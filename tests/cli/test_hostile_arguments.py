@@ -37,6 +37,7 @@ def a_file(tmp_path: Path) -> Path:
         (["team", "up", "default", "--realtime", "nan"], "--realtime: must be a finite number"),
         (["team", "up", "default", "--realtime", "-1"], "--realtime: must be a finite number"),
         (["airground", "world", "--team", "ta", "--duration", "1e12"], "robot-ticks"),  # 146 TiB
+        (["airground", "world", "--team", "ta", "--kill", "Z_9@0.5"], "unknown robot 'Z_9'"),
         (["node", "--scenario", "default", "--robot", "observer", "--paced", "nan"], "--paced:"),
         (["node", "--robot", "observer", "--run", "-1"], "--run: must be ≥ 0"),
         (["node", "--robot", "observer", "--tick", "nan"], "--tick: must be a finite number"),

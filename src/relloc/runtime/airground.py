@@ -189,6 +189,12 @@ class WorldProcess:
         self.s = settings
         self.world = world
         self.roster = world.names
+        for e in (*settings.kills, *settings.restarts):  # as team up refuses them
+            if e.robot not in self.roster:
+                raise ConfigError(
+                    f"--kill/--restart: unknown robot {e.robot!r}; the team is "
+                    f"{', '.join(self.roster)}"
+                )
         self.report = WorldReport()
         self.roll = Roll(self.roster)
         self._cmds: dict[str, np.ndarray] = {}
