@@ -38,10 +38,27 @@ def a_file(tmp_path: Path) -> Path:
         (["team", "up", "default", "--realtime", "-1"], "--realtime: must be a finite number"),
         (["airground", "world", "--team", "ta", "--duration", "1e12"], "robot-ticks"),  # 146 TiB
         (["airground", "world", "--team", "ta", "--kill", "Z_9@0.5"], "unknown robot 'Z_9'"),
+        (
+            [
+                "team",
+                "clock",
+                "--team",
+                "tc",
+                "--roster",
+                "a,b",
+                "--duration",
+                "1",
+                "--kill",
+                "z@0.5",
+            ],
+            "'z' is not on --roster",
+        ),
         (["node", "--scenario", "default", "--robot", "observer", "--paced", "nan"], "--paced:"),
         (["node", "--robot", "observer", "--run", "-1"], "--run: must be ≥ 0"),
         (["node", "--robot", "observer", "--tick", "nan"], "--tick: must be a finite number"),
         (["node", "--robot", "observer", "--partition", "x,y@1-2"], "unknown robot 'x'"),
+        (["node", "--robot", "observer", "--case", "nope"], "--case: read by a reproduction's"),
+        (["node", "--robot", "observer", "--fit", "f.json"], "--fit: read with --dataset"),
     ],
 )
 def test_a_bad_argument_is_refused_before_any_work(tmp_path, monkeypatch, capsys, argv, message):

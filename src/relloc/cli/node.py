@@ -274,6 +274,10 @@ def node_parts(args: argparse.Namespace) -> NodeParts:
     from relloc.experiments.team_sources import named_node_parts, team_names
 
     refuse_desilva_only(args)
+    if args.fit is not None and not (args.dataset is not None and args.estimator == "cooperative"):
+        from relloc.errors import ConfigError
+
+        raise ConfigError("--fit: read with --dataset and --estimator cooperative only")
     if args.dataset is None and args.scenario in team_names():
         return named_node_parts(
             args.scenario,
@@ -301,6 +305,10 @@ def node_parts(args: argparse.Namespace) -> NodeParts:
             args.duration,
             args.case or DEFAULT_CASE,
         )
+    if args.case is not None:  # seed 000's track manager has no case
+        from relloc.errors import ConfigError
+
+        raise ConfigError("--case: read by a reproduction's team or --estimator cooperative only")
     return track_manager_parts(args)
 
 

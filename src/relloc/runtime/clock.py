@@ -70,6 +70,9 @@ class ClockSettings:
             raise ConfigError("clock.roster: no robots")
         for r in self.roster:
             keys.check_id(r, "clock.roster")
+        for e in (*self.kills, *self.restarts):  # the clock would wait for it forever
+            if e.robot not in self.roster:
+                raise ConfigError(f"--kill/--restart: {e.robot!r} is not on --roster {self.roster}")
         if not 0 < self.duration_s < math.inf:
             raise ConfigError(f"--duration: must be a finite number > 0, got {self.duration_s}")
         if not (0 < self.tick_s <= self.duration_s):
