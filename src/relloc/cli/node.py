@@ -270,13 +270,12 @@ def run_realtime(args: argparse.Namespace, parts: NodeParts) -> int:
 
 def node_parts(args: argparse.Namespace) -> NodeParts:
     """The robot's sensor source and estimator for the team source the arguments name."""
+    from relloc.errors import ConfigError
     from relloc.experiments.desilva2015 import sensing_robots
     from relloc.experiments.team_sources import named_node_parts, team_names
 
     refuse_desilva_only(args)
     if args.fit is not None and not (args.dataset is not None and args.estimator == "cooperative"):
-        from relloc.errors import ConfigError
-
         raise ConfigError("--fit: read with --dataset and --estimator cooperative only")
     if args.dataset is None and args.scenario in team_names():
         return named_node_parts(
@@ -292,7 +291,6 @@ def node_parts(args: argparse.Namespace) -> NodeParts:
     if args.dataset is not None and args.estimator == "cooperative":
         from pathlib import Path
 
-        from relloc.errors import ConfigError
         from relloc.experiments.mrclam_team import DEFAULT_CASE, cooperative_node_parts
 
         if args.fit is None:
@@ -306,8 +304,6 @@ def node_parts(args: argparse.Namespace) -> NodeParts:
             args.case or DEFAULT_CASE,
         )
     if args.case is not None:  # seed 000's track manager has no case
-        from relloc.errors import ConfigError
-
         raise ConfigError("--case: read by a reproduction's team or --estimator cooperative only")
     return track_manager_parts(args)
 

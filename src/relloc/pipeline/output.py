@@ -35,15 +35,16 @@ def to_jsonable(value: Any) -> Any:
     return value
 
 
-def prepare_out_dir(out_dir: Path | str) -> Path:
-    """Create the output folder (and parents); raise ConfigError if a file is in the way."""
+def prepare_out_dir(out_dir: Path | str, flag: str = "--out") -> Path:
+    """Create the output folder (and parents); raise ConfigError naming ``flag`` if a file is
+    in the way or the folder cannot be created."""
     path = Path(out_dir)
     if path.exists() and not path.is_dir():
-        raise ConfigError(f"--out: {path} exists and is not a folder")
+        raise ConfigError(f"{flag}: {path} exists and is not a folder")
     try:
         path.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        raise ConfigError(f"--out: cannot create {path} ({exc.strerror or exc})") from None
+        raise ConfigError(f"{flag}: cannot create {path} ({exc.strerror or exc})") from None
     return path
 
 
@@ -52,10 +53,7 @@ def check_writable_file(path: Path, flag: str) -> None:
     its folder existing or creatable, writable (checked before a long run, not after it)."""
     if path.is_dir():
         raise ConfigError(f"{flag}: {path} is a folder; give a file name")
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise ConfigError(f"{flag}: cannot create {path.parent} ({exc.strerror or exc})") from None
+    prepare_out_dir(path.parent, flag)
     if not os.access(path.parent, os.W_OK):
         raise ConfigError(f"{flag}: {path.parent} is not writable")
 

@@ -189,12 +189,8 @@ class WorldProcess:
         self.s = settings
         self.world = world
         self.roster = world.names
-        for e in (*settings.kills, *settings.restarts):  # as team up refuses them
-            if e.robot not in self.roster:
-                raise ConfigError(
-                    f"--kill/--restart: unknown robot {e.robot!r}; the team is "
-                    f"{', '.join(self.roster)}"
-                )
+        # as team up: no event of a robot off the team, no restart without a kill before it
+        FaultSettings(kills=settings.kills, restarts=settings.restarts).check_robots(self.roster)
         self.report = WorldReport()
         self.roll = Roll(self.roster)
         self._cmds: dict[str, np.ndarray] = {}
@@ -679,7 +675,7 @@ class RobotProcess:
             raise MessageRejected("bad_tick", f"sense k={k} at t={msg.t:g}, dt={b['dt']:g}")
         if self._tick is not None:
             raise MessageRejected("bad_tick", f"sense k={k} before tick {self._tick.k} was done")
-        fix = self._fix_of(b)
+        fix = self._checked_fix(b)
         readings = rows_from_body(b, self.roster, self.s.robot)
         self._last_k = k
         self._budget.new_interval()
@@ -696,10 +692,11 @@ class RobotProcess:
             self._send("cmd", {"k": k, "u": u}, t)
             self._tick_done()
 
-    def _fix_of(self, b: Mapping[str, Any]) -> MarkerFix | None:
-        """The marker fix of a ``sense`` body, checked against the team: a drone has its
-        position (3 numbers) and may have a fix of a UGV — the leader with its heading, a
-        follower without — and a UGV has neither (``MessageRejected``, ``shape``)."""
+    def _checked_fix(self, b: Mapping[str, Any]) -> MarkerFix | None:
+        """The marker fix of a ``sense`` body once the body's position and fix are checked
+        against the team: a drone has its position (3 numbers) and may have a fix of a UGV —
+        the leader with its heading, a follower without — and a UGV has neither
+        (``MessageRejected``, ``shape``)."""
         ugvs = self.sc.n_followers + 1
         drone = self.roster.index(self.s.robot) >= ugvs
         if b["position"].size != (3 if drone else 0):

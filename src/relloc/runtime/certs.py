@@ -28,6 +28,7 @@ from pathlib import Path
 from typing import Any
 
 from relloc.errors import ConfigError, DataError, require
+from relloc.pipeline.output import prepare_out_dir
 from relloc.runtime import keys
 
 LAUNCHER_ID = "launcher"
@@ -74,11 +75,7 @@ def make_team_certs(
         keys.check_id(r, "--robots")
     if LAUNCHER_ID in robots or len(set(robots)) != len(robots):
         raise ConfigError(f"--robots: duplicate ids or the reserved id {LAUNCHER_ID!r}: {robots}")
-    folder = Path(folder)
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise ConfigError(f"{folder}: cannot create the folder ({exc.strerror or exc})") from None
+    folder = prepare_out_dir(folder, "certs")
     ca_key, ca_cert = _certificate_authority(team)
     _write_key(folder / "ca.key", ca_key)
     _write_pem(folder / "ca.pem", ca_cert)

@@ -37,7 +37,7 @@ import numpy as np
 from relloc.errors import ConfigError, RellocError
 from relloc.runtime import keys
 from relloc.runtime.admission import CLOCK_SENDER, admit
-from relloc.runtime.faults import RobotEvent
+from relloc.runtime.faults import FaultSettings, RobotEvent
 from relloc.runtime.messages import DEFAULT_MAX_BYTES, MessageRejected, encode
 from relloc.runtime.transport import (
     Inbox,
@@ -70,9 +70,8 @@ class ClockSettings:
             raise ConfigError("clock.roster: no robots")
         for r in self.roster:
             keys.check_id(r, "clock.roster")
-        for e in (*self.kills, *self.restarts):  # the clock would wait for it forever
-            if e.robot not in self.roster:
-                raise ConfigError(f"--kill/--restart: {e.robot!r} is not on --roster {self.roster}")
+        # a kill of a robot off the roster would keep the clock waiting for it forever
+        FaultSettings(kills=self.kills, restarts=self.restarts).check_robots(self.roster)
         if not 0 < self.duration_s < math.inf:
             raise ConfigError(f"--duration: must be a finite number > 0, got {self.duration_s}")
         if not (0 < self.tick_s <= self.duration_s):

@@ -90,6 +90,8 @@ DEFAULT_MAX_BYTES = 65_536
 """Default size limit of one encoded message (bytes); larger payloads are rejected unread."""
 
 STATE_DIM = 4
+"""Relative state (x, y, z, φ) of seed 000 carried by ``eqm`` and ``mail`` (``est`` carries
+the states of its frame)."""
 MIN_VARIANCE = 1e-18
 MAX_VARIANCE = 1e12
 """Eigenvalues a received covariance that a filter fuses or starts from (``mail``, ``sync``)
@@ -98,8 +100,6 @@ MAX_STATE = 1e9
 """Largest |entry| of a received state, position or marker fix (m, rad)."""
 MAX_DOF = 10_000
 """Largest degrees of freedom of one reported NIS (``est.update_dofs``)."""
-"""Relative state (x, y, z, φ) of seed 000 carried by ``eqm`` and ``mail`` (``est`` carries
-the states of its frame)."""
 
 Shape = tuple[int, ...]
 HEADER: dict[str, str] = {
