@@ -91,3 +91,16 @@ def test_a_bag_folder_without_its_metadata_says_so(tmp_path, capsys):
     (tmp_path / "bag" / "x_0.db3").write_bytes(b"")
     assert main(["bag", "inspect", str(tmp_path / "bag")]) == 3
     assert "a rosbag2 folder needs its metadata.yaml, which is missing" in capsys.readouterr().err
+
+
+def test_certs_keep_a_team_ca_unless_told_to_replace_it(tmp_path, capsys):
+    """A second ``certs`` into the same folder once replaced the CA silently, so every
+    certificate already copied to a robot stopped working."""
+    argv = ["certs", str(tmp_path / "c"), "--team", "demo", "--robots", "a,b"]
+    assert main(argv) == 0
+    ca = (tmp_path / "c" / "ca.pem").read_bytes()
+    assert main(argv) == 2
+    assert "the folder holds a team's CA" in capsys.readouterr().err
+    assert (tmp_path / "c" / "ca.pem").read_bytes() == ca
+    assert main([*argv, "--replace"]) == 0
+    assert (tmp_path / "c" / "ca.pem").read_bytes() != ca

@@ -14,6 +14,8 @@ start the processes by hand (the built-in team; one ``relloc node`` per robot)::
         --connect tls/127.0.0.1:7447
 
 Across machines, name them with ``--host`` and listen there (``--listen tls/HOST:0``).
+A folder that already holds a team's CA is refused unless ``--replace`` is given: the
+certificates the old CA signed (copied to robots) stop working when it is replaced.
 """
 
 from __future__ import annotations
@@ -39,6 +41,11 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         metavar="NAME",
         help="extra DNS name or IP the certificates are valid for (besides loopback; repeatable)",
     )
+    p.add_argument(
+        "--replace",
+        action="store_true",
+        help="write over a folder that already holds a team's CA (its certificates stop working)",
+    )
     p.set_defaults(func=run)
 
 
@@ -50,6 +57,12 @@ def run(args: argparse.Namespace) -> int:
     robots = tuple(r.strip() for r in args.robots.split(","))
     if not all(robots):
         raise ConfigError(f"--robots: an empty id in {args.robots!r}")
+    held = [p for p in (args.folder / "ca.pem", args.folder / "ca.key") if p.exists()]
+    if held and not args.replace:
+        raise ConfigError(
+            f"certs: {held[0]} exists: the folder holds a team's CA, and the certificates it "
+            "signed stop working if it is replaced; pass --replace, or choose another folder"
+        )
     certs = make_team_certs(args.folder, args.team, robots, args.host)
     configs = write_member_configs(certs, args.folder / "zenoh")
     print(

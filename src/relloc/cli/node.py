@@ -192,7 +192,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
 
 
 def run(args: argparse.Namespace) -> int:
-    from relloc.errors import ConfigError
+    from relloc.errors import ConfigError, RellocError
     from relloc.runtime.node import RobotNode
 
     if args.run < 0:
@@ -204,9 +204,16 @@ def run(args: argparse.Namespace) -> int:
     if args.realtime:
         return run_realtime(args, parts)
     settings = node_settings(args, parts)
-    counters = RobotNode(settings, parts.source, parts.driver).run()
+    node = RobotNode(settings, parts.source, parts.driver)
+    counters = node.run()
     json.dump({"robot": args.robot, "counters": counters}, sys.stdout, sort_keys=True)
     sys.stdout.write("\n")
+    if not node.reached_end:
+        how = "left" if counters.get("exit.clock_left") else "was silent"
+        raise RellocError(
+            f"robot {args.robot!r} stopped before the run's end: the clock {how} "
+            f"(after {counters.get('ticks', 0)} ticks; --clock-timeout {args.clock_timeout:g} s)"
+        )
     return 0
 
 

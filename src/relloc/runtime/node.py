@@ -54,7 +54,9 @@ A message that fails validation is dropped and counted by reason (see
 :mod:`relloc.runtime.messages` and :mod:`relloc.runtime.admission`: roles, ticks, time bound,
 rate); nothing a teammate — or anyone else on the network — sends can crash the node. On
 ``ctl(end)`` — or if the clock vanishes — the node filters what is left, ships its last report
-and exits cleanly.
+and exits cleanly. :attr:`RobotNode.reached_end` says whether the run ended (its last tick or
+``ctl(end)`` heard) or the node gave up on a clock that left or fell silent before it; the
+``node`` command exits non-zero then.
 """
 
 from __future__ import annotations
@@ -444,6 +446,12 @@ class RobotNode:
             self._send_mail(repeat=True)  # teammate waits for it and the last one was lost
         self._acks_due.append((k, t))
         self._send_due_acks()
+
+    @property
+    def reached_end(self) -> bool:
+        """Whether the node heard the run's last tick or ``ctl(end)``: else it stopped because
+        the clock left or was silent for ``clock_timeout_s`` before the run ended."""
+        return self._last_tick_seen or self._end_deadline is not None
 
     def _finish(self) -> None:
         """End of run: filter everything left (teammates published it before their last ack)."""
