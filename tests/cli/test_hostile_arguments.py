@@ -33,6 +33,13 @@ def a_file(tmp_path: Path) -> Path:
         (["certs", "c", "--team", "demo", "--robots", "a,,b"], "--robots: an empty id"),
         (["observability", "unicycle-landmarks", "--landmarks", "1000000"], "--landmarks"),  # hung
         (["observability", "relative-nonlinear", "--samples", "100000000000"], "--samples in"),
+        # options a model does not read were ignored silently, and 0 landmarks became 1
+        (["observability", "airground", "--landmarks", "3"], "--landmarks: 'airground' does not"),
+        (["observability", "relative-nonlinear", "--mode", "1"], "(read by airground)"),
+        (["observability", "unicycle-team", "--measurements", "range"], "--measurements: 'unic"),
+        (["observability", "unicycle-landmarks", "--gps", "1"], "(read by unicycle-team)"),
+        (["observability", "os:getcwd", "--robots", "2"], "--robots: 'os:getcwd' does not"),
+        (["observability", "unicycle-landmarks", "--landmarks", "0"], "needs at least 1, got 0"),
         (["team", "up", "default", "--timeout", "nan"], "--timeout: must be a finite number"),
         (["team", "up", "default", "--realtime", "nan"], "--realtime: must be a finite number"),
         (["team", "up", "default", "--realtime", "-1"], "--realtime: must be a finite number"),

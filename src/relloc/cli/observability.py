@@ -43,9 +43,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     p.add_argument("--measurements", nargs="+", default=None, help="measured outputs to use")
     p.add_argument("--order", type=int, default=2, help="highest Lie-derivative order (2)")
     p.add_argument("--inputs", nargs="*", default=None, help="only these inputs/groups excited")
-    p.add_argument("--landmarks", type=int, default=1, help="landmarks (unicycle models)")
-    p.add_argument("--robots", type=int, default=3, help="robots (unicycle-team, ≤ 6)")
-    p.add_argument("--gps", type=int, nargs="*", default=[], help="GPS robots (unicycle-team)")
+    p.add_argument("--landmarks", type=int, default=None, help="landmarks (unicycle models; 1)")
+    p.add_argument("--robots", type=int, default=None, help="robots (unicycle-team, ≤ 6; 3)")
+    p.add_argument("--gps", type=int, nargs="*", default=None, help="GPS robots (unicycle-team)")
     p.add_argument("--mode", type=int, nargs="+", default=None, help="airground modes sw")
     p.add_argument("--samples", type=int, default=5, help="random states for the generic rank")
     p.add_argument("--seed", type=int, default=0, help="seed of the random states")
@@ -84,20 +84,29 @@ def _assignments(text: str | None, names: tuple[str, ...], what: str) -> list[fl
 def run(args: argparse.Namespace) -> int:
     from relloc.models.symbolic import AIRGROUND_MODES
     from relloc.observability.analysis import analyse, rank_at
-    from relloc.observability.builtin import ModelOptions, resolve_models
+    from relloc.observability.builtin import ModelOptions, check_options_read, resolve_models
     from relloc.pipeline.output import write_json_file
 
     if args.order < 0 or not 1 <= args.samples <= MAX_SAMPLES:
         raise ConfigError(f"--order must be ≥ 0 and --samples in 1…{MAX_SAMPLES}")
     if args.seed < 0:
         raise ConfigError(f"--seed: must be ≥ 0, got {args.seed}")
-    if not 0 <= args.landmarks <= MAX_LANDMARKS:
-        raise ConfigError(f"--landmarks: must be in 0…{MAX_LANDMARKS}, got {args.landmarks}")
+    given = {
+        "measurements": args.measurements,
+        "landmarks": args.landmarks,
+        "robots": args.robots,
+        "gps": args.gps,
+        "mode": args.mode,
+    }
+    check_options_read(args.model, [k for k, v in given.items() if v is not None])
+    landmarks = 1 if args.landmarks is None else args.landmarks
+    if not 0 <= landmarks <= MAX_LANDMARKS:
+        raise ConfigError(f"--landmarks: must be in 0…{MAX_LANDMARKS}, got {landmarks}")
     opts = ModelOptions(
         measurements=tuple(args.measurements) if args.measurements else None,
-        landmarks=args.landmarks,
-        robots=args.robots,
-        gps=tuple(args.gps),
+        landmarks=landmarks,
+        robots=3 if args.robots is None else args.robots,
+        gps=tuple(args.gps or ()),
         modes=tuple(args.mode) if args.mode else AIRGROUND_MODES,
         inputs=tuple(args.inputs) if args.inputs is not None else None,
     )

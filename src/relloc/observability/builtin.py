@@ -28,6 +28,29 @@ BUILTIN_MODELS: dict[str, str] = {
 }
 
 
+READS: dict[str, tuple[str, ...]] = {
+    "relative-pseudo-linear": ("measurements",),
+    "relative-nonlinear": ("measurements",),
+    "unicycle-landmarks": ("measurements", "landmarks"),
+    "unicycle-team": ("robots", "landmarks", "gps"),
+    "airground": ("mode",),
+}
+"""The model options (flags without ``--``) each built-in model reads; a user model reads none
+(every model reads ``--inputs``)."""
+
+
+def check_options_read(name: str, given: Sequence[str]) -> None:
+    """Refuse an option ``name``'s model would ignore: a typo or a misunderstanding, never
+    silently dropped."""
+    reads = READS.get(name, ())
+    for option in given:
+        if option not in reads:
+            readers = [m for m, r in READS.items() if option in r]
+            raise ConfigError(
+                f"--{option}: {name!r} does not read it (read by {', '.join(readers)})"
+            )
+
+
 @dataclass(frozen=True, kw_only=True)
 class ModelOptions:
     """Options of the built-in models (validated; defaults per model when ``None``)."""
@@ -99,7 +122,9 @@ def resolve_models(name: str, opts: ModelOptions) -> list[S.SymbolicModel]:
         models = [S.relative_nonlinear(_measurements(opts, S.RELATIVE_MEASUREMENTS))]
     elif name == "unicycle-landmarks":
         measured = _measurements(opts, ("bearing",), allowed=("bearing", "range"))
-        models = [S.unicycle_landmarks(max(1, opts.landmarks), measured)]
+        if opts.landmarks < 1:
+            raise ConfigError(f"--landmarks: {name!r} needs at least 1, got {opts.landmarks}")
+        models = [S.unicycle_landmarks(opts.landmarks, measured)]
     elif name == "unicycle-team":
         n = opts.robots
         models = [
