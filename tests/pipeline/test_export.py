@@ -261,11 +261,15 @@ def test_a_folder_as_mcap_file_is_a_config_error(tmp_path):  # type: ignore[no-u
 
 
 def test_an_existing_file_of_another_kind_or_a_link_is_not_replaced(tmp_path, written):  # type: ignore[no-untyped-def]
-    """``--mcap victim.txt`` once overwrote the file with MCAP bytes."""
-    victim = tmp_path / "victim.txt"
+    """``--mcap victim.txt`` once overwrote the file with MCAP bytes, and ``--mcap
+    OUT/summary.json`` on a fresh ``OUT`` collided with the run's own summary."""
+    victim = tmp_path / "victim.mcap"
     victim.write_text("keep me")
     with pytest.raises(ConfigError, match="exists and is not an MCAP file"):
         ExportRequest(mcap=victim)
+    for name in ("victim.txt", "fresh/summary.json", "out"):
+        with pytest.raises(ConfigError, match=r"does not end in \.mcap"):
+            ExportRequest(mcap=tmp_path / name)
     link = tmp_path / "link.mcap"
     link.symlink_to(victim)
     with pytest.raises(ConfigError, match="is a link"):

@@ -81,11 +81,18 @@ MCAP_MAGIC = b"\x89MCAP0\r\n"
 
 
 def check_mcap_path(path: Path) -> Path:
-    """``path`` if an MCAP file can be written there (ConfigError naming ``--mcap`` if not)."""
+    """``path`` if an MCAP file can be written there (ConfigError naming ``--mcap`` if not): a
+    file name ending in ``.mcap`` (so never one of the run's own outputs, e.g.
+    ``OUT/summary.json``), not a link, and not an existing file of another format."""
     if path.is_dir():
         raise ConfigError(f"--mcap: {path} is a folder; give a file name such as out.mcap")
     if path.is_symlink():
         raise ConfigError(f"--mcap: {path} is a link; give the file itself")
+    if path.suffix != ".mcap":  # also keeps it off the files a run writes beside it
+        raise ConfigError(
+            f"--mcap: {path} does not end in .mcap, by which ros2 bag play and Foxglove know "
+            "the format; give a name such as out.mcap"
+        )
     if path.exists():  # replace an earlier export, never a file of another kind
         with path.open("rb") as f:
             if f.read(len(MCAP_MAGIC)) != MCAP_MAGIC:
