@@ -234,3 +234,38 @@ def test_finite_but_absurd_velocities_and_positions_are_out_of_range(kind, body,
     assert info.value.reason == "out_of_range" and what in str(info.value)
     limit = {"stamps": [0.0], "u": [[100.0, -100.0, 0.0, 100.0]]}
     assert decode(encode("odom", "obs", 0, 0.0, limit), roster=ROSTER).body["u"].shape == (1, 4)
+
+
+_MEAS = {"targets": ["air1", "gnd1"], "z": [[2.0, 0.1, 0.5]] * 2, "sigma": [[0.01] * 3] * 2}
+
+
+@pytest.mark.parametrize(
+    ("kind", "sender", "body", "reason", "what"),
+    [
+        ("meas", "obs", _MEAS | {"stamps": [0.2, 0.1]}, "malformed", "stamps decreasing"),
+        ("meas", "air1", _MEAS | {"stamps": [0.1, 0.2]}, "malformed", "of its sender 'air1'"),
+        ("eqm", "air1", {"target": "air1", "mean": [0.0] * 4, "cov": COV}, "malformed", "its"),
+        (
+            "eqm",
+            "obs",
+            {"target": "air1", "mean": [0.0] * 4, "cov": np.diag([1.0, 1.0, 1.0, -0.5])},
+            "bad_covariance",
+            "not positive semidefinite",
+        ),
+        (
+            "eqm",
+            "obs",
+            {"target": "air1", "mean": [0.0, 0.0, 2e9, 0.0], "cov": COV},
+            "out_of_range",
+            "beyond",
+        ),
+    ],
+)
+def test_readings_and_beliefs_no_robot_makes_are_refused(kind, sender, body, reason, what):
+    """These decoded once: unsorted readings, a reading or belief of the sender itself, an
+    indefinite belief (counted only, never fused, but counted as received)."""
+    with pytest.raises(MessageRejected) as info:
+        decode(encode(kind, sender, 0, 0.0, body), roster=ROSTER)
+    assert info.value.reason == reason and what in str(info.value)
+    held = {"target": "air1", "mean": [0.0] * 4, "cov": np.diag([0.1, 0.1, 0.0, 0.01])}
+    assert decode(encode("eqm", "obs", 0, 0.0, held), roster=ROSTER).body["cov"][2, 2] == 0.0

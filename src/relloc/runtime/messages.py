@@ -52,10 +52,12 @@ checked against their declared shape, ``-1`` meaning "any length". Kinds:
   x, y and, for the leader, heading); see :mod:`relloc.runtime.airground`.
 
 :func:`decode` validates *everything* a receiver relies on — size limit before unpacking, map
-layout, version, kind, field types, array shapes, finite numbers, a symmetric covariance, and a
-sender that is on the team roster and matches the key expression it arrived on, targets and
-controlled robots on the roster (who may send which kind on which key, how often and how far
-ahead of the clock is checked on top of this by :mod:`relloc.runtime.admission`). Anything else
+layout, version, kind, field types, array shapes, finite numbers, a symmetric covariance (an
+``eqm``'s also positive semidefinite, its mean within bounds), ``odom``/``meas`` stamps in order,
+and a sender that is on the team roster and matches the key expression it arrived on, targets
+(never the sender itself, for ``meas`` and ``eqm``) and controlled robots on the roster (who
+may send which kind on which key, how often and how far ahead of the clock is checked on top of
+this by :mod:`relloc.runtime.admission`). Anything else
 raises :class:`MessageRejected` whose ``reason`` is a short stable code the node counts (a bad
 message is dropped and counted, never crashes a node). Pickle is never used for network input.
 """
@@ -307,6 +309,8 @@ def decode(
         unknown = sorted(set(body["targets"]) - set(roster))
         if unknown:
             raise MessageRejected("unknown_target", f"targets {unknown} are not on the roster")
+    if kind in ("meas", "eqm") and sender in body.get("targets", [body.get("target")]):
+        raise MessageRejected("malformed", f"{kind}: of its sender {sender!r} itself")
     if kind == "ctl" and (body["robot"] == "") != (body["action"] == "end"):
         raise MessageRejected("malformed", "ctl: 'robot' is empty exactly for action 'end'")
     if kind == "sense" and body["fix_subject"] and body["fix_subject"] not in roster:
@@ -389,7 +393,8 @@ def _as_array(value: Any, shape: Shape, where: str) -> np.ndarray:
 
 
 def _check_consistency(kind: str, body: dict[str, Any]) -> None:
-    """Cross-field rules: equal batch lengths, increasing stamps, sane covariances/sigmas."""
+    """Cross-field rules: equal batch lengths, increasing stamps (``odom`` strictly, ``meas``
+    non-decreasing), sane covariances/sigmas, states within bounds."""
     if kind == "odom":
         if body["stamps"].shape[0] != body["u"].shape[0]:
             raise MessageRejected("shape", "odom: stamps and u lengths differ")
@@ -404,6 +409,14 @@ def _check_consistency(kind: str, body: dict[str, Any]) -> None:
             raise MessageRejected("shape", "meas: batch lengths differ")
         if np.any(body["sigma"] <= 0) or np.any(body["z"][:, 0] <= 0):
             raise MessageRejected("malformed", "meas: sigma and range must be > 0")
+        if np.any(np.diff(body["stamps"]) < 0):
+            raise MessageRejected("malformed", "meas: stamps decreasing")
+    elif kind == "eqm":
+        if np.any(np.abs(body["mean"]) > MAX_STATE):
+            raise MessageRejected("out_of_range", f"eqm: a state beyond ±{MAX_STATE:g}")
+        eig = np.linalg.eigvalsh(body["cov"])  # singular is honest (a state held fixed)
+        if eig[0] < -1e-9 * max(1.0, float(eig[-1])) or eig[-1] > MAX_VARIANCE:
+            raise MessageRejected("bad_covariance", "eqm: covariance not positive semidefinite")
     elif kind == "est":
         n = body["stamps"].shape[0]
         if not (body["means"].shape[0] == body["covs"].shape[0] == body["ages"].shape[0] == n):
