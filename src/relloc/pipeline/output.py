@@ -9,7 +9,8 @@ from __future__ import annotations
 import json
 import math
 import os
-from collections.abc import Mapping, Sequence
+import uuid
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -58,27 +59,31 @@ def check_writable_file(path: Path, flag: str) -> None:
         raise ConfigError(f"{flag}: {path.parent} is not writable")
 
 
-def write_json_file(path: Path, data: Any, flag: str) -> Path:
-    """Write ``data`` as JSON to ``path`` (its folder created); a path that cannot be written
-    raises ConfigError naming ``flag``."""
-    text = json.dumps(to_jsonable(data), indent=2) + "\n"
+def replace_file(path: Path, flag: str, write: Callable[[Path], object]) -> Path:
+    """Write ``path`` whole or not at all: ``write`` fills a new file beside it, which then
+    takes its name (:func:`os.replace`). A link at ``path`` is replaced, never followed (its
+    target is left as it was), and a run stopped midway leaves the earlier file. A path that
+    cannot be written (a folder in the way, no permission) raises ConfigError naming ``flag``."""
+    tmp = prepare_out_dir(path.parent, flag) / f".{path.name}.{uuid.uuid4().hex}.tmp"
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(text)
+        write(tmp)
+        os.replace(tmp, path)
     except OSError as exc:
         raise ConfigError(f"{flag}: cannot write {path} ({exc.strerror or exc})") from None
+    finally:
+        tmp.unlink(missing_ok=True)
     return path
+
+
+def write_json_file(path: Path, data: Any, flag: str) -> Path:
+    """Write ``data`` as JSON to ``path`` (its folder created; :func:`replace_file`)."""
+    text = json.dumps(to_jsonable(data), indent=2) + "\n"
+    return replace_file(path, flag, lambda tmp: tmp.write_text(text))
 
 
 def _write_out(out_dir: Path, name: str, text: str) -> Path:
-    """Write ``text`` to ``out_dir/name``; a path that cannot be written (a folder of that
-    name in the way, no permission) raises ConfigError naming it."""
-    path = prepare_out_dir(out_dir) / name
-    try:
-        path.write_text(text)
-    except OSError as exc:
-        raise ConfigError(f"--out: cannot write {path} ({exc.strerror or exc})") from None
-    return path
+    """Write ``text`` to ``out_dir/name`` (:func:`replace_file`)."""
+    return replace_file(Path(out_dir) / name, "--out", lambda tmp: tmp.write_text(text))
 
 
 def write_summary(out_dir: Path, summary: Mapping[str, Any]) -> Path:
@@ -107,11 +112,12 @@ def save_figure(fig: Any, out_dir: Path, name: str, *, dpi: int = 110) -> str:
             fig.tight_layout()
     from relloc.plotting.setup import pyplot
 
-    path = prepare_out_dir(out_dir) / filename
     try:
-        fig.savefig(path, dpi=dpi, bbox_inches="tight")
-    except OSError as exc:
-        raise ConfigError(f"--out: cannot write {path} ({exc.strerror or exc})") from None
+        replace_file(
+            Path(out_dir) / filename,
+            "--out",
+            lambda tmp: fig.savefig(tmp, dpi=dpi, bbox_inches="tight", format="png"),
+        )
     finally:
         pyplot().close(fig)
     return filename

@@ -64,7 +64,6 @@ messages also :func:`~relloc.runtime.admission.check_stamps` and a per-tick
 
 from __future__ import annotations
 
-import json
 import time
 from collections import Counter
 from collections.abc import Callable, Mapping
@@ -79,6 +78,7 @@ from relloc.core.gaussian import Gaussian
 from relloc.core.recording import Measurements, Recording, empty_measurements
 from relloc.errors import ConfigError, DataError, RellocError
 from relloc.estimators.switching_ekf import FRAME
+from relloc.pipeline.output import replace_file, write_json_file
 from relloc.runtime import keys
 from relloc.runtime.admission import CLOCK_SENDER, SenderBudget, admit, check_stamps
 from relloc.runtime.faults import FaultSettings, LinkEmulator, RobotEvent
@@ -323,13 +323,18 @@ def save_world(world: AirGroundWorld, path: Path) -> None:
     rec = world.recording()
     m = rec.measurements
     assert rec.truth is not None  # a simulation always has it
-    np.savez(
-        path,
-        truth=np.stack([g.pose for g in rec.truth], axis=1),
-        commands=np.stack([o.velocity for o in rec.odometry], axis=1),
-        formation_error=world.formation_error,
+    arrays = {
+        "truth": np.stack([g.pose for g in rec.truth], axis=1),
+        "commands": np.stack([o.velocity for o in rec.odometry], axis=1),
+        "formation_error": world.formation_error,
         **{f"m_{name}": getattr(m, name) for name in MEASUREMENT_FIELDS},
-    )
+    }
+
+    def write(tmp: Path) -> None:
+        with tmp.open("wb") as f:  # a file object: np.savez would add ".npz" to a name
+            np.savez(f, **arrays)
+
+    replace_file(path, "--world-out", write)
 
 
 def load_world(path: Path, sc: AirGroundScenario) -> tuple[Recording, np.ndarray]:
@@ -826,4 +831,4 @@ class RobotProcess:
 
 def write_report(path: Path, report: WorldReport) -> None:
     """The world's report as JSON."""
-    path.write_text(json.dumps(report.as_dict(), indent=2) + "\n")
+    write_json_file(path, report.as_dict(), "--report")

@@ -25,7 +25,6 @@ clock counts it); a robot that disappears is dropped from the barrier.
 
 from __future__ import annotations
 
-import json
 import math
 import time
 from dataclasses import dataclass, field
@@ -35,6 +34,7 @@ from typing import Any
 import numpy as np
 
 from relloc.errors import ConfigError, RellocError
+from relloc.pipeline.output import write_json_file
 from relloc.runtime import keys
 from relloc.runtime.admission import CLOCK_SENDER, admit
 from relloc.runtime.faults import FaultSettings, RobotEvent
@@ -224,5 +224,5 @@ def run_clock(settings: ClockSettings, report_path: Path | None = None) -> Clock
     """Run a clock to the end; optionally write its report as JSON."""
     report = Clock(settings).run()
     if report_path is not None:
-        report_path.write_text(json.dumps(report.as_dict(), indent=2) + "\n")
+        write_json_file(report_path, report.as_dict(), "--report")
     return report

@@ -24,7 +24,6 @@ must lie in ``[0, 2³¹)`` s, the range of a ``builtin_interfaces/Time``.
 
 from __future__ import annotations
 
-import os
 import time
 from collections import Counter
 from collections.abc import Iterator
@@ -45,6 +44,7 @@ from relloc.pipeline.export.poses import (
     PoseSet,
     yaw_quaternion,
 )
+from relloc.pipeline.output import replace_file
 
 Array = NDArray[np.float64]
 
@@ -208,7 +208,7 @@ def write_mcap(
     path: Path, poses: PoseSet, recording: Recording, *, estimator: str = ""
 ) -> McapWritten:
     """Write ``poses`` (and the recording's truth) to the MCAP file ``path`` (module
-    docstring). The file is written next to ``path`` and renamed when complete."""
+    docstring), whole or not at all (:func:`~relloc.pipeline.output.replace_file`)."""
     started = time.perf_counter()
     m = _Messages()
     messages = [msg for p in poses.poses for msg in _belief_messages(m, p)] + list(
@@ -216,18 +216,8 @@ def write_mcap(
     )
     messages.sort(key=lambda x: x[0])  # (stable) replay order: by stamp
     path = check_mcap_path(Path(path))
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise ConfigError(f"--mcap: cannot create {path.parent} ({exc.strerror or exc})") from None
-    partial = path.with_name(path.name + ".partial")
     counts: Counter[str] = Counter()
-    try:
-        _write(partial, messages, m, counts, recording, estimator)
-    except BaseException:
-        partial.unlink(missing_ok=True)
-        raise
-    os.replace(partial, path)
+    replace_file(path, "--mcap", lambda tmp: _write(tmp, messages, m, counts, recording, estimator))
     return McapWritten(
         path=path,
         bytes=path.stat().st_size,

@@ -27,6 +27,7 @@ from numpy.typing import NDArray
 
 from relloc.errors import ConfigError
 from relloc.pipeline.export.poses import PoseSeries, PoseSet, ros_token, yaw_quaternion
+from relloc.pipeline.output import replace_file
 
 Array = NDArray[np.float64]
 HEADER = "# timestamp tx ty tz qx qy qz qw"
@@ -77,16 +78,18 @@ def write_tum(directory: Path, poses: PoseSet) -> tuple[TumPair, ...]:
         if not p.trajectory:
             continue
         folder = directory / poses.names[p.owner]
-        try:
-            folder.mkdir(parents=True, exist_ok=True)
-        except OSError as exc:
-            raise ConfigError(f"--tum: cannot create {folder} ({exc.strerror or exc})") from None
-        estimate = folder / f"{_stem(p)}.tum"
-        estimate.write_text(tum_lines(p.t, p.position, p.yaw))
+        estimate = _write(folder / f"{_stem(p)}.tum", tum_lines(p.t, p.position, p.yaw))
         truth = None
         known = p.has_truth
         if known.any():
-            truth = folder / f"{_stem(p)}.truth.tum"
-            truth.write_text(tum_lines(p.t[known], p.truth_position[known], p.truth_yaw[known]))
+            truth = _write(
+                folder / f"{_stem(p)}.truth.tum",
+                tum_lines(p.t[known], p.truth_position[known], p.truth_yaw[known]),
+            )
         out.append(TumPair(label=p.label, estimate=estimate, truth=truth, poses=int(p.t.size)))
     return tuple(out)
+
+
+def _write(path: Path, text: str) -> Path:
+    """One TUM file, its folder created (:func:`~relloc.pipeline.output.replace_file`)."""
+    return replace_file(path, "--tum", lambda tmp: tmp.write_text(text))
