@@ -1,6 +1,7 @@
 """``relloc run``: default scenario smoke test, a user's TOML, bad TOML → exit code 2."""
 
 import json
+import os
 import textwrap
 
 import pytest
@@ -36,22 +37,11 @@ speed = 0.5
 
 def test_run_default_scenario_writes_summary_report_and_figures(tmp_path, capsys):
     out = tmp_path / "out"
-    code = main(
-        [
-            "run",
-            "--out",
-            str(out),
-            "--runs",
-            "2",
-            "--seed",
-            "3",
-            "--duration",
-            "12",
-            "--executor",
-            "serial",
-        ]
-    )
-    assert code == 0
+    argv = ["run", "--out", str(out), "--runs", "2", "--seed", "3", "--duration", "12"]
+    argv += ["--executor", "serial"]
+    assert main(argv) == 0
+    printed = capsys.readouterr()
+    assert "earlier run" not in printed.err and "observer->aerial1" in printed.out
     summary = json.loads((out / "summary.json").read_text())
     assert summary["seed"] == 3 and summary["runs"] == 2 and summary["filter"] == "plkf"
     assert set(summary["pairs"]) == {
@@ -82,7 +72,13 @@ def test_run_default_scenario_writes_summary_report_and_figures(tmp_path, capsys
     assert {"errors_all.png", "nees_nis.png", "conditioning.png", "trajectories.png"} <= set(pngs)
     for name in pngs:
         assert f"({name})" in report
-    assert "observer->aerial1" in capsys.readouterr().out
+    # run again into the same folder: every file of the first run is replaced, and a file no
+    # run of this kind writes is named as an earlier run's
+    (out / "old.png").write_bytes(b"")
+    os.utime(out / "old.png", (0, 0))
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    assert f"relloc: note: 1 file under {out} from an earlier run, not this one: old.png" in err
 
 
 def test_run_user_scenario_with_tekf(tmp_path):

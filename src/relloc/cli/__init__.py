@@ -1,12 +1,14 @@
 """The ``relloc`` command: parse -> library call -> write outputs.
 
-Each subcommand lives in its own module ``relloc.cli.<name>`` exposing
-``add_parser(subparsers)``, which registers the subparser and sets ``func=run(args) -> int``.
-Heavy imports happen inside ``run`` so ``relloc --help`` stays fast. Before a command runs,
+Each subcommand lives in its own module ``relloc.cli.<name>`` exposing ``add_parser(subparsers)``,
+which registers the subparser and sets ``func=run(args) -> int``. Heavy imports happen inside
+``run`` so ``relloc --help`` stays fast. Before a command runs,
 :func:`relloc.cli.extras.check_command` checks the optional extras it needs (exit 5 with the
-install line). Known errors (:class:`relloc.errors.RellocError`) become a one-line message and
-the class's exit code: configuration 2, data 3, model 4, missing extra 5. A misspelt option is
-reported with the usage of the subcommand it was given to.
+install line). After a command that writes an output folder (``--out``), the files there that an
+earlier run left and this one did not replace are named on stderr. Known errors
+(:class:`relloc.errors.RellocError`) become a one-line message and the class's exit code:
+configuration 2, data 3, model 4, missing extra 5. A misspelt option is reported with the usage of
+the subcommand it was given to.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ import importlib
 import importlib.util
 import os
 import sys
+import time
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -78,6 +81,22 @@ def _subparser(
     return parser
 
 
+def _note_earlier_files(out: Path, started: float) -> None:
+    """Say which files of ``--out`` an earlier run left there (this run did not write them)."""
+    from relloc.pipeline.output import earlier_files
+
+    old = earlier_files(out, started)
+    if old:
+        names = ", ".join(str(p.relative_to(out)) for p in old[:5])
+        more = f" and {len(old) - 5} more" if len(old) > 5 else ""
+        print(
+            f"relloc: note: {len(old)} file{'s' * (len(old) > 1)} under {out} from an earlier "
+            "run, not this one: "
+            f"{names}{more} (remove them, or use a new --out)",
+            file=sys.stderr,
+        )
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     from relloc.cli.extras import check_command
 
@@ -92,7 +111,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         os.environ[DATA_ENV] = str(args.data_dir)
     try:
         check_command(args)
-        return int(args.func(args) or 0)
+        started = time.time()
+        code = int(args.func(args) or 0)
+        if code == 0 and isinstance(getattr(args, "out", None), Path):
+            _note_earlier_files(args.out, started)
+        return code
     except RellocError as exc:
         print(f"relloc: error: {exc}", file=sys.stderr)
         return exc.exit_code

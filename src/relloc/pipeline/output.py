@@ -49,6 +49,28 @@ def prepare_out_dir(out_dir: Path | str, flag: str = "--out") -> Path:
     return path
 
 
+EARLIER_SLACK_S = 0.1
+"""A file's modification time may lag the clock by a timer tick: a file is an earlier run's
+only if it is older than the run's start by more than this."""
+
+
+def earlier_files(out_dir: Path, started: float) -> list[Path]:
+    """The files under ``out_dir`` last written before ``started`` (a :func:`time.time`):
+    an earlier run's, which this run did not replace (its outputs are all written anew).
+    Links are not followed."""
+    since = started - EARLIER_SLACK_S
+    found = []
+    for root, _, names in os.walk(out_dir):
+        for name in names:
+            path = Path(root) / name
+            try:
+                if path.lstat().st_mtime < since:
+                    found.append(path)
+            except OSError:  # removed meanwhile
+                continue
+    return sorted(found)
+
+
 def check_writable_file(path: Path, flag: str) -> None:
     """ConfigError naming ``flag`` unless a file can be written at ``path``: not a folder,
     its folder existing or creatable, writable (checked before a long run, not after it)."""
