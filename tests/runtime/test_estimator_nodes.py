@@ -362,7 +362,7 @@ def _handmade_fit(folder: str):
     from relloc.calibration.window import CalibrationWindow
     from relloc.experiments.mrclam_cl import FittedModels
 
-    window = CalibrationWindow(start_s=0.0, end_s=400.0, source=folder)
+    window = CalibrationWindow(start_s=1.0, end_s=400.0, source=folder)  # inside run 6
     return FittedModels(
         odometry=OdometryModelFit(
             calibration_window=window,
@@ -396,8 +396,8 @@ def _handmade_fit(folder: str):
 
 def test_fitted_models_round_trip_through_fit_json(tmp_path):
     from relloc.calibration.window import CalibrationWindow
+    from relloc.experiments.fit_file import load_fit, save_fit
     from relloc.experiments.mrclam_cl import OdometryInflation
-    from relloc.experiments.mrclam_team import load_fit, save_fit
 
     halves = CalibrationWindow(0.0, 200.0, "x"), CalibrationWindow(200.0, 400.0, "x")
     inflation = OdometryInflation(1.5, True, 5.0, ((1.0, 9.5), (1.5, 4.25)), *halves)
@@ -405,14 +405,59 @@ def test_fitted_models_round_trip_through_fit_json(tmp_path):
     save_fit(fit, tmp_path / "fit.json")
     assert load_fit(tmp_path / "fit.json") == fit
     (tmp_path / "bad.json").write_text('{"odometry": {}}')
+    with pytest.raises(DataError, match=r"bad\.json: odometry\.calibration_window: missing"):
+        load_fit(tmp_path / "bad.json")
+    (tmp_path / "bad.json").write_text("[" * 100_000 + "]" * 100_000)  # RecursionError once
     with pytest.raises(DataError, match=r"bad\.json: not the fitted models"):
         load_fit(tmp_path / "bad.json")
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        (("camera", "sigma_range", "nan"), "camera.sigma_range: expected float, got a string"),
+        (("odometry", "k_v", None), "odometry.k_v: expected float, got null"),
+        (("camera", "sigma_range", -0.36), "camera.sigma_range: must be > 0, got -0.36"),
+        (("camera", "sigma_range", 10**400), "camera.sigma_range: must be a finite number"),
+        (("odometry", "scale_v", [[1, 2]] * 5), r"odometry.scale_v\[0\]: expected float"),
+        (("odometry", "latency_s", -100), "odometry.latency_s: -100.0 s is outside"),
+        (("odometry", "time_constant_s", 1e12), "time_constant_s: 1000000000000.0 s is"),
+        (("odometry_inflation", "k", -1.5), "odometry_inflation.k: must be > 0"),
+        (("odometry_inflation", "met", "false"), "odometry_inflation.met: expected bool"),
+        (("camera", "range_bias_coeffs", []), "camera.range_bias_coeffs: 0 values"),
+        (("camera", "sigma_rnage", 0.1), "camera.sigma_rnage: unknown key"),
+        (("odometry", "calibration_window", {"start_s": 5, "end_s": 1, "source": "x"}), "empty"),
+        (("odometry_inflation", "tried", [[1.0]]), r"tried\[0\]: expected 2 values, got 1"),
+    ],
+)
+def test_a_fit_file_edited_by_hand_is_refused_naming_the_key(tmp_path, edit, message):
+    """Each of these once crashed a robot process (TypeError, ValueError) or was used as is."""
+    from relloc.experiments.fit_file import load_fit, save_fit
+
+    save_fit(_handmade_fit("x"), tmp_path / "fit.json")
+    raw = json.loads((tmp_path / "fit.json").read_text())
+    section, key, value = edit
+    raw[section][key] = value
+    (tmp_path / "fit.json").write_text(json.dumps(raw))
+    with pytest.raises(DataError, match=rf"fit\.json: .*{message}"):
+        load_fit(tmp_path / "fit.json")
+
+
+def test_a_fit_of_another_team_or_span_is_refused():
+    from relloc.experiments.fit_file import check_fit_for
+
+    fit = _handmade_fit("x")  # five robots, windows in [1, 400] s
+    check_fit_for(fit, 5, (0.0, 400.0), "f: ")
+    with pytest.raises(DataError, match=r"f: odometry\.scale_v: 5 values, for a team of 4"):
+        check_fit_for(fit, 4, (0.0, 400.0), "f: ")
+    with pytest.raises(DataError, match=r"odometry\.calibration_window: \[1\.00, 400\.00\]"):
+        check_fit_for(fit, 5, (10.0, 400.0), "f: ")
 
 
 @pytest.mark.slow
 def test_mrclam_agents_as_processes_each_equal_the_in_process_eif(tmp_path):
     from relloc.datasets.paths import default_mrclam_dataset
-    from relloc.experiments.mrclam_team import save_fit
+    from relloc.experiments.fit_file import save_fit
 
     folder = default_mrclam_dataset()
     if not folder.is_dir():

@@ -17,8 +17,6 @@ what a faulty network lost).
 
 from __future__ import annotations
 
-import dataclasses
-import json
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -26,18 +24,16 @@ from typing import Any
 
 import numpy as np
 
-from relloc.calibration.camera import CameraFit
-from relloc.calibration.odometry import OdometryModelFit
-from relloc.calibration.window import CalibrationWindow, leading_fraction
+from relloc.calibration.window import leading_fraction
 from relloc.core.estimates import Estimates
-from relloc.errors import ConfigError, DataError
+from relloc.errors import ConfigError
 from relloc.estimators.cooperative import CooperativeEstimator, CooperativeSettings
+from relloc.experiments.fit_file import check_fit_for, load_fit, save_fit
 from relloc.experiments.mrclam_cl import (
     ANCHORS,
     MODES,
     OUTPUT_DT_S,
     FittedModels,
-    OdometryInflation,
     Prepared,
     build_recording,
     case_settings,
@@ -75,42 +71,11 @@ def fit_dataset(folder: Path) -> tuple[Any, FittedModels]:
     return ds, fit_models(ds, window)
 
 
-def save_fit(fit: FittedModels, path: Path) -> None:
-    """The fitted models as JSON (every value a number, a tuple or the window)."""
-    path.write_text(json.dumps(dataclasses.asdict(fit), indent=1) + "\n")
-
-
-def load_fit(path: Path) -> FittedModels:
-    """The models :func:`save_fit` wrote; a file that does not hold them is a DataError."""
-    try:
-        raw = json.loads(Path(path).read_text())
-
-        def fields(cls: Any, d: dict[str, Any]) -> dict[str, Any]:
-            out = {k: tuple(v) if isinstance(v, list) else v for k, v in d.items()}
-            out["calibration_window"] = CalibrationWindow(**d["calibration_window"])
-            return {f.name: out[f.name] for f in dataclasses.fields(cls)}
-
-        inflation = raw["odometry_inflation"]
-        return FittedModels(
-            odometry=OdometryModelFit(**fields(OdometryModelFit, raw["odometry"])),
-            camera=CameraFit(**fields(CameraFit, raw["camera"])),
-            odometry_inflation=OdometryInflation(
-                k=float(inflation["k"]),
-                met=bool(inflation["met"]),
-                target_percent=float(inflation["target_percent"]),
-                tried=tuple((float(k), float(p)) for k, p in inflation["tried"]),
-                fitted_on=_window_or_none(inflation["fitted_on"]),
-                checked_on=_window_or_none(inflation["checked_on"]),
-                not_fitted=str(inflation["not_fitted"]),
-            ),
-        )
-    except (OSError, ValueError, KeyError, TypeError) as exc:
-        raise DataError(f"{path}: not the fitted models of relloc team up ({exc})") from None
-
-
-def _window_or_none(d: dict[str, Any] | None) -> CalibrationWindow | None:
-    """A window :func:`save_fit` wrote (``None`` where there was none)."""
-    return None if d is None else CalibrationWindow(**d)
+def checked_fit(path: Path, ds: Any) -> FittedModels:
+    """The models of the fit file ``path``, checked to be of the team of the dataset ``ds``."""
+    fit = load_fit(path)
+    check_fit_for(fit, len(ds.robot_ids), (ds.truth_span[0], ds.truth_end), f"{path}: ")
+    return fit
 
 
 def parse_case(case: str) -> tuple[str, str]:
@@ -149,7 +114,8 @@ def cooperative_node_parts(
     """Agent ``robot`` of the recorded team (module docstring)."""
     from relloc.datasets.mrclam import load_mrclam
 
-    prepared, settings = prepared_team(load_mrclam(folder), load_fit(fit_path), seed, case)
+    ds = load_mrclam(folder)
+    prepared, settings = prepared_team(ds, checked_fit(fit_path, ds), seed, case)
     rec = prepared.recording
     if robot not in rec.robots:
         raise ConfigError(f"--robot: {robot!r} is not in {folder} {rec.robots}")
@@ -199,7 +165,8 @@ def run_mrclam_team(s: MrclamTeamSettings) -> dict[str, Any]:
     else:
         from relloc.datasets.mrclam import load_mrclam
 
-        ds, fit = load_mrclam(s.folder), load_fit(s.fit_path)
+        ds = load_mrclam(s.folder)
+        fit = checked_fit(s.fit_path, ds)
     save_fit(fit, out / FIT_FILE)
     prepared, settings = prepared_team(ds, fit, s.seed, s.case)
     rec = prepared.recording
