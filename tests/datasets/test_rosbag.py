@@ -200,6 +200,24 @@ def test_a_missing_or_wrong_topic_names_the_key(tmp_path):
         (('robot = "beta"', 'robot = "gamma"'), r"uwb\.nodes\[1\]\.robot: 'gamma'"),
         (('topics = "/u/{a}/{b}/d"', 'topics = "/u/{a}/d"'), r"uwb\.topics: must contain \{b\}"),
         (("sigma = 0.1", "sigma = -1"), r"uwb\.sigma: must be > 0"),
+        # finite but absurd: 1e300 once overflowed the range filter (OverflowError)
+        (("sigma = 0.1", "sigma = 1e300"), r"uwb\.sigma: 1e\+300 is beyond ±10000"),
+        (("sigma = 0.1", "sigma = 1" + "0" * 400), r"uwb\.sigma: must be finite"),
+        (
+            ('robot = "beta"', 'robot = "beta"\noffset = [1e300, 0.0, 0.0]'),
+            r"uwb\.nodes\[1\]\.offset\[0\]: 1e\+300 is beyond",
+        ),
+        (
+            ("position = [0.0, 5.0, 0.0]", "position = [0.0, -2e5, 0.0]"),
+            r"uwb\.nodes\[2\]\.position\[1\]: -200000 is beyond",
+        ),
+        (
+            (
+                'odometry = "/alpha/odom"',
+                'odometry = "/alpha/odom"\nodometry_sigma = [1, 0, 0, 1e300]',
+            ),
+            r"robots\[0\]\.odometry_sigma\[3\]: 1e\+300 is beyond ±100",
+        ),
         (('name = "n_4"', 'name = "n_3"'), r"uwb\.nodes\[3\]\.name: 'n_3' is named twice"),
         (("position = [0.0, 5.0, 0.0]", "position = [0.0, 5.0]"), r"uwb\.nodes\[2\]\.position"),
         (('name = "sample"', 'name = "sample"\nstamp = "gps"'), r"stamp: must be one of"),

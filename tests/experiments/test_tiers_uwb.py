@@ -126,6 +126,22 @@ def test_relloc_run_on_a_bag(tmp_path, capsys):
     plain = tmp_path / "plain"
     assert main([*argv[:5], str(plain), "--no-plots", "--quiet"]) == 0
     assert sorted(p.name for p in plain.iterdir()) == ["report.md", "summary.json"]
+    assert json.loads((plain / "summary.json").read_text())["antenna_offset_not_modelled_m"] == 0
+    assert "offsets" not in capsys.readouterr().err
+    # an antenna offset this range filter does not model is said, not dropped silently
+    from importlib import resources
+
+    text = resources.files("relloc.datasets").joinpath("mappings", "tiers_cooperative.toml")
+    text = text.read_text(encoding="utf-8")
+    moved = text.replace(
+        'robot = "turtlebot1"\n', 'robot = "turtlebot1"\noffset = [0.3, 0.4, 0.0]\n'
+    )
+    assert moved != text
+    (tmp_path / "moved.toml").write_text(moved)
+    offset = [*argv[:3], str(tmp_path / "moved.toml"), "--out", str(tmp_path / "o")]
+    assert main([*offset, "--no-plots", "--quiet"]) == 0
+    assert "antenna offsets (up to 0.5 m) are not modelled" in capsys.readouterr().err
+    assert "up to 0.5 m from its robot's origin" in (tmp_path / "o" / "report.md").read_text()
     for flag, value in (("--runs", "3"), ("--duration", "5"), ("--executor", "serial")):
         assert main([*argv[:5], str(tmp_path / "no"), flag, value, "--quiet"]) == 2
         assert f"{flag}:" in capsys.readouterr().err

@@ -286,6 +286,13 @@ def _run_bag(args: argparse.Namespace) -> int:
         export=export_request(args),
         plots=not args.no_plots and available("plot"),
     )
+    if summary["antenna_offset_not_modelled_m"] > 0:
+        print(
+            f"relloc: note: the mapping's antenna offsets (up to "
+            f"{summary['antenna_offset_not_modelled_m']:.3g} m) are not modelled by this range "
+            "filter; relloc reproduce tiers-uwb uses them",
+            file=sys.stderr,
+        )
     if not args.quiet:
         print(console.team_summary_table(summary, width=console.terminal_width()))
         print(f"wrote {args.out / 'summary.json'} and {args.out / 'report.md'}")

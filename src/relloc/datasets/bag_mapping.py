@@ -42,6 +42,12 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
+from relloc.core.limits import (
+    MAX_ABS_POSITION_M,
+    MAX_RADIO_RANGE_M,
+    MAX_SPEED_M_S,
+    MAX_YAW_RATE_RAD_S,
+)
 from relloc.core.recording import PLATFORMS
 from relloc.errors import ConfigError
 
@@ -171,12 +177,20 @@ def _bool(value: object, where: str) -> bool:
     return value
 
 
-def _float(value: object, where: str, *, positive: bool = False, nonneg: bool = False) -> float:
+def _float(
+    value: object, where: str, *, positive: bool = False, nonneg: bool = False, limit: float
+) -> float:
+    """A finite number within ±``limit`` (> 0 with ``positive``, ≥ 0 with ``nonneg``)."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise ConfigError(f"{where}: expected a number, got {value!r:.60}")
-    x = float(value)
+    try:
+        x = float(value)
+    except OverflowError:  # an integer beyond any float
+        x = math.inf
     if not math.isfinite(x):
-        raise ConfigError(f"{where}: must be finite, got {x}")
+        raise ConfigError(f"{where}: must be finite, got {value!r:.60}")
+    if abs(x) > limit:
+        raise ConfigError(f"{where}: {x:g} is beyond ±{limit:g}")
     if positive and not x > 0:
         raise ConfigError(f"{where}: must be > 0, got {x:g}")
     if nonneg and x < 0:
@@ -184,10 +198,16 @@ def _float(value: object, where: str, *, positive: bool = False, nonneg: bool = 
     return x
 
 
-def _vector(value: object, where: str, size: int, *, nonneg: bool = False) -> tuple[float, ...]:
+def _vector(
+    value: object, where: str, limits: tuple[float, ...], *, nonneg: bool = False
+) -> tuple[float, ...]:
+    """One number per entry of ``limits``, each within its limit (:func:`_float`)."""
+    size = len(limits)
     if not isinstance(value, list) or len(value) != size:
         raise ConfigError(f"{where}: expected a list of {size} numbers, got {value!r:.60}")
-    return tuple(_float(v, f"{where}[{k}]", nonneg=nonneg) for k, v in enumerate(value))
+    return tuple(
+        _float(v, f"{where}[{k}]", nonneg=nonneg, limit=limits[k]) for k, v in enumerate(value)
+    )
 
 
 def _list(value: object, where: str) -> list[Any]:
@@ -213,7 +233,7 @@ def _robot(value: object, where: str) -> RobotTopics:
     sigma = _vector(
         t.get("odometry_sigma", list(DEFAULT_ODOMETRY_SIGMA)),
         f"{where}.odometry_sigma",
-        4,
+        (MAX_SPEED_M_S,) * 3 + (MAX_YAW_RATE_RAD_S,),
         nonneg=True,
     )
     return RobotTopics(
@@ -240,8 +260,9 @@ def _node(value: object, where: str, robots: set[str]) -> UwbNode:
         raise ConfigError(f"{where}.position: a node on a robot moves with it; give offset")
     if robot is None and "offset" in t:
         raise ConfigError(f"{where}.offset: only a node carried by a robot has an offset")
-    offset = _vector(t.get("offset", [0.0, 0.0, 0.0]), f"{where}.offset", 3)
-    pos = None if "position" not in t else _vector(t["position"], f"{where}.position", 3)
+    bounds = (MAX_ABS_POSITION_M,) * 3
+    offset = _vector(t.get("offset", [0.0, 0.0, 0.0]), f"{where}.offset", bounds)
+    pos = None if "position" not in t else _vector(t["position"], f"{where}.position", bounds)
     return UwbNode(
         name=_string(t["name"], f"{where}.name", name=True),
         robot=robot,
@@ -268,7 +289,9 @@ def _uwb(value: object, robots: set[str]) -> UwbTopics:
     for i, name in enumerate(names):
         if name in names[:i]:
             raise ConfigError(f"uwb.nodes[{i}].name: {name!r} is named twice")
-    sigma = None if "sigma" not in t else _float(t["sigma"], "uwb.sigma", positive=True)
+    sigma = None
+    if "sigma" in t:
+        sigma = _float(t["sigma"], "uwb.sigma", positive=True, limit=MAX_RADIO_RANGE_M)
     return UwbTopics(
         topics=template,
         nodes=nodes,
