@@ -24,7 +24,8 @@ paper's leaders L1, L2, as for ``relloc reproduce desilva2015``). ``guler2023`` 
 air-ground team in closed loop: a world process, the leader, followers and drones as processes,
 ``--case`` one of its paper scenarios, default ``two_drones``; see
 :mod:`relloc.experiments.guler2023_team`) takes the same flags but those two; its tick is the
-scenario's 0.05 s, not ``--tick``.
+scenario's 0.05 s, not ``--tick``. A flag the target does not read (:data:`READ_BY`) is
+refused, not ignored.
 
 ``relloc team clock`` runs only the clock/simulator process (for robots started by hand).
 """
@@ -63,7 +64,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         help="scenario TOML file, 'default' (built-in team), an MRCLAM-layout dataset folder, "
         "or a reproduction: desilva2015, desilva2015-kidnapped, sharma2013, guler2023",
     )
-    up.add_argument("--runs", type=int, default=1, help="a reproduction's Monte-Carlo runs")
+    up.add_argument("--runs", type=int, default=None, help="a reproduction's Monte-Carlo runs (1)")
     up.add_argument(
         "--case",
         default=None,
@@ -79,7 +80,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     up.add_argument(
         "--estimator",
         choices=("track", "cooperative"),
-        default="track",
+        default=None,
         help="with a dataset folder: seed 000's track managers, or seed 001's team EIF in "
         "every robot (the mrclam-cl reproduction)",
     )
@@ -89,7 +90,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     up.add_argument("--out", type=Path, required=True, help="output folder")
     up.add_argument("--seed", type=int, default=0, help="simulation and fault seed")
     up.add_argument("--team", default="team", help="team id (key-expression prefix)")
-    up.add_argument("--filter", default="plkf", help="plkf | tekf | bcplkf")
+    up.add_argument(
+        "--filter", default=None, help="a scenario's or a dataset's tracks: plkf | tekf | bcplkf"
+    )
     up.add_argument("--tick", type=float, default=0.1, help="clock tick (publication period), s")
     up.add_argument(
         "--realtime",
@@ -143,11 +146,52 @@ def _robot_events(args: argparse.Namespace) -> dict[str, tuple[object, ...]]:
     }
 
 
+COOPERATIVE = "a dataset with --estimator cooperative"
+TRACKS = "a scenario, default or a dataset's tracks"
+READ_BY: dict[str, tuple[str, ...]] = {
+    "guler2023": ("runs", "duration", "case"),
+    "desilva2015": ("runs", "duration"),
+    "sharma2013": ("runs", "duration", "case"),
+    COOPERATIVE: ("estimator", "duration", "case", "fit"),
+    TRACKS: ("estimator", "filter"),
+}
+"""Which of ``--runs``, ``--duration``, ``--case``, ``--fit``, ``--estimator`` and ``--filter``
+each kind of target reads (:func:`target_kind`); another is refused, never ignored."""
+
+
+def target_kind(args: argparse.Namespace) -> str:
+    """The kind of ``team up`` target (a key of :data:`READ_BY`): a reproduction, a dataset
+    folder's team EIF or the track managers of a scenario, ``default`` or a dataset."""
+    from relloc.experiments.team_sources import KIDNAPPED
+    from relloc.runtime.scenario import REPRODUCTIONS
+
+    if args.scenario in KIDNAPPED:
+        return "desilva2015"
+    if args.scenario in (*REPRODUCTIONS, "guler2023"):
+        return str(args.scenario)
+    return COOPERATIVE if args.estimator == "cooperative" else TRACKS
+
+
+def refuse_unread(args: argparse.Namespace) -> None:
+    """A ConfigError for a flag the target does not read (:data:`READ_BY`)."""
+    from relloc.errors import ConfigError
+
+    reads = READ_BY[target_kind(args)]
+    for name in ("runs", "duration", "case", "fit", "estimator", "filter"):
+        if getattr(args, name) is not None and name not in reads:
+            readers = [k for k, names in READ_BY.items() if name in names]
+            raise ConfigError(
+                f"--{name}: {args.scenario!r} does not read it (read by: {'; '.join(readers)})"
+            )
+
+
 def run_up(args: argparse.Namespace) -> int:
     from relloc.runtime.scenario import REPRODUCTIONS
 
     refuse_desilva_only(args)
-
+    refuse_unread(args)
+    if args.runs is None:  # the default of the targets that read it
+        args.runs = 1
     if args.scenario == "guler2023":
         from relloc.cli.airground import run_team_up
 
@@ -156,13 +200,6 @@ def run_up(args: argparse.Namespace) -> int:
         return run_reproduction(args)
     if args.estimator == "cooperative":
         return run_mrclam(args)
-    if args.duration is not None:
-        from relloc.errors import ConfigError
-
-        raise ConfigError(
-            "--duration: only the reproductions and MRCLAM teams take it; a scenario runs for "
-            "its own duration_s"
-        )
     from relloc.runtime.launcher import TeamSettings
     from relloc.runtime.team import run_team
 
@@ -176,7 +213,7 @@ def run_up(args: argparse.Namespace) -> int:
         realtime_factor=args.realtime,
         port=args.port,
         wall_timeout_s=args.timeout,
-        filter_kind=args.filter,
+        filter_kind=args.filter or "plkf",
         secure=args.secure,
         certs_dir=args.certs,
     )
