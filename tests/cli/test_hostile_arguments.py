@@ -47,14 +47,20 @@ def a_file(tmp_path: Path) -> Path:
         (["team", "up", "default", "--runs", "3"], "--runs: 'default' does not read it"),
         (["team", "up", "default", "--case", "two_landmarks"], "(read by: guler2023; sharma"),
         (["team", "up", "default", "--fit", "f.json"], "--fit: 'default' does not read it"),
-        (["team", "up", "sharma2013", "--fit", "f.json"], "(read by: a dataset with --estimator cooperative)"),
+        (
+            ["team", "up", "sharma2013", "--fit", "f.json"],
+            "(read by: a dataset with --estimator cooperative)",
+        ),
         (["team", "up", "sharma2013", "--filter", "tekf"], "--filter: 'sharma2013' does not"),
         (["team", "up", "desilva2015", "--case", "x"], "--case: 'desilva2015' does not read it"),
         (["team", "up", "guler2023", "--estimator", "track"], "--estimator: 'guler2023' does"),
         (["team", "up", "default", "--estimator", "cooperative"], "is not a dataset folder"),
         (["airground", "world", "--team", "ta", "--duration", "1e12"], "robot-ticks"),  # 146 TiB
         (["airground", "world", "--team", "ta", "--kill", "Z_9@0.5"], "unknown robot 'Z_9'"),
-        (["airground", "world", "--team", "ta", "--restart", "R_1@0.5"], "has no earlier --kill"),
+        (
+            ["airground", "world", "--team", "ta", "--restart", "R_1@0.5"],
+            "is not down then (no earlier --kill)",
+        ),
         (
             [
                 "team",

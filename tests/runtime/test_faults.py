@@ -4,6 +4,7 @@ parsing (by hand and fuzzed)."""
 from __future__ import annotations
 
 import itertools
+import re
 
 import numpy as np
 import pytest
@@ -87,6 +88,30 @@ def test_parsing_and_validation_name_the_flag():
         FaultSettings(restarts=(parse_robot_event("a@5", "--restart"),))
     with pytest.raises(ConfigError, match="unknown robot"):
         FaultSettings(kills=(parse_robot_event("zz@5", "--kill"),)).check_robots(("a", "b"))
+
+
+@pytest.mark.parametrize(
+    ("kills", "restarts", "message"),
+    [
+        (["a@1", "a@2"], [], "--kill a@2.0: a is already down then (killed at 1 s)"),
+        (["a@1"], ["a@1.5", "a@2"], "--restart a@2.0: a is not down then (restarted at 1.5 s)"),
+        (["a@1"], ["a@1"], "--restart a@1.0: a is not down then (no earlier --kill)"),
+    ],
+)
+def test_a_kill_or_restart_that_would_do_nothing_is_refused(kills, restarts, message):
+    """These were accepted: the second restart reported as completed, the second kill as a
+    fault of its own."""
+    events = {
+        "kills": tuple(parse_robot_event(k, "--kill") for k in kills),
+        "restarts": tuple(parse_robot_event(r, "--restart") for r in restarts),
+    }
+    with pytest.raises(ConfigError, match=re.escape(message)):
+        FaultSettings(**events)
+    kill, restart = parse_robot_event("a@1", "--kill"), parse_robot_event("a@2", "--restart")
+    again = parse_robot_event("a@3", "--kill")
+    FaultSettings(kills=(kill, again), restarts=(restart,)).check_robots(("a", "b"))
+    with pytest.raises(ConfigError, match="its side holds the whole team, so it separates"):
+        FaultSettings(partitions=(parse_partition("b,a@1-2"),)).check_robots(("a", "b"))
 
 
 def test_a_stall_holds_one_link_from_its_time_then_releases_it_in_order():

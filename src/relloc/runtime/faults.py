@@ -147,13 +147,32 @@ class FaultSettings:
                 raise ConfigError(f"faults.{name}: {value!r} must be a finite number ≥ 0")
         if not (0 < self.reorder_hold_s <= 60):
             raise ConfigError(f"faults.reorder_hold_s: {self.reorder_hold_s} outside (0, 60] s")
-        for restart in self.restarts:
-            before = [k.at_s for k in self.kills if k.robot == restart.robot]
-            if not any(k < restart.at_s for k in before):
-                raise ConfigError(
-                    f"faults.restarts: {restart.robot}@{restart.at_s:g} has no earlier "
-                    f"--kill {restart.robot}@T"
-                )
+        self._check_robot_events()
+
+    def _check_robot_events(self) -> None:
+        """Each robot's kills and restarts alternate in time, a kill first: a kill of a robot
+        that is down or a restart of one that is up would do nothing. (At one instant a
+        restart comes first: a kill and a restart at the same time restart nothing.)"""
+        events = sorted(
+            [(e.at_s, "kill", e) for e in self.kills]
+            + [(e.at_s, "restart", e) for e in self.restarts],
+            key=lambda x: (x[0], x[1] == "kill"),
+        )
+        down: dict[str, float] = {}  # robot → when it was killed
+        up_since: dict[str, float] = {}  # robot → when it was restarted
+        for at_s, action, e in events:
+            if action == "kill" and e.robot in down:
+                when = f"killed at {down[e.robot]:g} s"
+                raise ConfigError(f"--kill {e.arg}: {e.robot} is already down then ({when})")
+            if action == "restart" and e.robot not in down:
+                since = up_since.get(e.robot)
+                why = "no earlier --kill" if since is None else f"restarted at {since:g} s"
+                raise ConfigError(f"--restart {e.arg}: {e.robot} is not down then ({why})")
+            if action == "kill":
+                down[e.robot] = at_s
+            else:
+                del down[e.robot]
+                up_since[e.robot] = at_s
 
     @property
     def network_faulty(self) -> bool:
@@ -164,7 +183,8 @@ class FaultSettings:
         ) or bool(self.partitions)
 
     def check_robots(self, roster: tuple[str, ...]) -> None:
-        """Every robot named by an event, partition or stall must be on the team."""
+        """Every robot named by an event, partition or stall must be on the team, and a
+        partition must leave someone on the other side."""
         named = [e.robot for e in (*self.kills, *self.restarts)]
         named += [r for p in self.partitions for r in p.side]
         named += [r for st in self.stalls for r in (st.sender, st.receiver)]
@@ -172,6 +192,11 @@ class FaultSettings:
             if robot not in roster:
                 raise ConfigError(
                     f"faults: unknown robot {robot!r}; the team is {', '.join(roster)}"
+                )
+        for p in self.partitions:
+            if set(roster) <= set(p.side):
+                raise ConfigError(
+                    f"--partition {p.arg}: its side holds the whole team, so it separates nobody"
                 )
 
     def check_times(self, duration_s: float) -> None:
