@@ -45,6 +45,9 @@ def a_file(tmp_path: Path) -> Path:
         (["team", "up", "default", "--realtime", "-1"], "--realtime: must be a finite number"),
         # flags the target does not read were dropped silently
         (["team", "up", "default", "--runs", "3"], "--runs: 'default' does not read it"),
+        (["certs", "c", "--team", "demo\n", "--robots", "a"], "--team: 'demo\\n' is not a valid"),
+        (["team", "clock", "--roster", "a,a", "--duration", "1"], "a robot named twice in a,a"),
+        (["team", "clock", "--roster", "a,,b", "--duration", "1"], "clock.roster: '' is not"),
         (["team", "up", "default", "--case", "two_landmarks"], "(read by: guler2023; sharma"),
         (["team", "up", "default", "--fit", "f.json"], "--fit: 'default' does not read it"),
         (

@@ -232,7 +232,7 @@ def run_clock(args: argparse.Namespace) -> int:
     events = _robot_events(args)
     settings = ClockSettings(
         team=args.team,
-        roster=tuple(r for r in args.roster.split(",") if r),
+        roster=tuple(args.roster.split(",")),  # an empty id is refused, not dropped
         tick_s=args.tick,
         duration_s=args.duration,
         transport=transport_from_args(args),

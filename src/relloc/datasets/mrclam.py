@@ -97,7 +97,7 @@ BoolArray = NDArray[np.bool_]
 
 BARCODES_FILE = "Barcodes.dat"
 LANDMARKS_FILE = "Landmark_Groundtruth.dat"
-_ROBOT_FILE = re.compile(r"^Robot([1-9][0-9]*)_(Groundtruth|Odometry|Measurement)\.dat$", re.ASCII)
+_ROBOT_FILE = re.compile(r"Robot([1-9][0-9]*)_(Groundtruth|Odometry|Measurement)\.dat", re.ASCII)
 ROBOT_KINDS = ("Groundtruth", "Odometry", "Measurement")
 
 # Bounds of the columns (module docstring); a value outside is a logging fault.
@@ -758,7 +758,7 @@ def _discover_robots(folder: Path, options: MrclamOptions) -> list[int]:
     except OSError as exc:
         raise DataError(f"{folder}: cannot list the folder: {exc}") from exc
     for name in names:
-        m = _ROBOT_FILE.match(name)
+        m = _ROBOT_FILE.fullmatch(name)
         if m:
             found.setdefault(int(m.group(1)), set()).add(m.group(2))
     wanted = sorted(found) if options.robots is None else sorted({int(r) for r in options.robots})

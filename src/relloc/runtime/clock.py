@@ -70,6 +70,8 @@ class ClockSettings:
             raise ConfigError("clock.roster: no robots")
         for r in self.roster:
             keys.check_id(r, "clock.roster")
+        if len(set(self.roster)) != len(self.roster):
+            raise ConfigError(f"clock.roster: a robot named twice in {','.join(self.roster)}")
         # a kill of a robot off the roster would keep the clock waiting for it forever
         FaultSettings(kills=self.kills, restarts=self.restarts).check_robots(self.roster)
         if not 0 < self.duration_s < math.inf:

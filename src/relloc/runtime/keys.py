@@ -31,12 +31,12 @@ from relloc.errors import ConfigError
 
 ROBOT_KINDS = ("odom", "meas", "rows", "eqm", "mail", "est", "evt", "stats", "ack", "cmd", "sync")
 CLOCK_KINDS = ("tick", "ctl", "sense")
-_ID = re.compile(r"^[A-Za-z0-9_-]{1,64}$")
+_ID = re.compile(r"[A-Za-z0-9_-]{1,64}")
 
 
 def check_id(value: str, field: str) -> str:
     """Return ``value`` if it is a valid team/robot id, else raise ConfigError naming ``field``."""
-    if not isinstance(value, str) or not _ID.match(value):
+    if not isinstance(value, str) or not _ID.fullmatch(value):
         raise ConfigError(f"{field}: {value!r} is not a valid id (letters, digits, '_', '-')")
     return value
 
