@@ -154,6 +154,17 @@ def test_messages_the_metadata_lists_but_the_storage_lacks_are_counted(tmp_path)
     assert bag.recording.odometry[0].t.size == 4  # of the 6 read before
 
 
+def test_a_robot_without_motion_capture_is_named_when_truth_is_needed(tmp_path):
+    """The message once said the recording had no ground truth at all."""
+    path = write_bag(tmp_path / "bag", _messages())
+    ghost = MAPPING.replace("[uwb]", '[[robots]]\nname = "ghost"\n[uwb]')
+    rec = load_bag(path, parse_mapping(ghost, "ghost.toml")).recording
+    with pytest.raises(
+        DataError, match=r"scoring needs ground truth of every robot; .* for robots ghost"
+    ):
+        rec.require_truth("scoring")
+
+
 def test_inspect_lists_every_topic(tmp_path):
     path = write_bag(tmp_path / "bag", _messages())
     infos = {i.topic: i for i in inspect_bag(path)}

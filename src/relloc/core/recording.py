@@ -719,7 +719,12 @@ class Recording:
     def require_truth(self, what: str) -> tuple[GroundTruth, ...]:
         """The ground truth, or a :class:`DataError` saying that ``what`` needs it."""
         if self.truth is None:
-            raise DataError(f"{what} needs ground truth; recording {self.source!r} has none")
+            lacking = self.meta.get("robots_without_truth")
+            detail = f" for robots {', '.join(lacking)}" if lacking else ""
+            raise DataError(
+                f"{what} needs ground truth of every robot; recording {self.source!r} has "
+                f"none{detail}"
+            )
         return self.truth
 
     def relative_truth(self, observer: str | int, observed: str | int, t: Array | float) -> Array:
