@@ -30,6 +30,10 @@ def a_file(tmp_path: Path) -> Path:
             ["observability", "relative-nonlinear", "--at-state", "x=1,x=2"],
             "--at-state: x is given twice",
         ),
+        (  # exit 4 after the whole analysis, with numpy's warnings, once
+            ["observability", "relative-nonlinear", "--at-state", "x=0,y=0,z=0"],
+            "--at-state/--at-inputs: no rank of 'relative-nonlinear' there",
+        ),
         (["certs", "c", "--team", "demo", "--robots", "a,,b"], "--robots: an empty id"),
         (["observability", "unicycle-landmarks", "--landmarks", "1000000"], "--landmarks"),  # hung
         (["observability", "relative-nonlinear", "--samples", "100000000000"], "--samples in"),
@@ -92,8 +96,9 @@ def test_a_bad_argument_is_refused_before_any_work(tmp_path, monkeypatch, capsys
     extra = ["--out", str(tmp_path / "o")] if argv[:2] == ["team", "up"] else []
     extra += ["--world-out", str(tmp_path / "w.npz")] if argv[0] == "airground" else []
     assert main([*argv, *extra]) == 2
-    err = capsys.readouterr().err
-    assert message in err and "Traceback" not in err
+    out, err = capsys.readouterr()
+    assert message in err and "Traceback" not in err and "Warning" not in err
+    assert "rank" not in out  # refused before any work
     assert not (tmp_path / "o").exists() and not (tmp_path / "w.npz").exists()
 
 

@@ -14,7 +14,7 @@ import argparse
 import math
 from pathlib import Path
 
-from relloc.errors import ConfigError
+from relloc.errors import ConfigError, ModelError
 
 MAX_SAMPLES = 1000
 """Most random states for the generic rank (each is a numeric rank of the whole matrix)."""
@@ -113,9 +113,15 @@ def run(args: argparse.Namespace) -> int:
     results = []
     for model in resolve_models(args.model, opts):
         probe = args.at_state is not None or args.at_inputs is not None
-        if probe:  # validate before the (longer) analysis
+        if probe:  # before the (longer) analysis
             state = _assignments(args.at_state, model.state_names, "at-state")
             inputs = _assignments(args.at_inputs, model.input_names, "at-inputs")
+            try:
+                rank_there = rank_at(model, state, inputs)
+            except ModelError as exc:
+                raise ConfigError(
+                    f"--at-state/--at-inputs: no rank of {model.name!r} there ({exc})"
+                ) from None
         r = analyse(
             model, order=args.order, samples=args.samples, seed=args.seed, precise=args.precise
         )
@@ -138,7 +144,7 @@ def run(args: argparse.Namespace) -> int:
             out["rank_at"] = {
                 "state": state,
                 "inputs": inputs,
-                "rank": rank_at(model, state, inputs),
+                "rank": rank_there,
             }
             print(f"rank at the given state and constant inputs: {out['rank_at']['rank']}")
         for note in r.notes:

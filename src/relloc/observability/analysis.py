@@ -428,7 +428,9 @@ def rank_at(
     params: Sequence[float] | None = None,
     order: int | None = None,
 ) -> int:
-    """Rank of the combined-field observability matrix at ``state`` with constant ``inputs``."""
+    """Rank of the combined-field observability matrix at ``state`` with constant ``inputs``;
+    a ModelError where the matrix is not finite there (a singular configuration, such as two
+    robots at one point)."""
     s = np.asarray(state, dtype=float)
     u = np.asarray(inputs, dtype=float)
     if s.shape != (model.n,) or u.shape != (len(model.inputs),):
@@ -437,4 +439,5 @@ def rank_at(
             f"{len(model.inputs)} values {model.input_names}"
         )
     p = None if params is None else np.asarray(params, dtype=float)
-    return InputRankEvaluator.build(model, order).rank(s, u, p)
+    with np.errstate(all="ignore"):  # a division by zero there: reported as one error
+        return InputRankEvaluator.build(model, order).rank(s, u, p)
