@@ -5,6 +5,7 @@ loopback-only / TLS-only listeners of every child's command line."""
 from __future__ import annotations
 
 import ipaddress
+import json
 import stat
 
 import pytest
@@ -47,6 +48,46 @@ def test_one_certificate_per_robot_and_the_launcher_signed_by_the_team_ca(tmp_pa
     (tmp_path / "flyer.key").unlink()
     with pytest.raises(DataError, match="missing"):
         load_team_certs(tmp_path)
+
+
+def _copy(src, dst):  # type: ignore[no-untyped-def]
+    import shutil
+
+    shutil.copytree(src, dst)
+    return dst
+
+
+def test_certificates_that_do_not_belong_together_are_refused_naming_the_file(tmp_path):
+    """Each of these once started every process and left them waiting, with empty logs, for
+    TLS links that never came up, until the wall timeout."""
+    good = make_team_certs(tmp_path / "good", "demo", ROBOTS).folder
+    other = make_team_certs(tmp_path / "other", "demo", ROBOTS).folder
+    assert load_team_certs(good).robots == ROBOTS
+    cases = {
+        "another team's CA": ({"ca.pem": other / "ca.pem"}, r"observer\.pem: not signed by"),
+        "another CA's pair": (
+            {"observer.pem": other / "observer.pem", "observer.key": other / "observer.key"},
+            r"observer\.pem: not signed by",
+        ),
+        "a teammate's pair": (
+            {"observer.pem": good / "flyer.pem", "observer.key": good / "flyer.key"},
+            r"observer\.pem: its common name is \['flyer'\], not \['observer'\]",
+        ),
+        "a teammate's key": ({"observer.key": good / "flyer.key"}, "not the private key of"),
+        "not PEM": ({"observer.pem": good / "team.json"}, r"observer\.pem: not a PEM certificate"),
+        "a key not PEM": ({"observer.key": good / "team.json"}, "not an unencrypted PEM"),
+    }
+    for name, (replaced, message) in cases.items():
+        folder = _copy(good, tmp_path / name.replace(" ", "_").replace("'", ""))
+        for file, source in replaced.items():
+            (folder / file).write_bytes(source.read_bytes())
+        with pytest.raises(DataError, match=message):
+            load_team_certs(folder)
+    folder = _copy(good, tmp_path / "split")
+    manifest = json.loads((folder / "team.json").read_text())
+    (folder / "team.json").write_text(json.dumps({**manifest, "robots": "observer"}))
+    with pytest.raises(DataError, match="robots must be a list of ids"):  # was split in letters
+        load_team_certs(folder)
 
 
 def test_access_control_lets_each_robot_publish_only_under_its_own_prefix(tmp_path):

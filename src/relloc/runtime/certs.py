@@ -89,14 +89,19 @@ def make_team_certs(
 
 
 def load_team_certs(folder: Path) -> TeamCerts:
-    """The certificate folder written by :func:`make_team_certs` (checked to be complete)."""
+    """The certificate folder written by :func:`make_team_certs`, checked to be complete and
+    to belong together (:func:`check_member`): a mismatch found only by the TLS handshake
+    left every process waiting for links that never came up."""
     folder = Path(folder)
     manifest_path = folder / "team.json"
     try:
         manifest = json.loads(manifest_path.read_text())
-        certs = TeamCerts(folder, str(manifest["team"]), tuple(manifest["robots"]))
-    except (OSError, ValueError, KeyError, TypeError) as exc:
-        raise DataError(f"{manifest_path}: not a relloc certificate folder ({exc})") from exc
+        robots = manifest["robots"]
+        if not isinstance(robots, list) or not all(isinstance(r, str) for r in robots):
+            raise TypeError(f"robots must be a list of ids, got {robots!r:.60}")
+        certs = TeamCerts(folder, str(manifest["team"]), tuple(robots))
+    except (OSError, ValueError, KeyError, TypeError, RecursionError) as exc:
+        raise DataError(f"{manifest_path}: not a relloc certificate folder ({exc})") from None
     missing = [
         str(p)
         for p in (
@@ -108,7 +113,52 @@ def load_team_certs(folder: Path) -> TeamCerts:
     ]
     if missing:
         raise DataError(f"{folder}: missing certificate files {missing}")
+    ca = _read_certificate(certs.ca)
+    for member in (*certs.robots, LAUNCHER_ID):
+        check_member(certs, member, ca)
     return certs
+
+
+def check_member(certs: TeamCerts, member: str, ca: Any) -> None:
+    """DataError naming the file unless ``member``'s certificate is signed by the team's CA
+    (``ca``), names ``member`` (its CN), is valid now and holds the public key of ``member``'s
+    private key."""
+    from cryptography.exceptions import InvalidSignature
+    from cryptography.hazmat.primitives import serialization
+    from cryptography.x509.oid import NameOID
+
+    path = certs.certificate(member)
+    cert = _read_certificate(path)
+    try:
+        cert.verify_directly_issued_by(ca)
+    except (ValueError, TypeError, InvalidSignature) as exc:  # another issuer, key or signer
+        raise DataError(f"{path}: not signed by {certs.ca} ({type(exc).__name__})") from None
+    names = [a.value for a in cert.subject.get_attributes_for_oid(NameOID.COMMON_NAME)]
+    if names != [member]:
+        raise DataError(f"{path}: its common name is {names}, not [{member!r}]")
+    now = datetime.datetime.now(datetime.UTC)
+    if not cert.not_valid_before_utc <= now <= cert.not_valid_after_utc:
+        raise DataError(
+            f"{path}: valid only from {cert.not_valid_before_utc:%Y-%m-%d %H:%M} to "
+            f"{cert.not_valid_after_utc:%Y-%m-%d %H:%M} UTC"
+        )
+    key_path = certs.private_key(member)
+    try:
+        key = serialization.load_pem_private_key(key_path.read_bytes(), password=None)
+    except (OSError, ValueError, TypeError) as exc:
+        raise DataError(f"{key_path}: not an unencrypted PEM private key ({exc})") from None
+    public = serialization.PublicFormat.SubjectPublicKeyInfo
+    pem = serialization.Encoding.PEM
+    if key.public_key().public_bytes(pem, public) != cert.public_key().public_bytes(pem, public):
+        raise DataError(f"{key_path}: not the private key of {path}")
+
+
+def _read_certificate(path: Path) -> Any:
+    x509 = require("cryptography.x509", "runtime")
+    try:
+        return x509.load_pem_x509_certificate(path.read_bytes())
+    except (OSError, ValueError) as exc:
+        raise DataError(f"{path}: not a PEM certificate ({exc})") from None
 
 
 def _name(common_name: str, team: str | None = None) -> Any:
