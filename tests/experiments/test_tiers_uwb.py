@@ -46,6 +46,12 @@ def test_calibrated_on_one_stretch_scored_on_another(tmp_path):
     calibration = cut(src, tmp_path / "first", 0.0, 8.0)
     other = cut(src, tmp_path / "second", 20.0, 26.0)
     out = tmp_path / "out"
+    # a mapping that states a σ, which the fitted one replaces (said in the report)
+    from importlib import resources
+
+    shipped = resources.files("relloc.datasets").joinpath("mappings", "tiers_relative.toml")
+    text = shipped.read_text(encoding="utf-8")
+    (tmp_path / "map.toml").write_text(text.replace("[uwb]\n", "[uwb]\nsigma = 0.25\n", 1))
     code = main(
         [
             "reproduce",
@@ -55,7 +61,7 @@ def test_calibrated_on_one_stretch_scored_on_another(tmp_path):
             "--bag",
             str(other),
             "--map",
-            "tiers_relative",
+            str(tmp_path / "map.toml"),
             "--calibrate-on",
             str(calibration),
             "--quiet",
@@ -80,6 +86,8 @@ def test_calibrated_on_one_stretch_scored_on_another(tmp_path):
     assert b["pairs"] == {}  # no odometry in this layout
     report = (out / "report.md").read_text()
     assert "| team aligned" in report and "its 95 % interval" in report
+    assert b["calibration"]["mapping_sigma_replaced_m"] == 0.25
+    assert "(it replaces the mapping's stated 0.25 m)" in report
 
 
 def test_pairs_with_odometry_get_an_observability_verdict(tmp_path):

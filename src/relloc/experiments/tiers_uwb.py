@@ -41,8 +41,9 @@ pairs :mod:`relloc.experiments.tiers_uwb_pairs`):
 
 summary.json: ``bags.<name>``: ``loader`` (offsets header → bag time, unknown topics, skips),
 ``calibration`` (``source`` ``window`` or ``bag``, the ``window``, the ``fit``, ``link_bias_m``
-by radio names, ``bias_drift_m``, ``range_sigma_m`` the filters use, ``heldout`` range errors
-raw and corrected), ``scored_window_s``, ``team.aligned`` and ``team.anchored`` (``pos_rmse_m``,
+by radio names, ``bias_drift_m``, ``range_sigma_m`` the filters use, ``mapping_sigma_replaced_m``
+the mapping's ``uwb.sigma`` it replaces (``None`` without one), ``heldout`` range errors raw and
+corrected), ``scored_window_s``, ``team.aligned`` and ``team.anchored`` (``pos_rmse_m``,
 ``nees_pct_beyond``: share of record times whose 2-DOF NEES exceeds χ²₂(0.95), with
 ``nees_beyond_interval`` its 95 % interval by batch means over time (widened on short blocks,
 :func:`relloc.metrics.percent_beyond_interval`) and the verdict —
@@ -110,6 +111,8 @@ def analyse_bag(bag: BagRecording, calibration_bag: BagRecording | None) -> dict
     cal_info["heldout"] = heldout_errors(bag, cal, t0, span1)
     cal_info["bias_drift_m"] = cal.bias_drift
     cal_info["range_sigma_m"] = cal.range_sigma
+    uwb = bag.mapping.uwb
+    cal_info["mapping_sigma_replaced_m"] = None if uwb is None else uwb.sigma
     sigma = cal.range_sigma
     fixed = corrected(bag, cal, sigma)
     raw = corrected(bag, None, sigma)
@@ -196,8 +199,13 @@ def report(summary: dict[str, Any]) -> str:
             f"{fit['link_bias_std_m']:.3f} m, outliers {100 * fit['outlier_rate']:.1f} %, "
             f"correlation time {fit['correlation_time_s']:.2f} s, bias drift "
             f"{cal['bias_drift_m']:.3f} m → σ of one range in the filters "
-            f"{cal['range_sigma_m']:.3f} m. "
-            f"Scored on [{b['scored_window_s'][0]:.1f}, {b['scored_window_s'][1]:.1f}] s.",
+            f"{cal['range_sigma_m']:.3f} m"
+            + (
+                f" (it replaces the mapping's stated {cal['mapping_sigma_replaced_m']:g} m). "
+                if cal.get("mapping_sigma_replaced_m") is not None
+                else ". "
+            )
+            + f"Scored on [{b['scored_window_s'][0]:.1f}, {b['scored_window_s'][1]:.1f}] s.",
             "",
         ]
         h = cal["heldout"]
