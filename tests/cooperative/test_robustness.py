@@ -108,3 +108,27 @@ def test_input_the_filter_cannot_use_raises_data_errors(sim):
     )
     with pytest.raises(DataError, match="states no σ"):
         _replay(no_sigma, s.prior, _settings(scenario, use_fixes=True))
+
+
+def test_a_long_still_gap_is_one_exact_step():
+    """A 10⁷ s gap once cost 10⁸ prediction steps (the process was killed for memory); a team
+    standing still steps exactly in one (F = I), the same as in many small steps."""
+    from relloc.estimators.cooperative import TeamPending, TeamTimeline, accumulate_prediction
+
+    pose = np.array([[0.0, 0.0, 0.3], [1.0, 2.0, -1.2]])
+
+    def predicted(w: float, t1: float) -> TeamPending:
+        still = np.zeros((1, 2))
+        timeline = TeamTimeline(
+            start=np.zeros(1), v=still, w=still + w, q_v=still + 0.01, q_w=still + 0.002
+        )
+        pending = TeamPending.at(pose)
+        accumulate_prediction(pending, timeline, 0.0, t1, 0.1)
+        return pending
+
+    one, many = predicted(0.0, 50.0), predicted(1e-300, 50.0)  # 1e-300: stepped 500 times
+    np.testing.assert_allclose(one.pose, many.pose, atol=1e-12)
+    np.testing.assert_allclose(one.F, many.F, atol=1e-12)
+    np.testing.assert_allclose(one.Q, many.Q, rtol=1e-10)
+    huge = predicted(0.0, 1e7)
+    np.testing.assert_allclose(huge.Q[:, 2, 2], 0.002 * 1e7)

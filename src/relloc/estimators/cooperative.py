@@ -453,7 +453,10 @@ def accumulate_prediction(
     dur = end - begin
     ok = np.flatnonzero(dur > 0) + i0
     dur = dur[dur > 0]
-    n_sub = np.maximum(np.ceil(dur / max_step - 1e-9).astype(int), 1)
+    # a segment where the whole team stands still is one exact step (F = I, G constant), so
+    # a long gap after every command expired costs one step, not one per max_step
+    moving = np.any((timeline.v[ok] != 0) | (timeline.w[ok] != 0), axis=1)
+    n_sub = np.where(moving, np.maximum(np.ceil(dur / max_step - 1e-9), 1), 1).astype(np.int64)
     seg = np.repeat(ok, n_sub)
     dt = np.repeat(dur / n_sub, n_sub)[:, None]
     v, w = timeline.v[seg], timeline.w[seg]
