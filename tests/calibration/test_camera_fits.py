@@ -187,8 +187,9 @@ def test_detection_probability_is_the_share_of_frames_showing_a_teammate(synthet
     # only the window counts: the first 30 s hold 30 + 30 frames, 30 + 15 detections
     early = fit_detection_probability(ds, CalibrationWindow(0.0, 29.9, "synthetic"))
     assert early.p_detect == pytest.approx(45 / 60)
-    # a window without frames says so by the documented fallback, and P_D is clipped
-    assert fit_detection_probability(ds, CalibrationWindow(200.0, 300.0, "s")).p_detect == 0.5
+    # a window without frames is refused, naming it (no made-up P_D), and P_D is clipped
+    with pytest.raises(DataError, match=r"\[200.00, 300.00\] s of s: no \(camera frame, other"):
+        fit_detection_probability(ds, CalibrationWindow(200.0, 300.0, "s"))
     assert fit_detection_probability(ds, CalibrationWindow(0.0, 0.4, "s")).p_detect == 0.95
 
 
@@ -206,6 +207,28 @@ def test_detection_in_view_counts_only_teammates_the_truth_puts_in_view(syntheti
     assert fit.to_dict()["calibration_window"] == window.to_dict()
     with pytest.raises(ConfigError, match="half_width_rad"):
         fit_detection_in_view(ds, window, 0.0)
+
+
+def test_detection_in_view_refuses_a_window_without_a_teammate_in_view(synthetic):
+    """Robot 1 sees only a landmark, with robot 2 behind it; robot 2 records no frame at all.
+    Over all frames robot 2 is never seen (P_D clipped to its floor); in view there is no
+    (frame, robot) pair, and neither fit makes up a P_D where the window holds no frame."""
+    t = np.arange(100.0)
+    landmark = synthetic.measurements(t, np.full(100, 10), np.ones(100), np.zeros(100))
+    ds = synthetic.dataset(
+        [
+            synthetic.still_robot(1, 0, 0, 0, 100.0, landmark),
+            synthetic.still_robot(2, -1, 0, 0, 100.0),
+        ],
+        [(1.0, 0.0)],
+    )
+    window = CalibrationWindow(0.0, 99.0, "synthetic")
+    everywhere = fit_detection_probability(ds, window)
+    assert (everywhere.pairs, everywhere.detected_pairs, everywhere.p_detect) == (100, 0, 0.05)
+    with pytest.raises(DataError, match=r"99.00\] s of synthetic: no camera frame with another"):
+        fit_detection_in_view(ds, window, 0.5)
+    with pytest.raises(DataError, match=r"\[200.00, 300.00\] s of s: no camera frame"):
+        fit_detection_in_view(ds, CalibrationWindow(200.0, 300.0, "s"), 0.5)
 
 
 def test_field_of_view_is_the_widest_bearing_in_the_window(synthetic):

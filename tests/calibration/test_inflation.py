@@ -6,12 +6,13 @@ import math
 import pytest
 
 from relloc.calibration.inflation import (
+    MAX_INFLATION_TERMS,
     autocorrelation_inflation,
     gauss_markov_inflation,
     search_text,
     smallest_factor,
 )
-from relloc.errors import ConfigError
+from relloc.errors import ConfigError, DataError
 
 
 def test_gauss_markov_closed_form_is_the_limit_of_the_autocorrelation_sum():
@@ -44,6 +45,44 @@ def test_bad_inputs_are_refused():
         autocorrelation_inflation({1.0: 0.5}, 0.0)
     with pytest.raises(ConfigError, match="period"):
         gauss_markov_inflation(0.0, 1.0)
+
+
+@pytest.mark.parametrize(
+    ("rho", "spacing", "horizon_s", "error", "match"),
+    [
+        ({math.nan: 0.5}, 0.5, 10.0, ConfigError, "lags must be > 0, got nan"),
+        ({-1.0: 0.5}, 0.5, 10.0, ConfigError, "lags must be > 0"),
+        ({1.0: math.nan}, 0.5, 10.0, DataError, "rho at lag 1 s is nan"),
+        ({1.0: math.inf}, 0.5, 10.0, DataError, "rho at lag 1 s is inf"),
+        ({1.0: 0.5}, 0.5, math.nan, ConfigError, "horizon_s"),
+        ({1.0: 0.5}, 0.5, math.inf, ConfigError, "horizon_s"),
+        ({1.0: 0.5}, 1e-9, 10.0, ConfigError, f"spacing 1e-09 s would sum 1e\\+10 terms.*{MAX_INFLATION_TERMS}"),
+    ],
+)
+def test_autocorrelation_inflation_names_the_bad_argument(rho, spacing, horizon_s, error, match):
+    """No KeyError, ValueError, MemoryError or silent NaN: the argument at fault is named."""
+    with pytest.raises(error, match=match):
+        autocorrelation_inflation(rho, spacing, horizon_s)
+
+
+def test_autocorrelation_inflation_sums_up_to_the_term_limit():
+    spacing = 10.0 / MAX_INFLATION_TERMS
+    assert autocorrelation_inflation({1e-3: 0.0}, spacing, 10.0) == 1.0
+
+
+@pytest.mark.parametrize(
+    ("period", "tau", "match"),
+    [
+        (0.1, math.nan, "tau must be finite and ≥ 0, got nan"),
+        (0.1, math.inf, "tau must be finite"),
+        (0.1, -1.0, "tau must be finite and ≥ 0, got -1"),
+        (1e-20, 1.0, "period 1e-20 s is negligible against tau 1 s"),
+        (math.nan, 1.0, "period"),
+    ],
+)
+def test_gauss_markov_inflation_names_the_bad_argument(period, tau, match):
+    with pytest.raises(ConfigError, match=match):
+        gauss_markov_inflation(period, tau)
 
 
 def test_smallest_factor_stops_at_the_first_that_meets_the_target():

@@ -94,8 +94,6 @@ LAG_TOLERANCE_S = 0.25
 MIN_LAG_PAIRS = 10
 #: Clip of the detection probability (a pair never / always seen is not evidence of 0 or 1).
 P_DETECT_LIMITS = (0.05, 0.95)
-#: ``P_D`` when the window holds no camera frame.
-P_DETECT_UNKNOWN = 0.5
 
 
 @dataclass(frozen=True)
@@ -363,7 +361,8 @@ def fit_detection_probability(
     ds: MrclamDataset, window: CalibrationWindow
 ) -> DetectionProbabilityFit:
     """``P_D``: the share of (camera frame, other robot) pairs in ``window`` in which that
-    robot is detected (a frame is a distinct measurement time stamp of an observer)."""
+    robot is detected (a frame is a distinct measurement time stamp of an observer); DataError
+    naming the window when it holds no such pair."""
     seen = pairs = frames = 0
     n_other = len(ds.robot_ids) - 1
     for s in ds.robot_ids:
@@ -374,9 +373,17 @@ def fit_detection_probability(
         pairs += n_frames * n_other
         robots = sel & ds.is_robot(meas.subject) & (meas.subject != s)
         seen += np.unique(np.stack([meas.t[robots], meas.subject[robots]]), axis=1).shape[1]
-    p = float(np.clip(seen / pairs, *P_DETECT_LIMITS)) if pairs else P_DETECT_UNKNOWN
+    if not pairs:
+        raise window.too_little(
+            f"no (camera frame, other robot) pair to fit the detection probability on "
+            f"({frames} frames, {n_other} other robots)"
+        )
     return DetectionProbabilityFit(
-        calibration_window=window, p_detect=p, frames=frames, pairs=pairs, detected_pairs=seen
+        calibration_window=window,
+        p_detect=float(np.clip(seen / pairs, *P_DETECT_LIMITS)),
+        frames=frames,
+        pairs=pairs,
+        detected_pairs=seen,
     )
 
 
@@ -404,9 +411,10 @@ def fit_detection_in_view(
     """``P_D`` inside the field of view: over the camera frames in ``window`` (distinct time
     stamps of an observer) and every other robot whose true bearing from the observer,
     ``wrap(atan2(Δy, Δx) − θ)`` on the ground truth, lies inside ``±half_width_rad``, the
-    share detected (pairs with invalid ground truth are left out). :func:`fit_detection_probability`
-    is the same share over all pairs; the camera's narrow view makes the two differ by the
-    fraction of the time a teammate is in view."""
+    share detected (pairs with invalid ground truth are left out); DataError naming the window
+    when it holds no such pair. :func:`fit_detection_probability` is the same share over all
+    pairs; the camera's narrow view makes the two differ by the fraction of the time a
+    teammate is in view."""
     if not (np.isfinite(half_width_rad) and 0.0 < half_width_rad <= np.pi):
         raise ConfigError(
             f"fit_detection_in_view: half_width_rad must lie in (0, π]: {half_width_rad}"
@@ -428,11 +436,15 @@ def fit_detection_in_view(
             pairs += int(inside.sum())
             seen += int((inside & detected).sum())
             outside += int((valid & ~inside & detected).sum())
-    p_d = float(np.clip(seen / pairs, *P_DETECT_LIMITS)) if pairs else P_DETECT_UNKNOWN
+    if not pairs:
+        raise window.too_little(
+            f"no camera frame with another robot in view (±{half_width_rad:g} rad) to fit the "
+            "detection probability on"
+        )
     return InViewDetectionFit(
         calibration_window=window,
         half_width_rad=float(half_width_rad),
-        p_detect=p_d,
+        p_detect=float(np.clip(seen / pairs, *P_DETECT_LIMITS)),
         pairs_in_view=pairs,
         detected_in_view=seen,
         detected_outside=outside,

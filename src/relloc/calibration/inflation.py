@@ -30,10 +30,12 @@ from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
-from relloc.errors import ConfigError
+from relloc.errors import ConfigError, DataError
 
 #: Lags beyond this (s) are taken as uncorrelated by :func:`autocorrelation_inflation`.
 CORRELATION_HORIZON_S = 10.0
+#: Most terms ``horizon/Δ`` :func:`autocorrelation_inflation` sums (8 MB of lags).
+MAX_INFLATION_TERMS = 1_000_000
 
 
 def autocorrelation_inflation(
@@ -41,11 +43,27 @@ def autocorrelation_inflation(
 ) -> float:
     """``f = 1 + 2 Σ_{k≥1, kΔ ≤ horizon} ρ(kΔ)`` for readings ``Δ = spacing`` apart, with ``ρ``
     the correlation measured at the lags ``rho`` (s → correlation), interpolated linearly,
-    clipped to [0, 1], held at its first value below the first lag and 0 beyond the last."""
+    clipped to [0, 1], held at its first value below the first lag and 0 beyond the last.
+
+    ConfigError naming the argument unless the lags and ``spacing`` are finite and > 0,
+    ``horizon_s`` is finite and ≥ 0 and the sum has at most ``MAX_INFLATION_TERMS`` terms;
+    DataError when a measured correlation is not finite."""
     if not rho:
         raise ConfigError("autocorrelation_inflation: no measured lag correlation")
     if not (math.isfinite(spacing) and spacing > 0):
         raise ConfigError(f"autocorrelation_inflation: spacing must be > 0, got {spacing}")
+    if not (math.isfinite(horizon_s) and horizon_s >= 0):
+        raise ConfigError(f"autocorrelation_inflation: horizon_s must be ≥ 0, got {horizon_s}")
+    if horizon_s / spacing > MAX_INFLATION_TERMS:
+        raise ConfigError(
+            f"autocorrelation_inflation: spacing {spacing:g} s would sum {horizon_s / spacing:.3g}"
+            f" terms over the {horizon_s:g} s horizon, more than {MAX_INFLATION_TERMS}"
+        )
+    for lag, value in rho.items():
+        if not (math.isfinite(lag) and lag > 0):
+            raise ConfigError(f"autocorrelation_inflation: rho's lags must be > 0, got {lag}")
+        if not math.isfinite(value):
+            raise DataError(f"autocorrelation_inflation: rho at lag {lag:g} s is {value}")
     lags = np.array(sorted(rho))
     values = np.clip(np.array([rho[lag] for lag in lags]), 0.0, 1.0)
     k = np.arange(spacing, horizon_s + 1e-9, spacing)
@@ -54,12 +72,20 @@ def autocorrelation_inflation(
 
 def gauss_markov_inflation(period: float, tau: float) -> float:
     """``(1 + a)/(1 − a)``, ``a = exp(−period/τ)``, for a Gauss–Markov error of time constant
-    ``tau`` sampled every ``period`` (1 when ``tau = 0``)."""
-    if tau <= 0.0:
+    ``tau`` sampled every ``period`` (1 when ``tau = 0``). ConfigError unless ``tau`` is finite
+    and ≥ 0 and, for ``tau > 0``, ``period`` is finite, > 0 and not so small against ``tau``
+    that ``a`` rounds to 1 (an unbounded factor)."""
+    if not (math.isfinite(tau) and tau >= 0.0):
+        raise ConfigError(f"gauss_markov_inflation: tau must be finite and ≥ 0, got {tau}")
+    if tau == 0.0:
         return 1.0
     if not (math.isfinite(period) and period > 0):
         raise ConfigError(f"gauss_markov_inflation: period must be > 0, got {period}")
     a = math.exp(-period / tau)
+    if a == 1.0:
+        raise ConfigError(
+            f"gauss_markov_inflation: period {period:g} s is negligible against tau {tau:g} s"
+        )
     return (1.0 + a) / (1.0 - a)
 
 

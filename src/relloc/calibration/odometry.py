@@ -17,7 +17,11 @@ forward speed and turn rate by central differences (:func:`ground_truth_velociti
    on the grid; without the lag a delay alone fits the transients of a step by shrinking the
    scale, which then under-states every steady turn.
 2. *Scales* ``s_v, s_ω`` per robot: ``s = m·c / c·c`` at that ``(τ, T)`` (1 for a robot with
-   no samples in the window).
+   no samples in the window). A channel whose modelled command has an RMS
+   ``√(c·c / N)`` over the ``N`` samples below ``MIN_COMMAND_RMS`` — the recorded commands'
+   resolution — carries no motion to fit a scale on: the fit refuses it with a
+   :class:`DataError` naming the robot, since ``s`` would be noise over (almost) nothing, and a
+   scale of 0 would erase every later command of the robot.
 3. *Variance rates*: the calibrated commands are integrated over consecutive windows of
    ``integration_s = W`` seconds and compared with the ground truth's path over the window:
    ``D_v = s_path − Σ s_v c_v dt``, ``D_ω = Δθ − Σ s_ω c_ω dt`` (``c`` the modelled command
@@ -95,6 +99,10 @@ GRID_DT_S = 0.02
 LATENCY_GRID_S = np.arange(0.0, 0.5001, 0.01)
 #: First-order time constants (s) searched by :func:`fit_odometry_model` (0: a pure delay).
 TIME_CONSTANT_GRID_S = (0.0, 0.05, 0.1, 0.15, 0.2, 0.3, 0.4, 0.6)
+#: Largest latency and time constant (s) :func:`fit_odometry_noise` calibrates with: the largest
+#: :func:`fit_odometry_model` can fit (the ends of its grids).
+MAX_LATENCY_S = float(LATENCY_GRID_S[-1])
+MAX_TIME_CONSTANT_S = max(TIME_CONSTANT_GRID_S)
 #: The lagged response starts this many time constants before the first time asked for
 #: (its start-up transient has decayed to e⁻⁸ by then).
 SETTLE_TIME_CONSTANTS = 8.0
@@ -102,7 +110,10 @@ SETTLE_TIME_CONSTANTS = 8.0
 DIFFERENCE_STEP_S = 0.05
 #: Floor of the fitted constant variance rates ``q_v0``, ``q_ω0``.
 RATE_FLOOR = 1e-6
-#: Guard on ``c·c`` and ``m·m`` in the scale fit and the latency cost.
+#: Smallest RMS of a channel's modelled command (m/s, rad/s) over the window that a scale is
+#: fitted on: the resolution of the recorded commands (1 mm/s, 1 mrad/s on MRCLAM).
+MIN_COMMAND_RMS = 1e-3
+#: Guard on ``c·c`` and ``m·m`` in the latency cost.
 _TINY = 1e-12
 
 
@@ -202,9 +213,25 @@ def _robot_samples(
     return _RobotSamples(robot, t[ok], v[ok], w[ok])
 
 
-def _scale(measured: Array, command: Array) -> float:
-    """Least-squares ``s`` of ``measured ≈ s · command``."""
-    return float(measured @ command) / max(float(command @ command), _TINY)
+def _scales(
+    s: _RobotSamples, commands: tuple[Array, Array], window: CalibrationWindow
+) -> tuple[float, float]:
+    """Least-squares ``s`` of ``measured ≈ s · command`` for the speed and the turn rate of
+    ``s`` (module docstring, step 2); DataError when a channel's command RMS is below
+    ``MIN_COMMAND_RMS``."""
+    scales = []
+    for name, unit, measured, command in zip(
+        ("speed", "turn-rate"), ("m/s", "rad/s"), (s.v, s.w), commands, strict=True
+    ):
+        energy = float(command @ command)
+        rms = math.sqrt(energy / command.size)
+        if rms < MIN_COMMAND_RMS:
+            raise window.too_little(
+                f"no commanded motion of robot {s.robot.subject} in the window to fit its "
+                f"{name} scale on (RMS command {rms:.2g} {unit}, below {MIN_COMMAND_RMS:g})"
+            )
+        scales.append(float(measured @ command) / energy)
+    return scales[0], scales[1]
 
 
 def command_response(
@@ -317,7 +344,8 @@ def fit_odometry_model(
     ds: MrclamDataset, window: CalibrationWindow, integration_s: float
 ) -> OdometryModelFit:
     """Latency, per-robot scales and variance rates of every robot's odometry on ``window``
-    (module docstring); the rates are fitted over ``integration_s``-long windows."""
+    (module docstring); the rates are fitted over ``integration_s``-long windows. A robot
+    without commanded motion in the window is refused (DataError naming it)."""
     from scipy.optimize import nnls
 
     if not (np.isfinite(integration_s) and integration_s > 0):
@@ -332,8 +360,8 @@ def fit_odometry_model(
             scale_v.append(1.0)
             scale_w.append(1.0)
             continue
-        vc, wc = command_response(s.robot.odometry.at, s.t, tau, lag, DIFFERENCE_STEP_S)
-        sv, sw = _scale(s.v, vc), _scale(s.w, wc)
+        commands = command_response(s.robot.odometry.at, s.t, tau, lag, DIFFERENCE_STEP_S)
+        sv, sw = _scales(s, commands, window)
         scale_v.append(sv)
         scale_w.append(sw)
         rows.append(_rate_rows(s, tau, lag, sv, sw, integration_s))
@@ -543,11 +571,36 @@ def fit_odometry_noise(
     lag, scale errors), so a σ fitted for one integration length is only right at that time
     scale. With ``latency_s``, ``scale_v``, ``scale_w``, ``time_constant_s`` (a fitted
     :class:`OdometryModelFit`'s) the commands are first calibrated, ``s · c_τ,T``
-    (:func:`command_response`): the fit is then the noise left after that calibration."""
-    if not (rate_hz > 0 and window_s > 0):
+    (:func:`command_response`): the fit is then the noise left after that calibration.
+
+    ConfigError naming the parameter unless ``rate_hz``, ``window_s`` and the scales are finite
+    and > 0, ``window_s`` holds at least one step ``1/rate_hz`` (the σ divides by ``window_s``)
+    and is no longer than ``window``, and ``latency_s``, ``time_constant_s`` lie in
+    ``[0, MAX_LATENCY_S]``, ``[0, MAX_TIME_CONSTANT_S]`` (what :func:`fit_odometry_model` can
+    fit; the commands lead the motion, so neither is negative)."""
+    for name, value in (
+        ("rate_hz", rate_hz),
+        ("window_s", window_s),
+        ("scale_v", scale_v),
+        ("scale_w", scale_w),
+    ):
+        if not (math.isfinite(value) and value > 0):
+            raise ConfigError(f"fit_odometry_noise: {name} must be finite and > 0, got {value}")
+    if not 1.0 / rate_hz <= window_s <= window.duration_s:
         raise ConfigError(
-            f"fit_odometry_noise: need rate_hz > 0 and window_s > 0; got {rate_hz}, {window_s}"
+            f"fit_odometry_noise: window_s must lie between one step (1/rate_hz = "
+            f"{1.0 / rate_hz:g} s) and the length of the calibration window "
+            f"{window.describe()}, got {window_s:g} s"
         )
+    for name, value, most in (
+        ("latency_s", latency_s, MAX_LATENCY_S),
+        ("time_constant_s", time_constant_s, MAX_TIME_CONSTANT_S),
+    ):
+        if not 0.0 <= value <= most:
+            raise ConfigError(
+                f"fit_odometry_noise: {name} must lie in [0, {most:g}] s (what "
+                f"fit_odometry_model fits), got {value}"
+            )
     dt = 1.0 / rate_hz
     steps = max(round(window_s * rate_hz), 1)
     n_windows = int((window.end_s - window.start_s) // (steps * dt))
