@@ -130,6 +130,28 @@ def test_range_team_filter_with_anchors_localizes_the_free_robots():
     assert counts["ranges_used"] + counts["ranges_gated"] == 7 * 200
 
 
+def test_a_range_to_an_unknown_radio_is_counted_not_fused():
+    """Such a row (no target robot, no landmark) was fused against the last landmark, or
+    raised an IndexError without landmarks."""
+    still = Odometry(t=np.zeros(0), velocity=np.zeros((0, 4)), sigma=(0, 0, 0, 0))
+    rows = measurement_rows("range", t=[1.0], observer=1, value=[5.0], sigma=[0.05])
+    for landmarks in ([[100.0, 100.0, 0.0]], np.zeros((0, 3))):
+        rec = Recording(
+            robots=("a", "b"),
+            platforms=("ground",) * 2,
+            odometry=(still, still),
+            measurements=rows,
+            landmarks=landmarks,
+        )
+        settings = RangeTeamSettings(gate=None)
+        f = RangeTeamFilter(
+            rec.robots, [[0.0, 0.0], [1.0, 0.0]], settings, anchors=(0,), landmarks=rec.landmarks
+        )
+        est = replay(rec, [f])
+        assert est.counts["rows_of_unknown_target"] == 1 and est.counts["ranges_used"] == 0
+        np.testing.assert_allclose(est.series("team", "b").mean[-1], [1.0, 0.0])
+
+
 def test_mds_alignment_and_multilateration_recover_a_configuration():
     rng = np.random.default_rng(14)
     X = rng.uniform(0, 6, (6, 2))

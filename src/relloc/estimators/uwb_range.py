@@ -38,7 +38,7 @@ from numpy.typing import NDArray
 from relloc.association.mixture_reduction import merge_moments
 from relloc.core.contract import Belief, HeldOdometry, Silent, UpdateRecord
 from relloc.core.kalman import chi2_threshold, gated_update, kalman_update
-from relloc.core.recording import Measurements, kind_code
+from relloc.core.recording import NO_TARGET, Measurements, kind_code
 from relloc.errors import ConfigError, DataError
 from relloc.estimators.relative import FRAME as RELATIVE_FRAME
 from relloc.estimators.relative import predict_arrays
@@ -236,6 +236,7 @@ class _Counts:
     used: int = 0
     gated: int = 0
     between_anchors: int = 0
+    unknown_target: int = 0
     other: int = 0
 
 
@@ -317,6 +318,9 @@ class RangeTeamFilter(Silent):
             if batch.kind[q] != RANGE:
                 self.counts.other += 1
                 continue
+            if batch.target[q] == NO_TARGET and batch.landmark[q] == NO_TARGET:
+                self.counts.unknown_target += 1  # a radio of unknown identity or place
+                continue
             pi, ki = self._point(int(batch.observer[q]), -1)
             pj, kj = self._point(int(batch.target[q]), int(batch.landmark[q]))
             if ki is None and kj is None:
@@ -382,6 +386,7 @@ class RangeTeamFilter(Silent):
             "ranges_used": c.used,
             "ranges_gated": c.gated,
             "ranges_between_fixed_points": c.between_anchors,
+            "rows_of_unknown_target": c.unknown_target,
             "rows_not_used": c.other,
         }
 
