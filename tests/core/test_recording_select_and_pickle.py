@@ -1,6 +1,7 @@
 """Measurements.select keeps a valid table without checking it again; recordings pickle."""
 
 import pickle
+import re
 
 import numpy as np
 import pytest
@@ -60,3 +61,21 @@ def test_recording_survives_pickling():
     assert np.array_equal(back.measurements.value, rec.measurements.value, equal_nan=True)
     with pytest.raises(TypeError):
         back.meta["x"] = 1  # type: ignore[index]
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"observer": 1.7, "target": 0.9}, "observer must hold integer indices"),  # was 1, 0
+        ({"value": [[1.0, 0.0]], "kind": "range_bearing_elevation"}, "value is not (1, 3)"),
+        ({"sigma": [1.0, 1.0]}, "sigma is not (1, 1) numbers"),
+        ({"target": [1, 2]}, "target is not (1,) numbers"),
+        ({"t": ["x"]}, "t is not (-1,) numbers"),
+        ({"kind": ["range"]}, "kind ['range'] is not a kind's name"),
+    ],
+)
+def test_rows_of_the_wrong_shape_or_type_are_refused_naming_the_argument(kwargs, message):
+    """These were truncated silently (non-integer indices) or raised raw numpy errors."""
+    args = {"kind": "range", "t": [0.0], "observer": 1, "target": 0, "value": [2.0]} | kwargs
+    with pytest.raises(DataError, match=re.escape(f"measurement_rows: {message}")):
+        measurement_rows(args.pop("kind"), **args)

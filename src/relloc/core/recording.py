@@ -509,33 +509,44 @@ def measurement_rows(
     sensor: IntArray | int = 0,
 ) -> Measurements:
     """A table of rows of one kind: ``value (M, dim)``, ``sigma (M, dim)`` or ``(dim,)``
-    (NaN-padded to the table width); scalars broadcast to every row."""
-    spec = KINDS[kind] if kind in KINDS else None
-    if spec is None:
-        kind_code(kind)  # raises naming the known kinds
-        raise AssertionError  # pragma: no cover
-    t = np.asarray(t, dtype=float).reshape(-1)
+    (NaN-padded to the table width); scalars broadcast to every row. An argument that is not
+    of that shape, or an index that is not an integer, is a DataError naming it."""
+    if not isinstance(kind, str):
+        raise DataError(f"measurement_rows: kind {kind!r:.40} is not a kind's name")
+    spec = KINDS[KIND_NAMES[kind_code(kind)]]  # an unknown name raises, naming the known ones
+
+    def numbers(x: object, shape: tuple[int, ...], name: str, *, reshape: bool = False) -> Array:
+        """``x`` as floats of ``shape``: reshaped (same size) or broadcast (from fewer)."""
+        try:
+            arr = np.asarray(x, dtype=float)
+            return arr.reshape(shape) if reshape else np.broadcast_to(arr, shape).copy()
+        except (ValueError, TypeError) as exc:
+            raise DataError(f"measurement_rows: {name} is not {shape} numbers ({exc})") from None
+
+    t = numbers(t, (-1,), "t", reshape=True)
     m = t.size
-    v = np.asarray(value, dtype=float).reshape(m, spec.dim)
     padded = np.full((m, VALUE_WIDTH), np.nan)
-    padded[:, : spec.dim] = v
+    padded[:, : spec.dim] = numbers(value, (m, spec.dim), "value", reshape=True)
     s = np.full((m, VALUE_WIDTH), np.nan)
     if sigma is not None:
-        s[:, : spec.dim] = np.broadcast_to(np.asarray(sigma, dtype=float), (m, spec.dim))
+        s[:, : spec.dim] = numbers(sigma, (m, spec.dim), "sigma")
 
-    def ints(x: IntArray | int) -> IntArray:
-        return np.broadcast_to(np.asarray(x, dtype=np.int64), (m,)).copy()
+    def ints(x: IntArray | int, name: str) -> IntArray:
+        arr = numbers(x, (m,), name)
+        if not np.all(arr == np.round(arr)):
+            raise DataError(f"measurement_rows: {name} must hold integer indices, got {x!r:.60}")
+        return arr.astype(np.int64)
 
     return Measurements(
         t=t,
         kind=np.full(m, kind_code(kind), dtype=np.int64),
-        observer=ints(observer),
-        target=ints(target),
+        observer=ints(observer, "observer"),
+        target=ints(target, "target"),
         value=padded,
         sigma=s,
-        landmark=ints(landmark),
-        origin=None if origin is None else ints(origin),
-        sensor=ints(sensor),
+        landmark=ints(landmark, "landmark"),
+        origin=None if origin is None else ints(origin, "origin"),
+        sensor=ints(sensor, "sensor"),
     )
 
 
