@@ -93,6 +93,9 @@ def _record_marks(
         return out
 
     if isinstance(record_times, Mapping):
+        unknown = sorted(set(record_times) - {est.owner for est in estimators})
+        if unknown:  # a misspelt owner would record nothing
+            raise ConfigError(f"run_events: record_times of {unknown}, who own no estimator")
         return [marks(record_times.get(est.owner, np.zeros(0))) for est in estimators]
     shared = marks(np.asarray(record_times))
     return [shared for _ in estimators]

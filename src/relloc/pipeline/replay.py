@@ -52,11 +52,22 @@ def merge_times(*arrays: Array) -> Array:
     return t[np.concatenate([[True], np.diff(t) > TIME_TOL])]
 
 
+MAX_RECORDS = 10_000_000
+"""Most record times of one grid (a day at 100 Hz is 8.6 million)."""
+
+
 def record_grid(t0: float, t1: float, rate_hz: float) -> Array:
-    """``t0 + i / rate_hz`` for every ``i`` with ``t0 + i / rate_hz ≤ t1``."""
+    """``t0 + i / rate_hz`` for every ``i`` with ``t0 + i / rate_hz ≤ t1`` (at most
+    :data:`MAX_RECORDS`: ConfigError beyond)."""
     if not (np.isfinite(rate_hz) and rate_hz > 0):
         raise ConfigError(f"record_rate_hz: must be > 0, got {rate_hz}")
-    n = int(np.floor((t1 - t0) * rate_hz + TIME_TOL))
+    records = (t1 - t0) * rate_hz
+    if not (np.isfinite(records) and records <= MAX_RECORDS):
+        raise ConfigError(
+            f"record_rate_hz: {rate_hz:g} Hz over [{t0:g}, {t1:g}] s is more than "
+            f"{MAX_RECORDS} record times"
+        )
+    n = int(np.floor(records + TIME_TOL))
     return np.asarray(t0 + np.arange(n + 1) / rate_hz, dtype=float)
 
 
@@ -82,6 +93,8 @@ def replay(
     """
     if not estimators:
         raise ConfigError("replay: no estimators given")
+    if len({id(e) for e in estimators}) != len(estimators):  # it would be fed twice
+        raise ConfigError("replay: one estimator given twice")
     ticks = None if clock is None else _clock_ticks(clock)
     span0, span1 = recording.span if ticks is None else (float(ticks[0]), float(ticks[-1]))
     t0 = span0 if start is None else float(start)
