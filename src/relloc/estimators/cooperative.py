@@ -105,6 +105,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from relloc.association.gating import mahalanobis_batch
+from relloc.core.checks import count, number, positive, probability
 from relloc.core.contract import BeliefStack, HeldOdometry, Silent, UpdateRecord
 from relloc.core.events import TIME_TOL
 from relloc.core.gaussian import Gaussian
@@ -158,9 +159,7 @@ LINEARISATIONS: tuple[Linearisation, ...] = (
 
 def _check_nonneg(obj: object, names: Sequence[str]) -> None:
     for name in names:
-        value = getattr(obj, name)
-        if not (np.isfinite(value) and value >= 0):
-            raise ConfigError(f"{type(obj).__name__}.{name} must be a finite number ≥ 0")
+        number(getattr(obj, name), f"{type(obj).__name__}.{name}", low=0.0)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -195,8 +194,7 @@ class OdometryModel:
                 "lost_turn_rate",
             ),
         )
-        if not (np.isfinite(self.max_step_s) and self.max_step_s > 0):
-            raise ConfigError("OdometryModel.max_step_s must be a finite number > 0")
+        positive(self.max_step_s, "OdometryModel.max_step_s")
         if self.q_v0 + self.k_v <= 0 or self.q_w0 + self.k_w + self.k_wv <= 0:
             raise ConfigError("OdometryModel: q_v0/k_v and q_w0/k_w must not all be zero")
 
@@ -243,12 +241,14 @@ class SensorModel:
     def __post_init__(self) -> None:
         _check_nonneg(self, ("sigma_range_rel", "range_min_interval_s"))
         for name in ("sigma_bearing", "sigma_range0"):
-            if not (np.isfinite(getattr(self, name)) and getattr(self, name) > 0):
-                raise ConfigError(f"SensorModel.{name} must be a finite number > 0")
-        if not all(np.isfinite(c) for c in self.range_bias_coeffs) or not np.isfinite(
-            self.bearing_bias
-        ):
-            raise ConfigError("SensorModel.range_bias_coeffs/bearing_bias must be finite")
+            positive(getattr(self, name), f"SensorModel.{name}")
+        number(self.bearing_bias, "SensorModel.bearing_bias")
+        if not isinstance(self.range_bias_coeffs, (tuple, list)):
+            raise ConfigError(
+                f"SensorModel.range_bias_coeffs: expected a tuple, got {self.range_bias_coeffs!r}"
+            )
+        for c in self.range_bias_coeffs:
+            number(c, "SensorModel.range_bias_coeffs")
         if len(self.range_bias_coeffs) > len(RANGE_BIAS_FEATURES):
             raise ConfigError(
                 f"SensorModel.range_bias_coeffs: at most {len(RANGE_BIAS_FEATURES)} coefficients"
@@ -292,6 +292,16 @@ class CooperativeSettings:
     second_order: bool = False
 
     def __post_init__(self) -> None:
+        if not isinstance(self.odometry, OdometryModel) or not isinstance(self.sensor, SensorModel):
+            raise ConfigError(
+                "CooperativeSettings: odometry must be an OdometryModel, sensor a SensorModel"
+            )
+        if not isinstance(self.anchors, tuple):
+            raise ConfigError(
+                f"CooperativeSettings.anchors: expected a tuple, got {self.anchors!r}"
+            )
+        for a in self.anchors:
+            count(a, "CooperativeSettings.anchors", low=0)
         if self.filter not in ("eif", "ekf"):
             raise ConfigError(
                 f"CooperativeSettings.filter must be 'eif' or 'ekf', got {self.filter}"
@@ -301,10 +311,8 @@ class CooperativeSettings:
                 f"CooperativeSettings.linearisation must be one of {', '.join(LINEARISATIONS)}, "
                 f"got {self.linearisation}"
             )
-        if self.p_gate is not None and not 0.0 < self.p_gate < 1.0:
-            raise ConfigError(f"CooperativeSettings.p_gate must lie in (0, 1), got {self.p_gate}")
-        if any(a < 0 for a in self.anchors):
-            raise ConfigError("CooperativeSettings.anchors must be landmark indices ≥ 0")
+        if self.p_gate is not None:
+            probability(self.p_gate, "CooperativeSettings.p_gate")
 
     @property
     def uses_detections(self) -> bool:

@@ -103,6 +103,7 @@ from relloc.association.mixture_reduction import (
 )
 from relloc.association.nscan import branch, family_keep_mask, new_history
 from relloc.core.angles import wrap_angle
+from relloc.core.checks import count, number, positive
 from relloc.core.gaussian import Gaussian, GaussianMixture
 from relloc.core.kalman import chi2_threshold, kalman_update, prepare_gates
 from relloc.errors import ConfigError, DataError
@@ -217,13 +218,9 @@ class GaussianSumSettings:
             "max_range",
             "max_position_sigma",
         ):
-            value = getattr(self, name)
-            if not (np.isfinite(value) and value > 0.0):
-                raise ConfigError(f"GaussianSumSettings.{name} must be finite and > 0: {value}")
+            positive(getattr(self, name), f"GaussianSumSettings.{name}")
         for name in ("expected_clutter", "merge_threshold"):
-            value = getattr(self, name)
-            if not (np.isfinite(value) and value >= 0.0):
-                raise ConfigError(f"GaussianSumSettings.{name} must be finite and ≥ 0: {value}")
+            number(getattr(self, name), f"GaussianSumSettings.{name}", low=0.0)
         for name in (
             "prune_weight",
             "nscan_weight",
@@ -231,15 +228,11 @@ class GaussianSumSettings:
             "confirm_weight",
             "known_outlier_probability",
         ):
-            value = getattr(self, name)
-            if not 0.0 <= value < 1.0:
+            value = number(getattr(self, name), f"GaussianSumSettings.{name}", low=0.0, high=1.0)
+            if value == 1.0:
                 raise ConfigError(f"GaussianSumSettings.{name} must lie in [0, 1): {value}")
-        if self.nscan_depth < 1:
-            raise ConfigError(f"GaussianSumSettings.nscan_depth must be ≥ 1: {self.nscan_depth}")
-        if self.max_components < 1:
-            raise ConfigError(
-                f"GaussianSumSettings.max_components must be ≥ 1: {self.max_components}"
-            )
+        count(self.nscan_depth, "GaussianSumSettings.nscan_depth")
+        count(self.max_components, "GaussianSumSettings.max_components")
         for name in (
             "ranges_mark_detections",
             "range_in_view",

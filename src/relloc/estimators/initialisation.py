@@ -34,6 +34,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from relloc.core.checks import number
 from relloc.core.gaussian import Gaussian
 from relloc.errors import ConfigError
 
@@ -208,9 +209,13 @@ class FieldOfView:
     elevation_fov_deg: float = 0.0
 
     def __post_init__(self) -> None:
-        _check_sigma("fov_deg", self.fov_deg)
-        lo, hi = (float(v) for v in self.range_limits)
-        if not (0.0 <= lo < hi and math.isfinite(hi)):
+        number(self.fov_deg, "FieldOfView.fov_deg", low=0.0, high=360.0, open_low=True)
+        number(self.elevation_fov_deg, "FieldOfView.elevation_fov_deg", low=0.0, high=180.0)
+        limits = self.range_limits
+        if not isinstance(limits, (tuple, list)) or len(limits) != 2:
+            raise ConfigError(f"range_limits: need (min, max), got {limits!r:.60}")
+        lo, hi = (number(v, "FieldOfView.range_limits") for v in limits)
+        if not (0.0 <= lo < hi):
             raise ConfigError(f"range_limits: need 0 ≤ min < max < ∞, got {self.range_limits}")
         object.__setattr__(self, "range_limits", (lo, hi))
 

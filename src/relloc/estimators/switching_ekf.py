@@ -53,6 +53,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from relloc.core.angles import wrap_angle
+from relloc.core.checks import positive
 from relloc.core.contract import Belief, HeldOdometry, Silent, UpdateRecord
 from relloc.core.gaussian import Gaussian
 from relloc.core.kalman import gated_update, prepare_gates
@@ -110,9 +111,7 @@ class SwitchingEkfSettings:
             "heading_sigma",
             "sighting_hold",
         ):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0.0):
-                raise ConfigError(f"SwitchingEkfSettings.{name}: must be > 0, got {value!r}")
+            positive(getattr(self, name), f"SwitchingEkfSettings.{name}")
         if not math.isfinite(self.range_bias):
             raise ConfigError(f"SwitchingEkfSettings.range_bias: not finite ({self.range_bias})")
         if self.gate_probability is not None and not 0.0 < self.gate_probability < 1.0:

@@ -36,6 +36,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from relloc.association.mixture_reduction import merge_moments
+from relloc.core.checks import count, positive, probability
 from relloc.core.contract import Belief, HeldOdometry, Silent, UpdateRecord
 from relloc.core.kalman import chi2_threshold, gated_update, kalman_update
 from relloc.core.recording import NO_TARGET, Measurements, kind_code
@@ -69,11 +70,12 @@ class RangePairSettings:
     gate: float | None = 0.999
 
     def __post_init__(self) -> None:
-        if self.n_bearing < 1 or self.n_yaw < 1:
-            raise ConfigError("RangePairSettings: n_bearing and n_yaw must be ≥ 1")
+        for name in ("n_bearing", "n_yaw"):
+            count(getattr(self, name), f"RangePairSettings.{name}")
         for name in ("sigma_range", "sigma_z"):
-            if not (math.isfinite(getattr(self, name)) and getattr(self, name) > 0):
-                raise ConfigError(f"RangePairSettings.{name}: must be > 0")
+            positive(getattr(self, name), f"RangePairSettings.{name}")
+        if self.gate is not None:
+            probability(self.gate, "RangePairSettings.gate")
 
 
 class RangePairBank(Silent):
@@ -226,9 +228,9 @@ class RangeTeamSettings:
 
     def __post_init__(self) -> None:
         for name in ("q", "sigma_position", "sigma_velocity", "sigma_range"):
-            v = getattr(self, name)
-            if not (math.isfinite(v) and v > 0):
-                raise ConfigError(f"RangeTeamSettings.{name}: must be > 0, got {v}")
+            positive(getattr(self, name), f"RangeTeamSettings.{name}")
+        if self.gate is not None:
+            probability(self.gate, "RangeTeamSettings.gate")
 
 
 @dataclass

@@ -53,6 +53,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from relloc.association.mixture_reduction import absorb_weights, heaviest_mask, prune_mask
 from relloc.core.angles import angle_diff
+from relloc.core.checks import number, positive, probability
 from relloc.core.gaussian import Gaussian, GaussianMixture
 from relloc.core.kalman import Innovation
 from relloc.errors import ConfigError, ModelError
@@ -88,16 +89,16 @@ class YawBankSettings:
             raise ConfigError(
                 f"YawBankSettings.n_components: an integer in [2, 64], got {self.n_components!r}"
             )
-        if not (math.isfinite(self.spread_above) and self.spread_above > 0):
-            raise ConfigError(f"YawBankSettings.spread_above: > 0, got {self.spread_above!r}")
-        if not 0.0 < self.prune_ratio < 1.0:
-            raise ConfigError(f"YawBankSettings.prune_ratio: in (0, 1), got {self.prune_ratio!r}")
-        if not (math.isfinite(self.merge_sigmas) and self.merge_sigmas >= 0):
-            raise ConfigError(f"YawBankSettings.merge_sigmas: ≥ 0, got {self.merge_sigmas!r}")
-        if not 0.5 < self.collapse_weight <= 1.0:
-            raise ConfigError(
-                f"YawBankSettings.collapse_weight: in (0.5, 1], got {self.collapse_weight!r}"
-            )
+        positive(self.spread_above, "YawBankSettings.spread_above")
+        probability(self.prune_ratio, "YawBankSettings.prune_ratio")
+        number(self.merge_sigmas, "YawBankSettings.merge_sigmas", low=0.0)
+        number(
+            self.collapse_weight,
+            "YawBankSettings.collapse_weight",
+            low=0.5,
+            high=1.0,
+            open_low=True,
+        )
 
     @property
     def component_sigma(self) -> float:

@@ -38,6 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from relloc.core.checks import number
 from relloc.errors import ConfigError
 
 Array = NDArray[np.float64]
@@ -64,11 +65,10 @@ class VelocityNoise:
 
     def __post_init__(self) -> None:
         for name in ("observer", "observed"):
-            values = tuple(float(v) for v in getattr(self, name))
-            if len(values) != 4:
+            given = getattr(self, name)
+            if isinstance(given, str) or np.ndim(given) != 1 or len(given) != 4:
                 raise ConfigError(f"VelocityNoise.{name}: needs 4 sigmas {INPUT_NAMES}")
-            if not all(np.isfinite(v) and v >= 0.0 for v in values):
-                raise ConfigError(f"VelocityNoise.{name}: sigmas must be finite and ≥ 0: {values}")
+            values = tuple(number(v, f"VelocityNoise.{name}", low=0.0) for v in given)
             object.__setattr__(self, name, values)
 
     @classmethod

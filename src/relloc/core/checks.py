@@ -1,0 +1,52 @@
+"""Checks of settings values: each returns the value as a plain ``float`` or ``int``, or raises
+a :class:`~relloc.errors.ConfigError` naming the field (``where``) — also for a value of the
+wrong type (a string, ``None``, a ``bool``), which arithmetic would reject with a raw
+``TypeError`` or, worse, accept (``"0.1" * 2``)."""
+
+from __future__ import annotations
+
+import math
+import numbers
+
+from relloc.errors import ConfigError
+
+
+def number(
+    value: object,
+    where: str,
+    *,
+    low: float = -math.inf,
+    high: float = math.inf,
+    open_low: bool = False,
+) -> float:
+    """``value`` as a finite float in ``[low, high]`` (``(low, high]`` with ``open_low``)."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise ConfigError(f"{where}: expected a number, got {value!r:.40}")
+    x = float(value)
+    below = x <= low if open_low else x < low
+    if not math.isfinite(x) or below or x > high:
+        interval = f"{'(' if open_low else '['}{low:g}, {high:g}]"
+        raise ConfigError(f"{where}: must be a finite number in {interval}, got {value!r:.40}")
+    return x
+
+
+def positive(value: object, where: str) -> float:
+    """``value`` as a finite float > 0."""
+    return number(value, where, low=0.0, open_low=True)
+
+
+def probability(value: object, where: str) -> float:
+    """``value`` as a probability strictly between 0 and 1 (a χ² gate's)."""
+    p = number(value, where, low=0.0, high=1.0, open_low=True)
+    if p == 1.0:
+        raise ConfigError(f"{where}: must be < 1 (a gate of probability 1 is infinite)")
+    return p
+
+
+def count(value: object, where: str, *, low: int = 1) -> int:
+    """``value`` as an integer ≥ ``low`` (a whole float such as ``3.0`` is not an integer)."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise ConfigError(f"{where}: expected an integer, got {value!r:.40}")
+    if value < low:
+        raise ConfigError(f"{where}: must be ≥ {low}, got {value}")
+    return int(value)
