@@ -25,3 +25,19 @@ def test_bad_executor_and_runs():
         run_monte_carlo(draw, 2, 0, executor="gpu", task_args=(1.0,))
     with pytest.raises(ConfigError, match="runs"):
         run_monte_carlo(draw, 0, 0, executor="serial", task_args=(1.0,))
+
+
+@pytest.mark.parametrize(
+    ("runs", "seed", "message"),
+    [
+        (2.5, 0, "runs: expected an integer"),
+        ("2", 0, "runs: expected an integer"),
+        (True, 0, "runs: expected an integer"),  # ran once
+        (2, -1, "seed: must be ≥ 0"),
+        (2, 1.5, "seed: expected an integer"),
+    ],
+)
+def test_runs_and_seed_of_the_wrong_type_name_themselves(runs, seed, message):
+    """These raised raw numpy errors, or (``True``) ran once."""
+    with pytest.raises(ConfigError, match=message):
+        run_monte_carlo(draw, runs, seed, executor="serial", task_args=(1.0,))

@@ -20,6 +20,7 @@ from typing import Any, TypeVar
 
 import numpy as np
 
+from relloc.core.checks import count
 from relloc.errors import ConfigError, require
 
 R = TypeVar("R")
@@ -84,9 +85,9 @@ MAX_RUNS = 1_000_000
 
 def spawn_seeds(seed: int, n_runs: int) -> list[np.random.SeedSequence]:
     """Independent child seed sequences, one per run (``SeedSequence(seed).spawn(n_runs)``)."""
-    if not 1 <= n_runs <= MAX_RUNS:
+    if count(n_runs, "runs") > MAX_RUNS:
         raise ConfigError(f"runs: must be in 1…{MAX_RUNS}, got {n_runs}")
-    return np.random.SeedSequence(seed).spawn(n_runs)
+    return np.random.SeedSequence(count(seed, "seed", low=0)).spawn(n_runs)
 
 
 def run_monte_carlo(
