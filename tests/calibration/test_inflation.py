@@ -56,7 +56,13 @@ def test_bad_inputs_are_refused():
         ({1.0: math.inf}, 0.5, 10.0, DataError, "rho at lag 1 s is inf"),
         ({1.0: 0.5}, 0.5, math.nan, ConfigError, "horizon_s"),
         ({1.0: 0.5}, 0.5, math.inf, ConfigError, "horizon_s"),
-        ({1.0: 0.5}, 1e-9, 10.0, ConfigError, f"spacing 1e-09 s would sum 1e\\+10 terms.*{MAX_INFLATION_TERMS}"),
+        (
+            {1.0: 0.5},
+            1e-9,
+            10.0,
+            ConfigError,
+            f"spacing 1e-09 s would sum 1e\\+10 terms.*{MAX_INFLATION_TERMS}",
+        ),
     ],
 )
 def test_autocorrelation_inflation_names_the_bad_argument(rho, spacing, horizon_s, error, match):
@@ -66,8 +72,8 @@ def test_autocorrelation_inflation_names_the_bad_argument(rho, spacing, horizon_
 
 
 def test_autocorrelation_inflation_sums_up_to_the_term_limit():
-    spacing = 10.0 / MAX_INFLATION_TERMS
-    assert autocorrelation_inflation({1e-3: 0.0}, spacing, 10.0) == 1.0
+    horizon_s = 0.5 * MAX_INFLATION_TERMS
+    assert autocorrelation_inflation({1.0: 0.0}, 0.5, horizon_s) == 1.0
 
 
 @pytest.mark.parametrize(

@@ -5,6 +5,8 @@ import numpy as np
 import pytest
 
 from relloc.calibration.odometry import (
+    MAX_LATENCY_S,
+    MAX_TIME_CONSTANT_S,
     OdometryModelFit,
     calibrated_commands,
     calibrated_team,
@@ -107,6 +109,63 @@ def test_odometry_noise_fit_refuses_windows_without_ground_truth(synthetic):
         fit_odometry_noise(robot, CalibrationWindow(1.0, 9.0, "synthetic"))
     with pytest.raises(ConfigError, match="rate_hz"):
         fit_odometry_noise(robot, CalibrationWindow(1.0, 9.0, "synthetic"), rate_hz=0.0)
+
+
+@pytest.mark.parametrize(
+    ("parameter", "value", "match"),
+    [
+        ("latency_s", np.nan, r"latency_s must lie in \[0, 0.5\] s .*got nan"),
+        ("latency_s", -5.0, "latency_s must lie in"),
+        ("latency_s", 1e9, "latency_s must lie in"),
+        ("time_constant_s", -1.0, r"time_constant_s must lie in \[0, 0.6\] s"),
+        ("time_constant_s", np.inf, "time_constant_s must lie in"),
+        ("scale_v", np.nan, "scale_v must be finite and > 0, got nan"),
+        ("scale_v", 0.0, "scale_v must be finite and > 0"),
+        ("scale_w", -1.0, "scale_w must be finite and > 0"),
+        ("scale_w", np.inf, "scale_w must be finite and > 0"),
+        ("rate_hz", np.inf, "rate_hz must be finite and > 0"),
+        ("window_s", np.inf, "window_s must be finite and > 0, got inf"),
+        ("window_s", np.nan, "window_s must be finite and > 0"),
+        ("window_s", 0.001, r"window_s must lie between one step \(1/rate_hz = 0.01 s\)"),
+        ("window_s", 30.0, r"window_s must .*window \[1.00, 19.00\] s of synthetic, got 30 s"),
+    ],
+)
+def test_odometry_noise_fit_names_a_bad_parameter(synthetic, parameter, value, match):
+    """Each parameter is refused by name: none gives a silently wrong σ (a NaN latency used to
+    give σ_v ≈ 1 m/s instead of 0.01, a NaN scale a NaN σ) or a raw exception."""
+    robot = synthetic.commanded_robot(1, np.random.default_rng(2), duration=20.0)
+    window = CalibrationWindow(1.0, 19.0, "synthetic")
+    with pytest.raises(ConfigError, match=f"fit_odometry_noise: {match}"):
+        fit_odometry_noise(robot, window, **{parameter: value})
+    # the largest latency and time constant the model fit can find are taken
+    edge = fit_odometry_noise(
+        robot, window, latency_s=MAX_LATENCY_S, time_constant_s=MAX_TIME_CONSTANT_S
+    )
+    assert np.isfinite(edge.sigma_v) and edge.n_windows == 18
+
+
+def test_odometry_model_refuses_a_robot_without_commanded_motion(synthetic):
+    """A robot whose commands are all zero has no scale to fit (a scale of 0 would erase every
+    later command of it): the fit names the robot, whether the whole team stands still or one
+    robot among moving ones; a robot that drives without turning has no turn-rate scale."""
+    window = CalibrationWindow(1.0, 29.0, "calib")
+    still = synthetic.dataset(
+        [synthetic.still_robot(1, 0, 0, 0, 30.0), synthetic.still_robot(2, 1, 1, 0, 30.0)]
+    )
+    with pytest.raises(DataError, match=r"of calib: no commanded motion of robot 1 in the"):
+        fit_odometry_model(still, window, 2.0)
+    moving = synthetic.commanded_robot(1, np.random.default_rng(4), duration=30.0)
+    one_still = synthetic.dataset([moving, synthetic.still_robot(2, 1, 1, 0, 30.0)])
+    with pytest.raises(DataError, match="motion of robot 2 in the window to fit its speed scale"):
+        fit_odometry_model(one_still, window, 2.0)
+    t = np.arange(0.0, 30.0, 0.01)
+    straight = synthetic.robot(
+        3,
+        GroundTruth(t=t, x=0.2 * t, y=0 * t, theta=0 * t, gap_threshold=0.5),
+        Odometry(t=t, v=np.full_like(t, 0.2), omega=0 * t),
+    )
+    with pytest.raises(DataError, match="robot 3 in the window to fit its turn-rate scale"):
+        fit_odometry_model(synthetic.dataset([moving, straight]), window, 2.0)
 
 
 #: Variance rates (m²/s, rad²/s) of the white input noise of :func:`_white_noise_team`.
