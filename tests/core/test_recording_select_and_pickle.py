@@ -79,3 +79,14 @@ def test_rows_of_the_wrong_shape_or_type_are_refused_naming_the_argument(kwargs,
     args = {"kind": "range", "t": [0.0], "observer": 1, "target": 0, "value": [2.0]} | kwargs
     with pytest.raises(DataError, match=re.escape(f"measurement_rows: {message}")):
         measurement_rows(args.pop("kind"), **args)
+
+
+def test_a_range_beyond_any_sensor_is_refused_naming_the_row():
+    """One range of 10¹² m left a pseudo-linear track with a negative-variance covariance, and
+    the EKFs stuck near 10¹¹ m, without a word."""
+    with pytest.raises(DataError, match=r"\(range\): row 1 has range 1e\+12 beyond 10000 m"):
+        measurement_rows("range", t=[0.0, 1.0], observer=1, target=0, value=[2.0, 1e12])
+    rbe = measurement_rows(
+        "range_bearing_elevation", t=[0.0], observer=1, target=0, value=[[1e4, 0.1, 0.0]]
+    )
+    assert rbe.value[0, 0] == 1e4

@@ -3,8 +3,8 @@ never data, and would overflow a filter fed with it.
 
 One set for every reader — scenario files (:mod:`relloc.sim.scenario`), recorded logs
 (:mod:`relloc.datasets.mrclam`, :mod:`relloc.datasets.rosbag`), bag mappings
-(:mod:`relloc.datasets.bag_mapping`) and network messages
-(:mod:`relloc.runtime.messages`).
+(:mod:`relloc.datasets.bag_mapping`), network messages (:mod:`relloc.runtime.messages`) and
+every recording's measurements (:mod:`relloc.core.recording`).
 """
 
 from __future__ import annotations
@@ -15,5 +15,6 @@ MAX_YAW_RATE_RAD_S = 100.0
 """Largest |turn rate| (16 turns a second)."""
 MAX_ABS_POSITION_M = 1e5
 """Largest |coordinate| of a recorded position (a local metric frame within 100 km)."""
-MAX_RADIO_RANGE_M = 1e4
-"""Largest range of a radio, or its stated σ (m): ten times the reach of any UWB radio."""
+MAX_SENSOR_RANGE_M = 1e4
+"""Largest range any sensor reports, or a radio's stated σ (m): ten times the reach of any UWB
+radio, far beyond any camera or lidar."""

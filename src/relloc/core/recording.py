@@ -39,6 +39,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from relloc.core.angles import circular_interp, wrap_angle
+from relloc.core.limits import MAX_SENSOR_RANGE_M
 from relloc.errors import DataError
 
 Array = NDArray[np.float64]
@@ -450,7 +451,8 @@ def _check_kind_rows(
     target: IntArray,
     landmark: IntArray,
 ) -> None:
-    """Validate the rows of one kind: used columns finite, the rest NaN, ranges > 0, σ > 0."""
+    """Validate the rows of one kind: used columns finite, the rest NaN, ranges in
+    ``(0, MAX_SENSOR_RANGE_M]``, σ > 0."""
     where = f"measurements ({spec.name})"
     idx = np.flatnonzero(rows)
     used, unused = value[idx, : spec.dim], value[idx, spec.dim :]
@@ -464,6 +466,12 @@ def _check_kind_rows(
         bad = ~(value[idx, col] > 0)
         if bad.any():
             raise DataError(f"{where}: row {int(idx[np.argmax(bad)])} has {spec.fields[col]} ≤ 0")
+        far = value[idx, col] > MAX_SENSOR_RANGE_M  # a logging fault; it overflows a filter
+        if far.any():
+            raise DataError(
+                f"{where}: row {int(idx[np.argmax(far)])} has {spec.fields[col]} "
+                f"{value[idx[np.argmax(far)], col]:g} beyond {MAX_SENSOR_RANGE_M:g} m"
+            )
     s = sigma[idx, : spec.dim]
     bad_sigma = ~np.isnan(s) & ~(s > 0)
     if bad_sigma.any():

@@ -44,7 +44,7 @@ from typing import Any
 
 from relloc.core.limits import (
     MAX_ABS_POSITION_M,
-    MAX_RADIO_RANGE_M,
+    MAX_SENSOR_RANGE_M,
     MAX_SPEED_M_S,
     MAX_YAW_RATE_RAD_S,
 )
@@ -291,7 +291,7 @@ def _uwb(value: object, robots: set[str]) -> UwbTopics:
             raise ConfigError(f"uwb.nodes[{i}].name: {name!r} is named twice")
     sigma = None
     if "sigma" in t:
-        sigma = _float(t["sigma"], "uwb.sigma", positive=True, limit=MAX_RADIO_RANGE_M)
+        sigma = _float(t["sigma"], "uwb.sigma", positive=True, limit=MAX_SENSOR_RANGE_M)
     return UwbTopics(
         topics=template,
         nodes=nodes,

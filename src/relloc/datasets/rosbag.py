@@ -29,7 +29,7 @@ Bad messages
 Per topic, in receive order, a message is skipped and counted by reason (its 1-based index in
 the topic is the ``line`` of the :class:`~relloc.core.recording.SkippedRow`): it cannot be
 deserialised; a value is not finite, or finite but beyond what any robot reports (a speed,
-turn rate or position beyond :mod:`relloc.core.limits`, a range beyond :data:`MAX_RADIO_RANGE_M`:
+turn rate or position beyond :mod:`relloc.core.limits`, a range beyond :data:`MAX_SENSOR_RANGE_M`:
 ``out of bounds``, which would overflow a filter); a quaternion of zero norm; a range ≤ 0 or
 outside the message's own ``[min_range, max_range]`` (when ``max_range > 0``); a time not
 after the previous kept message of the topic (unsorted or duplicate stamps); listed by the
@@ -58,7 +58,7 @@ from numpy.typing import NDArray
 
 from relloc.core.limits import (
     MAX_ABS_POSITION_M,
-    MAX_RADIO_RANGE_M,
+    MAX_SENSOR_RANGE_M,
     MAX_SPEED_M_S,
     MAX_YAW_RATE_RAD_S,
 )
@@ -176,8 +176,8 @@ def range_sample(msg: Any) -> float:
         raise BadMessage("malformed range", str(exc)) from None
     if not r > 0:
         raise BadMessage("range ≤ 0", f"range = {r}")
-    if r > MAX_RADIO_RANGE_M:
-        raise BadMessage("out of bounds", f"range {r} beyond {MAX_RADIO_RANGE_M:g} m")
+    if r > MAX_SENSOR_RANGE_M:
+        raise BadMessage("out of bounds", f"range {r} beyond {MAX_SENSOR_RANGE_M:g} m")
     if hi > 0 and not lo <= r <= hi:
         raise BadMessage("range out of bounds", f"range {r} outside [{lo}, {hi}]")
     return r
