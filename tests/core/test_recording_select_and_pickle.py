@@ -90,3 +90,18 @@ def test_a_range_beyond_any_sensor_is_refused_naming_the_row():
         "range_bearing_elevation", t=[0.0], observer=1, target=0, value=[[1e4, 0.1, 0.0]]
     )
     assert rbe.value[0, 0] == 1e4
+
+
+def test_a_nan_query_time_is_refused():
+    """``GroundTruth.at(nan)`` returned a NaN pose and ``Odometry.held_at(nan)`` the last
+    velocity (NaN passes every span check)."""
+    gt = GroundTruth(t=[0.0, 1.0], pose=[[0.0, 0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]], where="gt")
+    od = Odometry(t=[0.0, 1.0], velocity=[[0.1, 0, 0, 0]] * 2, sigma=(0, 0, 0, 0), where="od")
+    for call in (
+        lambda: gt.at([0.5, np.nan]),
+        lambda: od.held_at(np.nan),
+        lambda: od.stamp_at(np.nan),
+    ):
+        with pytest.raises(DataError, match=r"^(gt|od): a query time is NaN"):
+            call()
+    assert od.held_at(0.5)[0, 0] == 0.1

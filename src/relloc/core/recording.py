@@ -209,9 +209,9 @@ class GroundTruth:
     def at(self, t: Array | float) -> Array:
         """Poses interpolated at times ``t`` (linear in x, y, z; on the circle in ψ).
 
-        Times outside ``[t[0], t[-1]]`` raise :class:`DataError` (no extrapolation).
+        Times outside ``[t[0], t[-1]]``, or NaN, raise :class:`DataError` (no extrapolation).
         """
-        tq = np.atleast_1d(np.asarray(t, dtype=float))
+        tq = _query_times(t, self.where)
         if tq.size and (tq.min() < self.t[0] - 1e-9 or tq.max() > self.t[-1] + 1e-9):
             raise DataError(
                 f"{self.where}: query time outside the recorded span "
@@ -254,9 +254,10 @@ class Odometry:
     def held_at(self, t: Array | float) -> Array:
         """Zero-order-hold velocities at times ``t``: the last sample at or before each time.
 
-        Times before the first sample get zero velocity (the robot has not reported motion yet).
+        Times before the first sample get zero velocity (the robot has not reported motion yet);
+        a NaN time is a :class:`DataError`.
         """
-        tq = np.atleast_1d(np.asarray(t, dtype=float))
+        tq = _query_times(t, self.where)
         idx = np.searchsorted(self.t, tq, side="right") - 1
         out = np.zeros((tq.size, 4))
         ok = idx >= 0
@@ -265,12 +266,21 @@ class Odometry:
 
     def stamp_at(self, t: Array | float) -> Array:
         """Time stamp of the sample held at each time ``t`` (NaN before the first sample)."""
-        tq = np.atleast_1d(np.asarray(t, dtype=float))
+        tq = _query_times(t, self.where)
         idx = np.searchsorted(self.t, tq, side="right") - 1
         out = np.full(tq.size, np.nan)
         ok = idx >= 0
         out[ok] = self.t[idx[ok]]
         return out
+
+
+def _query_times(t: Array | float, where: str) -> Array:
+    """``t`` as a 1-D float array; a NaN time (which compares false with every bound, so it
+    would pass any span check) is a DataError naming ``where``."""
+    tq = np.atleast_1d(np.asarray(t, dtype=float))
+    if np.isnan(tq).any():
+        raise DataError(f"{where}: a query time is NaN")
+    return tq
 
 
 @dataclass(frozen=True, kw_only=True)
