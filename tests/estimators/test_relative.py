@@ -135,10 +135,10 @@ def test_bad_input_is_reported_with_its_place() -> None:
         FilterSettings(kind="ukf", motion_noise=MOTION, sensor_noise=PRECISE)  # type: ignore[arg-type]
     with pytest.raises(ConfigError, match="pseudo_linear_covariance"):
         FilterSettings(motion_noise=MOTION, sensor_noise=PRECISE, pseudo_linear_covariance="x")  # type: ignore[arg-type]
-    broken = Gaussian(mean=np.ones(4), cov=-np.eye(4))
-    with pytest.raises(ModelError, match="not positive definite at l1->c2"):
-        RelativeTracker(broken, settings, label="l1->c2").update(np.array([1.0, 0.1, 0.0]))
+    # a tracker cannot start from a covariance that is not PSD: refused where it is made
+    with pytest.raises(ModelError, match="Gaussian: covariance is not positive semi-definite"):
+        Gaussian(mean=np.ones(4), cov=-np.eye(4))
     with pytest.raises(ModelError, match="not positive definite at pair 7"):
         update_tekf_arrays(
-            broken.mean, broken.cov, np.array([1.0, 0.1, 0.0]), PRECISE, where="pair 7"
+            np.ones(4), -np.eye(4), np.array([1.0, 0.1, 0.0]), PRECISE, where="pair 7"
         )

@@ -16,23 +16,57 @@ from relloc.errors import ModelError
 Array = NDArray[np.float64]
 
 
+#: Relative tolerance of the covariance checks: an asymmetry ``|P_ij − P_ji|``, a negative
+#: eigenvalue or (in a mixture) a negative variance larger than ``PSD_TOL`` times the largest
+#: variance is refused as wrong input; anything smaller is rounding (an asymmetry is then
+#: symmetrised away).
+PSD_TOL = 1e-6
+
+
+def _semidefinite(S: Array, tol: float) -> bool:
+    """Whether the symmetric ``S`` has no eigenvalue below ``−tol``, i.e. ``S + tol I`` has a
+    Cholesky factor: one factorisation of ``S`` (which succeeds for every positive definite one)
+    and, only if that fails, one of ``S + tol I``."""
+    try:
+        np.linalg.cholesky(S)
+        return True
+    except np.linalg.LinAlgError:
+        pass
+    try:
+        np.linalg.cholesky(S + max(tol, np.finfo(float).tiny) * np.eye(S.shape[-1]))
+        return True
+    except np.linalg.LinAlgError:
+        return False
+
+
 def _as_state(
     mean: Array, cov: Array, what: str, *, symmetric: bool = False
 ) -> tuple[Array, Array]:
-    """``(mean (n,), cov (n, n))`` checked for shape and finiteness, ``cov`` symmetrised unless
-    ``symmetric`` says it is exactly symmetric already."""
+    """``(mean (n,), cov (n, n))`` checked for shape and finiteness, and ``cov`` for symmetry and
+    positive semi-definiteness within ``τ = PSD_TOL · max_i P_ii`` (:data:`PSD_TOL`); ``cov``
+    symmetrised unless ``symmetric`` says it is exactly symmetric already."""
     m = np.asarray(mean, dtype=float).reshape(-1)
     P = np.asarray(cov, dtype=float)
     if P.shape != (m.size, m.size):
         raise ModelError(f"{what}: covariance shape {P.shape} does not match state size {m.size}")
     if not (np.all(np.isfinite(m)) and np.all(np.isfinite(P))):
         raise ModelError(f"{what}: non-finite mean or covariance")
-    return m, (P if symmetric else symmetrise(P))
+    S = P if symmetric else symmetrise(P)
+    tol = PSD_TOL * float(S.diagonal().max(initial=0.0))
+    asymmetry = 0.0 if symmetric else 2.0 * float(np.abs(P - S).max(initial=0.0))
+    if asymmetry > tol:
+        raise ModelError(f"{what}: covariance is not symmetric (|P_ij − P_ji| = {asymmetry:.3g})")
+    if not _semidefinite(S, tol):
+        raise ModelError(
+            f"{what}: covariance is not positive semi-definite; eigenvalues {np.linalg.eigvalsh(S)}"
+        )
+    return m, S
 
 
 @dataclass(frozen=True)
 class Gaussian:
-    """N(mean, cov). ``mean`` has shape (n,), ``cov`` (n, n)."""
+    """N(mean, cov). ``mean`` has shape (n,), ``cov`` (n, n): finite, and symmetric and positive
+    semi-definite within :data:`PSD_TOL` (else :class:`ModelError`); stored symmetrised."""
 
     mean: Array
     cov: Array
@@ -100,6 +134,10 @@ class GaussianMixture:
     * **flat** (``groups (K,)`` integers): ``means (K, n)``, ``covs (K, n, n)``, ``weights (K,)``
       and components with equal ``groups`` form one mixture, of any size (the Gaussian-sum
       filters of :mod:`relloc.estimators.gaussian_sum`, one per teammate).
+
+    The means and covariances must be finite and no variance negative (beyond
+    :data:`PSD_TOL`); unlike :class:`Gaussian`, the covariances are neither factorised nor
+    symmetrised, to keep the check of a bank of thousands of slots at O(K n²).
     """
 
     means: Array
@@ -120,6 +158,13 @@ class GaussianMixture:
             )
         if w.size and not (w.min() >= 0.0 and w.max() < np.inf):  # NaN fails both
             raise ModelError(f"GaussianMixture: weights must be finite and ≥ 0: {w}")
+        if not (np.isfinite(means).all() and np.isfinite(covs).all()):
+            raise ModelError("GaussianMixture: non-finite mean or covariance")
+        variances = np.diagonal(covs, axis1=-2, axis2=-1)
+        # the global minimum first: the per-component reductions are slow on a diagonal view
+        if variances.size and variances.min() < 0.0:
+            if np.any(variances.min(axis=-1) < -PSD_TOL * variances.max(axis=-1)):
+                raise ModelError("GaussianMixture: negative variance in a covariance")
         if self.groups is None:
             if shape[-1] == 0 or not (w > 0.0).any(axis=-1).all():
                 raise ModelError("GaussianMixture: every mixture needs a component of weight > 0")

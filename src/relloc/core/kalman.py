@@ -9,6 +9,10 @@ Update, in Joseph form (seed 000 Eq. 8; seed 001 §2.1; seed 003 Algorithm 1), f
 normalised innovation squared ``NIS = νᵀ S⁻¹ ν = ‖L⁻¹ ν‖²``. Every argument may carry leading
 batch dimensions (``mean (..., n)``, ``cov (..., n, n)``, ``residual (..., m)``,
 ``H (..., m, n)``, ``R (..., m, m)``), so many independent updates run in one numpy call.
+The trailing dimensions must agree and the leading ones broadcast, and ``S`` and every NIS must
+be finite (a NaN or infinity in ``ν``, ``P``, ``H`` or ``R`` reaches them); otherwise
+:class:`ModelError` naming ``where``. The checks cost O(m²) per update: the shapes, ``S`` and
+the NIS, not every entry of ``P``.
 
 Gate: a measurement block of dimension ``m`` is consistent with the prediction when
 
@@ -24,12 +28,13 @@ tests/estimators/test_kernels.py).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable
 from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from relloc.errors import ConfigError, ModelError
 
@@ -50,11 +55,46 @@ class Innovation:
     meas_cov: Array
 
 
+def _at(where: str) -> str:
+    return f" at {where}" if where else ""
+
+
 def not_positive_definite(where: str) -> ModelError:
     """The error of an update whose innovation covariance ``S`` cannot be factorised."""
-    return ModelError(
-        f"innovation covariance is not positive definite{' at ' + where if where else ''}"
+    return ModelError(f"innovation covariance is not positive definite{_at(where)}")
+
+
+def _checked(
+    mean: ArrayLike, cov: ArrayLike, residual: ArrayLike, H: ArrayLike, R: ArrayLike, where: str
+) -> tuple[Array, Array, Array, Array, Array]:
+    """The arguments as float arrays; ``ModelError`` naming ``where`` unless their shapes end in
+    ``(n,)``, ``(n, n)``, ``(m,)``, ``(m, n)``, ``(m, m)`` and the leading (batch) dimensions
+    broadcast."""
+    x = np.asarray(mean, dtype=float)
+    P = np.asarray(cov, dtype=float)
+    nu = np.asarray(residual, dtype=float)
+    H_ = np.asarray(H, dtype=float)
+    R_ = np.asarray(R, dtype=float)
+    n, m = x.shape[-1:], nu.shape[-1:]
+    fits = (
+        bool(n and m)
+        and P.shape[-2:] == n + n
+        and H_.shape[-2:] == m + n
+        and R_.shape[-2:] == m + m
     )
+    batches = (x.shape[:-1], P.shape[:-2], nu.shape[:-1], H_.shape[:-2], R_.shape[:-2])
+    if fits and batches.count(batches[0]) != len(batches):  # (equal ones need no broadcasting)
+        try:
+            np.broadcast_shapes(*batches)
+        except ValueError:
+            fits = False
+    if not fits:
+        raise ModelError(
+            f"Kalman update{_at(where)}: shapes mean {x.shape}, cov {P.shape}, residual "
+            f"{nu.shape}, H {H_.shape}, R {R_.shape} do not fit (..., n), (..., n, n), (..., m), "
+            "(..., m, n), (..., m, m)"
+        )
+    return x, P, nu, H_, R_
 
 
 def _swap(M: Array) -> Array:
@@ -65,7 +105,8 @@ def _factor(
     cov: Array, residual: Array, H: Array, R: Array, where: str
 ) -> tuple[Array, Array, Array, Array]:
     """``(S, NIS, P Hᵀ, L⁻¹)``: ``S = H P Hᵀ + R = L Lᵀ``, ``NIS = ‖L⁻¹ ν‖²``, and what the gain
-    needs (``ModelError`` naming ``where`` if ``S`` is not positive definite)."""
+    needs (``ModelError`` naming ``where`` if ``S`` is not positive definite, or ``S`` or a NIS
+    not finite)."""
     PHt = cov @ _swap(H)
     S = H @ PHt + R
     S = 0.5 * (S + _swap(S))
@@ -77,6 +118,12 @@ def _factor(
     L_inv = np.linalg.solve(L, eye)
     w = np.einsum("...ij,...j->...i", L_inv, residual)
     nis = np.einsum("...i,...i->...", w, w)
+    # one scalar test: a NaN or infinity anywhere in S or a NIS makes their sum non-finite
+    if not math.isfinite(S.sum() + nis.sum()):
+        raise ModelError(
+            f"Kalman update{_at(where)}: non-finite NIS or innovation covariance (NaN or "
+            "infinity in the residual, the covariance, H or R)"
+        )
     return S, nis, PHt, L_inv
 
 
@@ -96,9 +143,11 @@ def kalman_update(
 ) -> tuple[Array, Array, Innovation]:
     """Joseph-form Kalman update (module docstring), batched over leading dimensions.
 
-    Returns ``(mean⁺, cov⁺, innovation)``. Raises :class:`ModelError` naming ``where`` if some
-    ``S`` is not positive definite.
+    Returns ``(mean⁺, cov⁺, innovation)``. Raises :class:`ModelError` naming ``where`` if the
+    shapes do not fit, or some ``S`` is not finite and positive definite or some NIS not finite
+    (module docstring).
     """
+    mean, cov, residual, H, R = _checked(mean, cov, residual, H, R, where)
     S, nis, PHt, L_inv = _factor(cov, residual, H, R, where)
     new_mean, new_cov = _correct(mean, cov, residual, H, R, PHt, L_inv)
     return new_mean, new_cov, Innovation(residual=residual, cov=S, nis=nis, meas_cov=R)
@@ -148,14 +197,12 @@ def gated_update(
     Computes ``S`` and the NIS first; if ``NIS > chi2_threshold(m, probability)`` the block is
     rejected and the prior ``(mean, cov)`` is returned unchanged, otherwise the update is that of
     :func:`kalman_update`. ``probability=None`` disables the gate. Returns
-    ``(mean⁺, cov⁺, innovation, accepted)``.
+    ``(mean⁺, cov⁺, innovation, accepted)``; the errors are those of :func:`kalman_update` (a
+    NaN NIS is refused before the gate, which it would otherwise pass).
     """
-    residual = np.asarray(residual, dtype=float)
+    mean, cov, residual, H, R = _checked(mean, cov, residual, H, R, where)
     if residual.ndim != 1:
-        raise ModelError(
-            f"gated_update{' at ' + where if where else ''}: one block, residual shape "
-            f"{residual.shape}"
-        )
+        raise ModelError(f"gated_update{_at(where)}: one block, residual shape {residual.shape}")
     S, nis_array, PHt, L_inv = _factor(cov, residual, H, R, where)
     nis = float(nis_array)
     innovation = Innovation(residual=residual, cov=S, nis=nis, meas_cov=R)

@@ -22,19 +22,27 @@ def symmetrise(P: Array) -> Array:
 
 
 def cholesky(P: Array, *, where: str = "", symmetric: bool = False) -> Array:
-    """Lower Cholesky factor of ``P``; raises :class:`ModelError` naming ``where`` if not PD.
+    """Lower Cholesky factor of ``P``; raises :class:`ModelError` naming ``where`` if ``P`` is not
+    finite and positive definite (works on a stack ``(..., n, n)``).
 
     ``P`` is symmetrised first unless ``symmetric`` says it is exactly symmetric already (the
     output of :func:`symmetrise`, whose symmetrisation would change nothing).
     """
+    S = P if symmetric else symmetrise(P)
+    L: Array | None
     try:
-        return np.asarray(np.linalg.cholesky(P if symmetric else symmetrise(P)), dtype=float)
-    except np.linalg.LinAlgError as exc:
-        eig = np.linalg.eigvalsh(symmetrise(P)) if np.all(np.isfinite(P)) else "non-finite"
-        raise ModelError(
-            f"covariance is not positive definite{' at ' + where if where else ''}; "
-            f"eigenvalues: {eig}"
-        ) from exc
+        L = np.asarray(np.linalg.cholesky(S), dtype=float)
+    except np.linalg.LinAlgError:
+        L = None
+    # numpy factors a NaN matrix without complaint; a NaN or infinity in S reaches its factor
+    if L is not None and np.isfinite(L).all():
+        return L
+    at = f" at {where}" if where else ""
+    if not np.isfinite(S).all():
+        raise ModelError(f"covariance is not finite{at}")
+    raise ModelError(
+        f"covariance is not positive definite{at}; eigenvalues: {np.linalg.eigvalsh(S)}"
+    )
 
 
 def solve_psd(S: Array, B: Array, *, where: str = "") -> Array:

@@ -83,7 +83,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from relloc.core.kalman import chi2_threshold
-from relloc.errors import ConfigError, ModelError
+from relloc.core.linalg import cholesky
+from relloc.errors import ConfigError, DataError, ModelError
 
 Array = NDArray[np.float64]
 
@@ -95,20 +96,47 @@ def _check_probability(p: float) -> float:
     return p
 
 
+def _check_integer(value: int, what: str, minimum: int = 1) -> int:
+    """``value`` if it is an integer ``≥ minimum`` (a bool is not), else ``ConfigError``."""
+    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < minimum:
+        raise ConfigError(f"{what} must be an integer ≥ {minimum}, got {value!r}")
+    return int(value)
+
+
+def _check_bound(bound: float | ArrayLike, what: str) -> Array:
+    """``bound`` as an array if every entry is finite, else ``ConfigError`` (a NaN bound would
+    leave nothing beyond it)."""
+    b = np.asarray(bound, dtype=float)
+    if not np.isfinite(b).all():
+        raise ConfigError(f"{what}: {np.count_nonzero(~np.isfinite(b))} bound(s) not finite")
+    return b
+
+
 def normalised_squared(vector: ArrayLike, cov: ArrayLike) -> Array:
-    """``vᵀ C⁻¹ v`` batched over leading dimensions (NEES with ``P``, NIS with ``S``)."""
+    """``vᵀ C⁻¹ v = ‖L⁻¹ v‖²`` (``C = L Lᵀ``) batched over leading dimensions (NEES with ``P``,
+    NIS with ``S``): ``vector (..., n)``, ``cov (..., n, n)`` whose leading dimensions broadcast
+    (``ConfigError`` otherwise). ``C`` must be finite and positive definite
+    (:class:`ModelError`); a NaN in ``v`` (an error without truth: a missing record) gives NaN,
+    which :func:`anees`, :func:`percent_beyond` and :func:`percent_beyond_interval` skip."""
     v = np.asarray(vector, dtype=float)
     C = np.asarray(cov, dtype=float)
+    message = (
+        f"NEES/NIS: vector {v.shape} and covariance {C.shape} must be (..., n) and (..., n, n) "
+        "with leading dimensions that broadcast"
+    )
+    if v.ndim < 1 or C.shape[-2:] != v.shape[-1:] * 2:
+        raise ConfigError(message)
     try:
-        L = np.linalg.cholesky(0.5 * (C + np.swapaxes(C, -1, -2)))
-    except np.linalg.LinAlgError as exc:
-        raise ModelError("NEES/NIS: covariance is not positive definite") from exc
-    w = np.linalg.solve(L, v[..., None])[..., 0]
+        np.broadcast_shapes(v.shape[:-1], C.shape[:-2])
+    except ValueError as exc:
+        raise ConfigError(message) from exc
+    w = np.linalg.solve(cholesky(C, where="NEES/NIS"), v[..., None])[..., 0]
     return np.einsum("...i,...i->...", w, w)
 
 
 def nees(errors: ArrayLike, cov: ArrayLike) -> Array:
-    """NEES ``eᵀ P⁻¹ e`` (seed 000 Eq. 33); ``errors (..., n)`` already angle-wrapped."""
+    """NEES ``eᵀ P⁻¹ e`` (seed 000 Eq. 33); ``errors (..., n)`` already angle-wrapped
+    (:func:`normalised_squared`)."""
     return normalised_squared(errors, cov)
 
 
@@ -120,7 +148,13 @@ def projected_nees(error: ArrayLike, cov: ArrayLike, directions: ArrayLike) -> f
     the NEES of the generalised-least-squares estimate of ``e``'s components along ``N``
     (``M⁻¹ y``, of covariance ``M⁻¹``). It is χ²(d) when ``e ~ N(0, P)``: ``y`` then has
     covariance ``M``. With ``N`` a team's unobservable directions it tests the filter along
-    exactly those, where a linearised filter gains spurious information."""
+    exactly those, where a linearised filter gains spurious information.
+
+    Computed whitened: with ``P = L Lᵀ``, ``A = L⁻¹ N`` and ``b = L⁻¹ e``, ``y = Aᵀ b`` and
+    ``M = Aᵀ A``, so ``ε_N = bᵀ A (Aᵀ A)⁻¹ Aᵀ b = ‖Uᵀ b‖²``, the squared length of ``b``'s
+    projection on the columns of ``A`` (``U`` their orthonormal basis from the SVD of ``A``):
+    never negative. ``P`` must be finite and positive definite (:class:`ModelError`) and the
+    directions linearly independent (``M`` invertible; :class:`ConfigError`)."""
     e = np.asarray(error, dtype=float).reshape(-1)
     P = np.asarray(cov, dtype=float)
     N = np.asarray(directions, dtype=float)
@@ -129,12 +163,16 @@ def projected_nees(error: ArrayLike, cov: ArrayLike, directions: ArrayLike) -> f
             f"projected_nees: error {e.shape}, covariance {P.shape} and directions {N.shape} "
             "must be (n,), (n, n) and (n, d ≥ 1)"
         )
+    if not np.isfinite(N).all():
+        raise ConfigError("projected_nees: the directions must be finite")
     try:
-        Pinv_N = np.linalg.solve(P, N)
-    except np.linalg.LinAlgError as exc:
-        raise ModelError("projected_nees: singular covariance") from exc
-    y = Pinv_N.T @ e
-    return float(y @ np.linalg.solve(N.T @ Pinv_N, y))
+        L = cholesky(P, where="projected_nees")
+    except ModelError as exc:
+        raise ModelError("projected_nees: singular, indefinite or non-finite covariance") from exc
+    U, singular, _ = np.linalg.svd(np.linalg.solve(L, N), full_matrices=False)
+    if singular[-1] <= singular[0] * max(N.shape) * np.finfo(float).eps:  # matrix_rank's test
+        raise ConfigError(f"projected_nees: the directions {N.shape} must be linearly independent")
+    return float(np.sum((U.T @ np.linalg.solve(L, e)) ** 2))
 
 
 def nis(residual: ArrayLike, innovation_cov: ArrayLike) -> Array:
@@ -144,16 +182,18 @@ def nis(residual: ArrayLike, innovation_cov: ArrayLike) -> Array:
 
 def chi2_upper(dof: int, p: float = 0.95) -> float:
     """One-sided bound ``χ²_dof(p)``, e.g. ``chi2_upper(4) = 9.4877`` (seed 000 Eq. 34): the
-    gates' quantile (:func:`relloc.core.kalman.chi2_threshold`), one computation for both."""
-    return chi2_threshold(int(dof), _check_probability(p))
+    gates' quantile (:func:`relloc.core.kalman.chi2_threshold`), one computation for both.
+    ``dof`` is an integer ≥ 1 (``ConfigError`` otherwise, never truncated)."""
+    return chi2_threshold(_check_integer(dof, "chi2_upper: dof"), _check_probability(p))
 
 
 def mean_chi2_band(dof: int, n_samples: int, p: float = 0.95) -> tuple[float, float]:
-    """Two-sided ``p`` band of the mean of ``n_samples`` independent χ²(dof) values."""
+    """Two-sided ``p`` band of the mean of ``n_samples`` independent χ²(dof) values (both
+    integers ≥ 1, ``ConfigError`` otherwise)."""
     p = _check_probability(p)
-    if n_samples < 1 or dof < 1:
-        raise ConfigError(f"mean_chi2_band: dof and n_samples must be ≥ 1 ({dof}, {n_samples})")
-    k = dof * n_samples
+    k = _check_integer(dof, "mean_chi2_band: dof") * _check_integer(
+        n_samples, "mean_chi2_band: n_samples"
+    )
     from scipy.stats import chi2
 
     lo, hi = chi2.ppf([(1.0 - p) / 2.0, (1.0 + p) / 2.0], k)
@@ -161,8 +201,13 @@ def mean_chi2_band(dof: int, n_samples: int, p: float = 0.95) -> tuple[float, fl
 
 
 def anees(nees_values: ArrayLike, dof: int) -> float:
-    """ANEES ``= mean(ε) / n`` over all finite values (ideal 1)."""
+    """ANEES ``= mean(ε) / n`` over all finite values (ideal 1): a NaN NEES is a missing record
+    (:func:`normalised_squared`) and is skipped; NaN when no value is finite. ``dof`` is an
+    integer ≥ 1 (``ConfigError``); a negative NEES is impossible (``DataError``)."""
+    dof = _check_integer(dof, "anees: dof")
     values = np.asarray(nees_values, dtype=float)
+    if np.any(values < 0.0):
+        raise DataError(f"anees: {np.count_nonzero(values < 0.0)} negative NEES values")
     values = values[np.isfinite(values)]
     if values.size == 0:
         return float("nan")
@@ -252,12 +297,14 @@ def run_average_band(nees_runs: ArrayLike, dof: int, p: float = 0.95) -> dict[st
 
 
 def percent_beyond(values: ArrayLike, bound: float) -> float:
-    """Percentage of the finite ``values`` strictly above ``bound`` (seed 000 Table 4)."""
+    """Percentage of the finite ``values`` strictly above the finite ``bound`` (seed 000
+    Table 4); non-finite values (missing records) are skipped, NaN when none is left."""
+    b = _check_bound(bound, "percent_beyond")
     v = np.asarray(values, dtype=float)
     v = v[np.isfinite(v)]
     if v.size == 0:
         return float("nan")
-    return float(100.0 * np.count_nonzero(v > bound) / v.size)
+    return float(100.0 * np.count_nonzero(v > b) / v.size)
 
 
 #: Blocks of :func:`percent_beyond_interval` by default: ten, so that a 450 s window gives
@@ -275,6 +322,8 @@ def integrated_time(series: ArrayLike) -> float:
     each is capped at the one before, ``τ̂ = −1 + 2 Σ_j Γ_j`` (never below 1). The same
     quantity as :mod:`relloc.calibration.inflation`'s ``f``, here estimated from the series."""
     x = np.asarray(series, dtype=float).reshape(-1)
+    if not np.isfinite(x).all():
+        raise DataError("integrated_time: the series must be finite (evenly sampled, no gaps)")
     n = x.size
     x = x - x.mean() if n else x
     if n < 4 or not np.any(x):
@@ -403,8 +452,10 @@ def clopper_pearson(successes: float, size: float, confidence: float) -> tuple[f
     from scipy.stats import beta
 
     k, n, c = float(successes), float(size), _check_probability(confidence)
-    if not (n > 0 and 0 <= k <= n):
-        raise ConfigError(f"clopper_pearson: need 0 ≤ successes ≤ size and size > 0, got {k}, {n}")
+    if not (0 < n < np.inf and 0 <= k <= n):
+        raise ConfigError(
+            f"clopper_pearson: need 0 ≤ successes ≤ size and a finite size > 0, got {k}, {n}"
+        )
     lo = float(beta.ppf((1.0 - c) / 2.0, k, n - k + 1)) if k > 0 else 0.0
     hi = float(beta.ppf((1.0 + c) / 2.0, k + 1, n - k)) if k < n else 1.0
     return lo, hi
@@ -423,18 +474,19 @@ def percent_beyond_interval(
 ) -> BeyondShare:
     """Percentage of finite ``values`` above ``bound`` with its interval of confidence
     ``confidence`` by cluster means (module docstring): samples of any number of subjects, each
-    with its time and, with ``runs``, the run it belongs to; ``bound`` a scalar or one per
-    value; ``expected_percent`` what a consistent filter leaves beyond it (5 for ``χ²(0.95)``),
-    for the verdict. The clusters: ``batches`` time blocks for one run (``runs`` omitted or
-    holding one run); the runs when there are several, independent; the runs and the time
-    blocks, two-way, when ``shared_recording`` says the runs replay one recording. When every
-    cluster sits at ``p̂`` (e.g. none beyond anywhere) there is no spread to measure: ``N_eff``
-    is then ``G`` and the interval Clopper–Pearson's for ``G p̂`` in ``G``.
+    with its time and, with ``runs``, the run it belongs to; ``bound`` a finite scalar or one
+    per value (``ConfigError`` otherwise); values or times that are not finite (missing
+    records) are skipped and not counted in ``samples``; ``expected_percent`` what a consistent
+    filter leaves beyond it (5 for ``χ²(0.95)``), for the verdict. The clusters: ``batches``
+    time blocks for one run (``runs`` omitted or holding one run); the runs when there are
+    several, independent; the runs and the time blocks, two-way, when ``shared_recording`` says
+    the runs replay one recording. When every cluster sits at ``p̂`` (e.g. none beyond
+    anywhere) there is no spread to measure: ``N_eff`` is then ``G`` and the interval
+    Clopper–Pearson's for ``G p̂`` in ``G``.
     """
     c = _check_probability(confidence)
     expected = 100.0 * _check_probability(expected_percent / 100.0)
-    if isinstance(batches, bool) or not isinstance(batches, int | np.integer) or batches < 2:
-        raise ConfigError(f"percent_beyond_interval: batches must be an integer ≥ 2, got {batches}")
+    batches = _check_integer(batches, "percent_beyond_interval: batches", minimum=2)
     v = np.asarray(values, dtype=float).reshape(-1)
     t = np.asarray(times, dtype=float).reshape(-1)
     if t.shape != v.shape:
@@ -447,7 +499,7 @@ def percent_beyond_interval(
             f"percent_beyond_interval: {r.size} run indices ({r.dtype}) for {v.size} values; "
             "one integer per value"
         )
-    b = np.asarray(bound, dtype=float)
+    b = _check_bound(bound, "percent_beyond_interval")
     if b.size != 1 and b.shape != v.shape:
         raise ConfigError(
             f"percent_beyond_interval: {b.size} bounds for {v.size} values; one, or one per value"

@@ -139,10 +139,10 @@ def evaluate(
 
 def at_times(series: BeliefSeries, t: Array) -> BeliefSeries:
     """The records of ``series`` at the times ``t`` (each must be a record time, within
-    :data:`TIME_TOL`; ConfigError otherwise)."""
+    :data:`TIME_TOL`; ConfigError otherwise, for a NaN time too)."""
     t = np.asarray(t, dtype=float)
     idx = np.clip(np.searchsorted(series.t, t - TIME_TOL), 0, max(series.t.size - 1, 0))
-    if t.size and (series.t.size == 0 or np.any(np.abs(series.t[idx] - t) > TIME_TOL)):
+    if t.size and (series.t.size == 0 or not np.all(np.abs(series.t[idx] - t) <= TIME_TOL)):
         raise ConfigError(f"{series.label}: not recorded at every requested time")
     return dataclasses.replace(
         series,
@@ -173,6 +173,11 @@ def _percent_beyond_bound(values: Array, dof: IntArray, p: float = 0.95) -> floa
     return float(100.0 * np.mean(values > bounds))
 
 
+def _check_settle(settle_s: float, what: str) -> None:
+    if not 0.0 <= settle_s < np.inf:
+        raise ConfigError(f"{what}: settle_s must be finite and ≥ 0, got {settle_s}")
+
+
 def accuracy_and_consistency(
     evaluations: Sequence[SeriesEvaluation],
     *,
@@ -193,6 +198,7 @@ def accuracy_and_consistency(
     """
     if not evaluations:
         raise ConfigError("accuracy_and_consistency: nothing to pool")
+    _check_settle(settle_s, "accuracy_and_consistency")
     if runs is not None and len(runs) != len(evaluations):
         raise ConfigError(
             f"accuracy_and_consistency: {len(runs)} run indices for {len(evaluations)} "
@@ -254,13 +260,35 @@ def accuracy_and_consistency(
     }
 
 
+def _grid_cells(run: SeriesEvaluation, t0: float, rate_hz: float) -> IntArray:
+    """The cell ``k`` of each record of ``run`` on the grid ``t0 + k / rate_hz``; ConfigError
+    naming the run for a record off the grid (by more than :data:`TIME_TOL`) or two records in
+    one cell, either of which means that ``rate_hz`` is not the record rate."""
+    cell = (run.t - t0) * rate_hz
+    nearest = np.rint(cell)
+    off = ~(np.abs(cell - nearest) <= TIME_TOL * rate_hz)  # (a NaN time is off too)
+    if off.any():
+        raise ConfigError(
+            f"{run.label}: record at t={run.t[off][0]} is off the {rate_hz} Hz grid from t={t0}"
+        )
+    idx = nearest.astype(np.int64)
+    if np.unique(idx).size != idx.size:
+        raise ConfigError(f"{run.label}: two records in one cell of the {rate_hz} Hz grid")
+    return idx
+
+
 def steady_nees_table(
     runs: Sequence[SeriesEvaluation], *, rate_hz: float, settle_s: float
 ) -> tuple[Array, Array]:
     """The NEES of independent runs at the record times where every run has a steady-state
-    sample: ``(t, table (R, T))`` (records on a grid at ``rate_hz``)."""
-    t0 = min((float(r.t[0]) for r in runs if r.t.size), default=0.0)
-    idx = [np.rint((r.t - t0) * rate_hz).astype(np.int64) for r in runs]
+    sample: ``(t, table (R, T))``. The records lie on a grid at ``rate_hz`` from the first
+    record of any run, one per cell (:func:`_grid_cells`); ``rate_hz`` finite and > 0,
+    ``settle_s`` finite and ≥ 0 (ConfigError otherwise)."""
+    if not 0.0 < rate_hz < np.inf:
+        raise ConfigError(f"steady_nees_table: rate_hz must be finite and > 0, got {rate_hz}")
+    _check_settle(settle_s, "steady_nees_table")
+    t0 = min((float(r.t.min()) for r in runs if r.t.size), default=0.0)
+    idx = [_grid_cells(r, t0, rate_hz) for r in runs]
     width = max((int(i.max()) + 1 for i in idx if i.size), default=0)
     table = np.full((len(runs), width), np.nan)
     for k, (r, i) in enumerate(zip(runs, idx, strict=True)):
