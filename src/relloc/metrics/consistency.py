@@ -82,6 +82,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from relloc.core.checks import count
 from relloc.core.kalman import chi2_threshold
 from relloc.core.linalg import cholesky
 from relloc.errors import ConfigError, DataError, ModelError
@@ -94,13 +95,6 @@ def _check_probability(p: float) -> float:
     if not 0.0 < p < 1.0:
         raise ConfigError(f"probability must be in (0, 1), got {p}")
     return p
-
-
-def _check_integer(value: int, what: str, minimum: int = 1) -> int:
-    """``value`` if it is an integer ``≥ minimum`` (a bool is not), else ``ConfigError``."""
-    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < minimum:
-        raise ConfigError(f"{what} must be an integer ≥ {minimum}, got {value!r}")
-    return int(value)
 
 
 def _check_bound(bound: float | ArrayLike, what: str) -> Array:
@@ -184,16 +178,14 @@ def chi2_upper(dof: int, p: float = 0.95) -> float:
     """One-sided bound ``χ²_dof(p)``, e.g. ``chi2_upper(4) = 9.4877`` (seed 000 Eq. 34): the
     gates' quantile (:func:`relloc.core.kalman.chi2_threshold`), one computation for both.
     ``dof`` is an integer ≥ 1 (``ConfigError`` otherwise, never truncated)."""
-    return chi2_threshold(_check_integer(dof, "chi2_upper: dof"), _check_probability(p))
+    return chi2_threshold(count(dof, "chi2_upper: dof"), _check_probability(p))
 
 
 def mean_chi2_band(dof: int, n_samples: int, p: float = 0.95) -> tuple[float, float]:
     """Two-sided ``p`` band of the mean of ``n_samples`` independent χ²(dof) values (both
     integers ≥ 1, ``ConfigError`` otherwise)."""
     p = _check_probability(p)
-    k = _check_integer(dof, "mean_chi2_band: dof") * _check_integer(
-        n_samples, "mean_chi2_band: n_samples"
-    )
+    k = count(dof, "mean_chi2_band: dof") * count(n_samples, "mean_chi2_band: n_samples")
     from scipy.stats import chi2
 
     lo, hi = chi2.ppf([(1.0 - p) / 2.0, (1.0 + p) / 2.0], k)
@@ -204,7 +196,7 @@ def anees(nees_values: ArrayLike, dof: int) -> float:
     """ANEES ``= mean(ε) / n`` over all finite values (ideal 1): a NaN NEES is a missing record
     (:func:`normalised_squared`) and is skipped; NaN when no value is finite. ``dof`` is an
     integer ≥ 1 (``ConfigError``); a negative NEES is impossible (``DataError``)."""
-    dof = _check_integer(dof, "anees: dof")
+    dof = count(dof, "anees: dof")
     values = np.asarray(nees_values, dtype=float)
     if np.any(values < 0.0):
         raise DataError(f"anees: {np.count_nonzero(values < 0.0)} negative NEES values")
@@ -486,7 +478,7 @@ def percent_beyond_interval(
     """
     c = _check_probability(confidence)
     expected = 100.0 * _check_probability(expected_percent / 100.0)
-    batches = _check_integer(batches, "percent_beyond_interval: batches", minimum=2)
+    batches = count(batches, "percent_beyond_interval: batches", low=2)
     v = np.asarray(values, dtype=float).reshape(-1)
     t = np.asarray(times, dtype=float).reshape(-1)
     if t.shape != v.shape:

@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.core.checks import number, positive
 from relloc.core.estimates import BeliefSeries, Estimates, UpdateSeries, series_label
 from relloc.core.events import TIME_TOL
 from relloc.core.recording import Recording
@@ -173,11 +174,6 @@ def _percent_beyond_bound(values: Array, dof: IntArray, p: float = 0.95) -> floa
     return float(100.0 * np.mean(values > bounds))
 
 
-def _check_settle(settle_s: float, what: str) -> None:
-    if not 0.0 <= settle_s < np.inf:
-        raise ConfigError(f"{what}: settle_s must be finite and ≥ 0, got {settle_s}")
-
-
 def accuracy_and_consistency(
     evaluations: Sequence[SeriesEvaluation],
     *,
@@ -198,7 +194,7 @@ def accuracy_and_consistency(
     """
     if not evaluations:
         raise ConfigError("accuracy_and_consistency: nothing to pool")
-    _check_settle(settle_s, "accuracy_and_consistency")
+    number(settle_s, "accuracy_and_consistency: settle_s", low=0.0)
     if runs is not None and len(runs) != len(evaluations):
         raise ConfigError(
             f"accuracy_and_consistency: {len(runs)} run indices for {len(evaluations)} "
@@ -284,9 +280,8 @@ def steady_nees_table(
     sample: ``(t, table (R, T))``. The records lie on a grid at ``rate_hz`` from the first
     record of any run, one per cell (:func:`_grid_cells`); ``rate_hz`` finite and > 0,
     ``settle_s`` finite and ≥ 0 (ConfigError otherwise)."""
-    if not 0.0 < rate_hz < np.inf:
-        raise ConfigError(f"steady_nees_table: rate_hz must be finite and > 0, got {rate_hz}")
-    _check_settle(settle_s, "steady_nees_table")
+    positive(rate_hz, "steady_nees_table: rate_hz")
+    number(settle_s, "steady_nees_table: settle_s", low=0.0)
     t0 = min((float(r.t.min()) for r in runs if r.t.size), default=0.0)
     idx = [_grid_cells(r, t0, rate_hz) for r in runs]
     width = max((int(i.max()) + 1 for i in idx if i.size), default=0)
