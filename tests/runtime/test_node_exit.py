@@ -4,12 +4,10 @@ non-zero; one that reaches the end exits 0 (test_security_by_hand.py)."""
 from __future__ import annotations
 
 import json
-import os
-import subprocess
-import sys
 import time
 
 import pytest
+from cli_process import relloc_process
 
 from relloc.cli import main
 from relloc.runtime.transport import free_loopback_port
@@ -26,23 +24,25 @@ def test_a_node_whose_clock_never_ticks_exits_non_zero_and_says_so(capsys):
     assert "after 0 ticks; --clock-timeout 0.5 s" in err
 
 
-def _relloc(*args: str) -> subprocess.Popen[str]:
-    return subprocess.Popen(
-        [sys.executable, "-m", "relloc.cli", *args],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        env=os.environ.copy(),
-    )
-
-
 @pytest.mark.slow
 def test_a_node_whose_clock_is_killed_exits_non_zero_and_says_so():
     hub = f"tcp/127.0.0.1:{free_loopback_port()}"
     team = ["--team", "orphan"]
     roster = "observer,flyer,rover"  # the default scenario's: the clock waits for all three
-    clock = _relloc("team", "clock", *team, "--roster", roster, "--duration", "5", "--listen", hub)
-    node = _relloc("node", "--robot", "observer", "--scenario", "default", *team, "--connect", hub)
+    clock = relloc_process(
+        "team", "clock", *team, "--roster", roster, "--duration", "5", "--listen", hub
+    )
+    node = relloc_process(
+        "node",
+        "--robot",
+        "observer",
+        "--scenario",
+        "default",
+        *team,
+        "--connect",
+        hub,
+        merge_stderr=False,
+    )
     try:
         time.sleep(8.0)  # both up and the clock's presence heard; no tick (two robots missing)
         clock.kill()

@@ -7,12 +7,10 @@ tick (intruders against the same configuration: test_security_team.py).
 from __future__ import annotations
 
 import json
-import os
 import stat
-import subprocess
-import sys
 
 import pytest
+from cli_process import relloc_process
 
 from relloc.runtime.transport import free_loopback_port
 
@@ -21,25 +19,15 @@ pytestmark = pytest.mark.slow
 ROBOTS = ("observer", "flyer", "rover")
 
 
-def _relloc(*args: str) -> subprocess.Popen[str]:
-    return subprocess.Popen(
-        [sys.executable, "-m", "relloc.cli", *args],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.STDOUT,
-        text=True,
-        env=os.environ.copy(),
-    )
-
-
 def test_readme_secure_team_by_hand(trio_scenario, tmp_path):
     scenario = str(trio_scenario(2.0))
     certs = tmp_path / "certs"
-    made = _relloc("certs", str(certs), "--team", "demo", "--robots", ",".join(ROBOTS))
+    made = relloc_process("certs", str(certs), "--team", "demo", "--robots", ",".join(ROBOTS))
     assert made.wait(timeout=120) == 0, made.stdout.read() if made.stdout else ""
     for member in (*ROBOTS, "launcher", "ca"):
         assert stat.S_IMODE((certs / f"{member}.key").stat().st_mode) == 0o600
     hub = f"tls/127.0.0.1:{free_loopback_port()}"
-    clock = _relloc(
+    clock = relloc_process(
         "team",
         "clock",
         "--team",
@@ -56,7 +44,7 @@ def test_readme_secure_team_by_hand(trio_scenario, tmp_path):
         str(tmp_path / "clock.json"),
     )
     nodes = {
-        r: _relloc(
+        r: relloc_process(
             "node",
             "--robot",
             r,
