@@ -86,5 +86,5 @@ def test_the_checks_take_numpy_scalars_and_refuse_bools_and_strings():
         probability(1.0, "x")
     with pytest.raises(ConfigError, match=r"n: expected an integer, got 3\.0"):
         count(3.0, "n")
-    with pytest.raises(ConfigError, match=r"s: must be a finite number in \(0, inf\]"):
+    with pytest.raises(ConfigError, match=r"s: must be a finite number in \(0, inf\)"):
         positive(0.0, "s")

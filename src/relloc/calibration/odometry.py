@@ -84,6 +84,7 @@ from numpy.typing import NDArray
 
 from relloc.calibration.window import CalibrationWindow
 from relloc.core.angles import wrap_angle
+from relloc.core.checks import positive
 from relloc.core.recording import Odometry
 from relloc.datasets.mrclam import GroundTruth, MrclamDataset, RobotData
 from relloc.datasets.mrclam import Odometry as Commands
@@ -93,6 +94,8 @@ Array = NDArray[np.float64]
 
 #: Integration lengths (s) of :func:`fit_largest_odometry_noise`: 1 s up to 40 s.
 NOISE_WINDOWS_S: tuple[float, ...] = (1.0, 2.0, 5.0, 10.0, 20.0, 40.0)
+#: Most samples of :func:`fit_odometry_noise`'s grid (a 15-minute window at 10 kHz is 9 million).
+MAX_GRID_SAMPLES = 10_000_000
 #: Resampling step (s) of the latency/scale/rate fit.
 GRID_DT_S = 0.02
 #: Latencies (s) searched by :func:`fit_odometry_model`.
@@ -574,18 +577,23 @@ def fit_odometry_noise(
     (:func:`command_response`): the fit is then the noise left after that calibration.
 
     ConfigError naming the parameter unless ``rate_hz``, ``window_s`` and the scales are finite
-    and > 0, ``window_s`` holds at least one step ``1/rate_hz`` (the σ divides by ``window_s``)
-    and is no longer than ``window``, and ``latency_s``, ``time_constant_s`` lie in
-    ``[0, MAX_LATENCY_S]``, ``[0, MAX_TIME_CONSTANT_S]`` (what :func:`fit_odometry_model` can
-    fit; the commands lead the motion, so neither is negative)."""
+    and > 0, the grid holds at most :data:`MAX_GRID_SAMPLES` samples, ``window_s`` holds at
+    least one step ``1/rate_hz`` (the σ divides by ``window_s``) and is no longer than
+    ``window``, and ``latency_s``, ``time_constant_s`` lie in ``[0, MAX_LATENCY_S]``, ``[0,
+    MAX_TIME_CONSTANT_S]`` (what :func:`fit_odometry_model` can fit; the commands lead the
+    motion, so neither is negative)."""
     for name, value in (
         ("rate_hz", rate_hz),
         ("window_s", window_s),
         ("scale_v", scale_v),
         ("scale_w", scale_w),
     ):
-        if not (math.isfinite(value) and value > 0):
-            raise ConfigError(f"fit_odometry_noise: {name} must be finite and > 0, got {value}")
+        positive(value, f"fit_odometry_noise: {name}")
+    if window.duration_s * rate_hz > MAX_GRID_SAMPLES:
+        raise ConfigError(
+            f"fit_odometry_noise: rate_hz {rate_hz:g} over {window.describe()} is more than "
+            f"{MAX_GRID_SAMPLES} samples"
+        )
     if not 1.0 / rate_hz <= window_s <= window.duration_s:
         raise ConfigError(
             f"fit_odometry_noise: window_s must lie between one step (1/rate_hz = "

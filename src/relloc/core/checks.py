@@ -25,7 +25,9 @@ def number(
     x = float(value)
     below = x <= low if open_low else x < low
     if not math.isfinite(x) or below or x > high:
-        interval = f"{'(' if open_low else '['}{low:g}, {high:g}]"
+        left = "(" if open_low or not math.isfinite(low) else "["
+        right = "]" if math.isfinite(high) else ")"
+        interval = f"{left}{low:g}, {high:g}{right}"
         raise ConfigError(f"{where}: must be a finite number in {interval}, got {value!r:.40}")
     return x
 
