@@ -9,7 +9,7 @@ import pytest
 from relloc.core.gaussian import PSD_TOL, Gaussian, GaussianMixture, InformationState
 from relloc.core.kalman import gated_update, kalman_update
 from relloc.core.linalg import cholesky
-from relloc.errors import ModelError
+from relloc.errors import ConfigError, ModelError
 
 NAN = float("nan")
 
@@ -139,3 +139,12 @@ def test_a_mixture_refuses_nan_means_and_negative_variances(means, covs, match) 
     GaussianMixture(
         means=np.zeros((1, 2)), covs=np.diag([1.0, -0.1 * PSD_TOL])[None], weights=np.ones(1)
     )
+
+
+@pytest.mark.parametrize(("dim", "p"), [(2.5, 0.9), ("2", 0.9), (0, 0.9), (2, 1.0), (2, "0.9")])
+def test_chi2_threshold_names_a_bad_dimension_or_probability(dim, p) -> None:
+    """A dimension of 2.5 was accepted, and "2" raised a raw TypeError."""
+    from relloc.core.kalman import chi2_threshold
+
+    with pytest.raises(ConfigError, match="chi2_threshold: "):
+        chi2_threshold(dim, p)

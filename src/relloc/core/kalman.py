@@ -36,7 +36,9 @@ from functools import lru_cache
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from relloc.errors import ConfigError, ModelError
+from relloc.core.checks import count
+from relloc.core.checks import probability as probability_in_01
+from relloc.errors import ModelError
 
 Array = NDArray[np.float64]
 
@@ -155,11 +157,10 @@ def kalman_update(
 
 @lru_cache(maxsize=64)
 def chi2_threshold(dim: int, probability: float) -> float:
-    """Gate threshold ``γ`` with ``P(χ²(dim) ≤ γ) = probability`` (cached)."""
-    if dim < 1:
-        raise ConfigError(f"chi2_threshold: dim must be ≥ 1, got {dim}")
-    if not 0.0 < probability < 1.0:
-        raise ConfigError(f"chi2_threshold: probability must lie in (0, 1), got {probability}")
+    """Gate threshold ``γ`` with ``P(χ²(dim) ≤ γ) = probability`` (cached); ``dim`` an integer
+    ≥ 1 and ``probability`` in (0, 1), else ConfigError."""
+    count(dim, "chi2_threshold: dim")
+    probability_in_01(probability, "chi2_threshold: probability")
     # scipy.stats is imported here, not at module level: it takes about a second to import and
     # most users of this module (the relative filters) never gate
     from scipy.stats import chi2
