@@ -38,29 +38,53 @@ def a_file(tmp_path: Path) -> Path:
         (["observability", "unicycle-landmarks", "--landmarks", "1000000"], "--landmarks"),  # hung
         (["observability", "relative-nonlinear", "--samples", "100000000000"], "--samples in"),
         # options a model does not read were ignored silently, and 0 landmarks became 1
-        (["observability", "airground", "--landmarks", "3"], "--landmarks: 'airground' does not"),
-        (["observability", "relative-nonlinear", "--mode", "1"], "(read by airground)"),
-        (["observability", "unicycle-team", "--measurements", "range"], "--measurements: 'unic"),
-        (["observability", "unicycle-landmarks", "--gps", "1"], "(read by unicycle-team)"),
-        (["observability", "os:getcwd", "--robots", "2"], "--robots: 'os:getcwd' does not"),
+        (
+            ["observability", "airground", "--landmarks", "3"],
+            "--landmarks: airground does not read it; read by unicycle-l",
+        ),
+        (
+            ["observability", "relative-nonlinear", "--mode", "1"],
+            "--mode: relative-nonlinear does not read it; read by airground",
+        ),
+        (
+            ["observability", "unicycle-team", "--measurements", "range"],
+            "--measurements: unicycle-team does not read it",
+        ),
+        (
+            ["observability", "unicycle-landmarks", "--gps", "1"],
+            "--gps: unicycle-landmarks does not read it; read by unicycle-team",
+        ),
+        (["observability", "os:getcwd", "--robots", "2"], "--robots: os:getcwd does not read it"),
         (["observability", "unicycle-landmarks", "--landmarks", "0"], "needs at least 1, got 0"),
         (["team", "up", "default", "--timeout", "nan"], "--timeout: must be a finite number"),
         (["team", "up", "default", "--realtime", "nan"], "--realtime: must be a finite number"),
         (["team", "up", "default", "--realtime", "-1"], "--realtime: must be a finite number"),
         # flags the target does not read were dropped silently
-        (["team", "up", "default", "--runs", "3"], "--runs: 'default' does not read it"),
+        (
+            ["team", "up", "default", "--runs", "3"],
+            "--runs: default does not read it; read by guler2023, desilva",
+        ),
         (["certs", "c", "--team", "demo\n", "--robots", "a"], "--team: 'demo\\n' is not a valid"),
         (["team", "clock", "--roster", "a,a", "--duration", "1"], "a robot named twice in a,a"),
         (["team", "clock", "--roster", "a,,b", "--duration", "1"], "clock.roster: '' is not"),
-        (["team", "up", "default", "--case", "two_landmarks"], "(read by: guler2023; sharma"),
-        (["team", "up", "default", "--fit", "f.json"], "--fit: 'default' does not read it"),
+        (
+            ["team", "up", "default", "--case", "two_landmarks"],
+            "--case: default does not read it; read by guler2023, sharma2013",
+        ),
+        (["team", "up", "default", "--fit", "f.json"], "--fit: default does not read it"),
         (
             ["team", "up", "sharma2013", "--fit", "f.json"],
-            "(read by: a dataset with --estimator cooperative)",
+            "--fit: sharma2013 does not read it; read by --estimator cooperative",
         ),
-        (["team", "up", "sharma2013", "--filter", "tekf"], "--filter: 'sharma2013' does not"),
-        (["team", "up", "desilva2015", "--case", "x"], "--case: 'desilva2015' does not read it"),
-        (["team", "up", "guler2023", "--estimator", "track"], "--estimator: 'guler2023' does"),
+        (
+            ["team", "up", "sharma2013", "--filter", "tekf"],
+            "--filter: sharma2013 does not read it; read by --estimator track",
+        ),
+        (["team", "up", "desilva2015", "--case", "x"], "--case: desilva2015 does not read it"),
+        (
+            ["team", "up", "guler2023", "--estimator", "track"],
+            "--estimator: guler2023 does not read it",
+        ),
         (["team", "up", "default", "--estimator", "cooperative"], "is not a dataset folder"),
         (["airground", "world", "--team", "ta", "--duration", "1e12"], "robot-ticks"),  # 146 TiB
         (["airground", "world", "--team", "ta", "--kill", "Z_9@0.5"], "unknown robot 'Z_9'"),

@@ -211,7 +211,7 @@ def test_fault_flags_parse_or_name_the_flag(text):
         ("guler2023", ["--stall", "a,b@1:0.5"], "do not emulate link stalls"),
         ("desilva2015", ["--kill", "L1@50"], "--kill L1@50.0: begins at or after the run's end"),
         ("runtime-test-trio", ["--partition", "observer@2-3"], "observer@2.0-3.0: begins at or"),
-        ("default", ["--duration", "2"], "--duration: 'default' does not read it (read by: gu"),
+        ("default", ["--duration", "2"], "--duration: default does not read it; read by guler2023"),
         ("sharma2013", ["--stall", "1,2@2.5:1"], "--stall 1,2@2.5:1.0: begins at or after"),
     ],
 )

@@ -82,9 +82,10 @@ def _assignments(text: str | None, names: tuple[str, ...], what: str) -> list[fl
 
 
 def run(args: argparse.Namespace) -> int:
+    from relloc.core.checks import refuse_unread
     from relloc.models.symbolic import AIRGROUND_MODES
     from relloc.observability.analysis import analyse, rank_at
-    from relloc.observability.builtin import ModelOptions, check_options_read, resolve_models
+    from relloc.observability.builtin import READ_BY, ModelOptions, resolve_models
     from relloc.pipeline.output import write_json_file
 
     if args.order < 0 or not 1 <= args.samples <= MAX_SAMPLES:
@@ -98,7 +99,7 @@ def run(args: argparse.Namespace) -> int:
         "gps": args.gps,
         "mode": args.mode,
     }
-    check_options_read(args.model, [k for k, v in given.items() if v is not None])
+    refuse_unread(args.model, [k for k, v in given.items() if v is not None], READ_BY)
     landmarks = 1 if args.landmarks is None else args.landmarks
     if not 0 <= landmarks <= MAX_LANDMARKS:
         raise ConfigError(f"--landmarks: must be in 0…{MAX_LANDMARKS}, got {landmarks}")

@@ -146,22 +146,25 @@ def _robot_events(args: argparse.Namespace) -> dict[str, tuple[object, ...]]:
     }
 
 
-COOPERATIVE = "a dataset with --estimator cooperative"
-TRACKS = "a scenario, default or a dataset's tracks"
+COOPERATIVE = "--estimator cooperative"
+"""The team EIF of a dataset folder (as a target kind of :data:`READ_BY`)."""
+TRACKS = "--estimator track"
+"""The track managers of a scenario, ``default`` or a dataset folder."""
 READ_BY: dict[str, tuple[str, ...]] = {
-    "guler2023": ("runs", "duration", "case"),
-    "desilva2015": ("runs", "duration"),
-    "sharma2013": ("runs", "duration", "case"),
-    COOPERATIVE: ("estimator", "duration", "case", "fit"),
-    TRACKS: ("estimator", "filter"),
+    "runs": ("guler2023", "desilva2015", "sharma2013"),
+    "duration": ("guler2023", "desilva2015", "sharma2013", COOPERATIVE),
+    "case": ("guler2023", "sharma2013", COOPERATIVE),
+    "fit": (COOPERATIVE,),
+    "estimator": (COOPERATIVE, TRACKS),
+    "filter": (TRACKS,),
 }
-"""Which of ``--runs``, ``--duration``, ``--case``, ``--fit``, ``--estimator`` and ``--filter``
-each kind of target reads (:func:`target_kind`); another is refused, never ignored."""
+"""The kinds of target (:func:`target_kind`) that read each of these flags; another is refused,
+never ignored (:func:`relloc.core.checks.refuse_unread`)."""
 
 
 def target_kind(args: argparse.Namespace) -> str:
-    """The kind of ``team up`` target (a key of :data:`READ_BY`): a reproduction, a dataset
-    folder's team EIF or the track managers of a scenario, ``default`` or a dataset."""
+    """The kind of ``team up`` target (:data:`READ_BY`): a reproduction, a dataset folder's team
+    EIF or the track managers of a scenario, ``default`` or a dataset."""
     from relloc.experiments.team_sources import KIDNAPPED
     from relloc.runtime.scenario import REPRODUCTIONS
 
@@ -172,24 +175,13 @@ def target_kind(args: argparse.Namespace) -> str:
     return COOPERATIVE if args.estimator == "cooperative" else TRACKS
 
 
-def refuse_unread(args: argparse.Namespace) -> None:
-    """A ConfigError for a flag the target does not read (:data:`READ_BY`)."""
-    from relloc.errors import ConfigError
-
-    reads = READ_BY[target_kind(args)]
-    for name in ("runs", "duration", "case", "fit", "estimator", "filter"):
-        if getattr(args, name) is not None and name not in reads:
-            readers = [k for k, names in READ_BY.items() if name in names]
-            raise ConfigError(
-                f"--{name}: {args.scenario!r} does not read it (read by: {'; '.join(readers)})"
-            )
-
-
 def run_up(args: argparse.Namespace) -> int:
+    from relloc.core.checks import refuse_unread
     from relloc.runtime.scenario import REPRODUCTIONS
 
     refuse_desilva_only(args)
-    refuse_unread(args)
+    given = [name for name in READ_BY if getattr(args, name) is not None]
+    refuse_unread(target_kind(args), given, READ_BY, label=args.scenario)
     if args.runs is None:  # the default of the targets that read it
         args.runs = 1
     if args.scenario == "guler2023":

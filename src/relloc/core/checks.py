@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 import numbers
+from collections.abc import Collection, Iterable, Mapping
 
 from relloc.errors import ConfigError
 
@@ -52,3 +53,25 @@ def count(value: object, where: str, *, low: int = 1) -> int:
     if value < low:
         raise ConfigError(f"{where}: must be ≥ {low}, got {value}")
     return int(value)
+
+
+def refuse_unread(
+    target: str,
+    given: Iterable[str],
+    read_by: Mapping[str, Collection[str]],
+    *,
+    label: str | None = None,
+    flags: Mapping[str, str] | None = None,
+) -> None:
+    """ConfigError naming the flag of the first option in ``given`` that ``target`` does not
+    read: ``read_by`` maps an option to the targets that read it (an option it does not list is
+    read by every target). A flag that would be ignored is a typo or a misunderstanding, never
+    dropped silently. ``label`` names the target in the message (default ``target``);
+    ``flags`` the flag of an option whose flag is not ``--option`` (``_`` becoming ``-``)."""
+    for option in given:
+        readers = read_by.get(option)
+        if readers is not None and target not in readers:
+            flag = (flags or {}).get(option, "--" + option.replace("_", "-"))
+            raise ConfigError(
+                f"{flag}: {label or target} does not read it; read by {', '.join(readers)}"
+            )

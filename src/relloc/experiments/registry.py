@@ -23,6 +23,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from relloc.core import checks
 from relloc.errors import ConfigError
 from relloc.pipeline.montecarlo import MAX_RUNS
 
@@ -113,10 +114,8 @@ FLAGS: dict[str, str] = {"pairs": "--pair"}
 def refuse_unread(name: str, args: ReproduceArgs) -> None:
     """ConfigError naming the flag when ``args`` sets an input experiment ``name`` does not read
     (:data:`READ_BY`)."""
-    for field, readers in READ_BY.items():
-        if getattr(args, field) is not None and name not in readers:
-            flag = FLAGS.get(field, "--" + field.replace("_", "-"))
-            raise ConfigError(f"{flag}: {name} does not read it; read by {', '.join(readers)}")
+    given = [field for field in READ_BY if getattr(args, field) is not None]
+    checks.refuse_unread(name, given, READ_BY, flags=FLAGS)
 
 
 def available() -> list[str]:

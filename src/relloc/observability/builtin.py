@@ -28,27 +28,15 @@ BUILTIN_MODELS: dict[str, str] = {
 }
 
 
-READS: dict[str, tuple[str, ...]] = {
-    "relative-pseudo-linear": ("measurements",),
-    "relative-nonlinear": ("measurements",),
-    "unicycle-landmarks": ("measurements", "landmarks"),
-    "unicycle-team": ("robots", "landmarks", "gps"),
-    "airground": ("mode",),
+READ_BY: dict[str, tuple[str, ...]] = {
+    "measurements": ("relative-pseudo-linear", "relative-nonlinear", "unicycle-landmarks"),
+    "landmarks": ("unicycle-landmarks", "unicycle-team"),
+    "robots": ("unicycle-team",),
+    "gps": ("unicycle-team",),
+    "mode": ("airground",),
 }
-"""The model options (flags without ``--``) each built-in model reads; a user model reads none
-(every model reads ``--inputs``)."""
-
-
-def check_options_read(name: str, given: Sequence[str]) -> None:
-    """Refuse an option ``name``'s model would ignore: a typo or a misunderstanding, never
-    silently dropped."""
-    reads = READS.get(name, ())
-    for option in given:
-        if option not in reads:
-            readers = [m for m, r in READS.items() if option in r]
-            raise ConfigError(
-                f"--{option}: {name!r} does not read it (read by {', '.join(readers)})"
-            )
+"""The built-in models that read each model option (a user model reads none of them; every
+model reads ``--inputs``); another is refused (:func:`relloc.core.checks.refuse_unread`)."""
 
 
 @dataclass(frozen=True, kw_only=True)
