@@ -88,3 +88,8 @@ def test_the_checks_take_numpy_scalars_and_refuse_bools_and_strings():
         count(3.0, "n")
     with pytest.raises(ConfigError, match=r"s: must be a finite number in \(0, inf\)"):
         positive(0.0, "s")
+
+
+def test_an_integer_beyond_every_float_is_refused_not_an_overflow():
+    with pytest.raises(ConfigError, match=r"^x: must be a finite number"):
+        number(10**400, "x")

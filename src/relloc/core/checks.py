@@ -23,7 +23,10 @@ def number(
     """``value`` as a finite float in ``[low, high]`` (``(low, high]`` with ``open_low``)."""
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise ConfigError(f"{where}: expected a number, got {value!r:.40}")
-    x = float(value)
+    try:
+        x = float(value)
+    except OverflowError:  # an integer beyond every float
+        x = math.inf
     below = x <= low if open_low else x < low
     if not math.isfinite(x) or below or x > high:
         left = "(" if open_low or not math.isfinite(low) else "["

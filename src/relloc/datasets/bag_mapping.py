@@ -33,7 +33,6 @@ Every key is checked: an unknown key, a wrong type or a bad value is a
 
 from __future__ import annotations
 
-import math
 import re
 import tomllib
 from collections.abc import Mapping
@@ -42,6 +41,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
+from relloc.core.checks import number
 from relloc.core.limits import (
     MAX_ABS_POSITION_M,
     MAX_SENSOR_RANGE_M,
@@ -180,22 +180,10 @@ def _bool(value: object, where: str) -> bool:
 def _float(
     value: object, where: str, *, positive: bool = False, nonneg: bool = False, limit: float
 ) -> float:
-    """A finite number within ±``limit`` (> 0 with ``positive``, ≥ 0 with ``nonneg``)."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ConfigError(f"{where}: expected a number, got {value!r:.60}")
-    try:
-        x = float(value)
-    except OverflowError:  # an integer beyond any float
-        x = math.inf
-    if not math.isfinite(x):
-        raise ConfigError(f"{where}: must be finite, got {value!r:.60}")
-    if abs(x) > limit:
-        raise ConfigError(f"{where}: {x:g} is beyond ±{limit:g}")
-    if positive and not x > 0:
-        raise ConfigError(f"{where}: must be > 0, got {x:g}")
-    if nonneg and x < 0:
-        raise ConfigError(f"{where}: must be ≥ 0, got {x:g}")
-    return x
+    """A finite number within ±``limit`` (in ``(0, limit]`` with ``positive``, ``[0, limit]``
+    with ``nonneg``): :func:`relloc.core.checks.number`."""
+    low = 0.0 if positive or nonneg else -limit
+    return number(value, where, low=low, high=limit, open_low=positive)
 
 
 def _vector(
