@@ -39,21 +39,24 @@ def _semidefinite(S: Array, tol: float) -> bool:
         return False
 
 
-def _as_state(
-    mean: Array, cov: Array, what: str, *, symmetric: bool = False
-) -> tuple[Array, Array]:
-    """``(mean (n,), cov (n, n))`` checked for shape and finiteness, and ``cov`` for symmetry and
-    positive semi-definiteness within ``τ = PSD_TOL · max_i P_ii`` (:data:`PSD_TOL`); ``cov``
-    symmetrised unless ``symmetric`` says it is exactly symmetric already."""
+def _as_state(mean: Array, cov: Array, what: str, *, factored: bool = False) -> tuple[Array, Array]:
+    """``(mean (n,), cov (n, n))`` checked for shape and finiteness, and ``cov`` symmetrised and
+    checked for symmetry and positive semi-definiteness within ``τ = PSD_TOL · max_i P_ii``
+    (:data:`PSD_TOL`) — unless ``factored`` says it is exactly symmetric and known positive
+    definite (the caller has just Cholesky-factored it or its inverse): then neither again."""
     m = np.asarray(mean, dtype=float).reshape(-1)
     P = np.asarray(cov, dtype=float)
     if P.shape != (m.size, m.size):
         raise ModelError(f"{what}: covariance shape {P.shape} does not match state size {m.size}")
     if not (np.all(np.isfinite(m)) and np.all(np.isfinite(P))):
         raise ModelError(f"{what}: non-finite mean or covariance")
-    S = P if symmetric else symmetrise(P)
+    if factored:  # its factorisation proved it; a negative variance is all that is left to see
+        if np.any(P.diagonal() < 0.0):
+            raise ModelError(f"{what}: covariance is not positive semi-definite (a variance < 0)")
+        return m, P
+    S = symmetrise(P)
     tol = PSD_TOL * float(S.diagonal().max(initial=0.0))
-    asymmetry = 0.0 if symmetric else 2.0 * float(np.abs(P - S).max(initial=0.0))
+    asymmetry = 2.0 * float(np.abs(P - S).max(initial=0.0))
     if asymmetry > tol:
         raise ModelError(f"{what}: covariance is not symmetric (|P_ij − P_ji| = {asymmetry:.3g})")
     if not _semidefinite(S, tol):
@@ -100,10 +103,11 @@ class InformationState:
 
     @staticmethod
     def from_symmetric(info_vector: Array, info_matrix: Array) -> InformationState:
-        """The state of an ``info_matrix`` that is exactly symmetric already (the output of
-        :func:`~relloc.core.linalg.symmetrise`): checked like the constructor, not symmetrised
-        again (the team filter's ``3n × 3n`` matrices, every epoch)."""
-        y, Y = _as_state(info_vector, info_matrix, "InformationState", symmetric=True)
+        """The state of an ``info_matrix`` that is exactly symmetric and known positive definite:
+        the caller has just Cholesky-factored it or its inverse (the team filter's ``3n × 3n``
+        matrices, every epoch, in :mod:`relloc.estimators.eif`). Checked for shape, finiteness
+        and negative variances only: neither symmetrised nor factored again."""
+        y, Y = _as_state(info_vector, info_matrix, "InformationState", factored=True)
         state = object.__new__(InformationState)
         object.__setattr__(state, "info_vector", y)
         object.__setattr__(state, "info_matrix", Y)
