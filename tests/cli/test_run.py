@@ -81,7 +81,7 @@ def test_run_default_scenario_writes_summary_report_and_figures(tmp_path, capsys
     assert f"relloc: note: 1 file under {out} from an earlier run, not this one: old.png" in err
 
 
-def test_run_user_scenario_with_tekf(tmp_path):
+def test_run_user_scenario_with_tekf_and_a_gate(tmp_path):
     path = tmp_path / "my.toml"
     path.write_text(textwrap.dedent(SMALL))
     out = tmp_path / "out"
@@ -95,6 +95,8 @@ def test_run_user_scenario_with_tekf(tmp_path):
             "1",
             "--filter",
             "tekf",
+            "--gate",
+            "0.999",
             "--executor",
             "serial",
             "--quiet",
@@ -103,6 +105,8 @@ def test_run_user_scenario_with_tekf(tmp_path):
     assert code == 0
     summary = json.loads((out / "summary.json").read_text())
     assert summary["scenario"] == "pair" and summary["filter"] == "tekf"
+    assert summary["gate_probability"] == 0.999
+    assert "- **gate_probability**: 0.999" in (out / "report.md").read_text()
     assert list(summary["pairs"]) == ["leader->drone"]
 
 
@@ -141,6 +145,8 @@ def test_bad_options_exit_2_naming_the_option(tmp_path, capsys):
         (["--executor", "dask://localhost:abc"], "is not dask://HOST:PORT (a port 1…65535)"),
         (["--duration", "-1"], "--duration: duration_s: must be in (0, ∞)"),
         (["--yaw-bank", "1"], "--yaw-bank: 0 (off) or"),
+        (["--gate", "1.5"], "--gate: must be a finite number in (0, 1), got 1.5"),
+        (["--gate", "1"], "--gate: must be a finite number in (0, 1), got 1.0"),
     ):
         assert main(["run", "--out", out, "--quiet", *argv]) == 2
         assert message in capsys.readouterr().err

@@ -274,3 +274,56 @@ def test_manager_rejects_time_going_backwards_and_bad_settings():
         TrackManagerSettings(filter="ukf")
     with pytest.raises(ConfigError, match="keep_window_s"):
         TrackManagerSettings(keep_window_s=-1.0)
+
+
+def _outliers(times, range_m):
+    """Rows of l measuring c at ``times`` with a range of ``range_m`` (the true range is ~5.7 m)."""
+    return measurement_rows(
+        "range_bearing_elevation",
+        t=times,
+        observer=0,
+        target=1,
+        value=np.tile([range_m, 0.0, 0.35], (len(times), 1)),
+        sigma=SIGMA_Z,
+    )
+
+
+@pytest.mark.parametrize("bank", [None, YawBankSettings(n_components=12)])
+def test_gate_rejects_outliers_and_counts_them(bank):
+    # Readings at 6.05 and 6.55 s, between the 10 Hz true ones, claim c is 300 m away.
+    rec = _two_robot_recording([(0.1, 12.0)], extra=_outliers([6.05, 6.55], 300.0))
+    plain = _two_robot_recording([(0.1, 12.0)])
+    gated = TrackManagerSettings(yaw_bank=bank, gate_probability=0.999)
+    est = _track(rec, gated)
+    assert est.counts == {"rows_gated": 2}
+    # rejected rows leave the tracks as if they had never been received (the extra events
+    # only split a prediction step in two)
+    clean = _track(plain, gated)
+    assert clean.counts == {}
+    np.testing.assert_allclose(
+        est.series("l", "c").mean, clean.series("l", "c").mean, rtol=0, atol=1e-9
+    )
+    assert est.updates_of("l", "c").t.size == clean.updates_of("l", "c").t.size
+    # without the gate (seed 000) the outliers are fused and drag the track away
+    fused = _track(rec, TrackManagerSettings(yaw_bank=bank)).series("l", "c")
+    after = (fused.t > 6.5) & (fused.t < 6.7)
+    err = state_errors(fused.mean[after], rec.relative_truth("l", "c", fused.t[after]))
+    assert np.max(np.abs(err[:, :3])) > 1.0
+
+
+def test_a_track_whose_every_reading_is_gated_is_deleted_then_started_anew():
+    # From 6.1 s on every reading is an outlier: the track is not refreshed, so it is deleted
+    # one keep window after its last update; the next reading starts a new track from itself
+    # (seed 000 §6.2: a robot seen again after deletion gets a new track).
+    tm = np.arange(61, 121) / 10.0
+    rec = _two_robot_recording([(0.1, 6.0)], extra=_outliers(tm, 300.0))
+    est = _track(rec, TrackManagerSettings(keep_window_s=1.0, gate_probability=0.999))
+    assert est.counts == {"rows_gated": 10}  # 6.1 … 7.0 s
+    kinds = [(e.kind, round(e.t, 2)) for e in est.events]
+    assert kinds == [("created", 0.1), ("deleted", 7.01), ("recreated", 7.1)]
+
+
+@pytest.mark.parametrize("p", [0.0, 1.0, -0.5, float("nan"), "0.99", True])
+def test_gate_probability_must_be_a_probability(p):
+    with pytest.raises(ConfigError, match="gate_probability"):
+        TrackManagerSettings(gate_probability=p)

@@ -132,9 +132,13 @@ def test_relloc_run_on_a_bag(tmp_path, capsys):
     assert "turtlebot1->turtlebot3" in capsys.readouterr().out
     # --no-plots is honoured; flags a single replay cannot use are refused, not ignored
     plain = tmp_path / "plain"
-    assert main([*argv[:5], str(plain), "--no-plots", "--quiet"]) == 0
+    assert main([*argv[:5], str(plain), "--no-plots", "--quiet", "--gate", "0.99"]) == 0
     assert sorted(p.name for p in plain.iterdir()) == ["report.md", "summary.json"]
-    assert json.loads((plain / "summary.json").read_text())["antenna_offset_not_modelled_m"] == 0
+    plain_summary = json.loads((plain / "summary.json").read_text())
+    assert plain_summary["antenna_offset_not_modelled_m"] == 0
+    # the track managers' settings are stated, as for a simulated team
+    assert plain_summary["gate_probability"] == 0.99 and summary["gate_probability"] is None
+    assert {"init", "keep_window_s", "yaw_bank_components"} <= set(plain_summary)
     assert "offsets" not in capsys.readouterr().err
     # an antenna offset this range filter does not model is said, not dropped silently
     from importlib import resources

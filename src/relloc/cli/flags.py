@@ -18,6 +18,7 @@ from relloc.errors import ConfigError
 FIELD_FLAGS: dict[str, str] = {
     "YawBankSettings.n_components": "--yaw-bank",
     "keep_window_s": "--keep-window",
+    "gate_probability": "--gate",
     "settle_s": "--settle",
     "filter": "--filter",
     "init": "--init",

@@ -1,7 +1,8 @@
 """``relloc run [SCENARIO.toml] --out DIR [--seed S] [--runs N] [--filter plkf|tekf|bcplkf]``
 
 plus ``--init`` (track initialisation policy), ``--yaw-bank K`` (yaw hypotheses for an unknown
-initial yaw), ``--keep-window`` (seconds a track survives without measurements), ``--settle``
+initial yaw), ``--keep-window`` (seconds a track survives without measurements), ``--gate P``
+(reject measurements beyond the χ²(3, P) NIS gate), ``--settle``
 (track age from which samples count as steady state), ``--duration`` (shorten the scenario),
 ``--executor``, ``--no-plots`` and ``--mcap FILE`` / ``--tum DIR`` (run 0's estimates for ROS
 tools and evo). The defaults are the library's
@@ -107,6 +108,17 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         ),
     )
     p.add_argument(
+        "--gate",
+        type=float,
+        default=None,
+        metavar="P",
+        help=(
+            "reject a relative measurement whose NIS exceeds the χ²(3) quantile P as an "
+            "outlier, counted in rows_not_used as rows_gated (default: fuse every measurement, "
+            "as seed 000)"
+        ),
+    )
+    p.add_argument(
         "--settle",
         type=float,
         default=defaults.settle_s,
@@ -166,6 +178,7 @@ def run(args: argparse.Namespace) -> int:
                 keep_window_s=args.keep_window,
                 init=InitPolicy(name=args.init, fov=fov),
                 yaw_bank=_yaw_bank(args.yaw_bank),
+                gate_probability=args.gate,
             ),
             settle_s=args.settle,
             executor=args.executor,
@@ -191,8 +204,8 @@ def run(args: argparse.Namespace) -> int:
         width = console.terminal_width()
         title = (
             f"{scenario.name}: {args.filter.upper()}, {settings.runs} run(s), seed "
-            f"{settings.seed}, init {args.init}, yaw bank {args.yaw_bank or 'off'}, steady "
-            f"state from track age {settings.settle_s:g} s (--settle)"
+            f"{settings.seed}, init {args.init}, yaw bank {args.yaw_bank or 'off'}, gate "
+            f"{args.gate or 'off'}, steady state from track age {settings.settle_s:g} s (--settle)"
         )
         print(console.wrap_line(title, width))
         print(console.team_summary_table(summary, width=width))
@@ -274,6 +287,7 @@ def _run_bag(args: argparse.Namespace) -> int:
                 keep_window_s=args.keep_window,
                 init=InitPolicy(name=args.init),
                 yaw_bank=_yaw_bank(args.yaw_bank),
+                gate_probability=args.gate,
             ),
             settle_s=args.settle,
             quiet=args.quiet,

@@ -19,8 +19,10 @@ def number(
     low: float = -math.inf,
     high: float = math.inf,
     open_low: bool = False,
+    open_high: bool = False,
 ) -> float:
-    """``value`` as a finite float in ``[low, high]`` (``(low, high]`` with ``open_low``)."""
+    """``value`` as a finite float in ``[low, high]`` (an open end with ``open_low`` or
+    ``open_high``)."""
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise ConfigError(f"{where}: expected a number, got {value!r:.40}")
     try:
@@ -28,9 +30,10 @@ def number(
     except OverflowError:  # an integer beyond every float
         x = math.inf
     below = x <= low if open_low else x < low
-    if not math.isfinite(x) or below or x > high:
+    above = x >= high if open_high else x > high
+    if not math.isfinite(x) or below or above:
         left = "(" if open_low or not math.isfinite(low) else "["
-        right = "]" if math.isfinite(high) else ")"
+        right = ")" if open_high or not math.isfinite(high) else "]"
         interval = f"{left}{low:g}, {high:g}{right}"
         raise ConfigError(f"{where}: must be a finite number in {interval}, got {value!r:.40}")
     return x
@@ -42,11 +45,9 @@ def positive(value: object, where: str) -> float:
 
 
 def probability(value: object, where: str) -> float:
-    """``value`` as a probability strictly between 0 and 1 (a χ² gate's)."""
-    p = number(value, where, low=0.0, high=1.0, open_low=True)
-    if p == 1.0:
-        raise ConfigError(f"{where}: must be < 1 (a gate of probability 1 is infinite)")
-    return p
+    """``value`` as a probability strictly between 0 and 1 (a χ² gate's: one of 1 is
+    infinite)."""
+    return number(value, where, low=0.0, high=1.0, open_low=True, open_high=True)
 
 
 def count(value: object, where: str, *, low: int = 1) -> int:

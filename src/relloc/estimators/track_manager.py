@@ -16,6 +16,11 @@ deletion gets a new track. :class:`TrackManager` does exactly that for one obser
   Gaussian sum over φ, :mod:`relloc.estimators.yaw_bank`) that is reweighted by every
   measurement and collapses to a single filter once one hypothesis dominates — this avoids the
   long stalls of a single filter started near the wrong yaw (seed 000 Table 1, case 4);
+- optionally (``gate_probability``), a measurement whose NIS exceeds ``χ²(3, p)`` under every
+  live hypothesis of its track is **rejected** as an outlier, not fused, and counted
+  (``rows_gated``); seed 000 fuses every measurement, so the gate is off by default. A rejected
+  measurement does not refresh the track, so a track whose every measurement is rejected is
+  deleted like an unseen one;
 - a track with no update for longer than ``keep_window_s`` is **deleted**; the next measurement
   of that robot **re-creates** it.
 
@@ -33,7 +38,7 @@ Beliefs are reported in frame ``relative_pose4`` (the observed robot's ``(x, y, 
 owner's body frame, seed 000 Eq. 1) with the track's age; every update reports its NIS (3 degrees
 of freedom) and the conditioning ``log10(λmax/λmin)`` of ``R`` and ``S`` (seed 000 §7.3).
 Rows of the owner that the manager cannot use — another kind, an unknown target (unknown
-correspondence or a landmark), no stated σ — are counted by reason
+correspondence or a landmark), no stated σ, beyond the gate — are counted by reason
 (:meth:`TrackManager.take_counts`).
 """
 
@@ -47,6 +52,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.core.checks import probability
 from relloc.core.contract import (
     Belief,
     EventKind,
@@ -55,7 +61,7 @@ from relloc.core.contract import (
     UpdateRecord,
 )
 from relloc.core.gaussian import GaussianMixture
-from relloc.core.kalman import Innovation
+from relloc.core.kalman import Innovation, chi2_threshold
 from relloc.core.recording import Measurements, Recording
 from relloc.errors import ConfigError
 from relloc.estimators.initialisation import InitContext, InitPolicy
@@ -88,13 +94,16 @@ class TrackManagerSettings:
     predicted without measurements before deletion; ``pseudo_linear_covariance``:
     ``simplified`` (seed 000 Eq. 6) or ``full`` (Eqs. 4–5); ``init``: how tracks start;
     ``yaw_bank``: spread a track whose initial yaw is unknown into a bank of yaw hypotheses
-    (:mod:`relloc.estimators.yaw_bank`), or ``None`` for a single filter per track."""
+    (:mod:`relloc.estimators.yaw_bank`), or ``None`` for a single filter per track;
+    ``gate_probability``: reject a measurement whose NIS exceeds ``χ²(3, p)`` (module
+    docstring), or ``None`` to fuse every measurement (seed 000)."""
 
     filter: str = "plkf"
     keep_window_s: float = 2.0
     pseudo_linear_covariance: Literal["simplified", "full"] = "simplified"
     init: InitPolicy = field(default_factory=InitPolicy)
     yaw_bank: YawBankSettings | None = None
+    gate_probability: float | None = None
 
     def __post_init__(self) -> None:
         if self.filter not in UPDATE_KINDS:
@@ -113,6 +122,15 @@ class TrackManagerSettings:
             raise ConfigError("init: expected an InitPolicy")
         if self.yaw_bank is not None and not isinstance(self.yaw_bank, YawBankSettings):
             raise ConfigError("yaw_bank: expected YawBankSettings or None")
+        if self.gate_probability is not None:
+            probability(self.gate_probability, "gate_probability")
+
+    @property
+    def nis_gate(self) -> float:
+        """The NIS beyond which a measurement is rejected (``inf`` without a gate)."""
+        if self.gate_probability is None:
+            return math.inf
+        return chi2_threshold(MEASUREMENT_DOF, self.gate_probability)
 
 
 @dataclass
@@ -136,16 +154,24 @@ class _Track:
             self.bank = predict_yaw_bank(self.bank, u_l, u_c, dt, noise)
             self.mean, self.cov = self.bank.heaviest()
 
-    def update(self, z: Array, bank_settings: YawBankSettings | None, where: str) -> Innovation:
+    def update(
+        self, z: Array, bank_settings: YawBankSettings | None, gate: float, where: str
+    ) -> Innovation | None:
+        """Fuse ``z`` and return the innovation used, or return ``None`` and leave the track as
+        it was when the NIS exceeds ``gate`` under every live hypothesis."""
         if self.bank is None or bank_settings is None:
-            self.mean, self.cov, inn = self.settings.update_arrays(
-                self.mean, self.cov, z, where=where
-            )
+            mean, cov, inn = self.settings.update_arrays(self.mean, self.cov, z, where=where)
+            if inn.nis > gate:
+                return None
+            self.mean, self.cov = mean, cov
             return inn
-        self.bank, inns = update_yaw_bank(self.bank, z, self.settings, bank_settings)
-        k = int(self.bank.heaviest_index)
-        self.mean, self.cov = self.bank.heaviest()
-        if int(self.bank.alive.sum()) == 1:  # collapsed: a single filter from now on
+        bank, inns = update_yaw_bank(self.bank, z, self.settings, bank_settings)
+        if np.min(np.asarray(inns.nis)[self.bank.alive]) > gate:
+            return None
+        self.bank = bank
+        k = int(bank.heaviest_index)
+        self.mean, self.cov = bank.heaviest()
+        if int(bank.alive.sum()) == 1:  # collapsed: a single filter from now on
             self.bank = None
         return Innovation(
             residual=inns.residual[k],
@@ -196,6 +222,7 @@ class TrackManager(ObserverClock):
         self._updates: list[UpdateRecord] = []
         self._events: list[TrackEvent] = []
         self._settings_cache: dict[tuple[int, tuple[float, ...]], FilterSettings] = {}
+        self._gate = settings.nis_gate
 
     # ------------------------------------------------------------------ the contract
     def advance(self, t: float, odometry: HeldOdometry) -> None:
@@ -283,7 +310,10 @@ class TrackManager(ObserverClock):
                 return
         tr.settings = settings
         label = f"{self.owner}->{self.robots[j]} at t={now:.3f}"
-        inn = tr.update(z, self.settings.yaw_bank, label)
+        inn = tr.update(z, self.settings.yaw_bank, self._gate, label)
+        if inn is None:
+            self._count("rows_gated")
+            return
         tr.last_update_t = now
         cond = condition_log10_batch(np.stack([inn.meas_cov, inn.cov]))
         self._updates.append(

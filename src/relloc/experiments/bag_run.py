@@ -35,7 +35,13 @@ from relloc.experiments.team_run import TeamRunSettings
 from relloc.models.motion import VelocityNoise
 from relloc.pipeline.export import ExportRequest, export_estimates
 from relloc.pipeline.replay import replay
-from relloc.pipeline.team_report import RunResult, score_run, summarise, write_team_report
+from relloc.pipeline.team_report import (
+    RunResult,
+    score_run,
+    summarise,
+    tracker_meta,
+    write_team_report,
+)
 
 #: σ (m) of a UWB range when the mapping states none.
 DEFAULT_RANGE_SIGMA = 0.1
@@ -120,7 +126,7 @@ def run_bag(
             "bag": str(path),
             "mapping": mapping.source,
             "seed": settings.seed,
-            "filter": settings.tracker.filter,
+            **tracker_meta(settings.tracker),
             "range_sigma_m": sigma,
             "antenna_offset_not_modelled_m": offset,
             "loader": bag.to_dict(),

@@ -640,10 +640,11 @@ def report_markdown(
         "init",
         "yaw_bank_components",
         "keep_window_s",
+        "gate_probability",
         "settle_s",
     ):
-        if key in summary:
-            lines.append(f"- **{key}**: {summary[key]}")
+        if key in summary:  # a setting of None is one that is off (no gate)
+            lines.append(f"- **{key}**: {'off' if summary[key] is None else summary[key]}")
     if "odometry_sigma" in summary:
         lines.append("- **odometry noise σ (v_x, v_y, v_z, ω_z)** per robot:")
         for name, sig in summary["odometry_sigma"].items():
@@ -737,6 +738,18 @@ def write_team_report(
     return [*written, *(out / name for name, _ in figures)]
 
 
+def tracker_meta(tracker: TrackManagerSettings) -> dict[str, Any]:
+    """The track managers' settings, as ``summary.json`` states them."""
+    return {
+        "filter": tracker.filter,
+        "init": tracker.init.name,
+        "keep_window_s": tracker.keep_window_s,
+        "yaw_bank_components": tracker.yaw_bank.n_components if tracker.yaw_bank else 0,
+        "pseudo_linear_covariance": tracker.pseudo_linear_covariance,
+        "gate_probability": tracker.gate_probability,
+    }
+
+
 def scenario_meta(
     scenario: Scenario, *, seed: int, tracker: TrackManagerSettings
 ) -> dict[str, Any]:
@@ -746,11 +759,7 @@ def scenario_meta(
         "experiment": "run",
         "scenario": scenario.name,
         "seed": seed,
-        "filter": tracker.filter,
-        "init": tracker.init.name,
-        "keep_window_s": tracker.keep_window_s,
-        "yaw_bank_components": tracker.yaw_bank.n_components if tracker.yaw_bank else 0,
-        "pseudo_linear_covariance": tracker.pseudo_linear_covariance,
+        **tracker_meta(tracker),
         "duration_s": scenario.duration_s,
         "propagation_rate_hz": scenario.propagation_rate_hz,
         "odometry_sigma": {r.name: list(r.odometry.sigma_for(r.kind)) for r in scenario.robots},
