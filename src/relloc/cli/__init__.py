@@ -9,6 +9,13 @@ earlier run left and this one did not replace are named on stderr. Known errors
 (:class:`relloc.errors.RellocError`) become a one-line message and the class's exit code:
 configuration 2, data 3, model 4, missing extra 5. A misspelt option is reported with the usage of
 the subcommand it was given to.
+
+Stopping: Ctrl-C (SIGINT) exits 130 and SIGTERM or SIGHUP exits 128 + the signal's number
+(143, 129), each after the command's ``finally`` blocks have run — so a command that started
+processes (Monte-Carlo workers, a team) stops them before it exits instead of leaving them
+behind. The team's own processes (``relloc node``, ``team clock``, ``airground world|robot``,
+which set ``team_process``) keep the default SIGTERM: their launcher stops them that way and
+escalates to SIGKILL.
 """
 
 from __future__ import annotations
@@ -17,9 +24,12 @@ import argparse
 import importlib
 import importlib.util
 import os
+import signal
 import sys
+import threading
 import time
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 
 from relloc import __version__
@@ -112,7 +122,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         check_command(args)
         started = time.time()
-        code = int(args.func(args) or 0)
+        with _terminate_as_exception(not getattr(args, "team_process", False)):
+            code = int(args.func(args) or 0)
         if code == 0 and isinstance(getattr(args, "out", None), Path):
             _note_earlier_files(args.out, started)
         return code
@@ -122,3 +133,36 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("relloc: interrupted", file=sys.stderr)
         return 130
+    except Terminated as exc:
+        print(f"relloc: stopped by {exc.signal.name}", file=sys.stderr)
+        return 128 + exc.signal.value
+
+
+class Terminated(BaseException):
+    """SIGTERM or SIGHUP, raised in the main thread (a ``BaseException``, like
+    ``KeyboardInterrupt``, so that no ``except Exception`` swallows it)."""
+
+    def __init__(self, signum: int) -> None:
+        self.signal = signal.Signals(signum)
+        super().__init__(self.signal.name)
+
+
+def _raise_terminated(signum: int, _frame: object) -> None:
+    raise Terminated(signum)
+
+
+@contextmanager
+def _terminate_as_exception(wanted: bool) -> Iterator[None]:
+    """While the block runs, SIGTERM and SIGHUP raise :class:`Terminated` (module docstring);
+    the earlier handlers come back afterwards. Only the main thread can set handlers, so
+    elsewhere (``main`` called from a thread) the block runs as it is."""
+    if not wanted or threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    stops = (signal.SIGTERM, signal.SIGHUP)
+    earlier = {s: signal.signal(s, _raise_terminated) for s in stops}
+    try:
+        yield
+    finally:
+        for s, handler in earlier.items():
+            signal.signal(s, handler)

@@ -45,13 +45,13 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     world.add_argument("--realtime", type=float, default=0.0, metavar="FACTOR", help="pace ticks")
     world.add_argument("--kill", action="append", default=[], metavar="ROBOT@SECONDS")
     world.add_argument("--restart", action="append", default=[], metavar="ROBOT@SECONDS")
-    world.set_defaults(func=run_world)
+    world.set_defaults(func=run_world, team_process=True)
     robot = actions.add_parser("robot", help="one robot's process")
     robot.add_argument("--robot", required=True, help="R_0 (leader), R_i (follower), D_j (drone)")
     _run_arguments(robot)
     robot.add_argument("--input-timeout", type=float, default=10.0, help="wall s per input wait")
     add_network_fault_arguments(robot)
-    robot.set_defaults(func=run_robot)
+    robot.set_defaults(func=run_robot, team_process=True)
 
 
 def _run_arguments(p: argparse.ArgumentParser) -> None:

@@ -188,7 +188,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     )
     add_transport_arguments(p)
     add_network_fault_arguments(p)
-    p.set_defaults(func=run)
+    p.set_defaults(func=run, team_process=True)
 
 
 def run(args: argparse.Namespace) -> int:

@@ -134,7 +134,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     clock.add_argument("--restart", action="append", default=[], metavar="ROBOT@SECONDS")
     clock.add_argument("--report", type=Path, default=None, help="write the clock report here")
     add_transport_arguments(clock)
-    clock.set_defaults(func=run_clock)
+    clock.set_defaults(func=run_clock, team_process=True)
 
 
 def _robot_events(args: argparse.Namespace) -> dict[str, tuple[object, ...]]:

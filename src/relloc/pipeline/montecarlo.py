@@ -44,15 +44,22 @@ def executor_from_spec(
 ) -> Iterator[Executor]:
     """Open the executor a spec names (see module docstring) and close it afterwards.
 
-    An :class:`Executor` instance passes through untouched (and is not shut down here).
+    An :class:`Executor` instance passes through untouched (and is not shut down here). When
+    the block raises — an error, Ctrl-C, or SIGTERM (:mod:`relloc.cli`) — a process pool
+    cancels the runs it has not started, waits for the ones running, and its workers exit:
+    none is left behind, and none goes on to run the rest of the set.
     """
     if isinstance(spec, Executor):
         yield spec
         return
     if spec in (None, "", "process"):
-        workers = max_workers or os.cpu_count() or 1
-        with ProcessPoolExecutor(max_workers=workers) as pool:
+        pool = ProcessPoolExecutor(max_workers=max_workers or os.cpu_count() or 1)
+        try:
             yield pool
+        except BaseException:  # interrupted or failed: drop the runs not started yet
+            pool.shutdown(wait=True, cancel_futures=True)
+            raise
+        pool.shutdown(wait=True)
         return
     if spec == "serial":
         yield SerialExecutor()

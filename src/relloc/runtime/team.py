@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import json
 from collections import Counter
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
 
@@ -73,11 +72,14 @@ def run_team(settings: TeamSettings, *, export: ExportRequest | None = None) -> 
     t0, t1 = recording.span
     tracker = TrackManagerSettings(filter=settings.filter_kind, init=InitPolicy())
     launcher = TeamLauncher(settings, recording.robots, t1 - t0, est_frame=FRAME)
-    # the in-process reference runs in a process of its own while the team runs
-    with ProcessPoolExecutor(max_workers=1, mp_context=launcher.context) as pool:
-        reference_run = pool.submit(in_process_estimates, settings.scenario, settings.seed, tracker)
+    # the in-process reference runs in a process of its own while the team runs; leaving the
+    # block terminates it, also when the launcher is stopped (Ctrl-C, SIGTERM) mid-run
+    with launcher.context.Pool(1) as pool:
+        reference_run = pool.apply_async(
+            in_process_estimates, (settings.scenario, settings.seed, tracker)
+        )
         collected = launcher.run()
-        in_process = reference_run.result()
+        in_process = reference_run.get()
     distributed = assemble_estimates(collected, recording.robots, settings.filter_kind)
     meta = team_meta(team, settings, tracker)
     summary, results = build_summary(
