@@ -5,6 +5,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from relloc.errors import DataError
+
 
 def wrap_angle(angle: ArrayLike) -> NDArray[np.float64] | float:
     """Wrap angles to [-π, π).
@@ -24,10 +26,26 @@ def angle_diff(a: ArrayLike, b: ArrayLike) -> NDArray[np.float64] | float:
 
 
 def circular_interp(
-    t: ArrayLike, t_known: ArrayLike, angle_known: ArrayLike
+    t: ArrayLike, t_known: ArrayLike, angle_known: ArrayLike, *, assume_sorted: bool = False
 ) -> NDArray[np.float64]:
-    """Interpolate angles on the circle: unwrap, interpolate linearly, wrap back."""
-    unwrapped = np.unwrap(np.asarray(angle_known, dtype=float))
-    t_query = np.asarray(t, dtype=float)
+    """Interpolate angles on the circle: unwrap, interpolate linearly, wrap back.
+
+    ``t_known`` must be a non-empty 1-D array of strictly increasing times (unsorted or repeated
+    times make ``np.interp`` return a wrong angle without a word), ``angle_known`` of the same
+    length; otherwise a :class:`~relloc.errors.DataError`. Queries outside the known times get
+    the end angles (no extrapolation). ``assume_sorted`` skips the O(N) order check (only the
+    shapes are checked) for times already validated, e.g. a
+    :class:`~relloc.core.recording.GroundTruth`'s.
+    """
     t_grid = np.asarray(t_known, dtype=float)
+    angles = np.asarray(angle_known, dtype=float)
+    if t_grid.ndim != 1 or t_grid.size == 0 or angles.shape != t_grid.shape:
+        raise DataError(
+            f"circular_interp: expected 1-D sample times and angles of one length ≥ 1, got "
+            f"{t_grid.shape} and {angles.shape}"
+        )
+    if not assume_sorted and not (t_grid[1:] > t_grid[:-1]).all():  # (NaN times too)
+        raise DataError("circular_interp: the sample times must be strictly increasing")
+    unwrapped = np.unwrap(angles)
+    t_query = np.asarray(t, dtype=float)
     return np.asarray(wrap_angle(np.interp(t_query, t_grid, unwrapped)), dtype=float)

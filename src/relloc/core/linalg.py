@@ -59,8 +59,14 @@ def mahalanobis_sq(residual: Array, S: Array, *, where: str = "") -> float:
 
 
 def condition_log10(M: Array) -> float:
-    """Covariance conditioning ``log10(λmax/λmin)`` of a symmetric matrix (inf if λmin ≤ 0)."""
-    eig = np.linalg.eigvalsh(symmetrise(np.asarray(M, dtype=float)))
+    """Covariance conditioning ``log10(λmax/λmin)`` of a symmetric matrix (inf if λmin ≤ 0).
+
+    ``M`` must be a square matrix ``(n, n)`` with ``n ≥ 1``: an empty, non-square or
+    non-2-D ``M`` has no conditioning and is a :class:`ModelError`."""
+    A = np.asarray(M, dtype=float)
+    if A.ndim != 2 or A.shape[0] != A.shape[1] or A.shape[0] == 0:
+        raise ModelError(f"condition_log10: expected a square matrix (n, n), n ≥ 1, got {A.shape}")
+    eig = np.linalg.eigvalsh(symmetrise(A))
     if eig[0] <= 0.0:
         return float("inf")
     return float(np.log10(eig[-1] / eig[0]))

@@ -23,14 +23,16 @@ for the robots ``0 … n−1`` named in :attr:`Recording.robots`:
 
 Every array is validated on construction (shapes, finite numbers, strictly increasing time for
 truth and odometry, non-decreasing time for measurements, no duplicated reading of a known
-target, indices in range); a violation raises :class:`relloc.errors.DataError` naming the field
+target, indices in range — a negative index only where it is a sentinel: ``target`` and
+``landmark`` −1 (:data:`NO_TARGET`), ``origin`` −1 or −2 (:data:`CLUTTER`,
+:data:`ORIGIN_UNKNOWN`)); a violation raises :class:`relloc.errors.DataError` naming the field
 and the first offending row.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any
@@ -220,7 +222,7 @@ class GroundTruth:
         out = np.empty((tq.size, 4))
         for j in range(3):
             out[:, j] = np.interp(tq, self.t, self.pose[:, j])
-        out[:, 3] = circular_interp(tq, self.t, self.pose[:, 3])
+        out[:, 3] = circular_interp(tq, self.t, self.pose[:, 3], assume_sorted=True)
         return out
 
 
@@ -290,7 +292,8 @@ class Measurements:
     ``t (M,)``; ``kind (M,)`` codes into :data:`KIND_NAMES`; ``observer``, ``target``,
     ``landmark``, ``origin (M,)`` integer indices; ``value (M, 3)`` and ``sigma (M, 3)`` with the
     columns beyond the kind's width NaN. ``origin`` defaults to ``target`` where the target is a
-    robot and to :data:`ORIGIN_UNKNOWN` elsewhere.
+    robot and to :data:`ORIGIN_UNKNOWN` elsewhere. Indices are ≥ 0 but for the sentinels
+    (``target``/``landmark`` −1, ``origin`` −1 or −2); any other negative index is refused.
     """
 
     t: Array
@@ -339,6 +342,18 @@ class Measurements:
             _check_kind_rows(KINDS[KIND_NAMES[code]], kind == code, value, sigma, target, landmark)
         if np.any(observer < 0):
             raise DataError(f"measurements.observer: row {int(np.argmax(observer < 0))} is < 0")
+        for name, ids, lowest, sentinels in (
+            ("target", target, NO_TARGET, "−1 (no target)"),
+            ("landmark", landmark, NO_TARGET, "−1 (no landmark)"),
+            ("origin", origin, ORIGIN_UNKNOWN, "−1 (clutter) or −2 (unknown)"),
+        ):
+            below = ids < lowest
+            if below.any():  # an estimator would read it as unknown without a word
+                row = int(np.argmax(below))
+                raise DataError(
+                    f"measurements.{name}: row {row} is {int(ids[row])}; the only negative "
+                    f"{name} is {sentinels}"
+                )
         same = observer == target
         if same.any():
             raise DataError(f"measurements: row {int(np.argmax(same))} has observer == target")
@@ -383,6 +398,10 @@ class Measurements:
         Rows of a valid table taken in their order (a mask, a slice, or strictly increasing
         indices) form a valid table, so they are not checked again (the replay loop slices its
         table at every event); any other index array builds a new, checked table.
+
+        A mask must have one entry per row; an index array must be 1-D and of integers in
+        ``[−size, size)`` (negative indices count from the end, as in numpy). A scalar, a float
+        index, an index out of range or a mask of another length is a :class:`DataError`.
         """
         assert self.landmark is not None and self.origin is not None and self.sensor is not None
         pick: slice | NDArray[Any]
@@ -390,16 +409,26 @@ class Measurements:
             pick, ordered = mask, (mask.step or 1) > 0
         else:
             pick = np.asarray(mask)
+            if pick.size == 0 and pick.ndim == 1:
+                pick = pick.astype(np.int64)  # [] is float to numpy: no rows
+            if pick.ndim != 1 or pick.dtype.kind not in "biu":
+                raise DataError(
+                    "measurements.select: expected a slice, a boolean mask or a 1-D integer "
+                    f"index array, got {pick.dtype} of shape {pick.shape}"
+                )
             if pick.dtype == np.bool_ and pick.shape != self.t.shape:
                 raise DataError(f"measurements.select: mask of {pick.shape} for {self.size} rows")
             ordered = pick.dtype == np.bool_ or pick.size < 2 or bool(np.all(np.diff(pick) > 0))
+        try:  # (numpy checks the index range; no pass of its own over the indices)
+            columns = {name: getattr(self, name)[pick] for name in _MEASUREMENT_COLUMNS}
+        except IndexError as exc:
+            raise DataError(
+                f"measurements.select: an index is out of range for {self.size} rows ({exc})"
+            ) from None
         if not ordered:
-            return Measurements(
-                **{name: getattr(self, name)[pick] for name in _MEASUREMENT_COLUMNS}
-            )
+            return Measurements(**columns)
         out = object.__new__(Measurements)
-        for name in _MEASUREMENT_COLUMNS:
-            column = getattr(self, name)[pick]
+        for name, column in columns.items():
             column.setflags(write=False)
             object.__setattr__(out, name, column)
         return out
@@ -417,8 +446,24 @@ class Measurements:
         return np.asarray(self.of_kind(name).value[:, : KINDS[name].dim])
 
     @staticmethod
-    def concatenate(parts: Sequence[Measurements]) -> Measurements:
-        """Rows of every part, sorted by time (stable: equal times keep the parts' order)."""
+    def concatenate(parts: Iterable[Measurements]) -> Measurements:
+        """Rows of every part, sorted by time (stable: equal times keep the parts' order).
+
+        ``parts`` is any iterable of tables (a generator is read once); anything else — a lone
+        table, ``None``, a part that is not a :class:`Measurements` — is a :class:`DataError`.
+        """
+        if isinstance(parts, Measurements) or not isinstance(parts, Iterable):
+            raise DataError(
+                "measurements.concatenate: expected a sequence of Measurements tables, got "
+                f"{type(parts).__name__}"
+            )
+        parts = tuple(parts)
+        for i, part in enumerate(parts):
+            if not isinstance(part, Measurements):
+                raise DataError(
+                    f"measurements.concatenate: part {i} is a {type(part).__name__}, "
+                    "not a Measurements table"
+                )
         if not parts:
             return empty_measurements()
         t = np.concatenate([p.t for p in parts])
@@ -635,6 +680,29 @@ class SkipReport:
         }
 
 
+def _items(value: object, where: str, what: str) -> tuple[Any, ...]:
+    """``value`` — a sequence or any other iterable, a generator included — as a tuple;
+    ``None``, a string, a mapping (whose keys it would iterate) or a non-iterable is a
+    :class:`DataError` naming ``where``."""
+    if isinstance(value, (str, bytes, Mapping)) or not isinstance(value, Iterable):
+        raise DataError(f"{where}: expected a sequence of {what}, got {type(value).__name__}")
+    return tuple(value)
+
+
+def _landmarks(value: object) -> Array:
+    """Landmark positions as a read-only ``(L, 3)`` array (an empty input: ``(0, 3)``)."""
+    where = "recording.landmarks"
+    try:
+        raw = np.asarray(value, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise DataError(f"{where}: not numeric ({exc})") from exc
+    if raw.size == 0:
+        raw = raw.reshape(0, 3)
+    if raw.ndim != 2 or raw.shape[1] != 3:
+        raise DataError(f"{where}: expected shape (L, 3) world positions, got {raw.shape}")
+    return _float_array(raw, (3,), where)
+
+
 @dataclass(frozen=True, kw_only=True)
 class Recording:
     """What a team sensed (module docstring). Robots are indexed ``0 … n−1``.
@@ -642,6 +710,12 @@ class Recording:
     ``platforms[i]`` is ``"ground"`` or ``"aerial"``; ``odometry[i]`` and (if known)
     ``truth[i]`` belong to ``robots[i]``; ``landmarks (L, 3)`` are world positions indexed by
     the measurements' ``landmark`` column; ``source`` says where the recording came from.
+
+    ``robots``, ``platforms``, ``odometry`` and ``truth`` may be any iterable (a list, a numpy
+    array, a generator — read once) and are stored as tuples; ``None`` (but for ``truth``), a
+    string, a mapping or a non-iterable is a :class:`DataError` naming the field, as are
+    ``landmarks`` not of shape ``(L, 3)`` (an empty array of any shape means no landmarks),
+    ``meta`` that is not a mapping and ``skips`` that is not a :class:`SkipReport`.
     """
 
     robots: tuple[str, ...]
@@ -655,31 +729,34 @@ class Recording:
     skips: SkipReport = field(default_factory=SkipReport)
 
     def __post_init__(self) -> None:
-        robots = tuple(str(r) for r in self.robots)
+        robots = tuple(str(r) for r in _items(self.robots, "recording.robots", "robot names"))
         if not robots:
             raise DataError("recording.robots: a recording needs at least one robot")
         if len(set(robots)) != len(robots):
             raise DataError(f"recording.robots: names must be unique, got {robots}")
         n = len(robots)
-        if len(self.platforms) != n or len(self.odometry) != n:
+        platforms = _items(self.platforms, "recording.platforms", "platform names")
+        odometry = _items(self.odometry, "recording.odometry", "Odometry streams")
+        truth = None if self.truth is None else _items(self.truth, "recording.truth", "truths")
+        if len(platforms) != n or len(odometry) != n:
             raise DataError(
-                f"recording: {len(self.platforms)} platforms and {len(self.odometry)} odometry "
+                f"recording: {len(platforms)} platforms and {len(odometry)} odometry "
                 f"streams for {n} robots"
             )
-        for i, platform in enumerate(self.platforms):
-            if platform not in PLATFORMS:
+        for i, platform in enumerate(platforms):
+            if not isinstance(platform, str) or platform not in PLATFORMS:
                 raise DataError(
                     f"recording.platforms[{i}]: must be 'ground' or 'aerial', got {platform!r}"
                 )
-        for i, od in enumerate(self.odometry):
+        for i, od in enumerate(odometry):
             if not isinstance(od, Odometry):
                 raise DataError(
                     f"recording.odometry[{i}]: expected Odometry, got {type(od).__name__}"
                 )
-        if self.truth is not None:
-            if len(self.truth) != n:
-                raise DataError(f"recording.truth: {len(self.truth)} entries for {n} robots")
-            for i, gt in enumerate(self.truth):
+        if truth is not None:
+            if len(truth) != n:
+                raise DataError(f"recording.truth: {len(truth)} entries for {n} robots")
+            for i, gt in enumerate(truth):
                 if not isinstance(gt, GroundTruth):
                     raise DataError(
                         f"recording.truth[{i}]: expected GroundTruth, got {type(gt).__name__}"
@@ -687,7 +764,13 @@ class Recording:
         m = self.measurements
         if not isinstance(m, Measurements):
             raise DataError("recording.measurements: expected a Measurements table")
-        landmarks = _float_array(np.reshape(self.landmarks, (-1, 3)), (3,), "recording.landmarks")
+        if not isinstance(self.meta, Mapping):
+            raise DataError(f"recording.meta: expected a mapping, got {type(self.meta).__name__}")
+        if not isinstance(self.skips, SkipReport):
+            raise DataError(
+                f"recording.skips: expected a SkipReport, got {type(self.skips).__name__}"
+            )
+        landmarks = _landmarks(self.landmarks)
         assert m.landmark is not None and m.origin is not None
         for name, ids, limit in (
             ("observer", m.observer, n),
@@ -703,9 +786,9 @@ class Recording:
                     f"(the recording has {limit})"
                 )
         object.__setattr__(self, "robots", robots)
-        object.__setattr__(self, "platforms", tuple(self.platforms))
-        object.__setattr__(self, "odometry", tuple(self.odometry))
-        object.__setattr__(self, "truth", None if self.truth is None else tuple(self.truth))
+        object.__setattr__(self, "platforms", platforms)
+        object.__setattr__(self, "odometry", odometry)
+        object.__setattr__(self, "truth", truth)
         object.__setattr__(self, "landmarks", landmarks)
         object.__setattr__(self, "meta", MappingProxyType(dict(self.meta)))
 
@@ -736,9 +819,24 @@ class Recording:
 
     @property
     def span(self) -> tuple[float, float]:
-        """The time span covered by every robot's ground truth, or else by the data."""
+        """The time span covered by every robot's ground truth, or else by the data.
+
+        Truth spans that do not all overlap (one robot's ends before another's starts) are a
+        :class:`DataError` naming the two robots, never an inverted (empty) span.
+        """
         if self.truth is not None:
-            return max(float(g.t[0]) for g in self.truth), min(float(g.t[-1]) for g in self.truth)
+            starts = [float(g.t[0]) for g in self.truth]
+            ends = [float(g.t[-1]) for g in self.truth]
+            t0, t1 = max(starts), min(ends)
+            if t0 > t1:  # no instant at which every robot's truth is known
+                late, early = int(np.argmax(starts)), int(np.argmin(ends))
+                raise DataError(
+                    f"recording {self.source!r}: the ground truth of {self.robots[late]!r} "
+                    f"starts at {t0:.6g} s, after that of {self.robots[early]!r} ends at "
+                    f"{t1:.6g} s; the robots' truth spans do not overlap, so there is no common "
+                    "time span"
+                )
+            return t0, t1
         stamps = [od.t for od in self.odometry if od.t.size] + [self.measurements.t]
         t = np.concatenate(stamps) if stamps else np.zeros(0)
         if t.size == 0:
@@ -769,13 +867,31 @@ class Recording:
         return relative_pose(a, b)
 
 
+def _pose_pair(a: Array, b: Array, where: str) -> tuple[Array, Array, tuple[int, ...]]:
+    """``a`` and ``b`` as 2-D arrays of 4-DOF poses and their broadcast shape ``(N, 4)``;
+    a DataError naming ``where`` if either is not ``(4,)`` or ``(N, 4)`` or the row counts
+    differ (other than 1). Only shapes are checked (these run at every step)."""
+    a, b = np.atleast_2d(a), np.atleast_2d(b)
+    (na, wa), (nb, wb) = a.shape[-2:], b.shape[-2:]
+    if a.ndim != 2 or b.ndim != 2 or wa != 4 or wb != 4:
+        raise DataError(
+            f"{where}: poses are (x, y, z, ψ), shape (4,) or (N, 4); got {a.shape} and {b.shape}"
+        )
+    if na != nb and na != 1 and nb != 1:
+        raise DataError(f"{where}: {na} poses against {nb}")
+    return a, b, (max(na, nb), 4)
+
+
 def relative_pose(a: Array, b: Array) -> Array:
-    """Vectorised 4-DOF ``⊖a ⊕ b`` for poses ``(N, 4)``: ``b`` expressed in ``a``'s body frame."""
-    a = np.atleast_2d(a)
-    b = np.atleast_2d(b)
+    """Vectorised 4-DOF ``⊖a ⊕ b`` for poses ``(N, 4)``: ``b`` expressed in ``a``'s body frame.
+
+    Either may be one pose ``(4,)`` (or ``(1, 4)``), applied to every row of the other; any
+    other shape (a 3-wide SE(2) pose, a stack of more than two axes, row counts that differ) is
+    a :class:`DataError`."""
+    a, b, shape = _pose_pair(a, b, "relative_pose")
     d = b[:, :3] - a[:, :3]
     c, s = np.cos(a[:, 3]), np.sin(a[:, 3])
-    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    out = np.empty(shape)
     out[:, 0] = c * d[:, 0] + s * d[:, 1]
     out[:, 1] = -s * d[:, 0] + c * d[:, 1]
     out[:, 2] = d[:, 2]
@@ -786,11 +902,10 @@ def relative_pose(a: Array, b: Array) -> Array:
 def compose_pose(a: Array, b: Array) -> Array:
     """Vectorised 4-DOF ``a ⊕ b`` for poses ``(N, 4)``: ``b``, given in ``a``'s body frame, in
     ``a``'s frame of reference (the inverse of :func:`relative_pose`: ``a ⊕ (⊖a ⊕ b) = b``);
-    the heading is wrapped."""
-    a = np.atleast_2d(a)
-    b = np.atleast_2d(b)
+    the heading is wrapped. Shapes as for :func:`relative_pose` (others: :class:`DataError`)."""
+    a, b, shape = _pose_pair(a, b, "compose_pose")
     c, s = np.cos(a[:, 3]), np.sin(a[:, 3])
-    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    out = np.empty(shape)
     out[:, 0] = a[:, 0] + c * b[:, 0] - s * b[:, 1]
     out[:, 1] = a[:, 1] + s * b[:, 0] + c * b[:, 1]
     out[:, 2] = a[:, 2] + b[:, 2]

@@ -8,13 +8,14 @@ measures the range bias of pseudo-linear filters.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from relloc.core import checks
 from relloc.core.angles import wrap_angle
-from relloc.errors import DataError
+from relloc.errors import ConfigError, DataError
 
 Array = NDArray[np.float64]
 
@@ -25,25 +26,59 @@ RELPOSE4_ANGLES: tuple[int, ...] = (3,)
 def state_errors(
     estimate: ArrayLike, truth: ArrayLike, angle_indices: Sequence[int] = RELPOSE4_ANGLES
 ) -> Array:
-    """``x̂ − x`` with the angle entries wrapped; any matching shapes ``(..., n)``."""
+    """``x̂ − x`` with the angle entries wrapped; any matching shapes ``(..., n)``.
+
+    Shapes that differ are a :class:`DataError`; ``angle_indices`` must be a sequence (or an
+    array) of integers in ``[−n, n)`` (:class:`ConfigError` otherwise — a bare integer, a float
+    index, an index beyond the state).
+    """
     est = np.asarray(estimate, dtype=float)
     tru = np.asarray(truth, dtype=float)
     if est.shape != tru.shape:
         raise DataError(f"state_errors: estimate shape {est.shape} != truth shape {tru.shape}")
+    if isinstance(angle_indices, (str, bytes)) or not isinstance(angle_indices, Iterable):
+        raise ConfigError(
+            f"state_errors: angle_indices must be a sequence of state indices, got "
+            f"{angle_indices!r:.40}"
+        )
+    n = est.shape[-1] if est.ndim else 0
+    angles = [
+        checks.count(i, f"state_errors: angle_indices[{k}]", low=-n)
+        for k, i in enumerate(angle_indices)
+    ]
+    for k, i in enumerate(angles):
+        if i >= n:
+            raise ConfigError(
+                f"state_errors: angle_indices[{k}] = {i} is beyond the {n} entries of a state"
+            )
     err = est - tru
-    for i in angle_indices:
+    for i in angles:
         err[..., i] = wrap_angle(err[..., i])
     return err
 
 
-def rmse(errors: ArrayLike, axis: int | tuple[int, ...] = 0) -> Array:
+def rmse(errors: ArrayLike, axis: int | tuple[int, ...] | None = 0) -> Array:
     """Root-mean-square of ``errors`` along ``axis`` (default: over runs, the first axis).
 
     ``errors (runs, time, n)`` → RMSE per time and state ``(time, n)``; use
     ``axis=(0, 1)`` for one number per state over runs and time. NaN entries (e.g. no estimate
     while a track did not exist) are ignored; an all-NaN slice gives NaN.
+
+    ``axis`` is an integer or a tuple of distinct integers in ``[−ndim, ndim)`` (negative ones
+    count from the end), or ``None`` for all axes; anything else is a :class:`ConfigError`.
     """
     e = np.asarray(errors, dtype=float)
+    axes = tuple(range(e.ndim)) if axis is None else axis if isinstance(axis, tuple) else (axis,)
+    if not axes and e.ndim:
+        raise ConfigError("rmse: axis must name at least one axis, got ()")
+    seen: set[int] = set()
+    for a in axes:
+        k = checks.count(a, "rmse: axis", low=-e.ndim)
+        if k >= e.ndim:
+            raise ConfigError(f"rmse: axis {k} is beyond the {e.ndim} axes of the errors")
+        if k % e.ndim in seen:
+            raise ConfigError(f"rmse: axis {axis} names axis {k % e.ndim} twice")
+        seen.add(k % e.ndim)
     sq = np.square(e)
     count = np.sum(np.isfinite(sq), axis=axis)
     total = np.nansum(sq, axis=axis)
