@@ -66,6 +66,10 @@ def test_air_ground_team_survives_loss_a_partition_and_a_follower_killed_and_res
     world = run["messages"]["world"]
     assert world["cmd_absent"] == {"R_2": 10}  # its motors stopped for 0.5 s
     assert world["cmd_received"]["R_2"] == 30  # 10 ticks before the kill, 20 after the restart
+    # every teammate knew the restarted follower's subscriptions before its first tick: no
+    # input of it went astray, so no robot waited for one and no command came too late
+    assert not world["cmd_missing"] and world["rejected"] == 0
+    assert all(m["input_timeouts"] == 0 for m in run["messages"]["robots"].values())
     r2 = run["messages"]["robots"]["R_2"]
     # (a killed process' counters are those of its last report, a quarter second before)
     assert r2["processes"] == 2 and 20 < r2["sent"]["cmd"] <= 30

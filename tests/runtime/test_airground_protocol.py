@@ -187,6 +187,76 @@ def test_a_robot_the_world_counts_ready_is_present_whichever_token_arrives_first
     assert proc.roll.present == {"R_2"}
 
 
+def test_the_world_resumes_after_a_restart_once_every_present_robot_is_ready_anew(session):
+    """A teammate that has not yet seen a restarted robot's ``alive`` token may not know its
+    subscriptions: what it publishes for the next tick would not reach the robot, which would
+    wait ``input_timeout_s`` for it while the world waits ``cmd_timeout_s`` for its command
+    (once counted 29 commands of 30). So the world waits, beyond the restarted robot's
+    ``ready``, for every present robot's ``ready`` token declared since the announcement (each
+    renews its own on seeing the restarted one), and not for the tokens they held before."""
+    from relloc.runtime.faults import RobotEvent
+    from relloc.runtime.transport import Inbox, declare_publisher
+
+    proc = WorldProcess(WorldSettings(team=TEAM, transport=TRANSPORT), _world())
+    proc._pubs["ctl"] = declare_publisher(session, keys.clock_key("unheard", "ctl"))
+    others = set(ROSTER) - {"R_2"}
+    proc.roll.present, proc.roll.ready = set(others), set(others)  # R_2 was killed
+    inbox = Inbox()
+
+    def token(kind: str, robot: str, presence: str) -> None:
+        inbox._push(Incoming(f"relloc/{TEAM}/{kind}/{robot}", b"", presence))  # type: ignore[arg-type]
+
+    token("alive", "R_2", "joined")
+    token("ready", "R_2", "joined")  # the restarted robot has seen its teammates
+    for robot in sorted(others):  # each teammate has seen the restarted robot
+        token("ready", robot, "left")
+        token("ready", robot, "joined")
+    proc._robot_event(inbox, "restart", RobotEvent(robot="R_2", at_s=1.0))
+    assert proc.report.events[-1]["completed"]
+    assert not inbox.drain()  # every renewed token was waited for
+    assert proc.roll.present == proc.roll.ready == set(ROSTER)
+
+
+def test_a_robot_renews_its_ready_token_when_a_teammate_appears_after_it_was_ready(session):
+    """A robot declares ``ready`` once it has seen the world's and its teammates' ``alive``
+    tokens, and declares it again when a teammate's token appears later (a restart): by then
+    its session knows the newcomer's subscriptions. A repeated appearance changes nothing."""
+    from relloc.runtime.transport import Inbox
+
+    proc = _process("R_0", session)
+    proc._session = session
+    watch = Inbox()
+    watch.watch_presence(session, keys.ready_wildcard(TEAM))
+
+    def presence(robot: str, change: str) -> None:
+        proc._handle(Incoming(keys.alive_key(TEAM, robot), b"", change))  # type: ignore[arg-type]
+        proc._declare_ready()
+
+    def heard() -> list[str]:
+        changes = []
+        while (item := watch.get(timeout=0.5)) is not None:
+            assert keys.parse_presence_key(item.key) == ("ready", "R_0")
+            changes.append(item.presence)
+        return changes
+
+    try:
+        for member in (CLOCK_SENDER, "R_1", "R_2"):
+            presence(member, "joined")
+        assert proc._ready_token is None and heard() == []
+        presence("D_1", "joined")
+        assert heard() == ["joined"]
+        presence("R_2", "left")  # killed
+        assert heard() == []
+        presence("R_2", "joined")  # restarted
+        assert heard() == ["left", "joined"]
+        presence("R_2", "joined")
+        assert heard() == []
+    finally:
+        if proc._ready_token is not None:
+            proc._ready_token.undeclare()
+        watch.close()
+
+
 def test_a_follower_builds_its_filter_before_it_joins_and_a_restarted_one_starts_broad():
     """:meth:`FollowerRole.prepare` (called before the robot declares ready) builds the filter
     of a start at tick 0 with its gate quantiles; the first tick keeps it, and a follower whose

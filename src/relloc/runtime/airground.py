@@ -12,11 +12,19 @@ its filter, whose χ² gate quantiles are computed then (the first computation i
 scipy.stats, about half a second of CPU) — and only then joins: it declares its subscribers,
 its ``alive`` token and, once it has seen the world's and every teammate's, its ``ready`` token
 (:func:`relloc.runtime.keys.ready_key`, as a node does for the clock). The world starts when
-every robot is ready, and resumes after a restart once the restarted robot is ready again (a
+every robot is ready. After a restart it resumes once the restarted robot is ready again (a
 robot counted ready is counted present: :class:`~relloc.runtime.transport.Roll`, so the
-restarted robot's first tick is awaited); so the world's wait for a command (``cmd_timeout_s``)
-covers one tick's work, never a robot's one-off set-up (which, under load, could take longer
-than the timeout).
+restarted robot's first tick is awaited) *and* every other present robot is ready anew: a
+robot that sees a teammate's ``alive`` token appear after it declared ``ready`` declares its
+``ready`` token again (:meth:`RobotProcess._renew_ready`). Seeing a token proves only that the
+token's holder's declarations have arrived, not that the holder has this robot's: the
+restarted robot's ``ready`` says it knows its teammates' subscriptions, and only their renewed
+tokens say that they know its own — without them a teammate could publish its readings or the
+leader its command of the restarted robot's first tick before that robot's subscription
+reached it, and the robot would wait ``input_timeout_s`` for an input that never comes. So the
+world's wait for a command (``cmd_timeout_s``) covers one tick's work, never a robot's one-off
+set-up (which, under load, could take longer than the timeout) nor a subscription in
+flight.
 
 Per tick ``k = 0 … K`` (``t_k = k dt``; key expressions in :mod:`relloc.runtime.keys`):
 
@@ -296,13 +304,22 @@ class WorldProcess:
         self.report.wall_s = time.monotonic() - start
 
     def _robot_event(self, inbox: Inbox, action: str, event: RobotEvent) -> None:
-        """Announce a kill or restart (the launcher executes it) and wait until it happened."""
+        """Announce a kill or restart (the launcher executes it) and wait until it happened: a
+        killed robot's ``alive`` token is gone; a restarted robot is ready, and every present
+        robot has declared its ``ready`` token since the announcement — the others renew
+        theirs once they have seen the restarted robot's ``alive`` token, so all of them know
+        its subscriptions before the next ``sense`` (module docstring)."""
         wall = time.monotonic()
+        if action == "restart":
+            self.roll.renew_ready()
         self._publish("ctl", {"action": action, "robot": event.robot}, self._t)
         if action == "kill":
             ok = self._wait(inbox, lambda: event.robot not in self.roll.present, 30.0)
         else:
-            ok = self._wait(inbox, lambda: event.robot in self.roll.ready, 60.0)
+            roll = self.roll
+            ok = self._wait(
+                inbox, lambda: event.robot in roll.ready and roll.present <= roll.ready, 60.0
+            )
         self.report.events.append(
             {
                 "action": action,
@@ -638,8 +655,21 @@ class RobotProcess:
             return
         everyone = set(self.roster) - {self.s.robot} <= self.present
         if everyone or time.monotonic() - self._clock_wall > 1.0:
-            ready = keys.ready_key(self.s.team, self.s.robot)
-            self._ready_token = self._session.liveliness().declare_token(ready)
+            self._ready_token = self._new_ready_token()
+
+    def _renew_ready(self) -> None:
+        """Declare the ``ready`` token again, if it was declared: called when a teammate's
+        ``alive`` token appears (a restarted teammate), whose subscriptions this robot's
+        session knows by then — Zenoh propagates a session's declarations in order and a robot
+        declares its subscribers before its ``alive`` token. The world, resuming after a
+        restart, waits for every present robot's renewed token (module docstring)."""
+        if self._ready_token is None:
+            return
+        self._ready_token.undeclare()
+        self._ready_token = self._new_ready_token()
+
+    def _new_ready_token(self) -> Any:
+        return self._session.liveliness().declare_token(keys.ready_key(self.s.team, self.s.robot))
 
     def _handle(self, item: Any) -> None:
         if item.presence != "data":
@@ -651,7 +681,9 @@ class RobotProcess:
                     self._world_gone = True  # nothing more will come
             elif member in self.roster and member != self.s.robot:
                 if item.presence == "joined":
-                    self.present.add(member)
+                    if member not in self.present:
+                        self.present.add(member)
+                        self._renew_ready()
                 else:
                     self.present.discard(member)
                     self._seen.forget(member)

@@ -75,7 +75,11 @@ def ready_key(team: str, member: str) -> str:
     Zenoh propagates a session's declarations in order and a robot declares its subscribers
     before its ``alive`` token, so a robot that has seen a teammate's token also knows that
     teammate's subscriptions: once every robot is ready, no first message is lost to a
-    subscription still in flight.
+    subscription still in flight. Seeing a teammate's token says nothing about whether the
+    teammate knows this robot's subscriptions, so a robot of the air-ground team declares its
+    token again when a teammate's ``alive`` token appears after it was ready (a restart), and
+    the world resumes once every present robot has done so
+    (:mod:`relloc.runtime.airground`).
     """
     return f"relloc/{team}/ready/{member}"
 

@@ -304,3 +304,10 @@ class Roll:
             if token != "ready":
                 self.present.discard(member)
         return token, member, joined
+
+    def renew_ready(self) -> None:
+        """Count no member ready until its ``ready`` token is declared again: a ``joined`` of
+        that token heard after this call makes it ready anew (presence is kept). A driver
+        that calls this before it announces a restart, and then waits until every present
+        member is ready, waits for tokens declared after the announcement."""
+        self.ready.clear()
