@@ -7,6 +7,7 @@ their task pipe, so they never see their parent go (found with ``kill -TERM`` on
 from __future__ import annotations
 
 import signal
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -65,7 +66,15 @@ def _wait_for(predicate, timeout: float) -> bool:
 def _stop_and_check(argv: list[str], at_least: int, signum: int, code: int) -> str:
     """Start ``relloc ARGV``, wait until it has ``at_least`` processes below it, send
     ``signum``; it must exit with ``code`` and leave none of them alive."""
-    proc = relloc_process(*argv)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "relloc.cli", *argv],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        # a shell's default SIGINT: a test runner's worker may ignore it, and an ignored SIGINT
+        # is inherited (Python then installs no KeyboardInterrupt handler)
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
     try:
         assert _wait_for(lambda: len(_descendants(proc.pid)) >= at_least, 120), (
             f"fewer than {at_least} processes started"

@@ -22,7 +22,6 @@ import math
 import os
 import tempfile
 import time
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -31,7 +30,7 @@ import numpy as np
 
 from relloc.estimators.track_manager import TrackManagerSettings
 from relloc.experiments.team_run import team_task
-from relloc.pipeline.montecarlo import run_monte_carlo
+from relloc.pipeline.montecarlo import executor_from_spec, run_monte_carlo
 from relloc.sim.scenario import default_scenario
 
 TEAM_SIZES = (2, 4, 6, 8, 12, 16, 24)
@@ -138,7 +137,7 @@ def monte_carlo_speedup(runs: int = 4, duration_s: float = 10.0) -> dict[str, An
     timings: dict[int, float] = {}
     results: dict[int, list[Any]] = {}
     for workers in (1, 2):
-        with ProcessPoolExecutor(max_workers=workers) as pool:
+        with executor_from_spec("process", max_workers=workers) as pool:
             start = time.perf_counter()
             results[workers] = run_monte_carlo(
                 team_task, runs, 2026, executor=pool, task_args=args, quiet=True
