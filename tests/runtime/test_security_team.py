@@ -13,7 +13,9 @@ loopback Zenoh, and an outside session attacks while the team runs.
   the attacks: the first two never see the team (no link), the third is confined by Zenoh's
   access control to rover's own key prefix — only what it sends there reaches relloc: a
   malformed message and rover's odometry with a huge sequence number (which would make the
-  genuine stream look old), both counted — and the estimates again equal the in-process ones.
+  genuine stream look old), both counted by the teammates, and by rover itself as messages on
+  its own key from another process (``own_key``) — and the estimates again equal the
+  in-process ones.
 
 Each run: 3 robots, 5 s simulated, paced at 2.5x real time so the attack lands mid-run.
 """
@@ -171,6 +173,11 @@ def test_plain_team_survives_every_attack_and_counts_it(trio_scenario, tmp_path)
         assert reasons.get("future") == (None if robot == "flyer" else 1), (robot, reasons)
         flooded = robot != "observer"  # the flood used the observer's name
         assert (reasons.get("rate_limited", 0) > 0) == flooded, (robot, reasons)
+        # a robot hears what was sent in its name on its own key from another process: the
+        # observer the flood, flyer the future-stamped odometry (rover's key got only payloads
+        # too large to read)
+        own = reasons.get("own_key", 0)
+        assert {"observer": own > 0, "flyer": own == 1, "rover": own == 0}[robot], reasons
     assert collected.kills == [] and collected.restarts == []
     assert dict(collected.rejected_by_reason) == {
         "unknown_target": 1,
@@ -267,7 +274,8 @@ def test_secure_team_keeps_out_intruders_and_confines_a_stolen_certificate(trio_
     per_robot = robot_messages(collected, roster)
     for robot, m in per_robot.items():
         assert m["processes"] == 1 and m["final_report"] and m["ticks"] == 50, (robot, m)
-        expected = {} if robot == "rover" else {"malformed": 1, "seq_jump": 1}
+        # rover hears both on its own key, from a process that is not rover's: own_key
+        expected = {"own_key": 2} if robot == "rover" else {"malformed": 1, "seq_jump": 1}
         assert m["rejected_by_reason"] == expected, (robot, m["rejected_by_reason"])
         assert m["teammate_joins_seen"] == 2 and m["teammate_departures_seen"] == 0
     assert collected.kills == [] and dict(collected.rejected_by_reason) == {}

@@ -10,7 +10,10 @@ reason, which the receiver counts (``rejected_by_reason`` in the summary):
   roster robot ``id`` and only from that robot; ``tick``, ``ctl`` and ``sense`` only on
   ``relloc/<team>/clock/<kind>``
   and only from the infrastructure sender ``clock``; the message type must be its key's kind
-  (``unknown_key``, ``unknown_sender``, ``spoofed``, ``wrong_kind``). In ``--secure`` mode Zenoh's
+  (``unknown_key``, ``unknown_sender``, ``spoofed``, ``wrong_kind``); a robot subscribes to
+  its teammates' keys remote-only, so what it hears on its own keys was sent by another process
+  claiming its identity — a spoofer, or a second process started with the same id
+  (``own_key``). In ``--secure`` mode Zenoh's
   access control enforces the same layout at the transport (a robot's certificate may publish
   only under its own prefix, only the launcher's certificate under ``clock/``), so a spoofed
   message does not even reach this code; without TLS anyone on the network can still claim a

@@ -623,7 +623,7 @@ class RobotProcess:
         tokens = []
         try:
             for kind in self.role.listens:
-                inbox.subscribe(session, keys.robot_wildcard(s.team, kind))
+                inbox.subscribe(session, keys.robot_wildcard(s.team, kind), remote_only=True)
             inbox.subscribe(session, keys.clock_key(s.team, "sense"))
             inbox.subscribe(session, keys.clock_key(s.team, "ctl"))
             inbox.watch_presence(session, keys.alive_wildcard(s.team))
@@ -694,7 +694,9 @@ class RobotProcess:
                 self._on_sense(msg)
             elif msg.kind == "ctl":
                 self._on_ctl(msg)
-            elif msg.sender != self.s.robot:
+            elif msg.sender == self.s.robot:  # remote-only: another process speaks as it
+                raise MessageRejected("own_key", f"a {msg.kind!r} message on {item.key!r}")
+            else:
                 self._on_teammate(msg)
         except MessageRejected as exc:
             self.counters["rejected"] += 1

@@ -263,7 +263,7 @@ class RobotNode:
         try:
             if self.listens:
                 for kind in ("odom", "meas", "rows", "eqm", "mail", "sync"):
-                    inbox.subscribe(session, keys.robot_wildcard(s.team, kind))
+                    inbox.subscribe(session, keys.robot_wildcard(s.team, kind), remote_only=True)
             inbox.subscribe(session, keys.clock_key(s.team, "tick"))
             inbox.subscribe(session, keys.clock_key(s.team, "ctl"))
             inbox.watch_presence(session, keys.alive_wildcard(s.team))
@@ -335,7 +335,9 @@ class RobotNode:
             return
         parsed = keys.parse_robot_key(item.key)
         if parsed is not None and parsed[0] == self.s.robot:
-            return  # our own publication looped back by the local session
+            # the subscriptions are remote-only: another process speaks as this robot
+            self._count_rejected(MessageRejected("own_key", f"a message on {item.key!r}"))
+            return
         try:
             msg = admit(item.key, item.payload, roster=self.s.roster, max_bytes=self.s.max_bytes)
             if msg.kind == "tick":

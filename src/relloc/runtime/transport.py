@@ -206,9 +206,12 @@ class Inbox:
     def queued_bytes(self) -> int:
         return self._bytes
 
-    def subscribe(self, session: Any, key_expr: str) -> None:
+    def subscribe(self, session: Any, key_expr: str, *, remote_only: bool = False) -> None:
         """Deliver every sample on ``key_expr`` to this inbox (oversized payloads are counted
-        and dropped here, before they are copied)."""
+        and dropped here, before they are copied). ``remote_only``: not the samples this
+        session publishes itself (Zenoh's ``Locality.REMOTE``) — a robot that subscribes to
+        every robot's keys then hears on its own keys only what another process sent there."""
+        zenoh = require("zenoh", "runtime")
 
         def on_sample(sample: Any) -> None:
             payload = sample.payload
@@ -218,7 +221,10 @@ class Inbox:
                 return
             self._push(Incoming(str(sample.key_expr), payload.to_bytes()))
 
-        self._handles.append(session.declare_subscriber(key_expr, on_sample))
+        origin = zenoh.Locality.REMOTE if remote_only else zenoh.Locality.ANY
+        self._handles.append(
+            session.declare_subscriber(key_expr, on_sample, allowed_origin=origin)
+        )
 
     def watch_presence(self, session: Any, key_expr: str) -> None:
         """Deliver liveliness appearances/disappearances on ``key_expr`` (history included)."""
