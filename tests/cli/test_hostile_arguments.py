@@ -72,6 +72,19 @@ def a_file(tmp_path: Path) -> Path:
             "--case: default does not read it; read by guler2023, sharma2013",
         ),
         (["team", "up", "default", "--fit", "f.json"], "--fit: default does not read it"),
+        (["team", "up", "default", "--gate", "1"], "--gate: must be a finite number in (0, 1)"),
+        (
+            ["team", "up", "sharma2013", "--gate", "0.99"],
+            "--gate: sharma2013 does not read it; read by --estimator track",
+        ),
+        (
+            ["node", "--robot", "1", "--scenario", "sharma2013", "--gate", "0.99"],
+            "--gate: read by seed 000's track manager only",
+        ),
+        (
+            ["node", "--robot", "observer", "--scenario", "default", "--gate", "nan"],
+            "--gate: must be a finite number in (0, 1)",
+        ),
         (
             ["team", "up", "sharma2013", "--fit", "f.json"],
             "--fit: sharma2013 does not read it; read by --estimator cooperative",

@@ -12,6 +12,7 @@ Every process is started by the launcher and killed in its ``finally`` block.
 
 from __future__ import annotations
 
+import json
 import threading
 import time
 
@@ -19,6 +20,7 @@ import msgpack
 import numpy as np
 import pytest
 
+from relloc.cli import main
 from relloc.estimators.track_manager import TrackManagerSettings
 from relloc.pipeline.team_report import track_team
 from relloc.runtime import keys
@@ -161,3 +163,17 @@ def test_killed_robot_is_noticed_and_its_restart_rejoins(trio_scenario, tmp_path
     distributed = assemble_estimates(collected, rec.robots, "plkf")
     flyer = distributed.series("observer", "flyer")
     assert flyer.t.size and (flyer.t > 4.0).any()  # estimates after the restart
+
+
+def test_team_up_with_a_gate_gates_as_the_in_process_run(trio_scenario, tmp_path):
+    # --gate reaches every robot's track manager and the in-process reference alike: a tight
+    # gate (P = 0.5, so about half the readings are rejected) and still the same estimates
+    out = tmp_path / "out"
+    argv = ["team", "up", str(trio_scenario(4.0)), "--out", str(out), "--seed", "3", "--quiet",
+            "--port", str(free_loopback_port()), "--gate", "0.5"]  # fmt: skip
+    assert main(argv) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["gate_probability"] == 0.5
+    assert summary["messages"]["per_robot"]["observer"]["tracks"]["rows_gated"] > 0
+    agree = summary["agreement"]
+    assert agree["within_tolerance"], agree

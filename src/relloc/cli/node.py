@@ -154,6 +154,14 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     p.add_argument("--filter", default="plkf", help="plkf | tekf | bcplkf")
     p.add_argument("--init", default="measurement", help="track initialisation policy")
     p.add_argument(
+        "--gate",
+        type=float,
+        default=None,
+        metavar="P",
+        help="the track manager's NIS gate: reject a measurement beyond the χ²(3) quantile P "
+        "(default off)",
+    )
+    p.add_argument(
         "--realtime",
         action="store_true",
         help="run on wall time (the dataset/scenario replayed in real time through the live "
@@ -277,14 +285,21 @@ def run_realtime(args: argparse.Namespace, parts: NodeParts) -> int:
 
 def node_parts(args: argparse.Namespace) -> NodeParts:
     """The robot's sensor source and estimator for the team source the arguments name."""
+    from relloc.core.checks import probability
     from relloc.errors import ConfigError
     from relloc.experiments.desilva2015 import sensing_robots
     from relloc.experiments.team_sources import named_node_parts, team_names
 
     refuse_desilva_only(args)
-    if args.fit is not None and not (args.dataset is not None and args.estimator == "cooperative"):
+    cooperative = args.dataset is not None and args.estimator == "cooperative"
+    if args.fit is not None and not cooperative:
         raise ConfigError("--fit: read with --dataset and --estimator cooperative only")
-    if args.dataset is None and args.scenario in team_names():
+    reproduction = args.dataset is None and args.scenario in team_names()
+    if args.gate is not None:
+        if reproduction or cooperative:
+            raise ConfigError("--gate: read by seed 000's track manager only (--estimator track)")
+        probability(args.gate, "--gate")
+    if reproduction:
         return named_node_parts(
             args.scenario,
             args.robot,
@@ -295,7 +310,7 @@ def node_parts(args: argparse.Namespace) -> NodeParts:
             args.sharing_policy or "all",
             sensing_robots(args.sensing),
         )
-    if args.dataset is not None and args.estimator == "cooperative":
+    if cooperative:
         from pathlib import Path
 
         from relloc.experiments.mrclam_team import DEFAULT_CASE, cooperative_node_parts
@@ -336,7 +351,9 @@ def track_manager_parts(args: argparse.Namespace) -> NodeParts:
     manager = track_manager_of(
         recording,
         args.robot,
-        TrackManagerSettings(filter=args.filter, init=InitPolicy(name=args.init)),
+        TrackManagerSettings(
+            filter=args.filter, init=InitPolicy(name=args.init), gate_probability=args.gate
+        ),
         rng=np.random.default_rng(np.random.SeedSequence([args.seed, index])),
     )
     driver = WindowDriver(

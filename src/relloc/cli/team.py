@@ -93,6 +93,14 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     up.add_argument(
         "--filter", default=None, help="a scenario's or a dataset's tracks: plkf | tekf | bcplkf"
     )
+    up.add_argument(
+        "--gate",
+        type=float,
+        default=None,
+        metavar="P",
+        help="a scenario's or a dataset's tracks: reject a measurement whose NIS exceeds the "
+        "χ²(3) quantile P (as relloc run --gate; default off)",
+    )
     up.add_argument("--tick", type=float, default=0.1, help="clock tick (publication period), s")
     up.add_argument(
         "--realtime",
@@ -157,6 +165,7 @@ READ_BY: dict[str, tuple[str, ...]] = {
     "fit": (COOPERATIVE,),
     "estimator": (COOPERATIVE, TRACKS),
     "filter": (TRACKS,),
+    "gate": (TRACKS,),
 }
 """The kinds of target (:func:`target_kind`) that read each of these flags; another is refused,
 never ignored (:func:`relloc.core.checks.refuse_unread`)."""
@@ -206,6 +215,7 @@ def run_up(args: argparse.Namespace) -> int:
         port=args.port,
         wall_timeout_s=args.timeout,
         filter_kind=args.filter or "plkf",
+        gate_probability=args.gate,
         secure=args.secure,
         certs_dir=args.certs,
     )

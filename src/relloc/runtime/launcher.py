@@ -39,6 +39,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from relloc.core.checks import probability
 from relloc.errors import ConfigError, RellocError
 from relloc.runtime import keys
 from relloc.runtime.access import SecureTeam, secure_team
@@ -72,6 +73,8 @@ class TeamSettings:
     port: int | None = None
     wall_timeout_s: float = 300.0
     filter_kind: str = "plkf"
+    gate_probability: float | None = None
+    """The track managers' NIS gate (``--gate``; :class:`TrackManagerSettings`), or none."""
     secure: bool = False
     """Mutual TLS and access control (:mod:`relloc.runtime.access`) for every process."""
     certs_dir: Path | None = None
@@ -97,6 +100,8 @@ class TeamSettings:
             )
         if self.certs_dir is not None and not self.secure:
             raise ConfigError("--certs: only with --secure")
+        if self.gate_probability is not None:
+            probability(self.gate_probability, "--gate")
 
 
 @dataclass
@@ -163,6 +168,8 @@ def node_command(
         cmd += ["--stall", st.arg]
     if settings.realtime_factor > 0:
         cmd += ["--paced", repr(settings.realtime_factor)]
+    if settings.gate_probability is not None:
+        cmd += ["--gate", repr(settings.gate_probability)]
     return cmd + list(settings.node_args)
 
 

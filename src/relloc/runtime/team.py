@@ -44,6 +44,7 @@ from relloc.pipeline.team_report import (
     build_summary,
     scenario_meta,
     track_team,
+    tracker_meta,
     write_team_report,
 )
 from relloc.runtime.launcher import Collected, TeamLauncher, TeamSettings
@@ -70,7 +71,9 @@ def run_team(settings: TeamSettings, *, export: ExportRequest | None = None) -> 
     team = load_team(settings.scenario, settings.seed)
     recording = team.recording
     t0, t1 = recording.span
-    tracker = TrackManagerSettings(filter=settings.filter_kind, init=InitPolicy())
+    tracker = TrackManagerSettings(
+        filter=settings.filter_kind, init=InitPolicy(), gate_probability=settings.gate_probability
+    )
     launcher = TeamLauncher(settings, recording.robots, t1 - t0, est_frame=FRAME)
     # the in-process reference runs in a process of its own while the team runs; leaving the
     # block terminates it, also when the launcher is stopped (Ctrl-C, SIGTERM) mid-run
@@ -168,9 +171,7 @@ def team_meta(team: Team, settings: TeamSettings, tracker: TrackManagerSettings)
         "scenario": team.name,
         "source": team.description,
         "seed": settings.seed,
-        "filter": tracker.filter,
-        "init": tracker.init.name,
-        "keep_window_s": tracker.keep_window_s,
+        **tracker_meta(tracker),
         "odometry_sigma": {r: rec.odometry[i].sigma.tolist() for i, r in enumerate(rec.robots)},
         "sensor_sigma": {rec.robots[int(m.observer[0])]: m.sigma[0].tolist()} if m.size else {},
     }

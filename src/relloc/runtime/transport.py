@@ -222,9 +222,7 @@ class Inbox:
             self._push(Incoming(str(sample.key_expr), payload.to_bytes()))
 
         origin = zenoh.Locality.REMOTE if remote_only else zenoh.Locality.ANY
-        self._handles.append(
-            session.declare_subscriber(key_expr, on_sample, allowed_origin=origin)
-        )
+        self._handles.append(session.declare_subscriber(key_expr, on_sample, allowed_origin=origin))
 
     def watch_presence(self, session: Any, key_expr: str) -> None:
         """Deliver liveliness appearances/disappearances on ``key_expr`` (history included)."""
