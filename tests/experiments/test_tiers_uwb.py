@@ -154,6 +154,22 @@ def test_relloc_run_on_a_bag(tmp_path, capsys):
     assert main([*offset, "--no-plots", "--quiet"]) == 0
     assert "antenna offsets (up to 0.5 m) are not modelled" in capsys.readouterr().err
     assert "up to 0.5 m from its robot's origin" in (tmp_path / "o" / "report.md").read_text()
+    # (in this 6 s cut turtlebot4's odometry has fewer than two samples: its pairs are named)
+    without = summary["range_pairs_without_odometry"]
+    assert without and all("turtlebot4" in pair for pair in without)
+    # a robot without odometry: its range-linked pairs are not tracked, and said so
+    blind = text.replace('odometry = "/cali/turtle03/odom"\n', "")
+    assert blind != text
+    (tmp_path / "blind.toml").write_text(blind)
+    argv_blind = [*argv[:3], str(tmp_path / "blind.toml"), "--out", str(tmp_path / "b")]
+    assert main([*argv_blind, "--no-plots", "--quiet"]) == 0
+    skipped = json.loads((tmp_path / "b" / "summary.json").read_text())
+    unused = skipped["range_pairs_without_odometry"]
+    assert "turtlebot1-turtlebot3" in unused and all(n > 0 for n in unused.values())
+    assert all("turtlebot3" in pair or "turtlebot4" in pair for pair in unused)
+    assert not any("turtlebot3" in label for label in skipped["pairs"])
+    assert "turtlebot1-turtlebot3 not tracked" in capsys.readouterr().err
+    assert "Not tracked: robots linked by UWB ranges" in (tmp_path / "b" / "report.md").read_text()
     for flag, value in (("--runs", "3"), ("--duration", "5"), ("--executor", "serial")):
         assert main([*argv[:5], str(tmp_path / "no"), flag, value, "--quiet"]) == 2
         assert f"{flag}:" in capsys.readouterr().err

@@ -307,6 +307,12 @@ def _run_bag(args: argparse.Namespace) -> int:
             "filter; relloc reproduce tiers-uwb uses them",
             file=sys.stderr,
         )
+    for pair, ranges in summary["range_pairs_without_odometry"].items():
+        print(
+            f"relloc: note: {pair} not tracked: one of them reports fewer than two odometry "
+            f"samples ({ranges} ranges unused)",
+            file=sys.stderr,
+        )
     if not args.quiet:
         print(console.team_summary_table(summary, width=console.terminal_width()))
         print(f"wrote {args.out / 'summary.json'} and {args.out / 'report.md'}")

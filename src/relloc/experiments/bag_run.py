@@ -1,20 +1,21 @@
 """``relloc run BAG --map MAP.toml``: the main job of ``relloc run`` on a recorded ROS 2 bag.
 
 The bag is read through its mapping (:mod:`relloc.datasets.rosbag`) into a
-:class:`~relloc.core.recording.Recording` and replayed once (a recording is one run): every
-robot that measures others with ``range_bearing_elevation`` rows gets its
-:class:`~relloc.estimators.track_manager.TrackManager` (as on a scenario), and every pair of
-robots that both report odometry and are linked by UWB ``range`` rows gets seed 000's
-range-only relative filter (:class:`~relloc.estimators.uwb_range.RangePairBank`, owner the
-first robot of the pair in the mapping) from an unknown start. The run is scored against the
-bag's motion capture and written like a scenario's (:mod:`relloc.pipeline.team_report`:
-summary.json, report.md, figures), with the loader's report (time offsets, unknown topics,
-skipped messages) under ``loader``. Ranges are used as recorded (σ from the mapping's
-``uwb.sigma`` or :data:`DEFAULT_RANGE_SIGMA`) and between the robots' origins: the mapping's
-antenna offsets are not modelled (a range names only the observer's radio), so where a carried
-radio has one the largest is reported (``antenna_offset_not_modelled_m``, and a note in
-report.md and on stderr); the calibrated comparison, which uses them, is
-``relloc reproduce tiers-uwb``.
+:class:`~relloc.core.recording.Recording` and replayed once (a recording is one run): every robot
+that measures others with ``range_bearing_elevation`` rows gets its
+:class:`~relloc.estimators.track_manager.TrackManager` (as on a scenario), and every pair of robots
+that both report odometry and are linked by UWB ``range`` rows gets seed 000's range-only relative
+filter (:class:`~relloc.estimators.uwb_range.RangePairBank`, owner the first robot of the pair in
+the mapping) from an unknown start; a pair linked by ranges of which one robot reports no odometry
+(fewer than two samples) gets none, and is named with its count of ranges
+(``range_pairs_without_odometry``, and a note in report.md and on stderr). The run is scored against
+the bag's motion capture and written like a scenario's (:mod:`relloc.pipeline.team_report`:
+summary.json, report.md, figures), with the loader's report (time offsets, unknown topics, skipped
+messages) under ``loader``. Ranges are used as recorded (σ from the mapping's ``uwb.sigma`` or
+:data:`DEFAULT_RANGE_SIGMA`) and between the robots' origins: the mapping's antenna offsets are not
+modelled (a range names only the observer's radio), so where a carried radio has one the largest is
+reported (``antenna_offset_not_modelled_m``, and a note in report.md and on stderr); the calibrated
+comparison, which uses them, is ``relloc reproduce tiers-uwb``.
 """
 
 from __future__ import annotations
@@ -48,25 +49,30 @@ DEFAULT_RANGE_SIGMA = 0.1
 _RANGE = kind_code("range")
 
 
-def range_pairs(recording: Recording, sigma: float) -> list[RangePairBank]:
-    """A range-only relative filter per pair with odometry on both robots and a range row."""
+def range_pairs(recording: Recording, sigma: float) -> tuple[list[RangePairBank], dict[str, int]]:
+    """A range-only relative filter per pair with odometry on both robots and a range row,
+    and the pairs linked by ranges that get none because a robot has fewer than two odometry
+    samples (``"a-b"``
+    → their range rows, which nothing uses: the summary says so)."""
     m = recording.measurements
     rows = m.kind == _RANGE
-    out = []
+    out, without_odometry = [], {}
     for i in range(recording.n_robots):
         for j in range(i + 1, recording.n_robots):
-            if recording.odometry[i].t.size < 2 or recording.odometry[j].t.size < 2:
-                continue
             linked = rows & (
                 ((m.observer == i) & (m.target == j)) | ((m.observer == j) & (m.target == i))
             )
             if not linked.any():
                 continue
+            if recording.odometry[i].t.size < 2 or recording.odometry[j].t.size < 2:
+                pair = f"{recording.robots[i]}-{recording.robots[j]}"
+                without_odometry[pair] = int(linked.sum())
+                continue
             noise = VelocityNoise.of(recording.odometry[i].sigma, recording.odometry[j].sigma)
             out.append(
                 RangePairBank(i, j, recording.robots, noise, RangePairSettings(sigma_range=sigma))
             )
-    return out
+    return out, without_odometry
 
 
 def antenna_offset_m(mapping: BagMapping) -> float:
@@ -98,10 +104,8 @@ def run_bag(
         else mapping.uwb.sigma
     )
     rng = np.random.default_rng(settings.seed)
-    estimators: list[Any] = [
-        *managers_for(rec, settings.tracker, rng=rng),
-        *range_pairs(rec, sigma),
-    ]
+    banks, without_odometry = range_pairs(rec, sigma)
+    estimators: list[Any] = [*managers_for(rec, settings.tracker, rng=rng), *banks]
     if not estimators:
         raise DataError(
             f"{path}: nothing to track: no robot measures another with range_bearing_elevation "
@@ -114,6 +118,13 @@ def run_bag(
         notes.append(
             f"The mapping places a radio up to {offset:.3g} m from its robot's origin; this "
             "range filter takes every range between the robots' origins (offsets not modelled)."
+        )
+    if without_odometry:
+        pairs = ", ".join(f"{p} ({n} ranges)" for p, n in without_odometry.items())
+        notes.append(
+            "Not tracked: robots linked by UWB ranges of which one reports no odometry (fewer "
+            f"than two samples): {pairs} "
+            "(the range-only filter needs both robots' motion)."
         )
     estimates = replay(rec, estimators, record_rate_hz=settings.record_rate_hz)
     result = score_run(estimates, rec, keep_paths=True)
@@ -129,6 +140,7 @@ def run_bag(
             **tracker_meta(settings.tracker),
             "range_sigma_m": sigma,
             "antenna_offset_not_modelled_m": offset,
+            "range_pairs_without_odometry": without_odometry,
             "loader": bag.to_dict(),
         },
     )
