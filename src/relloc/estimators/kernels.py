@@ -46,6 +46,18 @@ def _all_array(value: Any) -> bool:
     return bool(np.all(value))
 
 
+def _any_scalar(value: bool) -> bool:
+    return bool(value)
+
+
+def _any_array(value: Any) -> bool:
+    return bool(np.any(value))
+
+
+def _where_scalar(cond: bool, a: Any, b: Any) -> Any:
+    return a if cond else b
+
+
 @dataclass(frozen=True)
 class Ops:
     """The elementary functions a kernel needs, for one kind of scalar."""
@@ -56,10 +68,19 @@ class Ops:
     atan2: Callable[[Any, Any], Any]
     sinc: Callable[[Any], tuple[Any, Any]]
     all: Callable[[Any], bool]
+    any: Callable[[Any], bool]
+    where: Callable[[Any, Any, Any], Any]
 
 
 SCALAR_OPS = Ops(
-    cos=math.cos, sin=math.sin, sqrt=math.sqrt, atan2=math.atan2, sinc=_sinc_scalar, all=_all_scalar
+    cos=math.cos,
+    sin=math.sin,
+    sqrt=math.sqrt,
+    atan2=math.atan2,
+    sinc=_sinc_scalar,
+    all=_all_scalar,
+    any=_any_scalar,
+    where=_where_scalar,
 )
 ARRAY_OPS = Ops(
     cos=np.cos,
@@ -68,6 +89,8 @@ ARRAY_OPS = Ops(
     atan2=np.arctan2,
     sinc=sinc_and_derivative,
     all=_all_array,
+    any=_any_array,
+    where=np.where,
 )
 
 
@@ -297,16 +320,27 @@ def update_kernel(
     return mean, cov, S, nis
 
 
+#: An estimate whose horizontal range is at most this fraction of its range, ``ρ̂ ≤ ε r̂``
+#: (within 1e-9 rad of the vertical axis through the observer), is treated as *on the axis* by
+#: the TEKF linearisation (:func:`tekf_terms_on_axis`).
+POLE_FRACTION = 1e-9
+
+
 def tekf_terms(m: Vec, z: Vec, var: Vec, ops: Ops) -> tuple[Vec, Vec, Vec]:
     """TEKF ``(A, ν, R)``: Jacobian block of ``h = (r, θ, α)`` at the prior, wrapped residual.
 
-    ``var`` are the sensor variances ``(σ_r², σ_θ², σ_α²)``.
+    ``var`` are the sensor variances ``(σ_r², σ_θ², σ_α²)``. An estimate on the vertical axis
+    through the observer (``ρ̂ ≤ POLE_FRACTION · r̂``, including the observer's own position)
+    is linearised by :func:`tekf_terms_on_axis`; every other estimate by the Jacobian of
+    :func:`relloc.models.measurement.range_bearing_jacobian`.
     """
     x, y, zz = m[0], m[1], m[2]
     rho2 = x * x + y * y
     rho = ops.sqrt(rho2)
     r2 = rho2 + zz * zz
     r = ops.sqrt(r2)
+    if ops.any(rho <= POLE_FRACTION * r):
+        return tekf_terms_on_axis(m, z, var, ops)
     rr = rho * r2
     zero = 0.0 * x  # a zero shaped like the batch
     A = (x / r, y / r, zz / r, -y / rho2, x / rho2, zero, -x * zz / rr, -y * zz / rr, rho / r2)
@@ -317,6 +351,75 @@ def tekf_terms(m: Vec, z: Vec, var: Vec, ops: Ops) -> tuple[Vec, Vec, Vec]:
         z[0] - r,
         (d_az + math.pi) % two_pi - math.pi,
         (d_el + math.pi) % two_pi - math.pi,
+    )
+    R = (var[0], 0.0, 0.0, var[1], 0.0, var[2])
+    return A, nu, R
+
+
+def tekf_terms_on_axis(m: Vec, z: Vec, var: Vec, ops: Ops) -> tuple[Vec, Vec, Vec]:
+    """TEKF ``(A, ν, R)`` that stays finite when the estimate is on the vertical axis.
+
+    A drone straight above (or below) its observer has elevation ``α = ±π/2`` and no azimuth:
+    at ``ρ = √(x² + y²) = 0`` the map ``h = (r, θ, α)`` is not differentiable. Its Jacobian
+    (:mod:`relloc.models.measurement`) divides by ``ρ²`` (azimuth row ``[−y, x, 0]/ρ²``) and by
+    ``ρ r²`` (elevation row ``[−x z/ρ, −y z/ρ, ρ]/r²``), which raised ``ZeroDivisionError`` (one
+    pair) or gave NaN and a "not positive definite" error (a batch). Entries with
+    ``ρ̂ ≤ ε r̂`` (``ε =`` :data:`POLE_FRACTION`) are linearised as follows; every other entry
+    of the batch keeps the formulas of :func:`tekf_terms` bit for bit.
+
+    * **Azimuth: no first-order information.** ``θ = atan2(y, x)`` has no derivative on the
+      axis (its gradient ``u_θ/ρ`` is unbounded and its direction is that of the unknown
+      horizontal offset). The row is dropped: ``A_θ = 0``, ``ν_θ = 0``, and ``R_θθ = σ_θ²``
+      is kept so that ``S`` stays positive definite; the azimuth then adds nothing to the gain
+      and 0 to the NIS (which has 2 effective degrees of freedom at such an update). Near the
+      axis a kept row would collapse the tangential variance to ``(ρ̂ σ_θ)² ≤ (ε r̂ σ_θ)²``,
+      far below anything the prior can resolve, so dropping it loses no usable information.
+    * **Elevation: the one-sided derivative on the measured half-plane.** ``α = atan2(z, ρ)``
+      is a cone at the axis. Restricted to the half-plane of the *measured* azimuth
+      ``θ̃`` (``p = ρ (cθ̃, sθ̃) + z e_z``, ``ρ ≥ 0``) it is smooth, with gradient
+      ``u_α(θ̃, α̂)/r̂ = [−cθ̃ sα̂, −sθ̃ sα̂, cα̂]/r̂`` (``sα̂ = ẑ/r̂``, ``cα̂ = ρ̂/r̂``) — the
+      Jacobian row rewritten without the removable ``x/ρ``, ``y/ρ`` and with the direction
+      taken from the measurement, where the estimate has none. The residual is the usual
+      wrapped ``α̃ − atan2(ẑ, ρ̂)``, so an elevation short of ``±π/2`` moves the estimate off
+      the axis towards the measured azimuth.
+    * **Range** keeps ``p̂ᵀ/r̂``; at the observer's own position (``r̂ = 0``, where ``r`` is a
+      cone too) it is the one-sided derivative along the measured ray ``u_r(θ̃, α̃)``, and the
+      elevation row is dropped like the azimuth (``A_α = 0``, ``ν_α = 0``).
+    """
+    x, y, zz = m[0], m[1], m[2]
+    rho2 = x * x + y * y
+    rho = ops.sqrt(rho2)
+    r2 = rho2 + zz * zz
+    r = ops.sqrt(r2)
+    axis = rho <= POLE_FRACTION * r
+    origin = r <= 0.0
+    # safe denominators: 1 where the quotient is not used
+    rho2_s = ops.where(axis, 1.0, rho2)
+    r_s = ops.where(origin, 1.0, r)
+    rr_s = ops.where(axis, 1.0, rho * r2)
+    r2_s = ops.where(origin, 1.0, r2)
+    ct, st = ops.cos(z[1]), ops.sin(z[1])
+    ca, sa = ops.cos(z[2]), ops.sin(z[2])
+    zero = 0.0 * (x + ct)  # a zero shaped like the batch
+    sa_hat, ca_hat = zz / r_s, rho / r_s
+    A = (
+        ops.where(origin, ct * ca, x / r_s),
+        ops.where(origin, st * ca, y / r_s),
+        ops.where(origin, sa, zz / r_s),
+        ops.where(axis, zero, -y / rho2_s),
+        ops.where(axis, zero, x / rho2_s),
+        zero,
+        ops.where(axis, ops.where(origin, zero, -ct * sa_hat / r_s), -x * zz / rr_s),
+        ops.where(axis, ops.where(origin, zero, -st * sa_hat / r_s), -y * zz / rr_s),
+        ops.where(axis, ops.where(origin, zero, ca_hat / r_s), rho / r2_s),
+    )
+    two_pi = 2.0 * math.pi
+    d_az = z[1] - ops.atan2(y, x)
+    d_el = z[2] - ops.atan2(zz, rho)
+    nu = (
+        z[0] - r,
+        ops.where(axis, zero, (d_az + math.pi) % two_pi - math.pi),
+        ops.where(origin, zero, (d_el + math.pi) % two_pi - math.pi),
     )
     R = (var[0], 0.0, 0.0, var[1], 0.0, var[2])
     return A, nu, R
