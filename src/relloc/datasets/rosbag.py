@@ -14,7 +14,9 @@ A :class:`~relloc.datasets.bag_mapping.BagMapping` says which topic is what:
   between a robot's radio and another robot's or a static radio of known position also enter
   :attr:`Recording.measurements` (observer: the end whose robot carries more radios, so that a
   reading is unambiguous; ``sensor``: which of the observer's radios; a static radio is a
-  landmark).
+  landmark); the others (two static radios, two radios of one robot, a static radio of unknown
+  position) are counted by reason in :attr:`BagRecording.radio_only`
+  (``uwb_readings_not_in_recording`` of :meth:`BagRecording.to_dict`).
 
 Time
 ----
@@ -326,6 +328,9 @@ class BagRecording:
     stamps_from_receive: dict[str, int]
     unknown_topics: tuple[TopicInfo, ...]
     odometry_pose: dict[str, tuple[Array, Array]] = field(default_factory=dict)
+    radio_only: dict[str, int] = field(default_factory=dict)
+    """UWB readings kept in :attr:`ranges` only, not in the recording's measurements (no
+    filter can use them), by reason (:data:`RADIO_ONLY_REASONS`; absent when none)."""
 
     def node_truth(self, node: int, t: Array) -> Array:
         """World position ``(len(t), 3)`` of radio ``node`` from motion capture (the carrying
@@ -360,6 +365,7 @@ class BagRecording:
             "stamps_from_receive": self.stamps_from_receive,
             "unknown_topics": [f"{t.topic} ({t.msgtype}, {t.count})" for t in self.unknown_topics],
             "uwb_readings": int(self.ranges.t.size),
+            "uwb_readings_not_in_recording": dict(self.radio_only),
             "skips": self.recording.skips.to_dict(),
         }
 
@@ -602,7 +608,7 @@ def _assemble(
         else:
             truths.append(None)
     ranges = _ranges(timed, uwb_links, seconds)
-    landmarks, measurements, repeats = _range_rows(mapping, ranges)
+    landmarks, measurements, repeats, radio_only = _range_rows(mapping, ranges)
     file_skips = tuple(
         FileSkips(
             file=f"{path}:{topic}",
@@ -652,6 +658,7 @@ def _assemble(
         stamps_from_receive=from_receive,
         unknown_topics=tuple(i for i in infos if i.topic not in named),
         odometry_pose=poses,
+        radio_only=radio_only,
     )
 
 
@@ -680,12 +687,24 @@ def _ranges(
     )
 
 
-def _range_rows(mapping: BagMapping, ranges: UwbRanges) -> tuple[Array, Measurements, int]:
-    """Landmarks (static radios of known position), the ``range`` rows of the recording and
-    how many readings repeated another's (time, observer, radio, target) and were left out."""
+#: Why a UWB reading stays at radio level (:attr:`BagRecording.radio_only`): its two radios
+#: are not a robot and another robot or a static radio of known position.
+RADIO_ONLY_REASONS = (
+    "between two static radios",
+    "between two radios of one robot",
+    "to a static radio of unknown position",
+)
+
+
+def _range_rows(
+    mapping: BagMapping, ranges: UwbRanges
+) -> tuple[Array, Measurements, int, dict[str, int]]:
+    """Landmarks (static radios of known position), the ``range`` rows of the recording, how
+    many readings repeated another's (time, observer, radio, target) and were left out, and how
+    many stay at radio level only, by reason (:data:`RADIO_ONLY_REASONS`)."""
     uwb = mapping.uwb
     if uwb is None or ranges.t.size == 0:
-        return np.zeros((0, 3)), empty_measurements(), 0
+        return np.zeros((0, 3)), empty_measurements(), 0, {}
     robot_of = [None if n.robot is None else mapping.robot_index(n.robot) for n in uwb.nodes]
     carried = Counter(r for r in robot_of if r is not None)
     sensor = [
@@ -697,12 +716,16 @@ def _range_rows(mapping: BagMapping, ranges: UwbRanges) -> tuple[Array, Measurem
     keep, observer, target, landmark, sensors = [], [], [], [], []
     seen: set[tuple[float, int, int, int, int]] = set()
     repeats = 0
+    radio_only: Counter[str] = Counter()
     for k, (a, b) in enumerate(zip(ranges.node_a.tolist(), ranges.node_b.tolist(), strict=True)):
         ra, rb = robot_of[a], robot_of[b]
         if ra is None or (rb is not None and carried[rb] > carried[ra]):
             a, b, ra, rb = b, a, rb, ra
         if ra is None or ra == rb or (rb is None and b not in static):
-            continue  # kept at radio level only (static–static, one robot, unsurveyed radio)
+            # kept at radio level only (static–static, one robot, unsurveyed radio): counted
+            reason = 0 if ra is None else 1 if ra == rb else 2
+            radio_only[RADIO_ONLY_REASONS[reason]] += 1
+            continue
         row = (
             float(ranges.t[k]),
             ra,
@@ -720,7 +743,7 @@ def _range_rows(mapping: BagMapping, ranges: UwbRanges) -> tuple[Array, Measurem
         target.append(row[3])
         landmark.append(row[4])
     if not keep:
-        return landmarks, empty_measurements(), repeats
+        return landmarks, empty_measurements(), repeats, dict(radio_only)
     idx = np.asarray(keep)
     sigma = np.nan if uwb.sigma is None else uwb.sigma
     rows = measurement_rows(
@@ -733,4 +756,4 @@ def _range_rows(mapping: BagMapping, ranges: UwbRanges) -> tuple[Array, Measurem
         landmark=np.asarray(landmark),
         sensor=np.asarray(sensors),
     )
-    return landmarks, rows, repeats
+    return landmarks, rows, repeats, dict(radio_only)

@@ -11,7 +11,10 @@ the mapping) from an unknown start; a pair linked by ranges of which one robot r
 (``range_pairs_without_odometry``, and a note in report.md and on stderr). The run is scored against
 the bag's motion capture and written like a scenario's (:mod:`relloc.pipeline.team_report`:
 summary.json, report.md, figures), with the loader's report (time offsets, unknown topics, skipped
-messages) under ``loader``. Ranges are used as recorded (σ from the mapping's ``uwb.sigma`` or
+messages, the UWB readings kept at radio level only: ``uwb_readings_not_in_recording``, also
+noted in report.md) under ``loader``. Range rows to a static radio of known position (a landmark)
+are used by no filter of this run: they are counted (``range_rows_to_static_radios_not_used``,
+and a note in report.md). Ranges are used as recorded (σ from the mapping's ``uwb.sigma`` or
 :data:`DEFAULT_RANGE_SIGMA`) and between the robots' origins: the mapping's antenna offsets are not
 modelled (a range names only the observer's radio), so where a carried radio has one the largest is
 reported (``antenna_offset_not_modelled_m``, and a note in report.md and on stderr); the calibrated
@@ -75,6 +78,15 @@ def range_pairs(recording: Recording, sigma: float) -> tuple[list[RangePairBank]
     return out, without_odometry
 
 
+def landmark_range_rows(recording: Recording) -> int:
+    """The ``range`` rows to a static radio of known position (a landmark), which no filter of
+    ``relloc run`` uses (the range-only filter is a robot pair's)."""
+    m = recording.measurements
+    if m.landmark is None:
+        return 0
+    return int(np.count_nonzero((m.kind == _RANGE) & (m.landmark >= 0)))
+
+
 def antenna_offset_m(mapping: BagMapping) -> float:
     """The largest distance (m) of a carried radio from its robot's origin (0 without UWB)."""
     if mapping.uwb is None:
@@ -126,6 +138,19 @@ def run_bag(
             f"than two samples): {pairs} "
             "(the range-only filter needs both robots' motion)."
         )
+    to_landmarks = landmark_range_rows(rec)
+    if to_landmarks:
+        notes.append(
+            f"Not used: {to_landmarks} UWB ranges to static radios of known position (this run "
+            "tracks robot pairs; no filter of it takes a range to a fixed radio)."
+        )
+    radio_only = bag.radio_only
+    if radio_only:
+        counts = ", ".join(f"{n} {why}" for why, n in sorted(radio_only.items()))
+        notes.append(
+            f"Not in the recording: {sum(radio_only.values())} of the bag's "
+            f"{bag.ranges.t.size} UWB readings ({counts}), which no filter can use."
+        )
     estimates = replay(rec, estimators, record_rate_hz=settings.record_rate_hz)
     result = score_run(estimates, rec, keep_paths=True)
     summary = summarise(
@@ -141,6 +166,7 @@ def run_bag(
             "range_sigma_m": sigma,
             "antenna_offset_not_modelled_m": offset,
             "range_pairs_without_odometry": without_odometry,
+            "range_rows_to_static_radios_not_used": to_landmarks,
             "loader": bag.to_dict(),
         },
     )

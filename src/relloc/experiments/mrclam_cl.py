@@ -91,6 +91,10 @@ summary.json keys: ``cases.<mode>/<anchors>``: ``pos_rmse_m`` and ``heading_rmse
 its 95 % interval by batch means over time, :func:`relloc.metrics.percent_beyond_interval`,
 with the verdict), ``anees``, ``used``,
 ``rejected`` (χ² gate + degenerate geometry + unknown barcodes), ``counts`` (the breakdown),
+``records_without_truth`` (per robot, the output times not scored for want of valid ground
+truth; robots with some only) and ``robots_without_truth`` (robots with none, left out of the
+per-robot figures and their mean; also said in report.md), the same over the held-out window
+(``heldout_records_without_truth``, ``heldout_robots_without_truth``),
 ``heldout`` (the same accuracy numbers over the held-out window only); ``fit`` (the fitted models),
 ``scored_on`` (the held-out window, after the calibration window), ``targets`` (the issue's
 targets and whether each is met, judged on the held-out window; the whole-run figures under
@@ -460,14 +464,24 @@ def evaluate(
     result: dict[str, Any], ds: Any, out_t: Array, t_from: float, t_to: float = np.inf
 ) -> dict[str, Any]:
     """Accuracy and consistency against ground truth at the output times in
-    ``[t_from, t_to]``."""
+    ``[t_from, t_to]``. Output times where a robot has no valid ground truth are not scored:
+    ``records_without_truth`` counts them per robot (robots with some only), and a robot
+    without any is left out of the per-robot figures and their mean and named in
+    ``robots_without_truth`` (DataError when no robot has any)."""
     from relloc.metrics import chi2_upper, nees, percent_beyond_interval, state_errors
 
     pos, head, final, nees_all, nees_t = {}, {}, {}, [], []
+    without: dict[str, int] = {}
+    dropped: list[str] = []
     for i, rid in enumerate(ds.robot_ids):
         q = ds.robot(rid).groundtruth.at(out_t)
-        ok = q.valid & (out_t >= t_from) & (out_t <= t_to)
+        inside = (out_t >= t_from) & (out_t <= t_to)
+        ok = q.valid & inside
+        missing = int(np.count_nonzero(inside & ~q.valid))
+        if missing:
+            without[str(rid)] = missing
         if not ok.any():
+            dropped.append(str(rid))
             continue
         err = state_errors(result["mean"][ok, i], q.pose[ok], angle_indices=(2,))
         pos[str(rid)] = float(np.sqrt(np.mean(np.sum(err[:, :2] ** 2, axis=1))))
@@ -475,6 +489,11 @@ def evaluate(
         final[str(rid)] = float(np.hypot(*err[-1, :2]))
         nees_all.append(nees(err, result["cov"][ok, i]))
         nees_t.append(out_t[ok])
+    if not nees_all:
+        raise DataError(
+            f"{ds.path}: no robot has ground truth at an output time in [{t_from:g}, {t_to:g}] s "
+            "to score the estimates against"
+        )
     ne = np.concatenate(nees_all)
     share = percent_beyond_interval(ne, np.concatenate(nees_t), chi2_upper(3, 0.95))
     for d in (pos, head, final):
@@ -486,6 +505,8 @@ def evaluate(
         "nees_pct_beyond": share.percent,
         "nees_beyond_interval": share.to_dict(),
         "anees": float(np.mean(ne) / 3.0),
+        "records_without_truth": without,
+        "robots_without_truth": dropped,
     }
 
 
@@ -577,6 +598,8 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
                 "nees_beyond_interval": held["nees_beyond_interval"],
                 "anees": held["anees"],
             }
+            entry["heldout_records_without_truth"] = held["records_without_truth"]
+            entry["heldout_robots_without_truth"] = held["robots_without_truth"]
             if anchors == "all_landmarks" and mode != "dead_reckoning":
                 entry["heading_by_landmark_gap"] = heading_error_by_landmark_gap(res, ds, prepared)
             if mode == "dead_reckoning":
@@ -770,6 +793,30 @@ def _improvement_text(cases: dict[str, Any], held: dict[str, Any]) -> str:
     )
 
 
+def _without_truth_text(case: dict[str, Any]) -> str:
+    """report.md's account of the output times and robots not scored for want of ground truth
+    (:func:`evaluate`; the same in every case)."""
+    parts = []
+    for name, prefix in (("whole run", ""), ("held-out window", "heldout_")):
+        if case[f"{prefix}records_without_truth"]:
+            counts = ", ".join(
+                f"robot {r}: {n}" for r, n in case[f"{prefix}records_without_truth"].items()
+            )
+            parts.append(f"{name}: {counts}")
+    text = (
+        "Output times not scored for want of valid ground truth — " + "; ".join(parts) + "."
+        if parts
+        else "Every robot has valid ground truth at every output time scored."
+    )
+    for name, prefix in (("whole run", ""), ("held-out window", "heldout_")):
+        if case[f"{prefix}robots_without_truth"]:
+            text += (
+                f" Left out of the per-robot figures and their mean ({name}), without any "
+                f"ground truth there: robots {', '.join(case[f'{prefix}robots_without_truth'])}."
+            )
+    return text
+
+
 def _report(summary: dict[str, Any], figures: list[tuple[str, str]]) -> str:
     cases = summary["cases"]
     rows = []
@@ -911,7 +958,8 @@ def _report(summary: dict[str, Any], figures: list[tuple[str, str]]) -> str:
         "itself, as the issue states it. "
         f"`held-out`: the same over [{held['start_s']:.0f}, {held['end_s']:.0f}] s, the part of "
         "the run the models were not fitted on. "
-        f"The two landmarks are subjects {summary['two_landmarks']}.",
+        f"The two landmarks are subjects {summary['two_landmarks']}. "
+        + _without_truth_text(cases["dead_reckoning/none"]),
         "## Error models",
         fit_text,
         "## Figures",

@@ -12,7 +12,8 @@ robot shares its odometry and its readings and runs the team EIF of one case
 ground-truth time for ``--duration`` seconds, recording every robot's pose every 0.5 s; the
 in-process reference is that case's filter replayed over the same window. Scoring and tolerance
 as :mod:`relloc.experiments.sharma2013_team` (each agent against the in-process EIF; the cost of
-what a faulty network lost).
+what a faulty network lost). ``load_report`` (summary.json, and a line in report.md) counts the rows
+the loader and the conversion to a recording skipped, by reason, as mrclam-cl's does.
 """
 
 from __future__ import annotations
@@ -96,6 +97,21 @@ def prepared_team(
     mode, anchors = parse_case(case)
     n_lm = prepared.recording.landmarks.shape[0]
     return prepared, case_settings(mode, anchors, fit, prepared.two_landmarks, n_lm)
+
+
+def load_report(prepared: Prepared) -> dict[str, Any]:
+    """The rows of the dataset's files that the loader and the conversion skipped (as
+    mrclam-cl's ``load_report``)."""
+    skips = prepared.recording.skips
+    return {"n_skipped": skips.n_skipped, "by_reason": skips.skipped_by_reason()}
+
+
+def load_report_line(report: dict[str, Any]) -> str:
+    """report.md's account of :func:`load_report`."""
+    if not report["n_skipped"]:
+        return "Every data row of the dataset was used."
+    reasons = ", ".join(f"{n} {why}" for why, n in sorted(report["by_reason"].items()))
+    return f"Rows of the dataset skipped (not used): {report['n_skipped']} ({reasons})."
 
 
 def window_end(prepared: Prepared, duration_s: float | None) -> float:
@@ -203,9 +219,12 @@ def run_mrclam_team(s: MrclamTeamSettings) -> dict[str, Any]:
         "seed": s.seed,
         "runs": 1,
         "fit": fit.to_dict(),
+        "load_report": load_report(prepared),
         "per_run": [run],
         "wall_s": time.monotonic() - start,
     }
     write_summary(out, summary)
-    write_report(out, report_markdown(summary))
+    write_report(
+        out, report_markdown(summary) + "\n\n" + load_report_line(summary["load_report"]) + "\n"
+    )
     return summary
