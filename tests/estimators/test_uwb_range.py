@@ -73,6 +73,28 @@ def test_range_pair_bank_converges_from_an_unknown_start_when_both_move():
     assert beyond < 0.5
 
 
+def test_range_pair_bank_counts_the_ranges_its_gate_rejects():
+    rec = _unicycles(np.random.default_rng(12), duration=20.0)
+    m = rec.measurements
+    outliers = measurement_rows(
+        "range", t=m.t[[60, 120]] + 0.01, observer=0, target=1, value=[40.0, 55.0], sigma=[0.05]
+    )
+    spoilt = Recording(
+        robots=rec.robots,
+        platforms=rec.platforms,
+        odometry=rec.odometry,
+        measurements=type(m).concatenate([m, outliers]),
+        truth=rec.truth,
+    )
+    noise = VelocityNoise(observer=SIGMA_ODO, observed=SIGMA_ODO)
+    bank = RangePairBank(0, 1, rec.robots, noise, RangePairSettings(sigma_range=0.05))
+    est = replay(spoilt, [bank], record_rate_hz=2.0)
+    assert est.counts == {"ranges_gated": 2}
+    assert bank.take_counts() == {}  # taken by the replay
+    clean = RangePairBank(0, 1, rec.robots, noise, RangePairSettings(sigma_range=0.05))
+    assert replay(rec, [clean], record_rate_hz=2.0).counts == {}
+
+
 def test_dead_reckoning_from_the_true_start_drifts_slowly():
     rec = _unicycles(np.random.default_rng(12), duration=20.0)
     noise = VelocityNoise(observer=SIGMA_ODO, observed=SIGMA_ODO)

@@ -100,6 +100,7 @@ class RangePairBank(Silent):
         self.covs = np.zeros((0, 4, 4))
         self.log_w = np.zeros(0)
         self._updates: list[UpdateRecord] = []
+        self._gated = 0
 
     def advance(self, t: float, odometry: HeldOdometry) -> None:
         if self.t is not None and self.means.shape[0] and t > self.t:
@@ -164,7 +165,8 @@ class RangePairBank(Silent):
         nis = np.asarray(inn.nis, dtype=float)
         gate = self.settings.gate
         if gate is not None and float(nis.min()) > chi2_threshold(1, gate):
-            return  # an outlier for every hypothesis: rejected
+            self._gated += 1  # an outlier for every hypothesis: rejected, counted
+            return
         self.means, self.covs = mean, cov
         self.log_w = self.log_w - 0.5 * (nis + np.log(2 * np.pi * S))
         self.log_w -= self.log_w.max()
@@ -206,6 +208,12 @@ class RangePairBank(Silent):
 
     def take_updates(self) -> list[UpdateRecord]:
         out, self._updates = self._updates, []
+        return out
+
+    def take_counts(self) -> dict[str, int]:
+        """Ranges rejected by the gate since the previous call (``ranges_gated``)."""
+        out = {"ranges_gated": self._gated} if self._gated else {}
+        self._gated = 0
         return out
 
 

@@ -50,8 +50,8 @@ corrected), ``scored_window_s``, ``team.aligned`` and ``team.anchored`` (``pos_r
 one run, whose records are correlated in time —, ``converged_after_s`` (error below 0.3 m for
 good), ``per_robot`` (anchored), ``baselines.uncalibrated`` / ``baselines.multilateration``
 ``pos_rmse_m``, ``anchors``, ``mode``, ``mirror_ambiguous``, ``mirror_image_scored``),
-``pairs.<a->b>`` (the same keys in the owner's body frame, ``baselines.odometry_alone``,
-``observability``).
+``pairs.<a->b>`` (the same keys in the owner's body frame, ``ranges_gated`` the ranges the
+filter's χ² gate rejected, ``baselines.odometry_alone``, ``observability``).
 """
 
 from __future__ import annotations

@@ -117,7 +117,8 @@ def pair_case(
     def score(recording: Recording, est: Any) -> dict[str, Any]:
         estimates = replay(recording, [est], record_times=grid, start=t0, end=t1)
         evs = evaluate(estimates, recording)
-        return _pair_score(evs[0]) if evs else {"pos_rmse_m": None, "records": 0}
+        scored = _pair_score(evs[0]) if evs else {"pos_rmse_m": None, "records": 0}
+        return scored | {"ranges_gated": estimates.counts.get("ranges_gated", 0)}
 
     out = score(rec, RangePairBank(i, j, rec.robots, noise, settings))
     truth0 = rec.relative_truth(i, j, t0)[0]
