@@ -64,7 +64,12 @@ def test_reproduce_desilva2015_smoke(
     assert set(summary["pd_sweep"]) == {"0.95", "0.8", "0.6"}
     assert 0.0 <= summary["success_rate"]["overall"] <= 1.0
     assert summary["consistency"]["anees"] > 0.0
+    # what the RMSE is taken over: the scans with a dominant track, said as a share
+    scored = summary["rmse_scored_percent"]
+    assert set(scored["per_pair"]) == set(summary["success_rate"]["per_pair"])
+    assert all(0.0 <= v <= 100.0 for v in [scored["overall"], *scored["per_pair"].values()])
     report = (out / "report.md").read_text()
+    assert "with a dominant track to take them over (%)" in report
     team_note = "the paper's leaders" if sensing is None else "`--sensing`; an extension"
     assert f"Sensing robots: {', '.join(sensing_names)} ({team_note}" in report
     for fig in summary["figures"].values():

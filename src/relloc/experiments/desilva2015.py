@@ -64,7 +64,8 @@ summary.json keys: ``experiment, seed, runs, duration_s, settings`` (the scenari
 ``sensing``: the sensing robots' names, ``paper_sensing``: the paper's), ``success_rate``
 (``overall`` and per ``"L1->P2"`` pair, paper 1.0), ``time_to_first_confirmed_s``,
 ``hypotheses`` (components per filter: ``mean``, ``max``), ``pos_rmse_m`` / ``yaw_rmse_rad``
-(dominant track, t ≥ 5 s), ``wrong_association_rate`` (bearings used by the dominant track that
+(dominant track, t ≥ 5 s; ``rmse_scored_percent``: the share of (run, scan) cells from 5 s on
+that have a dominant track, over which they are taken), ``wrong_association_rate`` (bearings used by the dominant track that
 came from another robot or clutter, after its first confirmation; ``joint_decision``: the same
 for the fuser's one-to-one assignment of bearings to teammates), ``consistency`` (ANEES of the
 dominant track against its own covariance, descriptive, and the % of NEES values above the
@@ -322,6 +323,12 @@ def _rms(x: Array) -> float:
     return float(np.sqrt(np.mean(x**2))) if x.size else float("nan")
 
 
+def _scored_percent(x: Array) -> float:
+    """The share (%) of cells of ``x`` with an error, i.e. a dominant track: what :func:`_rms`
+    is taken over."""
+    return float(100.0 * np.mean(np.isfinite(x))) if x.size else float("nan")
+
+
 def metrics(results: list[LeaderRunScores]) -> dict[str, Any]:
     """Figures of merit of one configuration over its runs."""
     t = results[0].times
@@ -350,6 +357,7 @@ def metrics(results: list[LeaderRunScores]) -> dict[str, Any]:
             "hypotheses_mean": float(comps[:, li, :, j].mean()),
             "hypotheses_max": int(comps[:, li, :, j].max()),
             "pos_rmse_m": _rms(pe[:, li, steady, j]),
+            "rmse_scored_percent": _scored_percent(pe[:, li, steady, j]),
             "yaw_rmse_rad": _rms(ye[:, li, steady, j]),
             "wrong_association_rate": float(wrong[li, j] / max(used[li, j], 1)),
             "anees": anees(ne[:, li, steady, j], NEES_DOF),
@@ -369,6 +377,7 @@ def metrics(results: list[LeaderRunScores]) -> dict[str, Any]:
         "time_to_first_confirmed_s": float(np.nanmean(all_first)),
         "hypotheses": {"mean": float(comps_all.mean()), "max": int(comps_all.max())},
         "pos_rmse_m": _rms(pe_pairs[..., steady]),
+        "rmse_scored_percent": _scored_percent(pe_pairs[..., steady]),
         "yaw_rmse_rad": _rms(ye_pairs[..., steady]),
         "wrong_association_rate": float(
             wrong[leaders_idx, robots_idx].sum() / max(used[leaders_idx, robots_idx].sum(), 1)
@@ -532,6 +541,10 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
         "yaw_rmse_rad": {
             "overall": paper["yaw_rmse_rad"],
             "per_pair": {k: v["yaw_rmse_rad"] for k, v in paper["per_pair"].items()},
+        },
+        "rmse_scored_percent": {
+            "overall": paper["rmse_scored_percent"],
+            "per_pair": {k: v["rmse_scored_percent"] for k, v in paper["per_pair"].items()},
         },
         "wrong_association_rate": {
             "overall": paper["wrong_association_rate"],
@@ -802,6 +815,11 @@ def _report(summary: dict[str, Any], paper: dict[str, Any], no_sharing: dict[str
             ],
             ["position RMSE, t ≥ 5 s (m)", s["pos_rmse_m"]["overall"], "Fig. 5"],
             ["yaw RMSE, t ≥ 5 s (rad)", s["yaw_rmse_rad"]["overall"], "Fig. 5"],
+            [
+                "share of scans, t ≥ 5 s, with a dominant track to take them over (%)",
+                s["rmse_scored_percent"]["overall"],
+                "—",
+            ],
             [
                 "wrong-association rate (dominant tracks)",
                 s["wrong_association_rate"]["overall"],
