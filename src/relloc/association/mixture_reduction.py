@@ -36,6 +36,8 @@ components of different mixtures.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -58,14 +60,41 @@ def align_angles(means: Array, reference: Array, angle_index: int | None) -> Arr
 
 
 def pairwise_mahalanobis(means: Array, covs: Array, *, angle_index: int | None = None) -> Array:
-    """``D[a, b] = max(d_abᵀ P_a⁻¹ d_ab, d_abᵀ P_b⁻¹ d_ab)`` with ``d_ab = m_b − m_a``."""
+    """``D[a, b] = max(d_abᵀ P_a⁻¹ d_ab, d_abᵀ P_b⁻¹ d_ab)`` with ``d_ab = m_b − m_a``.
+
+    A singular covariance (``np.linalg.inv`` fails: a component with no spread along some
+    direction) has no inverse; its component is a degenerate Gaussian supported on
+    ``m + range(P)``, and the distance to it is taken as ``0`` from an identical mean
+    (``d_ab = 0``) and ``∞`` otherwise, so it merges only with exact duplicates.
+    """
     d = means[None, :, :] - means[:, None, :]
     if angle_index is not None:
         d[..., angle_index] = wrap_angle(d[..., angle_index])
-    inv = np.linalg.inv(covs)
+    try:
+        inv = np.linalg.inv(covs)
+        singular = None
+    except np.linalg.LinAlgError:
+        inv, singular = _inverses_or_zero(covs)
     d2_a = np.einsum("abi,aij,abj->ab", d, inv, d)
     d2_b = np.einsum("abi,bij,abj->ab", d, inv, d)
-    return np.maximum(d2_a, d2_b)
+    out = np.maximum(d2_a, d2_b)
+    if singular is not None:
+        involved = singular[:, None] | singular[None, :]
+        same = ~np.any(d != 0.0, axis=-1)
+        out[involved] = np.where(same[involved], 0.0, np.inf)
+    return out
+
+
+def _inverses_or_zero(covs: Array) -> tuple[Array, BoolArray]:
+    """Per-matrix inverses of ``covs (K, n, n)``, zeros where one is singular, and which are."""
+    inv = np.zeros_like(covs, dtype=float)
+    singular = np.zeros(covs.shape[0], dtype=bool)
+    for k in range(covs.shape[0]):
+        try:
+            inv[k] = np.linalg.inv(covs[k])
+        except np.linalg.LinAlgError:
+            singular[k] = True
+    return inv, singular
 
 
 def merge_groups(
@@ -109,16 +138,35 @@ def merge_moments(
 ) -> tuple[Array, Array, float]:
     """Moment-preserving merge of the components ``group`` → ``(mean, cov, weight)``.
 
-    The first index of ``group`` is the reference for heading alignment.
+    The first index of ``group`` is the reference for heading alignment. The moments depend
+    only on the ratios ``w_b / Σ w``, so they are computed with the weights scaled by a power
+    of two, ``2⁻ᵉ w`` with ``2ᵉ⁻¹ ≤ Σ w < 2ᵉ`` (``max w`` in place of ``Σ w`` when the sum
+    overflows). That scaling is exact in floating point: every product and quotient is the
+    unscaled one, bit for bit, wherever that neither underflows nor overflows; and weights
+    near the subnormal range (whose products with the means underflow to 0) or near overflow
+    (whose sum is ∞) still give the right moments. The returned weight is the unscaled
+    ``Σ w``; a group whose total is not > 0, or holding an infinite weight, is a ModelError.
     """
     w = weights[group]
     total = float(w.sum())
-    if total <= 0.0:
-        raise ModelError("merge_moments: the group has zero total weight")
+    if not total > 0.0:
+        raise ModelError(f"merge_moments: the group's total weight must be > 0, got {total}")
+    if math.isfinite(total):
+        e = math.frexp(total)[1]
+        w = np.ldexp(w, -e)
+        scaled_total = math.ldexp(total, -e)
+    else:
+        largest = float(np.max(w))
+        if not math.isfinite(largest):
+            raise ModelError(f"merge_moments: a weight is not finite ({largest})")
+        w = np.ldexp(w, -math.frexp(largest)[1])
+        scaled_total = float(w.sum())
     m = align_angles(means[group], means[group[0]], angle_index)
-    mean = (w @ m) / total
+    mean = (w @ m) / scaled_total
     d = m - mean
-    cov = (np.einsum("k,kij->ij", w, covs[group]) + np.einsum("k,ki,kj->ij", w, d, d)) / total
+    cov = (
+        np.einsum("k,kij->ij", w, covs[group]) + np.einsum("k,ki,kj->ij", w, d, d)
+    ) / scaled_total
     return mean, 0.5 * (cov + cov.T), total
 
 

@@ -122,6 +122,11 @@ FUSION_MODES: tuple[str, ...] = ("decorrelated", "ci")
 
 _YAW = 3
 _H_HEIGHT = np.array([[0.0, 0.0, 1.0, 0.0]])
+#: Smallest horizontal distance ``ρ`` (m) at which a track is linearised (:func:`_jacobian`).
+RHO_FLOOR = 1e-6
+#: Floor on ``expected_clutter`` (bearings per scan) in the clutter density ``κ``: with none
+#: modelled, ``κ`` would be 0 and an unexplained bearing's ``log κ`` / ``1/κ`` infinite.
+MIN_EXPECTED_CLUTTER = 1e-3
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -134,7 +139,9 @@ class GaussianSumSettings:
         sigma_azimuth, sigma_elevation: bearing noise (rad).
         use_elevation: bearings are (azimuth, elevation); ``False`` for azimuth-only sensors
             (planar robots), where births place the teammate at the height reference.
-        expected_clutter: expected number of clutter bearings per scan (Poisson mean λV).
+        expected_clutter: expected number of clutter bearings per scan (Poisson mean λV);
+            the clutter density ``κ`` uses at least :data:`MIN_EXPECTED_CLUTTER` (10⁻³), so
+            a bearing no track explains never has density 0 (``1/κ``, ``log κ`` finite).
         formation: P_D, P_G, P_B and the Eq. 13 birth covariance.
         gate: gate probability and the modified gate for uniform-yaw tracks.
         prune_weight: tracks below this normalised weight are deleted.
@@ -405,6 +412,33 @@ def predict_fusers(
         start += size
 
 
+def _jacobian(means: Array) -> Array:
+    """``range_bearing_jacobian`` of tracks ``means (K, 4)``, linearised at ``ρ ≥ ρ_min``.
+
+    ``∂θ/∂p = [−y, x, 0]/ρ²`` and ``∂α/∂p`` carry ``1/ρ`` (``ρ = √(x² + y²)``), and ``∂r/∂p =
+    p/r``: the Jacobian is undefined on the vertical axis through the observer (``ρ = 0``: a
+    teammate straight above, or a track at the observer, ``r = 0``) and overflows next to it, and
+    its NaN or ∞ would poison the innovation covariance, the likelihoods and through the clutter
+    density ``κ`` every filter's weights. A track with ``ρ < ρ_min`` (:data:`RHO_FLOOR`,
+    10⁻⁶ m) is therefore linearised at its position moved horizontally out to ``ρ_min`` along
+    its own azimuth (along +x at ``ρ = 0``, where the predicted azimuth ``atan2(0, 0) = 0``
+    points too), so ``‖∂θ/∂p‖ ≤ 1/ρ_min`` and ``r ≥ ρ_min``. Then ``S = H P Hᵀ + R`` is finite and
+    factorisable and, being huge, makes the bearing almost uninformative for such a track: the
+    limit of the exact model, in which the azimuth of a point on the axis is undefined. ``ρ_min``
+    lies far below any robot's size or sensor noise; every track with ``ρ ≥ ρ_min`` is
+    linearised exactly where it is.
+    """
+    x, y = means[:, 0], means[:, 1]
+    low = x * x + y * y < RHO_FLOOR**2
+    if not low.any():
+        return range_bearing_jacobian(means)
+    point = np.array(means, dtype=float, copy=True)
+    azimuth = np.arctan2(point[low, 1], point[low, 0])
+    point[low, 0] = RHO_FLOOR * np.cos(azimuth)
+    point[low, 1] = RHO_FLOOR * np.sin(azimuth)
+    return range_bearing_jacobian(point)
+
+
 def _gaussian_density(nu: Array, S: Array) -> Array:
     """``N(ν; 0, S)`` for stacks ``ν (..., n)``, ``S (..., n, n)``."""
     n = nu.shape[-1]
@@ -498,7 +532,7 @@ class GaussianSumFuser:
         if st.field_of_view is None or t.size == 0:
             return p
         azimuth = range_bearing(t.means)[:, 1]
-        H = range_bearing_jacobian(t.means)[:, 1:2, :]
+        H = _jacobian(t.means)[:, 1:2, :]
         var = (H @ t.covs @ np.swapaxes(H, -1, -2))[:, 0, 0] + st.sigma_azimuth**2
         sd = np.sqrt(var)
         fov = st.field_of_view
@@ -600,7 +634,7 @@ class GaussianSumFuser:
             pred = mean[:, 2:3]
             var = self.settings.sigma_height**2
         elif kind == "range":
-            H = range_bearing_jacobian(mean)[:, :1, :]
+            H = _jacobian(mean)[:, :1, :]
             pred = range_bearing(mean)[:, :1]
             var = self.settings.sigma_range**2
         else:
@@ -634,7 +668,7 @@ class GaussianSumFuser:
         parts: list[Tracks] = []
         if k and m:
             hz = range_bearing(t.means)[:, st.bearing_rows]
-            H = range_bearing_jacobian(t.means)[:, st.bearing_rows, :]
+            H = _jacobian(t.means)[:, st.bearing_rows, :]
             R = st.bearing_noise
             S = H @ t.covs @ np.swapaxes(H, -1, -2) + R
             nu = Z[None, :, :] - hz[:, None, :]
@@ -724,7 +758,7 @@ class GaussianSumFuser:
             dens[~tracked] = 1.0 / st.bearing_volume
             dens *= p_det[:, None]
         others = dens.sum(axis=0)[None, :] - dens
-        clutter = max(st.expected_clutter, 1e-3) / st.bearing_volume
+        clutter = max(st.expected_clutter, MIN_EXPECTED_CLUTTER) / st.bearing_volume
         return clutter + others
 
     def _births(
@@ -793,12 +827,12 @@ class GaussianSumFuser:
         if t.size and Z.shape[0]:
             dom = np.flatnonzero(heaviest_mask(t.weights, t.groups))
             mean, cov = t.means[dom], t.covs[dom]
-            H = range_bearing_jacobian(mean)[:, st.bearing_rows, :]
+            H = _jacobian(mean)[:, st.bearing_rows, :]
             S = H @ cov @ np.swapaxes(H, -1, -2) + st.bearing_noise
             nu = Z[None, :, :] - range_bearing(mean)[:, st.bearing_rows][:, None, :]
             nu[..., 0] = wrap_angle(nu[..., 0])
             d2 = mahalanobis_batch(nu, S[:, None, :, :])
-            kappa = max(st.expected_clutter, 1e-3) / st.bearing_volume
+            kappa = max(st.expected_clutter, MIN_EXPECTED_CLUTTER) / st.bearing_volume
             c = 0.5 * d2 + 0.5 * np.log(np.linalg.det(2.0 * np.pi * S))[:, None]
             owner_pd = self._track_detection(p_det)[dom]
             p_det = p_det.copy()

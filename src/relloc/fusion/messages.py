@@ -28,6 +28,12 @@ class EquivalentMeasurement:
 
     ``means``/``prior_means`` (K, 4) and ``covs``/``prior_covs`` (K, 4, 4) are the current and
     the previous-broadcast-propagated tracks; ``weights`` (K,) sum to one.
+
+    Every covariance must be positive definite with a determinant that is > 0 in floating
+    point (its Cholesky factor ``L`` exists and ``det P = (Π diag L)² > 0``), else DataError:
+    the receiver scores a track with Gaussian densities (``e^{−γ/2}/√det(2πP)`` for a birth),
+    which a singular or numerically degenerate ``P`` (a point mass) makes infinite;
+    normalised, that weight is NaN and would empty the receiver's filter.
     """
 
     sender: int
@@ -60,6 +66,15 @@ class EquivalentMeasurement:
             if not np.all(np.isfinite(arr)):
                 raise DataError(f"{where}: {name} holds non-finite values")
             object.__setattr__(self, name, arr)
+        for name in ("covs", "prior_covs"):
+            try:
+                L = np.linalg.cholesky(arrays[name][0])
+                # det P = (Π diag L)²: 0 when det P underflows
+                regular = bool(np.all(np.prod(np.diagonal(L, 0, -2, -1), axis=-1) ** 2 > 0.0))
+            except np.linalg.LinAlgError:
+                regular = False
+            if not regular:
+                raise DataError(f"{where}: {name} must be positive definite with a determinant > 0")
         w = arrays["weights"][0]
         if k == 0 or np.any(w < 0.0) or w.sum() <= 0.0:
             raise DataError(f"{where}: needs ≥ 1 track with non-negative weights summing > 0")
