@@ -64,6 +64,22 @@ def test_k_connectivity_counts_walks_and_beta() -> None:
         k_connectivity(A, -1)
 
 
+def test_beta_by_reachability_is_eq_22_on_random_graphs() -> None:
+    # β is computed by graph search; Eq. 22 defines it by the walk counts C_n (k_connectivity)
+    rng = np.random.default_rng(2031)
+    for _ in range(200):
+        n, l = int(rng.integers(1, 7)), int(rng.integers(0, 4))
+        G = nx.DiGraph(n_robots=n, n_landmarks=l)
+        G.add_nodes_from(range(n + l))
+        for i in range(n):
+            for j in range(n + l):
+                if i != j and rng.random() < 0.3:
+                    G.add_edge(i, j)
+        C = k_connectivity(adjacency_matrix(G), n)
+        eq22 = l >= 2 and all(sum(C[i, n + k] > 0 for k in range(l)) >= 2 for i in range(n))
+        assert beta(G) == int(eq22), sorted(G.edges)
+
+
 @pytest.mark.parametrize("n", [2, 3, 5])
 def test_theorems_on_hand_made_teams(n: int) -> None:
     rng = np.random.default_rng(10 + n)

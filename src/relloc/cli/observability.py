@@ -5,7 +5,9 @@ Symbolic nonlinear observability of a built-in model or of a user model given as
 :class:`relloc.models.symbolic.SymbolicModel`). Prints the generic rank of the
 observability matrix, the input conditions needed to reach it, the unobservable directions
 when the rank is deficient, and a witness state; ``--json FILE`` writes the same. With
-``--at-state``/``--at-inputs`` it also prints the rank at that state with constant inputs.
+``--at-state``/``--at-inputs`` it also prints the rank at that state with constant inputs
+(Lie derivatives of the combined field up to ``--order``; a model's free parameters, such as
+landmark positions, are given in ``--at-state`` too).
 """
 
 from __future__ import annotations
@@ -13,8 +15,12 @@ from __future__ import annotations
 import argparse
 import math
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from relloc.errors import ConfigError, ModelError
+
+if TYPE_CHECKING:
+    from relloc.models.symbolic import SymbolicModel
 
 MAX_SAMPLES = 1000
 """Most random states for the generic rank (each is a numeric rank of the whole matrix)."""
@@ -41,7 +47,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     )
     p.add_argument("model", help="a built-in model (listed below) or package.module:function")
     p.add_argument("--measurements", nargs="+", default=None, help="measured outputs to use")
-    p.add_argument("--order", type=int, default=2, help="highest Lie-derivative order (2)")
+    p.add_argument(
+        "--order", type=int, default=2, help="highest Lie-derivative order (2; also --at-state)"
+    )
     p.add_argument("--inputs", nargs="*", default=None, help="only these inputs/groups excited")
     p.add_argument("--landmarks", type=int, default=None, help="landmarks (unicycle models; 1)")
     p.add_argument("--robots", type=int, default=None, help="robots (unicycle-team, ≤ 6; 3)")
@@ -50,7 +58,12 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     p.add_argument("--samples", type=int, default=5, help="random states for the generic rank")
     p.add_argument("--seed", type=int, default=0, help="seed of the random states")
     p.add_argument("--precise", action="store_true", help="re-check the rank with 50 digits")
-    p.add_argument("--at-state", default=None, help="NAME=VALUE,... rank at this state")
+    p.add_argument(
+        "--at-state",
+        default=None,
+        help="NAME=VALUE,... rank at this state (unset states 0; free parameters such as "
+        "landmark positions lx_0, ly_0 must be given)",
+    )
     p.add_argument("--at-inputs", default=None, help="NAME=VALUE,... constant inputs for it")
     p.add_argument("--json", type=Path, default=None, help="also write the results here")
     p.set_defaults(func=run)
@@ -79,6 +92,27 @@ def _assignments(text: str | None, names: tuple[str, ...], what: str) -> list[fl
             raise ConfigError(f"--{what}: {key} must be finite, got {val!r}")
         values[key] = number
     return list(values.values())
+
+
+def _state_and_parameters(
+    text: str | None, model: SymbolicModel
+) -> tuple[list[float], list[float] | None]:
+    """``--at-state`` values: the states (0 where not given) and, for a model whose parameters
+    are free constants (landmark positions ``lx_0, ly_0, …``; no rule derives them from the
+    state), those parameters too, every one of them required. ``None`` parameters: the model's
+    rule gives them."""
+    states = model.state_names
+    if model.parameter_rule is not None or not model.parameters:
+        return _assignments(text, states, "at-state"), None
+    names = tuple(str(p) for p in model.parameters)
+    given = {item.partition("=")[0].strip() for item in (text or "").split(",")}
+    missing = [p for p in names if p not in given]
+    if missing:
+        raise ConfigError(
+            f"--at-state: {model.name!r} has free parameters; give them too: {', '.join(missing)}"
+        )
+    values = _assignments(text, states + names, "at-state")
+    return values[: len(states)], values[len(states) :]
 
 
 def run(args: argparse.Namespace) -> int:
@@ -115,10 +149,10 @@ def run(args: argparse.Namespace) -> int:
     for model in resolve_models(args.model, opts):
         probe = args.at_state is not None or args.at_inputs is not None
         if probe:  # before the (longer) analysis
-            state = _assignments(args.at_state, model.state_names, "at-state")
+            state, params = _state_and_parameters(args.at_state, model)
             inputs = _assignments(args.at_inputs, model.input_names, "at-inputs")
             try:
-                rank_there = rank_at(model, state, inputs)
+                rank_there = rank_at(model, state, inputs, params=params, order=args.order)
             except ModelError as exc:
                 raise ConfigError(
                     f"--at-state/--at-inputs: no rank of {model.name!r} there ({exc})"
@@ -144,6 +178,7 @@ def run(args: argparse.Namespace) -> int:
         if probe:
             out["rank_at"] = {
                 "state": state,
+                "parameters": params,
                 "inputs": inputs,
                 "rank": rank_there,
             }

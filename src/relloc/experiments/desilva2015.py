@@ -76,7 +76,7 @@ fusion), ``mutual_confirmed`` (the same with the restricted sharing policy), ``c
 (``"1"``, ``"10"``, ``"100"``, ``"1000"`` → ``success_rate``, ``pos_rmse_m``, ``yaw_rmse_rad``,
 ``wrong_association_rate``, ``anees``, ``expected_clutter_per_scan``, ``runs``), ``pd_sweep``
 (``"0.95"``, ``"0.8"``, ``"0.6"`` → the same), ``kidnapped`` (``refound_rate``,
-``time_to_refind_s``), ``fig5`` (file names), ``departures`` (every departure from the paper). """
+``time_to_refind_s``), ``fig5`` (file names), ``departures`` (every departure from the paper)."""
 
 from __future__ import annotations
 

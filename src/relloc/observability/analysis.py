@@ -226,6 +226,8 @@ def _symbolic_directions(
     numerically at the witness.
     """
     model = om.model
+    if rank == 0:  # nothing to solve: every state direction is unobservable (numeric basis)
+        return None
     rows = _independent_rows(normalise_rows_keep_index(M), rank)
     A_num = normalise_rows_keep_index(M[rows])
     piv = _pivot_columns(A_num, rank)

@@ -103,7 +103,12 @@ class _Probe:
         return np.stack(out, axis=1)
 
     def adds_information(self, fields: frozenset[int], vals: Array) -> bool:
-        """Is this gradient independent of the kept rows available whenever it is?"""
+        """Is this gradient independent of the kept rows available whenever it is?
+
+        With no such rows, any non-zero gradient adds information: a fixed threshold would
+        prune every row of a model whose outputs are simply small numbers (the rank tests of
+        :mod:`.rank` are scale-free, so this one is too).
+        """
         base = [v for f, v in self.kept if f <= fields]
         for p in range(vals.shape[0]):
             if not np.all(np.isfinite(vals[p])):
@@ -114,7 +119,7 @@ class _Probe:
             if (
                 numeric_rank(np.vstack([B, vals[p]])) > numeric_rank(B)
                 if base
-                else np.any(np.abs(vals[p]) > 1e-12)
+                else np.any(vals[p] != 0.0)  # no absolute floor: the model's scale is free
             ):
                 return True
         return False

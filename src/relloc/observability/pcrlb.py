@@ -54,7 +54,8 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from relloc.errors import DataError
+from relloc.core.linalg import cholesky
+from relloc.errors import DataError, ModelError
 from relloc.models.measurement import MEASUREMENT_NAMES, range_bearing_jacobian
 from relloc.models.motion import VelocityNoise, process_noise, relative_jacobians
 from relloc.models.planar_measurement import ScalarRows, linearise_rows
@@ -79,6 +80,8 @@ Array = NDArray[np.float64]
 
 
 def _step_lengths(dt: float | ArrayLike, T: int) -> Array:
+    if T < 1:
+        raise DataError("PCRLB: the trajectory has no steps (T = 0); give at least one state")
     d = np.asarray(dt, dtype=float)
     d = np.full(T - 1, float(d)) if d.ndim == 0 else d.reshape(-1)
     if d.shape != (T - 1,) or not np.all(np.isfinite(d)) or np.any(d < 0):
@@ -98,9 +101,11 @@ def _with_runs(a: ArrayLike, tail: tuple[int, ...], name: str) -> Array:
 
 
 def _prior_information(P0: ArrayLike, n: int) -> Array:
+    """``P0⁻¹``; ``P0`` must be finite and positive definite (a ModelError naming P0)."""
     P = np.asarray(P0, dtype=float)
     if P.shape != (n, n):
         raise DataError(f"PCRLB: P0 has shape {P.shape}, expected {(n, n)}")
+    cholesky(P, where="the prior covariance P0")  # names P0, not "measurement noise R"
     return measurement_information(np.eye(n), P)
 
 
@@ -118,7 +123,12 @@ def relative_pair_pcrlb(
     P0: ArrayLike,
     measured: Sequence[str] = MEASUREMENT_NAMES,
 ) -> Array:
-    """PCRLB ``(T, 4, 4)`` of the seed-000 relative pair (see the module docstring)."""
+    """PCRLB ``(T, 4, 4)`` of the seed-000 relative pair (see the module docstring).
+
+    A measured step where the Jacobian is not finite (``ρ = √(x² + y²) = 0``: azimuth and
+    elevation have no gradient there) is a :class:`ModelError` naming the step; at unmeasured
+    steps the state is not used for information and any ρ is fine.
+    """
     X = _with_runs(true_states, (4,), "true_states")
     M, T = X.shape[:2]
     U_l = _with_runs(u_obs, (4,), "u_obs")
@@ -147,7 +157,23 @@ def relative_pair_pcrlb(
         for k in range(T - 1):
             F[:, k], G = relative_jacobians(X[:, k], U_l[:, k], U_c[:, k], float(steps[k]))
             Q[:, k] = process_noise(G, velocity_noise)
-    H = range_bearing_jacobian(X)[..., rows, :]
+    with np.errstate(divide="ignore", invalid="ignore"):  # ρ = 0: checked just below
+        H = range_bearing_jacobian(X)[..., rows, :]
+    singular = mask & ~np.isfinite(H).all(axis=(-2, -1))
+    if singular.any():
+        m, k = (int(v) for v in np.argwhere(singular)[0])
+        why = (
+            "horizontal distance ρ = √(x² + y²) = 0 (robot straight above/below or co-located), "
+            "where azimuth and elevation have no gradient; leave that step out of "
+            "measurement_mask or measure range only"
+            if np.hypot(X[m, k, 0], X[m, k, 1]) ** 2 == 0.0
+            else "the position is beyond double precision (ρ² under- or overflows)"
+        )
+        raise ModelError(
+            f"PCRLB: the {'/'.join(measured)} Jacobian is not finite at step {k} "
+            f"(trajectory {m}), state {X[m, k].tolist()}: {why}"
+        )
+    H = np.where(mask[..., None, None], H, 0.0)  # unmeasured steps: no information
     R = np.diag(sig[rows] ** 2)
     info = measurement_information(H, np.broadcast_to(R, (*H.shape[:-2], len(rows), len(rows))))
     info = np.where(mask[..., None, None], info, 0.0)

@@ -3,8 +3,18 @@
 Rows of an observability matrix have wildly different scales (gradients of higher-order Lie
 derivatives carry powers of ranges and speeds), so every non-zero row is normalised to unit
 length before the SVD; the rank is the number of singular values above ``rtol · σ_max``.
-Normalising rows does not change the rank. The mpmath variant repeats the computation with
-``dps`` significant digits so that a rank decision does not hinge on double rounding.
+Normalising rows does not change the rank.
+
+Every tolerance is *relative*, so the rank of ``c·M`` is that of ``M`` for any ``c > 0`` (a
+matrix whose entries are all 1e-13 is as full-rank as the identity): a row is dropped as zero
+when its norm is at most :data:`ROW_RTOL` times the largest row norm (or exactly zero), and a
+singular value counts when it exceeds :data:`RANK_RTOL` times the largest one. Noise at the
+1e-12 level on a rank-deficient matrix stays below :data:`RANK_RTOL` and does not raise the
+rank. Column (state-unit) scaling is *not* undone: a state whose column is 1e-8 times smaller
+than the others, in every row, reads as unobservable; express states in comparable units.
+
+The mpmath variant repeats the computation with ``dps`` significant digits so that a rank
+decision does not hinge on double rounding.
 """
 
 from __future__ import annotations
@@ -20,23 +30,48 @@ Array = NDArray[np.float64]
 
 #: Singular values below ``RANK_RTOL · σ_max`` count as zero in double precision.
 RANK_RTOL = 1e-8
+#: Rows with norm ≤ ``ROW_RTOL ·`` (largest row norm) are treated as zero rows (module doc).
+ROW_RTOL = 1e-12
 
 
 def normalise_rows(M: Array) -> Array:
-    """Drop (numerically) zero rows and scale the others to unit Euclidean norm."""
+    """Drop (numerically) zero rows and scale the others to unit Euclidean norm.
+
+    A row is zero when its norm is ``≤ ROW_RTOL ·`` the largest row norm: relative, so the
+    decision does not depend on the overall scale of ``M`` (module doc). Non-finite entries are
+    a :class:`ModelError`.
+    """
+    A, keep = unit_rows(M)
+    return A[keep]
+
+
+def unit_rows(M: Array) -> tuple[Array, NDArray[np.bool_]]:
+    """Every row of ``M`` scaled to unit norm (zero rows left as they are) and the mask of the
+    rows :func:`normalise_rows` keeps (same rule; row indices preserved)."""
     M = np.asarray(M, dtype=float)
     if not np.all(np.isfinite(M)):
-        raise ModelError("observability matrix has non-finite entries (singular configuration)")
+        raise ModelError(
+            "observability matrix has non-finite entries (a singular configuration, e.g. two "
+            "bodies at one point, or values beyond double precision)"
+        )
+    top = float(np.max(np.abs(M), initial=0.0))
+    if top > 0.0:  # rescale first: row norms neither overflow nor underflow
+        M = M / top
     norms = np.linalg.norm(M, axis=1)
-    keep = norms > 1e-12 * max(1.0, float(norms.max(initial=0.0)))
-    return M[keep] / norms[keep, None]
+    keep = norms > ROW_RTOL * float(norms.max(initial=0.0))
+    return M / np.where(keep, norms, 1.0)[:, None], keep
 
 
 def singular_values(M: Array) -> Array:
     """Singular values of the row-normalised matrix (length ``n``, zeros padded)."""
     M = np.asarray(M, dtype=float)
-    n = M.shape[1]
-    A = normalise_rows(M)
+    return padded_singular_values(normalise_rows(M), M.shape[1])
+
+
+def padded_singular_values(A: Array, n: int) -> Array:
+    """Singular values (length ``n``, zeros padded) of ``A``, taken as already row-normalised
+    (or an orthogonal transform of such rows, e.g. a triangular factor): no rescaling here."""
+    A = np.asarray(A, dtype=float).reshape(-1, n)
     out = np.zeros(n)
     if A.shape[0]:
         if A.shape[0] > 2 * n:  # tall: the triangular factor has the same singular values
