@@ -173,10 +173,9 @@ def relative_pair_pcrlb(
             f"PCRLB: the {'/'.join(measured)} Jacobian is not finite at step {k} "
             f"(trajectory {m}), state {X[m, k].tolist()}: {why}"
         )
-    H = np.where(mask[..., None, None], H, 0.0)  # unmeasured steps: no information
+    H = np.where(mask[..., None, None], H, 0.0)  # unmeasured steps: no information (HᵀR⁻¹H = 0)
     R = np.diag(sig[rows] ** 2)
     info = measurement_information(H, np.broadcast_to(R, (*H.shape[:-2], len(rows), len(rows))))
-    info = np.where(mask[..., None, None], info, 0.0)
     J = pcrlb_information(F, Q, info, _prior_information(P0, 4))
     return pcrlb_covariance(J)
 
