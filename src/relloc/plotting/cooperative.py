@@ -85,16 +85,21 @@ def plot_grouped_bars(
     reference: float | None = None,
     reference_label: str = "",
 ) -> None:
-    """Bars of ``series[label][g]`` for every group ``g`` (e.g. RMSE per mode and anchor set)."""
+    """Bars of ``series[label][g]`` for every group ``g`` (e.g. RMSE per mode and anchor set);
+    ``None`` is a missing bar. ``log`` takes effect only if some bar or the reference is
+    positive: with none (every value missing or ≤ 0) matplotlib cannot log-scale the axis and
+    would fail while saving, so the axis stays linear."""
     x = np.arange(len(groups))
     width = 0.8 / max(len(series), 1)
+    positive = reference is not None and reference > 0
     for k, (label, values) in enumerate(series.items()):
         vals = np.asarray([np.nan if v is None else v for v in values], dtype=float)
         ax.bar(x + (k - (len(series) - 1) / 2) * width, vals, width, label=label)
+        positive = positive or bool(np.any(vals > 0))
     if reference is not None:
         ax.axhline(reference, color="k", ls="--", lw=0.8, label=reference_label)
     ax.set_xticks(x, groups, rotation=20)
-    if log:
+    if log and positive:
         ax.set_yscale("log")
     ax.set_ylabel(ylabel)
     ax.grid(True, alpha=0.3, axis="y", which="both")

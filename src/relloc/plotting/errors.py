@@ -105,11 +105,14 @@ def plot_trajectories(
     markers: Mapping[str, str] | None = None,
 ) -> None:
     """Planar paths ``(K, ≥2)`` of several robots, with start markers (in the legend) and the
-    arena outline; the legend sits outside the data."""
+    arena outline; the legend sits outside the data. An empty path (``K = 0``) keeps its
+    legend entry and has no start marker."""
 
     for k, (name, path) in enumerate(paths.items()):
         p = np.asarray(path, dtype=float)
         (line,) = ax.plot(p[:, 0], p[:, 1], lw=1.2, label=name)
+        if not p.shape[0]:
+            continue
         marker = (markers or {}).get(name, "o")
         start = "start" if k == 0 and not markers else None
         ax.plot(p[0, 0], p[0, 1], marker=marker, color=line.get_color(), ms=6, ls="", label=start)

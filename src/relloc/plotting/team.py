@@ -104,6 +104,8 @@ def plot_team_paths(
 
     ``paths``: robot → ``(K, 4)`` true x, y, z, ψ at ``t_path``; ``estimates``: pair label →
     ``(t, (M, 3) world position, subject)``; ``views``: observer → ``(fov_deg, max_range)``.
+    A robot with an empty true path (``K = 0``) keeps its legend entry but has no start marker
+    and no field of view (both are drawn at its first pose).
     """
     from matplotlib.patches import Wedge
 
@@ -113,6 +115,9 @@ def plot_team_paths(
         p = np.asarray(path, dtype=float)
         (line,) = ax_xy.plot(p[:, 0], p[:, 1], lw=1.2, label=f"{name} (true)")
         colors[name] = line.get_color()
+        ax_z.plot(tp, p[:, 2], lw=1.2, color=colors[name], label=f"{name} (true)")
+        if not p.shape[0]:
+            continue
         ax_xy.plot(p[0, 0], p[0, 1], "o", color=colors[name], ms=6)
         ax_xy.annotate(
             f"{name} start",
@@ -122,7 +127,6 @@ def plot_team_paths(
             fontsize="x-small",
             color=colors[name],
         )
-        ax_z.plot(tp, p[:, 2], lw=1.2, color=colors[name], label=f"{name} (true)")
     for label, (t, xyz, subject) in estimates.items():
         tt, q = break_gaps(t, xyz)
         color = colors.get(subject)
@@ -130,6 +134,8 @@ def plot_team_paths(
         ax_z.plot(tt, q[:, 2], ls="--", lw=0.9, color=color, label=f"{label} (estimate)")
     for name, (fov_deg, max_range) in (views or {}).items():
         p = np.asarray(paths[name], dtype=float)
+        if not p.shape[0]:
+            continue
         heading = float(np.degrees(p[0, 3]))
         ax_xy.add_patch(
             Wedge(

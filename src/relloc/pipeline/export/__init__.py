@@ -20,13 +20,17 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from relloc.core.estimates import Estimates
 from relloc.core.recording import Recording
 from relloc.errors import ConfigError
-from relloc.pipeline.evaluation import accuracy_and_consistency, at_times, evaluate_series
+from relloc.metrics.errors import state_errors
+from relloc.pipeline.evaluation import at_times
 from relloc.pipeline.export.mcap_file import check_mcap_path, write_mcap
 from relloc.pipeline.export.poses import UNKNOWN_VARIANCE, PoseSeries, PoseSet, pose_set
-from relloc.pipeline.export.tum_files import write_tum
+from relloc.pipeline.export.tum_files import tum_paths, write_tum
+from relloc.pipeline.frames import frame
 
 
 @dataclass(frozen=True)
@@ -70,6 +74,8 @@ def export_estimates(
     }
     if poses.skipped:
         out["skipped"] = dict(poses.skipped)
+    if request.tum is not None:
+        tum_paths(request.tum, poses)  # a clash of file names fails before any file is written
     if request.mcap is not None:
         written = write_mcap(request.mcap, poses, recording, estimator=estimates.estimator)
         out["mcap"] = written.to_dict()
@@ -82,7 +88,14 @@ def export_estimates(
 def _figures(
     p: PoseSeries, estimates: Estimates, recording: Recording, settle_s: float
 ) -> dict[str, Any]:
-    """relloc's own scores of the records of ``p`` that have truth (module docstring)."""
+    """relloc's own scores of the records of ``p`` that have truth (module docstring).
+
+    Only the position error enters (the same errors and RMSE as
+    :func:`~relloc.pipeline.evaluation.accuracy_and_consistency`), never the covariance: a
+    belief whose covariance is singular (zero, rank-deficient) or not invertible in floating
+    point is still exported and scored rather than failing the export on a NEES it does not
+    report. ``steady_position_rmse_m`` is NaN when no record has reached ``settle_s``.
+    """
     known = p.has_truth
     out: dict[str, Any] = {
         "topic": p.topic,
@@ -93,12 +106,16 @@ def _figures(
     if not known.any():
         return out
     series = at_times(estimates.series(p.owner, p.subject, p.track), p.t[known])
-    evaluation = evaluate_series(series, estimates.updates_of(*series.key), recording)
-    out["position_rmse_m"] = accuracy_and_consistency([evaluation], settle_s=0.0)["position_rmse_m"]
+    f = frame(series.frame)
+    truth = f.truth(recording, series.owner, series.subject, series.t)
+    error = state_errors(series.mean, truth, f.angles)
+    squared = np.sum(error[:, list(f.position)] ** 2, axis=1)
+    steady = series.age >= settle_s
+    out["position_rmse_m"] = float(np.sqrt(np.mean(squared)))
     out["settle_s"] = settle_s
-    out["steady_position_rmse_m"] = accuracy_and_consistency([evaluation], settle_s=settle_s)[
-        "position_rmse_m"
-    ]
+    out["steady_position_rmse_m"] = (
+        float(np.sqrt(np.mean(squared[steady]))) if steady.any() else float("nan")
+    )
     return out
 
 

@@ -153,9 +153,11 @@ def _track_path(track: str) -> str:
 
 
 def series_topic(names: Mapping[str, str], s: BeliefSeries, suffix: str = "") -> str:
-    """``/{owner}/estimates/{subject}[/{track}][/{suffix}]`` in ROS tokens."""
+    """``/{owner}/estimates/{subject}[/{track}][/{suffix}]`` in ROS tokens. A track whose
+    name has no part between slashes (``"/"``) adds nothing: a ROS name never ends in ``/``
+    (nor holds ``//``)."""
     parts = [names[s.owner], "estimates", names[s.subject]]
-    if s.track:
+    if _track_path(s.track):
         parts.append(_track_path(s.track))
     if suffix:
         parts.append(suffix)
@@ -204,6 +206,9 @@ def pose_set(estimates: Estimates, recording: Recording) -> PoseSet:
 
     Skipped and counted: series in a frame without a pose map (``frame without a pose
     meaning: NAME``, one per record) and records with a non-finite mean or covariance.
+    ConfigError if two series would share a topic (track names that differ only in what
+    :func:`ros_token` replaces, e.g. ``a b`` and ``a_b``): their messages would merge into
+    one channel.
     """
     owners = sorted({s.owner for s in estimates.beliefs} - set(recording.robots))
     names = ros_names([*recording.robots, *owners])
@@ -249,12 +254,25 @@ def pose_set(estimates: Estimates, recording: Recording) -> PoseSet:
                     truth_yaw=truth_yaw,
                 )
             )
+    check_unique([(p.topic, p.label) for p in poses], "topic")
     return PoseSet(
         poses=tuple(poses),
         names=MappingProxyType(names),
         skipped=MappingProxyType(skipped),
         common_frame_owners=tuple(sorted(common)),
     )
+
+
+def check_unique(named: Sequence[tuple[object, str]], what: str) -> None:
+    """ConfigError if two series labels of ``named`` (``(name, label)`` pairs) share a name."""
+    seen: dict[object, str] = {}
+    for name, label in named:
+        if name in seen:
+            raise ConfigError(
+                f"ROS export: series {seen[name]!r} and {label!r} both become the {what} "
+                f"{str(name)!r}; rename a track or robot"
+            )
+        seen[name] = label
 
 
 def yaw_quaternion(yaw: Array) -> Array:

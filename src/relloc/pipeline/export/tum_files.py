@@ -26,7 +26,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from relloc.errors import ConfigError
-from relloc.pipeline.export.poses import PoseSeries, PoseSet, ros_token, yaw_quaternion
+from relloc.pipeline.export.poses import (
+    PoseSeries,
+    PoseSet,
+    check_unique,
+    ros_token,
+    yaw_quaternion,
+)
 from relloc.pipeline.output import replace_file
 
 Array = NDArray[np.float64]
@@ -68,22 +74,39 @@ def _stem(p: PoseSeries) -> str:
     return stem
 
 
+def tum_paths(directory: Path, poses: PoseSet) -> dict[str, Path]:
+    """The estimate file of every teammate trajectory in ``poses`` by series label (module
+    docstring; the truth file is its ``.truth.tum`` sibling). ConfigError if two series would
+    share a file — names that differ only in what :func:`ros_token` replaces, e.g. the tracks
+    ``a/b`` and ``a_b`` — so that one never silently overwrites the other. Every name is made
+    of ROS tokens, so every path lies inside ``directory`` (``..`` becomes ``__``)."""
+    out = {
+        p.label: Path(directory) / poses.names[p.owner] / f"{_stem(p)}.tum"
+        for p in poses.poses
+        if p.trajectory
+    }
+    check_unique([(path, label) for label, path in out.items()], "TUM file")
+    return out
+
+
 def write_tum(directory: Path, poses: PoseSet) -> tuple[TumPair, ...]:
-    """Write the TUM files of every teammate trajectory in ``poses`` (module docstring)."""
+    """Write the TUM files of every teammate trajectory in ``poses`` (module docstring); the
+    paths are checked (:func:`tum_paths`) before any file is written."""
     directory = Path(directory)
     if directory.exists() and not directory.is_dir():
         raise ConfigError(f"--tum: {directory} exists and is not a folder")
+    paths = tum_paths(directory, poses)
     out = []
     for p in poses.poses:
         if not p.trajectory:
             continue
-        folder = directory / poses.names[p.owner]
-        estimate = _write(folder / f"{_stem(p)}.tum", tum_lines(p.t, p.position, p.yaw))
+        path = paths[p.label]
+        estimate = _write(path, tum_lines(p.t, p.position, p.yaw))
         truth = None
         known = p.has_truth
         if known.any():
             truth = _write(
-                folder / f"{_stem(p)}.truth.tum",
+                path.with_name(f"{_stem(p)}.truth.tum"),
                 tum_lines(p.t[known], p.truth_position[known], p.truth_yaw[known]),
             )
         out.append(TumPair(label=p.label, estimate=estimate, truth=truth, poses=int(p.t.size)))
