@@ -145,3 +145,22 @@ def test_children_listen_on_loopback_only_and_tls_only_when_secure(tmp_path):
         '["tcp/127.0.0.1:0"]',
         '{"peer":["tcp/127.0.0.1:0"]}',
     )
+
+
+def test_a_zenoh_config_naming_a_bad_tls_file_is_refused_naming_key_and_file(tmp_path):
+    # Zenoh's own message for a certificate of garbage was "peer sent no certificates"
+    from relloc.runtime.access import write_member_configs
+
+    certs = make_team_certs(tmp_path / "certs", "demo", ROBOTS[:1])
+    config = write_member_configs(certs, tmp_path / "zenoh")[ROBOTS[0]]
+    TransportSettings(config_file=config).zenoh_config()  # as written: accepted
+    cert, key = certs.certificate(ROBOTS[0]), certs.private_key(ROBOTS[0])
+    key.write_bytes(cert.read_bytes())  # a certificate where the key should be
+    with pytest.raises(ConfigError, match=r"tls/listen_private_key: .* not an unencrypted PEM"):
+        TransportSettings(config_file=config).zenoh_config()
+    cert.write_text("garbage\n")
+    with pytest.raises(ConfigError, match=rf"{config}: transport/link/tls/listen_certificate: "):
+        TransportSettings(config_file=config).zenoh_config()
+    certs.ca.unlink()
+    with pytest.raises(ConfigError, match=r"tls/root_ca_certificate: .*No such file"):
+        TransportSettings(config_file=config).zenoh_config()

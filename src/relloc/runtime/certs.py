@@ -113,7 +113,7 @@ def load_team_certs(folder: Path) -> TeamCerts:
     ]
     if missing:
         raise DataError(f"{folder}: missing certificate files {missing}")
-    ca = _read_certificate(certs.ca)
+    ca = read_certificate(certs.ca)
     for member in (*certs.robots, LAUNCHER_ID):
         check_member(certs, member, ca)
     return certs
@@ -128,7 +128,7 @@ def check_member(certs: TeamCerts, member: str, ca: Any) -> None:
     from cryptography.x509.oid import NameOID
 
     path = certs.certificate(member)
-    cert = _read_certificate(path)
+    cert = read_certificate(path)
     try:
         cert.verify_directly_issued_by(ca)
     except (ValueError, TypeError, InvalidSignature) as exc:  # another issuer, key or signer
@@ -143,22 +143,59 @@ def check_member(certs: TeamCerts, member: str, ca: Any) -> None:
             f"{cert.not_valid_after_utc:%Y-%m-%d %H:%M} UTC"
         )
     key_path = certs.private_key(member)
-    try:
-        key = serialization.load_pem_private_key(key_path.read_bytes(), password=None)
-    except (OSError, ValueError, TypeError) as exc:
-        raise DataError(f"{key_path}: not an unencrypted PEM private key ({exc})") from None
+    key = read_private_key(key_path)
     public = serialization.PublicFormat.SubjectPublicKeyInfo
     pem = serialization.Encoding.PEM
     if key.public_key().public_bytes(pem, public) != cert.public_key().public_bytes(pem, public):
         raise DataError(f"{key_path}: not the private key of {path}")
 
 
-def _read_certificate(path: Path) -> Any:
+def read_certificate(path: Path) -> Any:
+    """The X.509 certificate in the PEM file ``path`` (DataError naming it otherwise)."""
     x509 = require("cryptography.x509", "runtime")
     try:
         return x509.load_pem_x509_certificate(path.read_bytes())
     except (OSError, ValueError) as exc:
         raise DataError(f"{path}: not a PEM certificate ({exc})") from None
+
+
+def read_private_key(path: Path) -> Any:
+    """The unencrypted private key in the PEM file ``path`` (DataError naming it otherwise)."""
+    serialization = require("cryptography.hazmat.primitives.serialization", "runtime")
+    try:
+        return serialization.load_pem_private_key(path.read_bytes(), password=None)
+    except (OSError, ValueError, TypeError) as exc:
+        raise DataError(f"{path}: not an unencrypted PEM private key ({exc})") from None
+
+
+#: The TLS files a Zenoh configuration names (keys under ``transport/link/tls``).
+TLS_FILES = (
+    "root_ca_certificate",
+    "listen_certificate",
+    "listen_private_key",
+    "connect_certificate",
+    "connect_private_key",
+)
+
+
+def check_tls_files(conf: Any, where: str) -> None:
+    """ConfigError naming ``where``, the key and the file unless every TLS file the Zenoh
+    configuration ``conf`` names (:data:`TLS_FILES`) is a readable PEM certificate or private
+    key. Zenoh would otherwise fail inside its TLS layer (a file of garbage read as "peer sent
+    no certificates"), or, for a connecting peer, only when a link is tried."""
+    for name in TLS_FILES:
+        key = f"transport/link/tls/{name}"
+        try:
+            value = json.loads(conf.get_json(key))
+        except Exception:  # a Zenoh without this key: nothing to check
+            continue
+        if value is None:
+            continue
+        read = read_private_key if name.endswith("private_key") else read_certificate
+        try:
+            read(Path(str(value)))
+        except DataError as exc:
+            raise ConfigError(f"{where}: {key}: {exc}") from None
 
 
 def _name(common_name: str, team: str | None = None) -> Any:

@@ -38,6 +38,7 @@ from typing import Any, Literal
 
 from relloc.errors import ConfigError, require
 from relloc.runtime import keys
+from relloc.runtime.certs import check_tls_files
 
 Mode = Literal["peer", "client", "router"]
 DEFAULT_LISTEN = "tcp/127.0.0.1:0"
@@ -89,6 +90,7 @@ class TransportSettings:
                 conf = zenoh.Config.from_file(str(self.config_file))
             except zenoh.ZError as exc:
                 raise ConfigError(f"transport.config_file: {self.config_file}: {exc}") from exc
+            check_tls_files(conf, f"transport.config_file {self.config_file}")
         else:
             conf = zenoh.Config()
         conf.insert_json5("mode", json.dumps(self.mode))
