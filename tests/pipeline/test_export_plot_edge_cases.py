@@ -67,6 +67,7 @@ def test_no_track_ever_created_writes_an_empty_but_valid_mcap(tmp_path: Path) ->
     out = _export(tmp_path, [])
     assert out["series"] == {} and out["mcap"]["messages"] == 0
     assert out["tum"]["pairs"] == {}
+    assert (tmp_path / "tum").is_dir() and not any((tmp_path / "tum").iterdir())  # as named
     assert _mcap_topics(tmp_path / "out.mcap") == {}
 
 

@@ -25,7 +25,6 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from relloc.errors import ConfigError
 from relloc.pipeline.export.poses import (
     PoseSeries,
     PoseSet,
@@ -33,7 +32,7 @@ from relloc.pipeline.export.poses import (
     ros_token,
     yaw_quaternion,
 )
-from relloc.pipeline.output import replace_file
+from relloc.pipeline.output import prepare_out_dir, replace_file
 
 Array = NDArray[np.float64]
 HEADER = "# timestamp tx ty tz qx qy qz qw"
@@ -91,11 +90,11 @@ def tum_paths(directory: Path, poses: PoseSet) -> dict[str, Path]:
 
 def write_tum(directory: Path, poses: PoseSet) -> tuple[TumPair, ...]:
     """Write the TUM files of every teammate trajectory in ``poses`` (module docstring); the
-    paths are checked (:func:`tum_paths`) before any file is written."""
+    paths are checked (:func:`tum_paths`) before any file is written. ``directory`` is made
+    even when there is no trajectory, so the folder the summary names exists."""
     directory = Path(directory)
-    if directory.exists() and not directory.is_dir():
-        raise ConfigError(f"--tum: {directory} exists and is not a folder")
     paths = tum_paths(directory, poses)
+    prepare_out_dir(directory, "--tum")
     out = []
     for p in poses.poses:
         if not p.trajectory:
