@@ -85,28 +85,40 @@ class SeriesEvaluation:
         return series_label((self.owner, self.subject, self.track))
 
 
-def evaluate_series(
-    series: BeliefSeries, updates: UpdateSeries, recording: Recording
-) -> SeriesEvaluation:
-    """Score one belief series (and its updates) against the recording's truth."""
+def series_errors(series: BeliefSeries, recording: Recording) -> Array:
+    """``x̂ − x`` of every record of ``series`` against the recording's truth in the series'
+    frame (angles wrapped), ``(T, dim)``."""
     f = frame(series.frame)
     if series.mean.shape[1:] != (f.dim,):
         raise ConfigError(
             f"{series.label}: frame {f.name} has {f.dim} states, the series {series.mean.shape}"
         )
+    if series.t.size == 0:
+        return np.zeros((0, f.dim))
+    truth = f.truth(recording, series.owner, series.subject, series.t)
+    return state_errors(series.mean, truth, f.angles)
+
+
+def position_rmse(err: Array, frame_name: str) -> float:
+    """RMSE of the position part of errors ``(N, dim)`` in frame ``frame_name`` (NaN if none)."""
+    if not err.size:
+        return float("nan")
+    position = list(frame(frame_name).position)
+    return float(np.sqrt(np.mean(np.sum(err[:, position] ** 2, axis=1))))
+
+
+def evaluate_series(
+    series: BeliefSeries, updates: UpdateSeries, recording: Recording
+) -> SeriesEvaluation:
+    """Score one belief series (and its updates) against the recording's truth."""
+    err = series_errors(series, recording)
     empty = series.t.size == 0
-    truth = (
-        np.zeros((0, f.dim))
-        if empty
-        else f.truth(recording, series.owner, series.subject, series.t)
-    )
-    err = state_errors(series.mean, truth, f.angles)
     return SeriesEvaluation(
         owner=series.owner,
         subject=series.subject,
         track=series.track,
         platform=recording.platforms[recording.index(series.subject)],
-        frame=f.name,
+        frame=series.frame,
         t=series.t,
         error=err,
         sigma=np.sqrt(np.diagonal(series.cov, axis1=1, axis2=2)),
@@ -228,13 +240,10 @@ def accuracy_and_consistency(
         [e.nis_dof[k] for e, k in zip(evaluations, keep_nis, strict=True)]
     ).astype(np.int64)
     nan = float("nan")
-    position = list(f.position)
     common_dof = int(np.bincount(ni_dof).argmax()) if ni_dof.size else 0
     return {
         "samples": int(err.shape[0]),
-        "position_rmse_m": float(np.sqrt(np.mean(np.sum(err[:, position] ** 2, axis=1))))
-        if err.size
-        else nan,
+        "position_rmse_m": position_rmse(err, f.name),
         "yaw_rmse_rad": float(np.sqrt(np.mean(err[:, f.yaw] ** 2)))
         if err.size and f.yaw is not None
         else nan,

@@ -20,17 +20,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from relloc.core.estimates import Estimates
 from relloc.core.recording import Recording
 from relloc.errors import ConfigError
-from relloc.metrics.errors import state_errors
-from relloc.pipeline.evaluation import at_times
+from relloc.pipeline.evaluation import at_times, position_rmse, series_errors
 from relloc.pipeline.export.mcap_file import check_mcap_path, write_mcap
 from relloc.pipeline.export.poses import UNKNOWN_VARIANCE, PoseSeries, PoseSet, pose_set
 from relloc.pipeline.export.tum_files import tum_paths, write_tum
-from relloc.pipeline.frames import frame
 
 
 @dataclass(frozen=True)
@@ -90,8 +86,9 @@ def _figures(
 ) -> dict[str, Any]:
     """relloc's own scores of the records of ``p`` that have truth (module docstring).
 
-    Only the position error enters (the same errors and RMSE as
-    :func:`~relloc.pipeline.evaluation.accuracy_and_consistency`), never the covariance: a
+    Only the position error enters (:func:`~relloc.pipeline.evaluation.series_errors` and
+    :func:`~relloc.pipeline.evaluation.position_rmse`, as every relloc summary scores it), never
+    the covariance: a
     belief whose covariance is singular (zero, rank-deficient) or not invertible in floating
     point is still exported and scored rather than failing the export on a NEES it does not
     report. ``steady_position_rmse_m`` is NaN when no record has reached ``settle_s``.
@@ -106,16 +103,10 @@ def _figures(
     if not known.any():
         return out
     series = at_times(estimates.series(p.owner, p.subject, p.track), p.t[known])
-    f = frame(series.frame)
-    truth = f.truth(recording, series.owner, series.subject, series.t)
-    error = state_errors(series.mean, truth, f.angles)
-    squared = np.sum(error[:, list(f.position)] ** 2, axis=1)
-    steady = series.age >= settle_s
-    out["position_rmse_m"] = float(np.sqrt(np.mean(squared)))
+    error = series_errors(series, recording)
+    out["position_rmse_m"] = position_rmse(error, series.frame)
     out["settle_s"] = settle_s
-    out["steady_position_rmse_m"] = (
-        float(np.sqrt(np.mean(squared[steady]))) if steady.any() else float("nan")
-    )
+    out["steady_position_rmse_m"] = position_rmse(error[series.age >= settle_s], series.frame)
     return out
 
 
