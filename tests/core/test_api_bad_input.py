@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from recording_samples import three_rows
 
 from relloc.core.angles import circular_interp
 from relloc.core.linalg import condition_log10
@@ -20,12 +21,9 @@ from relloc.core.recording import (
     Recording,
     compose_pose,
     empty_measurements,
-    kind_code,
     relative_pose,
 )
 from relloc.errors import DataError, ModelError
-
-RBE = kind_code("range_bearing_elevation")
 
 
 def _truth(t0: float = 0.0, n: int = 5) -> GroundTruth:
@@ -37,26 +35,13 @@ def _odometry() -> Odometry:
     return Odometry(t=np.arange(5) * 0.1, velocity=np.ones((5, 4)), sigma=np.zeros(4))
 
 
-def _measurements(**overrides) -> Measurements:  # type: ignore[no-untyped-def]
-    fields = dict(
-        t=np.array([0.1, 0.1, 0.2]),
-        kind=np.full(3, RBE),
-        observer=np.array([0, 1, 0]),
-        target=np.array([1, 0, 1]),
-        value=np.array([[1.0, 0.1, 0.0], [1.0, -0.1, 0.0], [1.1, 0.1, 0.0]]),
-        sigma=np.full((3, 3), 0.01),
-    )
-    fields.update(overrides)
-    return Measurements(**fields)
-
-
 def _recording(**overrides) -> Recording:  # type: ignore[no-untyped-def]
     fields = dict(
         robots=("a", "b"),
         platforms=("ground", "aerial"),
         truth=(_truth(), _truth()),
         odometry=(_odometry(), _odometry()),
-        measurements=_measurements(),
+        measurements=three_rows(),
     )
     fields.update(overrides)
     return Recording(**fields)
@@ -134,18 +119,18 @@ def test_recording_refuses_a_platform_that_is_not_a_string() -> None:
 def test_select_refuses_an_index_out_of_range(index) -> None:
     # was a raw IndexError
     with pytest.raises(DataError, match=r"measurements\.select: an index is out of range for 3"):
-        _measurements().select(index)
+        three_rows().select(index)
 
 
 @pytest.mark.parametrize("index", [np.array([1.0]), 1.5, 1, np.array([[0, 1]]), ["a"]])
 def test_select_refuses_a_float_a_scalar_or_a_2d_index(index) -> None:
     # a float array was a raw IndexError; a scalar int gave a table of 0-d columns
     with pytest.raises(DataError, match=r"measurements\.select: expected a slice"):
-        _measurements().select(index)
+        three_rows().select(index)
 
 
 def test_select_keeps_numpy_indexing_for_valid_picks() -> None:
-    m = _measurements()
+    m = three_rows()
     assert m.select([-1]).t.tolist() == [0.2]
     assert m.select([]).size == 0
     assert m.select([0, 2]).t.tolist() == [0.1, 0.2]
@@ -161,7 +146,7 @@ def test_select_keeps_numpy_indexing_for_valid_picks() -> None:
     ],
 )
 def test_concatenate_refuses_parts_that_are_not_tables(parts, message) -> None:
-    m = _measurements()
+    m = three_rows()
     given = {"m5": [m, 5], "m": m, None: None}[parts]
     with pytest.raises(DataError, match=f"measurements.concatenate: {message}"):
         Measurements.concatenate(given)
@@ -169,8 +154,8 @@ def test_concatenate_refuses_parts_that_are_not_tables(parts, message) -> None:
 
 def test_concatenate_reads_a_generator_once() -> None:
     # was a raw ValueError: the generator was consumed by the time column
-    a = _measurements()
-    b = _measurements(t=np.array([0.3, 0.3, 0.4]))
+    a = three_rows()
+    b = three_rows(t=np.array([0.3, 0.3, 0.4]))
     out = Measurements.concatenate(p for p in (b, a))
     assert out.t.tolist() == [0.1, 0.1, 0.2, 0.3, 0.3, 0.4]
     assert Measurements.concatenate(p for p in ()).size == empty_measurements().size == 0
@@ -284,11 +269,11 @@ def test_span_of_truth_spans_that_do_not_overlap_is_an_error_naming_the_robots()
 )
 def test_measurements_refuse_negative_indices_other_than_the_sentinels(overrides, field) -> None:
     with pytest.raises(DataError, match=f"measurements.{field}: row 1 is -[23]; the only negative"):
-        _measurements(**overrides)
+        three_rows(**overrides)
 
 
 def test_measurements_keep_the_sentinels() -> None:
-    m = _measurements(
+    m = three_rows(
         target=np.array([1, NO_TARGET, 1]), origin=np.array([1, ORIGIN_UNKNOWN, CLUTTER])
     )
     assert m.target.tolist() == [1, -1, 1] and m.origin.tolist() == [1, -2, -1]

@@ -4,6 +4,7 @@ interpolation; relative poses."""
 
 import numpy as np
 import pytest
+from recording_samples import RBE, three_rows
 
 from relloc.core.poses import relative
 from relloc.core.recording import (
@@ -27,8 +28,6 @@ from relloc.core.recording import (
 )
 from relloc.errors import DataError
 
-RBE = kind_code("range_bearing_elevation")
-
 
 def _truth(n=5):
     t = np.arange(n) * 0.1
@@ -40,26 +39,13 @@ def _odometry(n=5):
     return Odometry(t=np.arange(n) * 0.1, velocity=np.ones((n, 4)), sigma=np.zeros(4))
 
 
-def _measurements(**overrides):
-    fields = dict(
-        t=np.array([0.1, 0.1, 0.2]),
-        kind=np.full(3, RBE),
-        observer=np.array([0, 1, 0]),
-        target=np.array([1, 0, 1]),
-        value=np.array([[1.0, 0.1, 0.0], [1.0, -0.1, 0.0], [1.1, 0.1, 0.0]]),
-        sigma=np.full((3, 3), 0.01),
-    )
-    fields.update(overrides)
-    return Measurements(**fields)
-
-
 def _recording(measurements=None, **overrides):
     fields = dict(
         robots=("a", "b"),
         platforms=("ground", "aerial"),
         truth=(_truth(), _truth()),
         odometry=(_odometry(), _odometry()),
-        measurements=measurements if measurements is not None else _measurements(),
+        measurements=measurements if measurements is not None else three_rows(),
     )
     fields.update(overrides)
     return Recording(**fields)
@@ -109,13 +95,13 @@ def test_valid_recording_and_arrays_are_read_only():
 )
 def test_bad_measurements_name_the_field(overrides, message):
     with pytest.raises(DataError) as err:
-        _measurements(**overrides)
+        three_rows(**overrides)
     assert message in str(err.value)
 
 
 def test_unknown_indices_are_named():
     with pytest.raises(DataError, match=r"measurements.target: row 2 names unknown index 7"):
-        _recording(_measurements(target=np.array([1, 0, 7])))
+        _recording(three_rows(target=np.array([1, 0, 7])))
     with pytest.raises(DataError, match=r"measurements.landmark: row 0 names unknown index 0"):
         _recording(measurement_rows("range", t=[0.1], observer=0, value=[2.0], landmark=0))
     with pytest.raises(DataError, match=r"measurements.origin: row 0 names unknown index 5"):
