@@ -81,3 +81,31 @@ def write_bag(
         for topic, msgtype, t, msg in messages:
             writer.write(cons[topic], t, STORE.serialize_cdr(msg, msgtype))
     return path
+
+
+#: A mapping of the sample bags: robots alpha (odometry and motion capture) and beta (motion
+#: capture only), radios on each, one surveyed and one unsurveyed static radio.
+SAMPLE_MAPPING = """
+name = "sample"
+[[robots]]
+name = "alpha"
+odometry = "/alpha/odom"
+truth = "/mocap/alpha"
+[[robots]]
+name = "beta"
+truth = "/mocap/beta"
+[uwb]
+topics = "/u/{a}/{b}/d"
+sigma = 0.1
+[[uwb.nodes]]
+name = "n_1"
+robot = "alpha"
+[[uwb.nodes]]
+name = "n_2"
+robot = "beta"
+[[uwb.nodes]]
+name = "n_3"
+position = [0.0, 5.0, 0.0]
+[[uwb.nodes]]
+name = "n_4"
+"""

@@ -40,35 +40,13 @@ from bag_samples import (
     uwb,
     write_bag,
 )
+from bag_samples import (
+    SAMPLE_MAPPING as MAPPING,
+)
 
 S = 1_000_000_000
 T0 = 1_000 * S  # header stamps
 LAG = 2 * S  # bag receive time − header stamp
-
-MAPPING = """
-name = "sample"
-[[robots]]
-name = "alpha"
-odometry = "/alpha/odom"
-truth = "/mocap/alpha"
-[[robots]]
-name = "beta"
-truth = "/mocap/beta"
-[uwb]
-topics = "/u/{a}/{b}/d"
-sigma = 0.1
-[[uwb.nodes]]
-name = "n_1"
-robot = "alpha"
-[[uwb.nodes]]
-name = "n_2"
-robot = "beta"
-[[uwb.nodes]]
-name = "n_3"
-position = [0.0, 5.0, 0.0]
-[[uwb.nodes]]
-name = "n_4"
-"""
 
 
 def _messages() -> list[tuple[str, str, int, object]]:

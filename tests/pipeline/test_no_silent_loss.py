@@ -20,31 +20,14 @@ sys.path.insert(0, str(Path(__file__).parents[1] / "datasets"))
 S = 1_000_000_000
 T0 = 1_000 * S
 
-MAPPING = """
-name = "loss"
-[[robots]]
-name = "alpha"
-odometry = "/alpha/odom"
-truth = "/mocap/alpha"
-[[robots]]
-name = "beta"
-odometry = "/beta/odom"
-truth = "/mocap/beta"
-[uwb]
-topics = "/u/{a}/{b}/d"
-sigma = 0.1
-[[uwb.nodes]]
-name = "n_1"
-robot = "alpha"
-[[uwb.nodes]]
-name = "n_2"
-robot = "beta"
-[[uwb.nodes]]
-name = "n_3"
-position = [0.0, 5.0, 0.0]
-[[uwb.nodes]]
-name = "n_4"
-"""
+
+def _mapping() -> str:
+    """The sample bags' mapping with odometry for beta too, so both robots form a pair."""
+    from bag_samples import SAMPLE_MAPPING
+
+    text = SAMPLE_MAPPING.replace('name = "beta"\n', 'name = "beta"\nodometry = "/beta/odom"\n', 1)
+    assert text != SAMPLE_MAPPING
+    return text
 
 
 def _bag(path: Path) -> Path:
@@ -81,7 +64,7 @@ def test_relloc_run_counts_the_uwb_readings_no_filter_uses(tmp_path):
     path = _bag(tmp_path / "bag")
     out = tmp_path / "out"
     summary, _ = run_bag(
-        path, parse_mapping(MAPPING, "loss.toml"), TeamRunSettings(runs=1), out, plots=False
+        path, parse_mapping(_mapping(), "loss.toml"), TeamRunSettings(runs=1), out, plots=False
     )
     loader = summary["loader"]
     assert loader["uwb_readings"] == 10 + 3 + 4
@@ -99,7 +82,7 @@ def test_a_bag_whose_readings_all_reach_the_recording_reports_none_left_out(tmp_
     from relloc.datasets.rosbag import load_bag
 
     path = _bag(tmp_path / "bag")
-    surveyed = MAPPING.replace('name = "n_4"\n', 'name = "n_4"\nposition = [9.0, 9.0, 0.0]\n')
+    surveyed = _mapping().replace('name = "n_4"\n', 'name = "n_4"\nposition = [9.0, 9.0, 0.0]\n')
     bag = load_bag(path, parse_mapping(surveyed, "s.toml"))
     assert bag.to_dict()["uwb_readings_not_in_recording"] == {}
     assert bag.recording.measurements.size == bag.ranges.t.size == 17
