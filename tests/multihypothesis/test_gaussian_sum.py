@@ -6,12 +6,12 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from gaussian_sum_samples import NOISE, gs_settings
 
 from relloc.core.angles import wrap_angle
 from relloc.errors import ConfigError, DataError
 from relloc.estimators.gaussian_sum import (
     GaussianSumFuser,
-    GaussianSumSettings,
     Tracks,
     predict_fusers,
 )
@@ -26,23 +26,8 @@ from relloc.experiments.desilva2015 import (
 )
 from relloc.fusion.messages import EquivalentMeasurement
 from relloc.fusion.pose_beliefs import invert_beliefs
-from relloc.models.motion import VelocityNoise
 from relloc.pipeline.montecarlo import spawn_seeds
 from relloc.sim.multihypothesis import DeSilvaScenario
-
-NOISE = VelocityNoise(observer=(0.2, 0.2, 0.2, 0.1), observed=(0.2, 0.2, 0.2, 0.1))
-
-
-def _settings(**kw: object) -> GaussianSumSettings:
-    base = dict(
-        velocity_noise=NOISE,
-        sigma_height=0.01,
-        sigma_range=0.02,
-        sigma_azimuth=0.05,
-        sigma_elevation=0.05,
-    )
-    base.update(kw)
-    return GaussianSumSettings(**base)  # type: ignore[arg-type]
 
 
 def _one_track(mean: np.ndarray, cov: np.ndarray, depth: int) -> Tracks:
@@ -70,7 +55,7 @@ def _ekf_update(x, P, z, h, H, R, wrap=()):  # type: ignore[no-untyped-def]
 
 
 def test_single_component_without_clutter_equals_the_ekf() -> None:
-    st = _settings(prune_weight=0.5, merge_threshold=0.0)
+    st = gs_settings(prune_weight=0.5, merge_threshold=0.0)
     fus = GaussianSumFuser(0, [1], st)
     x0 = np.array([3.0, 1.0, 0.5, 0.3])
     P0 = np.diag([0.05, 0.05, 0.02, 0.1])
@@ -116,7 +101,7 @@ def test_single_component_without_clutter_equals_the_ekf() -> None:
 
 
 def test_out_of_gate_known_measurement_leaves_the_track_alone() -> None:
-    st = _settings()
+    st = gs_settings()
     fus = GaussianSumFuser(0, [1], st)
     x0 = np.array([3.0, 0.0, 0.0, 0.0])
     fus.tracks = _one_track(x0, np.eye(4) * 0.01, st.nscan_depth)
@@ -133,7 +118,9 @@ def test_converged_track_survives_an_unlucky_scan_but_a_kidnapped_one_is_refound
     not lose to a track born from teammate 2's bearing (elevation consistent with teammate 1's
     range and height). When teammate 1 has jumped (range 1 m off its track, bearing far from its
     gate), the track born from its new bearing must win."""
-    st = _settings(sigma_height=0.002, sigma_range=0.003, sigma_azimuth=0.06, sigma_elevation=0.06)
+    st = gs_settings(
+        sigma_height=0.002, sigma_range=0.003, sigma_azimuth=0.06, sigma_elevation=0.06
+    )
     x1 = np.array([0.2, 3.0, 0.85, 2.0])
     az2, el2, r2 = 0.1, 0.36, 3.0
     x2 = r2 * np.array([np.cos(el2) * np.cos(az2), np.cos(el2) * np.sin(az2), np.sin(el2), 0.0])
@@ -155,7 +142,7 @@ def test_converged_track_survives_an_unlucky_scan_but_a_kidnapped_one_is_refound
 
 
 def test_births_from_unknown_bearings_and_clutter() -> None:
-    st = _settings()
+    st = gs_settings()
     fus = GaussianSumFuser(0, [1, 2], st)
     # teammate 1 at height 0 and 3 m, teammate 2 at height 1 m and 4 m; bearings shuffled
     b1 = (0.5, 0.0)
@@ -178,7 +165,7 @@ def test_births_from_unknown_bearings_and_clutter() -> None:
 
 def test_ranges_mark_detections_gives_each_scan_its_detection_probability() -> None:
     """One detector for range and bearing: only the ranged teammate can own a bearing."""
-    st = _settings(ranges_mark_detections=True, use_elevation=False)
+    st = gs_settings(ranges_mark_detections=True, use_elevation=False)
     fus = GaussianSumFuser(0, [1, 2], st)
     bearings = np.array([[0.5], [-1.0]])
     np.testing.assert_array_equal(fus.decide(bearings, [3.0, np.nan]), [-1, -1])  # no tracks
@@ -200,7 +187,7 @@ def test_ranges_mark_detections_gives_each_scan_its_detection_probability() -> N
 
 def test_fuse_dispatches_mutual_and_indirect_and_validates() -> None:
     # single-component births (Eq. 13), so that one scan gives registrable tracks
-    st = _settings()
+    st = gs_settings()
     st = replace(st, formation=replace(st.formation, birth_yaw_components=1))
     a, b = GaussianSumFuser(0, [1, 2], st), GaussianSumFuser(1, [0, 2], st)
     a.direct_scan([0.0, 0.0], [3.0, 2.0], np.array([[0.0, 0.0], [1.0, 0.0]]))
@@ -218,7 +205,7 @@ def test_sharing_policies_send_only_confirmed_filters_and_can_skip_indirect_fusi
     keeps its broadcast prior (what it learns goes out once it is confirmed); the sent one's
     prior is reset. ``indirect_fusion=False``: a belief of a third robot is skipped, a mutual
     one still fused."""
-    st = _settings(share_confirmed_only=True, indirect_fusion=False)
+    st = gs_settings(share_confirmed_only=True, indirect_fusion=False)
     fus = GaussianSumFuser(0, [1, 2], st)
     sure, vague = np.diag([0.05, 0.05, 0.01, 0.1]) ** 2, np.diag([1.0, 1.0, 0.01, 1.0]) ** 2
     one, two = np.array([3.0, 1.0, 0.0, 0.2]), np.array([-2.0, 2.0, 0.0, 1.0])
@@ -234,7 +221,7 @@ def test_sharing_policies_send_only_confirmed_filters_and_can_skip_indirect_fusi
     np.testing.assert_allclose(sent[0].prior_means, [one - 0.1])
     np.testing.assert_allclose(fus.tracks.prior_means, [one, old_prior])
     # every filter is sent by default (seed 002)
-    fus_all = GaussianSumFuser(0, [1, 2], _settings())
+    fus_all = GaussianSumFuser(0, [1, 2], gs_settings())
     fus_all.tracks = fus.tracks
     assert [m.subject for m in fus_all.broadcast()] == [1, 2]
     # teammate 1's message about 2 is indirect: skipped; its message about 0 is mutual
@@ -243,7 +230,7 @@ def test_sharing_policies_send_only_confirmed_filters_and_can_skip_indirect_fusi
     assert fus_all.fuse(about_two) == "indirect"
     assert fus.fuse(_message_about_receiver(1, 0, one, sure)) == "mutual"
     with pytest.raises(ConfigError, match="indirect_fusion must be a bool"):
-        _settings(indirect_fusion=1)
+        gs_settings(indirect_fusion=1)
 
 
 def _message_about_receiver(sender: int, receiver: int, mean: np.ndarray, cov: np.ndarray):  # type: ignore[no-untyped-def]
@@ -266,7 +253,7 @@ def test_a_message_does_not_reweigh_the_receivers_own_hypotheses() -> None:
     """Two heading hypotheses of teammate 1, 0.4 / 0.6; teammate 1's message pairs with the
     first only. The weights of the two stay the receiver's (Eq. 10's product would cut the
     unpaired one by (1 − P_G) N_γ / N(Δ) and prune it)."""
-    st = _settings()
+    st = gs_settings()
     fus = GaussianSumFuser(0, [1], st)
     cov = np.diag([0.05, 0.05, 0.02, 0.1]) ** 2
     a, b = np.array([3.0, 1.0, 0.2, 0.0]), np.array([3.0, 1.0, 0.2, 1.5])
@@ -285,7 +272,7 @@ def test_a_message_does_not_reweigh_the_receivers_own_hypotheses() -> None:
 def test_a_received_track_is_born_only_if_the_receivers_scan_admits_it() -> None:
     """A confident received track 2 m off the range the receiver has just measured is not born;
     without a range of that teammate in the scan it is."""
-    st = _settings()
+    st = gs_settings()
     far = np.array([5.0, 0.0, 0.0, 0.3])
     for ranges, born in (([3.0], False), ([np.nan], True)):
         fus = GaussianSumFuser(0, [1], st)
@@ -298,7 +285,7 @@ def test_a_received_track_is_born_only_if_the_receivers_scan_admits_it() -> None
 
 
 def test_predict_fusers_equals_separate_predictions() -> None:
-    st = _settings()
+    st = gs_settings()
     fa, fb = GaussianSumFuser(0, [1], st), GaussianSumFuser(1, [0], st)
     ga, gb = GaussianSumFuser(0, [1], st), GaussianSumFuser(1, [0], st)
     for f in (fa, ga):
@@ -315,17 +302,17 @@ def test_predict_fusers_equals_separate_predictions() -> None:
 
 def test_settings_are_validated() -> None:
     with pytest.raises(ConfigError, match="sigma_range"):
-        _settings(sigma_range=0.0)
+        gs_settings(sigma_range=0.0)
     with pytest.raises(ConfigError, match="fusion"):
-        _settings(fusion="naive")
+        gs_settings(fusion="naive")
     with pytest.raises(ConfigError, match="max_components"):
-        _settings(max_components=0)
+        gs_settings(max_components=0)
     with pytest.raises(ConfigError, match="ranges_mark_detections"):
-        _settings(ranges_mark_detections="yes")
+        gs_settings(ranges_mark_detections="yes")
     with pytest.raises(ConfigError, match="known_outlier_probability"):
-        _settings(known_outlier_probability=1.0)
+        gs_settings(known_outlier_probability=1.0)
     with pytest.raises(ConfigError, match="teammates"):
-        GaussianSumFuser(0, [0, 1], _settings())
+        GaussianSumFuser(0, [0, 1], gs_settings())
 
 
 def _tracked_at_end(result, window: float = 4.0) -> np.ndarray:  # type: ignore[no-untyped-def]
@@ -401,7 +388,7 @@ def _two_tracks(depth: int) -> Tracks:
 
 @pytest.mark.parametrize("fov", [None, 0.5])
 def test_a_missed_detection_weighs_against_tracks_in_the_field_of_view(fov: float | None) -> None:
-    st = _settings(use_elevation=False, field_of_view=fov)
+    st = gs_settings(use_elevation=False, field_of_view=fov)
     st = replace(st, formation=replace(st.formation, p_detect=0.8))
     fuser = GaussianSumFuser(0, [1], st)
     fuser.tracks = _two_tracks(st.nscan_depth)
@@ -418,9 +405,9 @@ def test_a_missed_detection_weighs_against_tracks_in_the_field_of_view(fov: floa
 
 def test_field_of_view_is_checked() -> None:
     with pytest.raises(ConfigError, match="field_of_view"):
-        _settings(use_elevation=False, field_of_view=0.0)
+        gs_settings(use_elevation=False, field_of_view=0.0)
     with pytest.raises(ConfigError, match="ranges_mark_detections"):
-        _settings(use_elevation=False, field_of_view=0.5, ranges_mark_detections=True)
+        gs_settings(use_elevation=False, field_of_view=0.5, ranges_mark_detections=True)
 
 
 @pytest.mark.parametrize("ranged", [True, False])
@@ -434,7 +421,7 @@ def test_a_range_sensor_with_the_field_of_view_weighs_tracks_by_where_they_put_t
     from scipy.stats import norm
 
     fov, p_d = 0.5, 0.8
-    st = _settings(use_elevation=False, field_of_view=fov, range_in_view=True)
+    st = gs_settings(use_elevation=False, field_of_view=fov, range_in_view=True)
     st = replace(st, formation=replace(st.formation, p_detect=p_d))
     sd = np.sqrt(0.01 / 4 + 0.05**2)
     p_in = np.array([norm.cdf((fov - a) / sd) - norm.cdf((-fov - a) / sd) for a in (0, np.pi / 2)])
@@ -455,6 +442,6 @@ def test_a_range_sensor_with_the_field_of_view_weighs_tracks_by_where_they_put_t
 
 def test_range_in_view_needs_a_field_of_view() -> None:
     with pytest.raises(ConfigError, match="range_in_view needs a field_of_view"):
-        _settings(use_elevation=False, range_in_view=True)
+        gs_settings(use_elevation=False, range_in_view=True)
     with pytest.raises(ConfigError, match="range_in_view must be a bool"):
-        _settings(use_elevation=False, field_of_view=0.5, range_in_view=1)
+        gs_settings(use_elevation=False, field_of_view=0.5, range_in_view=1)

@@ -15,6 +15,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from gaussian_sum_samples import gs_settings
 
 from relloc.association.assignment import assign
 from relloc.association.hypotheses import FormationSettings, formation_weights
@@ -32,24 +33,10 @@ from relloc.estimators.gaussian_sum import (
     Tracks,
 )
 from relloc.fusion.messages import EquivalentMeasurement
-from relloc.models.motion import VelocityNoise
 
-NOISE = VelocityNoise(observer=(0.2, 0.2, 0.2, 0.1), observed=(0.2, 0.2, 0.2, 0.1))
 X1 = np.array([3.0, 1.0, 0.5, 0.3])
 X2 = np.array([-2.0, 1.0, 0.2, 0.0])
 COV = np.diag([0.01, 0.01, 0.01, 0.01])
-
-
-def _settings(**kw: object) -> GaussianSumSettings:
-    base: dict[str, object] = dict(
-        velocity_noise=NOISE,
-        sigma_height=0.01,
-        sigma_range=0.02,
-        sigma_azimuth=0.05,
-        sigma_elevation=0.05,
-    )
-    base.update(kw)
-    return GaussianSumSettings(**base)  # type: ignore[arg-type]
 
 
 def _with_pd(st: GaussianSumSettings, p_detect: float) -> GaussianSumSettings:
@@ -102,7 +89,7 @@ def test_a_coasting_track_keeps_its_weight_until_it_is_too_uncertain() -> None:
     weight stays 1 (a missed scan's factor 1 − P_D P_G cancels in the normalisation), and the
     track is deleted once √tr P_xyz exceeds ``max_position_sigma`` (5 m: measured after 7345
     steps of 0.1 s at this process noise, here after 74 steps of 1 s)."""
-    st = _settings()
+    st = gs_settings()
     fus = GaussianSumFuser(0, [1], st)
     fus.tracks = _track(X1, st.nscan_depth)
     sigma, steps = [], 0
@@ -122,7 +109,7 @@ def test_a_coasting_track_keeps_its_weight_until_it_is_too_uncertain() -> None:
 def test_a_scan_of_only_clutter_leaves_the_tracks_where_they_are() -> None:
     """Every bearing far outside every gate: no track is updated, the births (height mismatch)
     are pruned, each filter still sums to 1 and the decision gives no teammate a bearing."""
-    st = _settings(expected_clutter=20.0)
+    st = gs_settings(expected_clutter=20.0)
     fus = _two_teammates(st)
     clutter = np.array([[2.5, 0.3], [-2.0, -0.5], [1.5, 1.0]])
     fus.direct_scan([0.5, 0.2], _ranges(X1, X2), clutter)
@@ -140,7 +127,7 @@ def test_a_burst_of_a_thousand_detections_stays_bounded() -> None:
     grow as tracks × detections (linear in the detections; the joint decision is a 2 × 1002
     assignment) and the reduction caps each filter at ``max_components``. Measured: about
     40 ms and 20 MB for the scan (130 ms for 3000)."""
-    st = _settings(expected_clutter=20.0)
+    st = gs_settings(expected_clutter=20.0)
     fus = GaussianSumFuser(0, [1, 2], st)
     parts = []
     for j, p in enumerate((X1, X2)):
@@ -170,7 +157,7 @@ def test_two_detections_at_the_same_place_act_as_one() -> None:
     """Duplicated bearing: its two detected branches are identical and merge, so the posterior
     is the one of the single detection (the duplicate only doubles a weight that the
     normalisation removes)."""
-    st = _settings(expected_clutter=2.0)
+    st = gs_settings(expected_clutter=2.0)
     b = _bearing(X1) + 0.01
     out = []
     for Z in (np.array([b]), np.array([b, b])):
@@ -205,7 +192,9 @@ def test_a_track_on_the_observers_vertical_axis_stays_finite(
     raised ModelError, a bearing's NaN likelihood made κ NaN (ConfigError) and the field of
     view's NaN P_D a NaN assignment cost. Now the track is linearised at ρ ≥ RHO_FLOOR."""
     fov = sensor == "field-of-view"
-    st = _settings(expected_clutter=2.0, field_of_view=1.0 if fov else None, use_elevation=not fov)
+    st = gs_settings(
+        expected_clutter=2.0, field_of_view=1.0 if fov else None, use_elevation=not fov
+    )
     fus = GaussianSumFuser(0, [1], st)
     fus.tracks = _track(np.array(mean), st.nscan_depth)
     nb = len(st.bearing_rows)
@@ -224,7 +213,7 @@ def test_a_track_on_the_observers_vertical_axis_stays_finite(
 def test_births_at_a_vanishing_range_are_finite_at_the_next_scan() -> None:
     """A range of 1e-300 m is accepted (> 0) and gives births at the observer; their next
     range update divided 0 by 0 (ModelError)."""
-    st = _settings(expected_clutter=2.0)
+    st = gs_settings(expected_clutter=2.0)
     fus = GaussianSumFuser(0, [1], st)
     for _ in range(2):
         fus.direct_scan([0.0], [1e-300], np.array([[0.3, 0.0]]))
@@ -240,7 +229,7 @@ def test_births_at_a_vanishing_range_are_finite_at_the_next_scan() -> None:
 def test_extreme_detection_probabilities(p_detect: float) -> None:
     """P_D = 1 with a missed detection: the false-alarm branch keeps 1 − P_G = 0.05 of the
     weight, never 0. A tiny P_D: detections and births carry tiny but positive weights."""
-    st = _with_pd(_settings(expected_clutter=1.0), p_detect)
+    st = _with_pd(gs_settings(expected_clutter=1.0), p_detect)
     fus = _two_teammates(st)
     fus.direct_scan([0.5, 0.2], _ranges(X1, X2), np.zeros((0, 2)))  # both missed
     _assert_sane(fus)
@@ -257,7 +246,7 @@ def test_extreme_detection_probabilities(p_detect: float) -> None:
 def test_a_detection_probability_whose_births_underflow_leaves_the_filter_empty() -> None:
     """P_D = 5e-324 (the smallest subnormal): every birth weight underflows to 0; the filter
     stays empty (no NaN) instead of holding zero-weight tracks."""
-    st = _with_pd(_settings(expected_clutter=1.0), 5e-324)
+    st = _with_pd(gs_settings(expected_clutter=1.0), 5e-324)
     fus = GaussianSumFuser(0, [1], st)
     fus.direct_scan([0.5], _ranges(X1), np.array([_bearing(X1)]))
     assert fus.tracks.size == 0 and fus.summary(1) is None
@@ -267,7 +256,7 @@ def test_zero_clutter_uses_the_documented_floor() -> None:
     """expected_clutter = 0: κ uses MIN_EXPECTED_CLUTTER (1e-3 per scan), so an unexplained
     bearing has a finite density and log κ is finite; the bearing is the teammate's. A zero κ
     passed to the formation directly is refused."""
-    st = _settings(expected_clutter=0.0)
+    st = gs_settings(expected_clutter=0.0)
     fus = GaussianSumFuser(0, [1], st)
     fus.tracks = _track(X1, st.nscan_depth)
     fus.direct_scan([0.5], _ranges(X1), np.array([[-2.5, 0.3], _bearing(X1)]))
@@ -289,7 +278,7 @@ def test_weights_that_underflow_empty_the_filter_without_nan(
     that floor; with ε = 0 the Gaussian density exp(−d²/2) underflows to exactly 0 for every
     track, and the filter is emptied (documented in ``reduce``: it waits for births) rather
     than normalised by a zero sum."""
-    st = _settings(known_outlier_probability=outlier)
+    st = gs_settings(known_outlier_probability=outlier)
     fus = GaussianSumFuser(0, [1], st)
     fus.tracks = _track(X1, st.nscan_depth)
     fus.direct_scan([np.nan], [float(np.linalg.norm(X1[:3])) + off], np.zeros((0, 2)))
@@ -387,7 +376,7 @@ def test_a_degenerate_received_covariance_is_refused(cov: np.ndarray) -> None:
     """A received track with such a covariance was born with weight e^{−γ/2}/√det(2πP) = ∞;
     normalised to NaN it emptied every track of the receiver's filter. Now the message is
     refused (DataError) and the receiver keeps its tracks."""
-    st = _settings()
+    st = gs_settings()
     fus = GaussianSumFuser(0, [1, 2], st)
     fus.tracks = _track(-X1, st.nscan_depth)
     with pytest.raises(DataError, match="positive definite"):
