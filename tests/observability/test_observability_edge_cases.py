@@ -249,6 +249,16 @@ def test_cli_at_state_non_finite_and_singular(capsys: pytest.CaptureFixture[str]
     assert "singular configuration" in capsys.readouterr().err
 
 
+def test_cli_pseudo_linear_at_coincident_robots(capsys: pytest.CaptureFixture[str]) -> None:
+    """Before: rank 3 at x = y = z = 0, of the bearings atan2(0, 0) = 0 picked there. Straight
+    above, where only the azimuth is arbitrary, the rows span the same space for any azimuth."""
+    args = ["observability", "relative-pseudo-linear", "--at-inputs", "v_xc=1"]
+    assert main([*args, "--at-state", "x=0,y=0,z=0"]) == 2
+    assert "azimuth and elevation" in capsys.readouterr().err
+    assert main([*args, "--at-state", "x=0,y=0,z=1"]) == 0
+    assert "rank at the given state and constant inputs: 4" in capsys.readouterr().out
+
+
 def test_cli_at_state_takes_landmark_parameters(capsys: pytest.CaptureFixture[str]) -> None:
     """Before: any --at-state of a landmark model failed ('free parameters need an rng')."""
     args = ["observability", "unicycle-landmarks", "--order", "1", "--samples", "1"]

@@ -286,8 +286,20 @@ def relative_nonlinear(measured: Sequence[str] = RELATIVE_MEASUREMENTS) -> Symbo
 
 
 def true_bearings(state: Array) -> Array:
-    """Azimuth and elevation ``(θ, α)`` of a relative state (the pseudo-linear coefficients)."""
+    """Azimuth and elevation ``(θ, α)`` of a relative state (the pseudo-linear coefficients).
+
+    A ModelError at ``x = y = z = 0`` (the robots at one point), where neither bearing is
+    defined: ``atan2(0, 0) = 0`` would pick the direction ``+x`` and give a rank of that
+    arbitrary choice. Straight above or below (``ρ = 0, z ≠ 0``) the elevation is ``±π/2`` and
+    the azimuth ``θ`` any value; the rows of ``H_pmo`` then span the same space for every ``θ``,
+    so ``θ = 0`` is kept there.
+    """
     x, y, z = float(state[0]), float(state[1]), float(state[2])
+    if x == 0.0 and y == 0.0 and z == 0.0:
+        raise ModelError(
+            "relative position (x, y, z) = 0 (the robots at one point): azimuth and elevation, "
+            "the pseudo-linear coefficients, are undefined there"
+        )
     return np.array([np.arctan2(y, x), np.arctan2(z, np.hypot(x, y))])
 
 
