@@ -12,7 +12,14 @@ batch dimensions (``mean (..., n)``, ``cov (..., n, n)``, ``residual (..., m)``,
 The trailing dimensions must agree and the leading ones broadcast, and ``S`` and every NIS must
 be finite (a NaN or infinity in ``ν``, ``P``, ``H`` or ``R`` reaches them); otherwise
 :class:`ModelError` naming ``where``. The checks cost O(m²) per update: the shapes, ``S`` and
-the NIS, not every entry of ``P``.
+the NIS, not every entry of ``P``, and not the prior mean ``x``, which enters neither ``S`` nor
+the NIS (a NaN there comes back in ``x⁺``). Its check, one reduction over ``x``, costs about
+1 µs, 2–2.5 % of an update of 1 to 30 states, so a mean is checked where it enters an
+estimator instead: :class:`~relloc.core.gaussian.Gaussian`,
+:class:`~relloc.core.gaussian.GaussianMixture`, the relative filters' array functions
+(:func:`relloc.estimators.relative.check_finite`) and the measurement tables
+(:class:`~relloc.core.recording.Measurements`) refuse NaN and infinity, and every filter's
+state stays one of these or the output of an update from one.
 
 Gate: a measurement block of dimension ``m`` is consistent with the prediction when
 
@@ -147,7 +154,7 @@ def kalman_update(
 
     Returns ``(mean⁺, cov⁺, innovation)``. Raises :class:`ModelError` naming ``where`` if the
     shapes do not fit, or some ``S`` is not finite and positive definite or some NIS not finite
-    (module docstring).
+    (module docstring). ``mean`` must be finite: it is not checked here (module docstring).
     """
     mean, cov, residual, H, R = _checked(mean, cov, residual, H, R, where)
     S, nis, PHt, L_inv = _factor(cov, residual, H, R, where)

@@ -145,7 +145,9 @@ class ObserverClock(Silent):
         return out
 
 
-def _check_finite(name: str, value: ArrayLike, last: int, where: str) -> Array:
+def check_finite(name: str, value: ArrayLike, last: int, where: str) -> Array:
+    """``value`` as a float array whose last dimension is ``last``; :class:`DataError` naming
+    ``where`` and ``name`` if it is not, or if an entry is NaN or infinite."""
     arr = np.asarray(value, dtype=float)
     if arr.ndim == 0 or arr.shape[-1] != last:
         raise DataError(f"{where or 'relative filter'}: {name} must have last dimension {last}")
@@ -163,7 +165,9 @@ def _check_finite(name: str, value: ArrayLike, last: int, where: str) -> Array:
 # (tests/estimators/test_kernels.py).
 
 
-def _check_cov(cov: ArrayLike, where: str) -> Array:
+def check_cov(cov: ArrayLike, where: str) -> Array:
+    """``cov`` as a float array ``(..., 4, 4)`` of finite entries, else :class:`DataError`
+    naming ``where``."""
     P = np.asarray(cov, dtype=float)
     if P.ndim < 2 or P.shape[-2:] != (4, 4):
         raise DataError(
@@ -185,10 +189,10 @@ def predict_arrays(
     where: str = "",
 ) -> tuple[Array, Array]:
     """Shared predict ``x⁻ = f_d(x, u)``, ``P⁻ = F P Fᵀ + G Σ_u Gᵀ`` (batched, broadcasting)."""
-    mean = _check_finite("mean", mean, 4, where)
-    cov = _check_cov(cov, where)
-    u_l = _check_finite("observer input u_l", u_l, 4, where)
-    u_c = _check_finite("observed input u_c", u_c, 4, where)
+    mean = check_finite("mean", mean, 4, where)
+    cov = check_cov(cov, where)
+    u_l = check_finite("observer input u_l", u_l, 4, where)
+    u_c = check_finite("observed input u_c", u_c, 4, where)
     dt = float(dt)
     if not (np.isfinite(dt) and dt >= 0.0):
         raise ConfigError(f"{where or 'relative filter'}: dt must be finite and ≥ 0, got {dt}")
@@ -208,7 +212,7 @@ def predict_arrays(
 
 
 def _check_measurement(z: ArrayLike, where: str) -> Array:
-    z = _check_finite("measurement z", z, 3, where)
+    z = check_finite("measurement z", z, 3, where)
     if np.any(z[..., 0] <= 0.0):
         raise DataError(f"{where or 'relative filter'}: measured range must be > 0: {z}")
     return z
@@ -226,8 +230,8 @@ def _kernel_update(
     bias: Callable[[Vec, Vec, Vec, Ops], Vec | None] | None = None,
 ) -> tuple[Array, Array, Innovation]:
     """Validate, run ``terms`` (``A``, ``ν``, ``R``) and the Joseph update kernel, re-assemble."""
-    mean = _check_finite("mean", mean, 4, where)
-    cov = _check_cov(cov, where)
+    mean = check_finite("mean", mean, 4, where)
+    cov = check_cov(cov, where)
     z = _check_measurement(z, where)
     single = mean.ndim == 1 and cov.ndim == 2 and z.ndim == 1
     ops = SCALAR_OPS if single else ARRAY_OPS

@@ -36,13 +36,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from relloc.association.mixture_reduction import merge_moments
-from relloc.core.checks import count, positive, probability
+from relloc.core.checks import count, number, positive, probability
 from relloc.core.contract import Belief, HeldOdometry, Silent, UpdateRecord
 from relloc.core.kalman import chi2_threshold, gated_update, kalman_update
 from relloc.core.recording import NO_TARGET, Measurements, kind_code
 from relloc.errors import ConfigError, DataError
 from relloc.estimators.relative import FRAME as RELATIVE_FRAME
-from relloc.estimators.relative import predict_arrays
+from relloc.estimators.relative import check_cov, check_finite, predict_arrays
 from relloc.models.motion import VelocityNoise
 
 Array = NDArray[np.float64]
@@ -403,7 +403,13 @@ class RangeTeamFilter(Silent):
 
 class RelativeDeadReckoning(Silent):
     """The baseline a user tries first for a pair: both odometries integrated from a given start
-    ``(mean, cov)`` of the relative state, with the shared predict and no measurement."""
+    ``(t, mean, cov)`` of the relative state, with the shared predict and no measurement.
+
+    The start is checked where it comes in: a finite time (else :class:`ConfigError`), a mean
+    ``(4,)`` and a covariance ``(4, 4)`` of finite entries (else :class:`DataError` naming the
+    pair). A NaN start time would make every later ``t > t_start`` false and freeze the belief;
+    a NaN mean would be reported as a belief until the first prediction.
+    """
 
     name = "odometry_alone"
 
@@ -418,9 +424,16 @@ class RelativeDeadReckoning(Silent):
         self.owner_index, self.subject_index = owner, subject
         self.owner, self.subject = robots[owner], robots[subject]
         self.noise = noise
-        self.t, mean, cov = float(start[0]), np.asarray(start[1]), np.asarray(start[2])
+        self._where = f"{self.owner}->{self.subject}"
+        self.t = number(start[0], f"RelativeDeadReckoning {self._where}: start time")
         self.started = self.t
-        self.mean, self.cov = mean.astype(float), cov.astype(float)
+        mean = check_finite("start mean", start[1], 4, self._where)
+        if mean.shape != (4,):
+            raise DataError(f"{self._where}: start mean must have shape (4,), got {mean.shape}")
+        cov = check_cov(start[2], self._where)
+        if cov.shape != (4, 4):
+            raise DataError(f"{self._where}: start covariance must be (4, 4), got {cov.shape}")
+        self.mean, self.cov = mean.copy(), cov.copy()
 
     def advance(self, t: float, odometry: HeldOdometry) -> None:
         if t > self.t:
@@ -432,6 +445,7 @@ class RelativeDeadReckoning(Silent):
                 u[self.subject_index],
                 t - self.t,
                 self.noise,
+                where=self._where,
             )
             self.t = t
 
