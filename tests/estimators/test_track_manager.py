@@ -16,7 +16,7 @@ from relloc.core.recording import (
     Recording,
     measurement_rows,
 )
-from relloc.errors import ConfigError
+from relloc.errors import ConfigError, DataError
 from relloc.estimators.initialisation import InitPolicy
 from relloc.estimators.relative import UPDATE_KINDS
 from relloc.estimators.track_manager import (
@@ -327,3 +327,17 @@ def test_a_track_whose_every_reading_is_gated_is_deleted_then_started_anew():
 def test_gate_probability_must_be_a_probability(p):
     with pytest.raises(ConfigError, match="gate_probability"):
         TrackManagerSettings(gate_probability=p)
+
+
+@pytest.mark.parametrize("bank", [None, YawBankSettings(n_components=12)])
+def test_a_prediction_error_names_the_pair(bank):
+    """Before: 'predict at t=…' (a single filter) or 'yaw bank' (a live bank), without the pair."""
+    rec = _two_robot_recording([(0.1, 0.1)], yaw=3.0)
+    (manager,) = managers_for(rec, TrackManagerSettings(yaw_bank=bank))
+    manager.advance(0.1, HeldOdometry.still(2))
+    manager.measure(rec.measurements)
+    assert (manager._tracks[1].bank is None) == (bank is None)
+    velocity = np.zeros((2, 4))
+    velocity[1, 0] = np.nan
+    with pytest.raises(DataError, match=r"l->c predict at t=0\.200"):
+        manager.advance(0.2, HeldOdometry(velocity=velocity, stamp=np.zeros(2)))

@@ -26,7 +26,9 @@ def cholesky(P: Array, *, where: str = "", symmetric: bool = False) -> Array:
     finite and positive definite (works on a stack ``(..., n, n)``).
 
     ``P`` is symmetrised first unless ``symmetric`` says it is exactly symmetric already (the
-    output of :func:`symmetrise`, whose symmetrisation would change nothing).
+    output of :func:`symmetrise`, whose symmetrisation would change nothing). Where every
+    eigenvalue is positive but the factorisation still fails, the message gives the condition
+    number: the matrix is positive definite only beyond double precision.
     """
     S = P if symmetric else symmetrise(P)
     L: Array | None
@@ -40,9 +42,15 @@ def cholesky(P: Array, *, where: str = "", symmetric: bool = False) -> Array:
     at = f" at {where}" if where else ""
     if not np.isfinite(S).all():
         raise ModelError(f"covariance is not finite{at}")
-    raise ModelError(
-        f"covariance is not positive definite{at}; eigenvalues: {np.linalg.eigvalsh(S)}"
-    )
+    eigenvalues = np.linalg.eigvalsh(S)
+    if np.all(eigenvalues > 0):  # positive, but too ill-conditioned for the factorisation
+        ratio = float(np.max(np.max(eigenvalues, axis=-1) / np.min(eigenvalues, axis=-1)))
+        raise ModelError(
+            f"covariance is not positive definite in double precision{at}: its condition "
+            f"number λmax/λmin, up to {ratio:.3g}, is beyond what a Cholesky factorisation "
+            f"resolves; eigenvalues: {eigenvalues}"
+        )
+    raise ModelError(f"covariance is not positive definite{at}; eigenvalues: {eigenvalues}")
 
 
 def solve_psd(S: Array, B: Array, *, where: str = "") -> Array:

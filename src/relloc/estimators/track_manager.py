@@ -151,7 +151,7 @@ class _Track:
                 self.mean, self.cov, u_l, u_c, dt, noise, where=where
             )
         else:
-            self.bank = predict_yaw_bank(self.bank, u_l, u_c, dt, noise)
+            self.bank = predict_yaw_bank(self.bank, u_l, u_c, dt, noise, where=where)
             self.mean, self.cov = self.bank.heaviest()
 
     def update(
@@ -165,7 +165,7 @@ class _Track:
                 return None
             self.mean, self.cov = mean, cov
             return inn
-        bank, inns = update_yaw_bank(self.bank, z, self.settings, bank_settings)
+        bank, inns = update_yaw_bank(self.bank, z, self.settings, bank_settings, where=where)
         if np.min(np.asarray(inns.nis)[self.bank.alive]) > gate:
             return None
         self.bank = bank
@@ -236,10 +236,10 @@ class TrackManager(ObserverClock):
         if dt > 0.0:
             # One track at a time: the relative filter's scalar kernels are faster than numpy
             # on the handful of robots one observer tracks.
-            where = f"predict at t={t:.3f}"
+            when = f" predict at t={t:.3f}"
             u_l = odometry.velocity[self._me]
             for j, tr in self._tracks.items():
-                tr.predict(u_l, odometry.velocity[j], dt, where)
+                tr.predict(u_l, odometry.velocity[j], dt, f"{self.owner}->{self.robots[j]}{when}")
         self.t = max(self._now("advance"), t)
 
     def measure(self, batch: Measurements) -> None:

@@ -145,12 +145,19 @@ def spread_yaw_bank(
 
 
 def predict_yaw_bank(
-    bank: GaussianMixture, u_l: ArrayLike, u_c: ArrayLike, dt: float, noise: VelocityNoise
+    bank: GaussianMixture,
+    u_l: ArrayLike,
+    u_c: ArrayLike,
+    dt: float,
+    noise: VelocityNoise,
+    *,
+    where: str = "yaw bank",
 ) -> GaussianMixture:
-    """Shared predict of every component (inputs broadcast over the component axis)."""
+    """Shared predict of every component (inputs broadcast over the component axis); an error
+    names ``where`` (a track manager passes its pair)."""
     u_l = np.asarray(u_l, dtype=float)[..., None, :]
     u_c = np.asarray(u_c, dtype=float)[..., None, :]
-    means, covs = predict_arrays(bank.means, bank.covs, u_l, u_c, dt, noise, where="yaw bank")
+    means, covs = predict_arrays(bank.means, bank.covs, u_l, u_c, dt, noise, where=where)
     return GaussianMixture(means=means, covs=covs, weights=bank.weights)
 
 
@@ -194,16 +201,20 @@ def reduce_bank(bank: GaussianMixture, settings: YawBankSettings) -> GaussianMix
 
 
 def update_yaw_bank(
-    bank: GaussianMixture, z: ArrayLike, filter_settings: FilterSettings, settings: YawBankSettings
+    bank: GaussianMixture,
+    z: ArrayLike,
+    filter_settings: FilterSettings,
+    settings: YawBankSettings,
+    *,
+    where: str = "yaw bank",
 ) -> tuple[GaussianMixture, Innovation]:
     """Update every component with ``z (..., 3)``, reweight, prune and collapse.
 
-    Returns the new bank and the innovation of every component (shapes ``(..., K, ...)``).
+    Returns the new bank and the innovation of every component (shapes ``(..., K, ...)``); an
+    error names ``where``.
     """
     z = np.asarray(z, dtype=float)[..., None, :]
-    means, covs, innovation = filter_settings.update_arrays(
-        bank.means, bank.covs, z, where="yaw bank"
-    )
+    means, covs, innovation = filter_settings.update_arrays(bank.means, bank.covs, z, where=where)
     updated = GaussianMixture(means=means, covs=covs, weights=reweight(bank.weights, innovation))
     return reduce_bank(updated, settings), innovation
 
