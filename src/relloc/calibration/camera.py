@@ -31,6 +31,11 @@ observer's and target's ground truth are valid (a landmark's position is known) 
   the filter keeps one range per pair per interval), summed up to the longest measured lag,
   gives the σ the filter should assume, ``σ·√f``.
 
+The fit refuses (DataError naming the window) a window with fewer than ``MIN_RESIDUALS``
+detections, or fewer than ``MIN_RESIDUALS`` bearing or range inliers (a camera whose every
+bearing is off by more than ``BEARING_INLIER_RAD`` has no core to fit), and a σ of 0 (residuals
+without spread: every reading would be taken as exact).
+
 **Correction** (:func:`corrected_readings`): a recording's camera rows with the fitted bearing
 bias ``b_i(η̃)`` removed from every bearing and, when asked, the fitted range bias
 ``b(η̃, ρ̃)`` (:meth:`CameraFit.range_bias`) from every range, both evaluated at the measured
@@ -71,7 +76,7 @@ Array = NDArray[np.float64]
 
 #: Gaussian-consistent MAD scale.
 MAD_SCALE = 1.4826
-#: Fewest residuals in the window for a camera fit.
+#: Fewest residuals in the window for a camera fit, and fewest bearing and range inliers.
 MIN_RESIDUALS = 20
 #: Bearing residuals beyond this (rad) are outliers for the offset and σ_η fits.
 BEARING_INLIER_RAD = 0.1
@@ -159,7 +164,8 @@ def lag_correlation(
     res: CameraResiduals, values: Array, keep: NDArray[np.bool_], lag: float
 ) -> float:
     """Correlation of ``values`` with the same pair's value ``lag`` seconds later (within
-    ``LAG_TOLERANCE_S``), over the rows ``keep``; 0 with fewer than ``MIN_LAG_PAIRS`` pairs."""
+    ``LAG_TOLERANCE_S``), over the rows ``keep``; 0 with fewer than ``MIN_LAG_PAIRS`` pairs
+    (none when ``keep`` holds no row)."""
     a, b = [], []
     key = res.pair_key()
     for k in np.unique(key[keep]):
@@ -170,9 +176,9 @@ def lag_correlation(
         ok[ok] &= np.abs(tt[j[ok]] - tt[ok] - lag) < LAG_TOLERANCE_S
         a.append(vv[ok])
         b.append(vv[j[ok]])
-    x, y = np.concatenate(a), np.concatenate(b)
-    if x.size < MIN_LAG_PAIRS:
+    if sum(v.size for v in a) < MIN_LAG_PAIRS:
         return 0.0
+    x, y = np.concatenate(a), np.concatenate(b)
     return float(np.corrcoef(x, y)[0, 1])
 
 
@@ -298,22 +304,39 @@ def _bearing_offsets(res: CameraResiduals, good: NDArray[np.bool_], n_robots: in
 def fit_camera(
     ds: MrclamDataset, window: CalibrationWindow, *, range_interval_s: float
 ) -> CameraFit:
-    """Fit the camera's bearing and range error models on ``window`` (module docstring)."""
+    """Fit the camera's bearing and range error models on ``window`` (module docstring);
+    DataError naming the window when it holds too few detections or inliers, or the residuals
+    have no spread."""
     if not (np.isfinite(range_interval_s) and range_interval_s >= 0):
         raise ConfigError(f"fit_camera: range_interval_s must be ≥ 0, got {range_interval_s}")
     res = camera_residuals(ds, window)
     if res.t.size < MIN_RESIDUALS:
         raise window.too_little(f"fewer than {MIN_RESIDUALS} detections with ground truth")
     good_b = np.abs(res.bearing_error) < BEARING_INLIER_RAD
+    good_r = np.abs(res.range_error) < RANGE_INLIER_M
+    for name, good, limit in (
+        ("bearing", good_b, f"{BEARING_INLIER_RAD:g} rad"),
+        ("range", good_r, f"{RANGE_INLIER_M:g} m"),
+    ):
+        if good.sum() < MIN_RESIDUALS:
+            raise window.too_little(
+                f"{good.sum()} of {res.t.size} {name} residuals within {limit} of the truth, "
+                f"fewer than the {MIN_RESIDUALS} inliers a {name} fit needs"
+            )
     offsets = _bearing_offsets(res, good_b, len(ds.robot_ids))
     coeffs_b, limits_b = _bearing_bias(res, good_b, offsets)
     eb = res.bearing_error - evaluate_bearing_bias(coeffs_b, limits_b, res.observer, res.bearing)
     sigma_b = mad_sigma(eb[good_b])
-    good_r = np.abs(res.range_error) < RANGE_INLIER_M
     X = range_bias_features(res.bearing, res.range)
     coeffs, *_ = np.linalg.lstsq(X[good_r], res.range_error[good_r], rcond=None)
     er = res.range_error - X @ coeffs
     sigma_r = mad_sigma(er[good_r])
+    for name, sigma in (("bearing", sigma_b), ("range", sigma_r)):
+        if not sigma > 0:
+            raise window.too_little(
+                f"{name} residuals without spread (σ {sigma:g}): a σ of 0 would take every "
+                "reading as exact"
+            )
     rho_r = {lag: lag_correlation(res, er, good_r, lag) for lag in CORRELATION_LAGS_S}
     rho_b = {lag: lag_correlation(res, eb, good_b, lag) for lag in CORRELATION_LAGS_S}
     spacing = pair_spacing_s(res)

@@ -17,11 +17,13 @@ forward speed and turn rate by central differences (:func:`ground_truth_velociti
    on the grid; without the lag a delay alone fits the transients of a step by shrinking the
    scale, which then under-states every steady turn.
 2. *Scales* ``s_v, s_ω`` per robot: ``s = m·c / c·c`` at that ``(τ, T)`` (1 for a robot with
-   no samples in the window). A channel whose modelled command has an RMS
-   ``√(c·c / N)`` over the ``N`` samples below ``MIN_COMMAND_RMS`` — the recorded commands'
-   resolution — carries no motion to fit a scale on: the fit refuses it with a
-   :class:`DataError` naming the robot, since ``s`` would be noise over (almost) nothing, and a
-   scale of 0 would erase every later command of the robot.
+   no samples in the window, which the fit lists in ``unfitted_robots``). A channel whose
+   modelled command has an RMS ``√(c·c / N)`` over the ``N`` samples below
+   ``MIN_COMMAND_RMS`` — the recorded commands' resolution — carries no motion to fit a scale
+   on: the fit refuses it with a :class:`DataError` naming the robot, since ``s`` would be
+   noise over (almost) nothing, and a scale of 0 would erase every later command of the robot.
+   A scale ≤ 0 (a robot moving against its commands, or not with them at all) is refused the
+   same way: it would erase or reverse every later command.
 3. *Variance rates*: the calibrated commands are integrated over consecutive windows of
    ``integration_s = W`` seconds and compared with the ground truth's path over the window:
    ``D_v = s_path − Σ s_v c_v dt``, ``D_ω = Δθ − Σ s_ω c_ω dt`` (``c`` the modelled command
@@ -37,7 +39,9 @@ forward speed and turn rate by central differences (:func:`ground_truth_velociti
    the window), fitted by non-negative least squares on ``D²/W`` (rates cannot be negative).
    The constant terms are floored at ``RATE_FLOOR`` so that a still robot keeps some noise.
    ``W`` sets the time scale the rates are right at: the real errors are correlated over
-   seconds, so the caller picks the horizon its filter must bridge.
+   seconds, so the caller picks the horizon its filter must bridge. Fewer whole windows (valid
+   ground truth, no gap in the grid) than coefficients of ``q_ω`` leave the rates unfitted: a
+   :class:`DataError` naming the window, not the floor passed on as a fit.
 
 **Velocities from the ground truth** (:func:`ground_truth_odometry`,
 :func:`truth_velocity_dataset`): the central differences of :func:`ground_truth_velocities`
@@ -49,7 +53,9 @@ by least squares on a window, on the commands at a set of lags (a finite impulse
 acausal lags included) plus a constant,
 ``ω(t) ≈ Σ_k a_k c_ω(t − ℓ_k) + Σ_k b_k c_v(t − ℓ'_k) + c₀``: every latency, lag, scale and
 speed-to-turn coupling any linear time-invariant calibration of the commands could model, so the
-residual it leaves is what no such calibration can explain.
+residual it leaves is what no such calibration can explain. A robot whose turn-rate commands
+have an RMS below ``MIN_COMMAND_RMS`` in the window gives the filter nothing to respond to (its
+gain ``Σ a_k`` would be 0 and its mean delay undefined): DataError naming the robot.
 
 :func:`calibrated_commands` applies a fit to a recording's odometry: the modelled response
 ``c_τ,T`` (re-stamped by when it acts, ``t + τ``; lagged, on a ``GRID_DT_S`` grid, when
@@ -84,7 +90,7 @@ from numpy.typing import NDArray
 
 from relloc.calibration.window import CalibrationWindow
 from relloc.core.angles import wrap_angle
-from relloc.core.checks import positive
+from relloc.core.checks import number, positive
 from relloc.core.recording import Odometry
 from relloc.datasets.mrclam import GroundTruth, MrclamDataset, RobotData
 from relloc.datasets.mrclam import Odometry as Commands
@@ -130,7 +136,10 @@ class OdometryModelFit:
     """Latency (s), first-order time constant (s), per-robot scales (in ``ds.robot_ids``
     order) and variance rates: ``q_v0``
     (m²/s), ``k_v`` (m), ``q_w0`` (rad²/s), ``k_w`` (rad), ``k_wv`` (rad²/m), fitted over
-    ``odometry_window_s``-long integration windows inside ``calibration_window``."""
+    ``odometry_window_s``-long integration windows inside ``calibration_window``.
+
+    ``unfitted_robots``: the subjects of the robots without samples in the window, whose scales
+    are the placeholder 1, not a fit (empty when every robot was fitted)."""
 
     calibration_window: CalibrationWindow
     latency_s: float
@@ -143,6 +152,7 @@ class OdometryModelFit:
     k_w: float
     k_wv: float
     odometry_window_s: float
+    unfitted_robots: tuple[int, ...] = ()
 
     def to_dict(self) -> dict[str, object]:
         """JSON-ready record (the window as ``calibration_window``)."""
@@ -216,24 +226,50 @@ def _robot_samples(
     return _RobotSamples(robot, t[ok], v[ok], w[ok])
 
 
+def _require_finite(robot: RobotData, window: CalibrationWindow, *arrays: Array) -> None:
+    """DataError naming the robot and the window unless every value of ``arrays`` (what a fit
+    computed from the robot's ground truth and commands there) is finite: a NaN or infinite
+    input is refused, never passed on as a NaN fit."""
+    if not all(np.isfinite(a).all() for a in arrays):
+        raise window.too_little(
+            f"robot {robot.subject}: its ground truth or commands there are not all finite"
+        )
+
+
+def _command_energy(
+    robot: RobotData, command: Array, what: str, unit: str, window: CalibrationWindow
+) -> float:
+    """``c·c`` of one channel's ``command`` on the window's (non-empty) grid; DataError naming
+    the robot and ``what`` it was to be fitted for when the RMS ``√(c·c / N)`` is below
+    ``MIN_COMMAND_RMS`` (no commanded motion to fit on)."""
+    energy = float(command @ command)
+    rms = math.sqrt(energy / command.size)
+    if rms < MIN_COMMAND_RMS:
+        raise window.too_little(
+            f"no commanded motion of robot {robot.subject} in the window to fit its {what} on "
+            f"(RMS command {rms:.2g} {unit}, below {MIN_COMMAND_RMS:g})"
+        )
+    return energy
+
+
 def _scales(
     s: _RobotSamples, commands: tuple[Array, Array], window: CalibrationWindow
 ) -> tuple[float, float]:
     """Least-squares ``s`` of ``measured ≈ s · command`` for the speed and the turn rate of
-    ``s`` (module docstring, step 2); DataError when a channel's command RMS is below
-    ``MIN_COMMAND_RMS``."""
+    ``s`` (module docstring, step 2); DataError naming the robot when a channel's command RMS
+    is below ``MIN_COMMAND_RMS`` or its scale is not > 0."""
     scales = []
     for name, unit, measured, command in zip(
         ("speed", "turn-rate"), ("m/s", "rad/s"), (s.v, s.w), commands, strict=True
     ):
-        energy = float(command @ command)
-        rms = math.sqrt(energy / command.size)
-        if rms < MIN_COMMAND_RMS:
+        energy = _command_energy(s.robot, command, f"{name} scale", unit, window)
+        scale = float(measured @ command) / energy
+        if not scale > 0:
             raise window.too_little(
-                f"no commanded motion of robot {s.robot.subject} in the window to fit its "
-                f"{name} scale on (RMS command {rms:.2g} {unit}, below {MIN_COMMAND_RMS:g})"
+                f"robot {s.robot.subject} does not move with its commands: its {name} scale "
+                f"fits as {scale:.3g} (a scale must be > 0)"
             )
-        scales.append(float(measured @ command) / energy)
+        scales.append(scale)
     return scales[0], scales[1]
 
 
@@ -348,7 +384,11 @@ def fit_odometry_model(
 ) -> OdometryModelFit:
     """Latency, per-robot scales and variance rates of every robot's odometry on ``window``
     (module docstring); the rates are fitted over ``integration_s``-long windows. A robot
-    without commanded motion in the window is refused (DataError naming it)."""
+    without commanded motion in the window, or with a scale ≤ 0, is refused (DataError naming
+    it), as is one whose ground truth or commands there are not finite; a robot without
+    samples in the window keeps scales of 1 and is listed in
+    ``unfitted_robots``; too few whole integration windows for the rates are refused
+    (DataError naming the window)."""
     from scipy.optimize import nnls
 
     if not (np.isfinite(integration_s) and integration_s > 0):
@@ -357,19 +397,27 @@ def fit_odometry_model(
     if not any(s.t.size for s in samples):
         raise window.too_little("no odometry overlapping ground truth to fit the odometry on")
     tau, lag = _latency_and_lag(samples)
-    scale_v, scale_w, rows = [], [], []
+    scale_v, scale_w, rows, unfitted = [], [], [], []
     for s in samples:
         if s.t.size == 0:
             scale_v.append(1.0)
             scale_w.append(1.0)
+            unfitted.append(int(s.robot.subject))
             continue
         commands = command_response(s.robot.odometry.at, s.t, tau, lag, DIFFERENCE_STEP_S)
+        _require_finite(s.robot, window, s.v, s.w, *commands)
         sv, sw = _scales(s, commands, window)
         scale_v.append(sv)
         scale_w.append(sw)
         rows.append(_rate_rows(s, tau, lag, sv, sw, integration_s))
+    rows_w = np.vstack([r.rows_w for r in rows])
+    if rows_w.shape[0] < rows_w.shape[1]:
+        raise window.too_little(
+            f"{rows_w.shape[0]} whole {integration_s:g} s integration windows with valid ground "
+            f"truth, fewer than the {rows_w.shape[1]} variance-rate coefficients to fit"
+        )
     cv, _ = nnls(np.vstack([r.rows_v for r in rows]), np.concatenate([r.rhs_v for r in rows]))
-    cw, _ = nnls(np.vstack([r.rows_w for r in rows]), np.concatenate([r.rhs_w for r in rows]))
+    cw, _ = nnls(rows_w, np.concatenate([r.rhs_w for r in rows]))
     return OdometryModelFit(
         calibration_window=window,
         latency_s=tau,
@@ -382,6 +430,7 @@ def fit_odometry_model(
         k_w=float(cw[1]),
         k_wv=float(cw[2]),
         odometry_window_s=float(integration_s),
+        unfitted_robots=tuple(unfitted),
     )
 
 
@@ -502,20 +551,28 @@ def fit_command_fir(
     """The least-squares :class:`CommandFir` of ``robot``'s true turn rate (central
     differences, :func:`ground_truth_velocities`) on its commands inside ``window`` (the
     ``GRID_DT_S`` grid of :func:`fit_odometry_model`, ground-truth gaps left out): minimises
-    ``Σ_t (ω(t) − x(t)·β)²`` over ``β = (a, b, c₀)`` with ``x(t)`` the lagged commands and 1.
+    ``Σ_t (ω(t) − x(t)·β)²`` over ``β = (a, b, c₀)`` with ``x(t)`` the lagged commands and 1
+    (ConfigError naming a lag that is not a finite number).
     Collinear lags (commands held longer than a grid step) get the minimum-norm solution, which
-    leaves the fitted values — and so the residual — unchanged."""
+    leaves the fitted values — and so the residual — unchanged. DataError naming the window
+    when it holds fewer than ten samples per coefficient, and naming the robot when its
+    turn-rate commands there have an RMS below ``MIN_COMMAND_RMS`` (module docstring) or its
+    ground truth or commands there are not finite."""
     if not lags_w_s:
         raise ConfigError("fit_command_fir: needs at least one turn-rate lag")
+    for name, lags in (("lags_w_s", lags_w_s), ("lags_v_s", lags_v_s)):
+        for i, lag in enumerate(lags):
+            number(lag, f"fit_command_fir: {name}[{i}]")
     s = _robot_samples(robot, window, GRID_DT_S)
     n_coef = len(lags_w_s) + len(lags_v_s) + 1
     if s.t.size < 10 * n_coef:
         raise window.too_little(
             f"robot {robot.subject}: {s.t.size} ground-truth samples for {n_coef} FIR coefficients"
         )
-    beta, *_ = np.linalg.lstsq(
-        _fir_design(robot.odometry, s.t, (lags_w_s, lags_v_s)), s.w, rcond=None
-    )
+    _command_energy(robot, robot.odometry.at(s.t)[1], "turn-rate filter", "rad/s", window)
+    design = _fir_design(robot.odometry, s.t, (lags_w_s, lags_v_s))
+    _require_finite(robot, window, design, s.w)
+    beta, *_ = np.linalg.lstsq(design, s.w, rcond=None)
     nw = len(lags_w_s)
     return CommandFir(
         lags_w_s=tuple(float(x) for x in lags_w_s),
@@ -581,7 +638,9 @@ def fit_odometry_noise(
     least one step ``1/rate_hz`` (the σ divides by ``window_s``) and is no longer than
     ``window``, and ``latency_s``, ``time_constant_s`` lie in ``[0, MAX_LATENCY_S]``, ``[0,
     MAX_TIME_CONSTANT_S]`` (what :func:`fit_odometry_model` can fit; the commands lead the
-    motion, so neither is negative)."""
+    motion, so neither is negative). DataError naming the window when it holds fewer than two
+    whole integration windows of valid ground truth, and naming the robot when its ground truth
+    or commands there are not finite."""
     for name, value in (
         ("rate_hz", rate_hz),
         ("window_s", window_s),
@@ -630,6 +689,7 @@ def fit_odometry_noise(
     if ok.sum() < 2:
         raise window.too_little(f"robot {robot.subject}: ground truth has gaps in every window")
     D = err[ok].sum(axis=1)
+    _require_finite(robot, window, D)
     sigma = np.sqrt(np.mean(D * D, axis=0) / (dt * window_s))
     bias = D.mean(axis=0) / window_s
     return OdometryNoiseFit(

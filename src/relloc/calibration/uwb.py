@@ -20,7 +20,13 @@ medians and MADs, so that the outliers being measured do not distort the core:
   irregularly; linear interpolation between lags), median over links — consecutive UWB errors
   are far from white. ``lag1_correlation`` (median over links of the correlation of consecutive
   residuals) and ``sample_period`` (median over links of the mean sampling interval) are
-  reported beside it.
+  reported beside it; a link whose consecutive residuals do not both vary (the correlation is
+  undefined) gives no ``lag1_correlation``.
+
+A window whose within-link residuals have no spread (``spread`` 0: readings equal to their
+link's median, such as a link reading one constant range) is refused with a
+:class:`~relloc.errors.DataError` naming the window: a core σ of 0 would take every range as
+exact.
 """
 
 from __future__ import annotations
@@ -82,10 +88,18 @@ def _robust_sigma(x: NDArray[np.float64]) -> float:
     return float(MAD_SCALE * np.median(np.abs(x - np.median(x))))
 
 
+def _correlation(a: NDArray[np.float64], b: NDArray[np.float64]) -> float | None:
+    """Correlation of ``a`` and ``b``; None where either does not vary (it is undefined)."""
+    if float(np.std(a)) == 0.0 or float(np.std(b)) == 0.0:
+        return None
+    return float(np.corrcoef(a, b)[0, 1])
+
+
 def decorrelation_time(t: NDArray[np.float64], r: NDArray[np.float64]) -> float | None:
     """Time lag (s) where the autocorrelation of ``r`` (sampled at ``t``) first falls below
     1/e, interpolated linearly between sample lags; None if it does not within
-    ``MAX_CORRELATION_LAG`` or ``r`` is too short or constant."""
+    ``MAX_CORRELATION_LAG``, ``r`` is too short or constant, or the correlation at a lag is
+    undefined (one of the two overlapping stretches constant, and so every longer lag's)."""
     if r.size < 4 or float(np.std(r)) == 0.0:
         return None
     prev_lag, prev_rho = 0.0, 1.0
@@ -93,7 +107,9 @@ def decorrelation_time(t: NDArray[np.float64], r: NDArray[np.float64]) -> float 
         lag = float(np.mean(t[k:] - t[:-k]))
         if lag > MAX_CORRELATION_LAG:
             return None
-        rho = float(np.corrcoef(r[:-k], r[k:])[0, 1])
+        rho = _correlation(r[:-k], r[k:])
+        if rho is None:
+            return None
         if rho < math.exp(-1.0):
             frac = (prev_rho - math.exp(-1.0)) / (prev_rho - rho)
             return prev_lag + frac * (lag - prev_lag)
@@ -124,7 +140,9 @@ def within_link_residuals(rec: UwbRecording, window: CalibrationWindow) -> NDArr
 
 
 def fit_uwb_noise(rec: UwbRecording, window: CalibrationWindow) -> UwbNoiseFit:
-    """Fit :class:`UwbNoiseModel` to the rows of ``rec`` in ``window`` (module docstring)."""
+    """Fit :class:`UwbNoiseModel` to the rows of ``rec`` in ``window`` (module docstring);
+    DataError naming the window when no link has ``MIN_LINK_ROWS`` readings in it or the
+    residuals have no spread."""
     masks = link_masks(rec, window)
     medians: dict[str, float] = {}
     rho: list[float] = []
@@ -136,8 +154,9 @@ def fit_uwb_noise(rec: UwbRecording, window: CalibrationWindow) -> UwbNoiseFit:
         medians[f"{link[0]}-{link[1]}"] = med
         r = e - med
         t = rec.t[mask]
-        if r.size > 2 and float(np.std(r)) > 0.0:
-            rho.append(float(np.corrcoef(r[:-1], r[1:])[0, 1]))
+        lag1 = _correlation(r[:-1], r[1:]) if r.size > 2 else None
+        if lag1 is not None:
+            rho.append(lag1)
         tau_link = decorrelation_time(t, r)
         if tau_link is not None:
             taus.append(tau_link)
@@ -145,6 +164,11 @@ def fit_uwb_noise(rec: UwbRecording, window: CalibrationWindow) -> UwbNoiseFit:
             periods.append(float((t[-1] - t[0]) / (t.size - 1)))
     pooled = within_link_residuals(rec, window)
     spread = _robust_sigma(pooled)
+    if not spread > 0.0:
+        raise window.too_little(
+            f"the {pooled.size} within-link residuals have no spread (1.4826·MAD {spread:g} m): "
+            "a UWB noise σ of 0 would take every range as exact"
+        )
     threshold = OUTLIER_K * spread
     tail = pooled[np.abs(pooled) > threshold]
     outlier_rate = float(tail.size / pooled.size)

@@ -23,8 +23,9 @@ sentence where it is made):
 - :func:`odometry_and_truth` — where one robot has both odometry and ground truth (fits that
   use a robot's whole recording, as the seed-000 replay does).
 
-A window with ``end_s ≤ start_s`` (or a non-finite end) is refused with :class:`ConfigError`;
-a fit whose window holds too little data refuses with :class:`DataError` naming the window.
+A window with ``end_s ≤ start_s`` (or an end that is not a finite number) is refused with
+:class:`ConfigError`; a fit whose window holds too little data refuses with :class:`DataError`
+naming the window.
 """
 
 from __future__ import annotations
@@ -35,6 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from relloc.core.checks import number
 from relloc.datasets.mrclam import RobotData
 from relloc.errors import ConfigError, DataError
 
@@ -51,10 +53,8 @@ class CalibrationWindow:
         where = f"CalibrationWindow of {self.source!r}"
         if not self.source:
             raise ConfigError("CalibrationWindow.source: must name the data it was cut from")
-        if not (math.isfinite(self.start_s) and math.isfinite(self.end_s)):
-            raise ConfigError(
-                f"{where}: start_s and end_s must be finite, got [{self.start_s}, {self.end_s}]"
-            )
+        number(self.start_s, f"{where}: start_s")
+        number(self.end_s, f"{where}: end_s")
         if not self.end_s > self.start_s:
             raise ConfigError(
                 f"{where}: empty window [{self.start_s:g}, {self.end_s:g}] s (end_s ≤ start_s)"
@@ -152,10 +152,15 @@ def spanning(t: ArrayLike, source: str) -> CalibrationWindow:
 
 def odometry_and_truth(robot: RobotData, source: str) -> CalibrationWindow:
     """``[max(first odometry, first ground truth), min(last odometry, last ground truth)]`` of
-    ``robot``: everywhere it has both."""
+    ``robot``: everywhere it has both (DataError naming the robot when it lacks either or the
+    two do not overlap)."""
     odo, gt = robot.odometry.t, robot.groundtruth.t
     if len(odo) == 0 or len(gt) == 0:
         raise DataError(f"{source}: robot {robot.subject} lacks odometry or ground truth")
-    return CalibrationWindow(
-        max(float(odo[0]), float(gt[0])), min(float(odo[-1]), float(gt[-1])), source
-    )
+    start, end = max(float(odo[0]), float(gt[0])), min(float(odo[-1]), float(gt[-1]))
+    if not end > start:
+        raise DataError(
+            f"{source}: robot {robot.subject}'s odometry [{odo[0]:.2f}, {odo[-1]:.2f}] s and "
+            f"ground truth [{gt[0]:.2f}, {gt[-1]:.2f}] s do not overlap"
+        )
+    return CalibrationWindow(start, end, source)

@@ -11,6 +11,11 @@ the fits produce — σ, scales, inflation factors and the integration window > 
 (:data:`~relloc.calibration.odometry.LATENCY_GRID_S`,
 :data:`~relloc.calibration.odometry.TIME_CONSTANT_GRID_S`). :func:`check_fit_for` adds what
 needs the recording: one scale, offset and bias per robot, every window inside the recording.
+
+A robot without samples in the odometry fit's window keeps scales of 1, which are not a fit:
+``odometry.unfitted_robots`` lists such robots' subjects. The key is optional — written only
+where a robot is unfitted, and read as none when absent — so files of a team fitted robot by
+robot are the same as before the key existed, and every file written before it is still read.
 """
 
 from __future__ import annotations
@@ -38,8 +43,12 @@ MAX_FIT_BYTES = 1 << 20
 
 
 def save_fit(fit: FittedModels, path: Path) -> None:
-    """The fitted models as JSON (every value a number, a list, a string or a window)."""
-    write_json_file(path, dataclasses.asdict(fit), "--out")
+    """The fitted models as JSON (every value a number, a list, a string or a window);
+    ``odometry.unfitted_robots`` only where it lists a robot (module docstring)."""
+    raw = dataclasses.asdict(fit)
+    if not fit.odometry.unfitted_robots:
+        del raw["odometry"]["unfitted_robots"]
+    write_json_file(path, raw, "--out")
 
 
 def load_fit(path: Path) -> FittedModels:
@@ -110,6 +119,16 @@ def _check_ranges(fit: FittedModels, where: str) -> None:
     for key, value in positive.items():
         if not value > 0:
             raise DataError(f"{where}{key}: must be > 0, got {value}")
+    unfitted = o.unfitted_robots
+    if (
+        len(set(unfitted)) != len(unfitted)
+        or len(unfitted) > len(o.scale_v)
+        or min(unfitted, default=1) < 1
+    ):
+        raise DataError(
+            f"{where}odometry.unfitted_robots: expected distinct robot subjects (≥ 1), at most "
+            f"one per scale, got {list(unfitted)}"
+        )
     rates = {"q_v0": o.q_v0, "k_v": o.k_v, "q_w0": o.q_w0, "k_w": o.k_w, "k_wv": o.k_wv}
     for key, value in rates.items():
         if not value >= 0:
