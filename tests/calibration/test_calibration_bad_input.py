@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from relloc.calibration.camera import CameraFit, camera_residuals, fit_camera, lag_correlation
-from relloc.calibration.odometry import fit_command_fir, fit_odometry_model, fit_odometry_noise
+from relloc.calibration.odometry import fit_command_fir, fit_odometry_model
 from relloc.calibration.uwb import fit_uwb_noise
 from relloc.calibration.window import CalibrationWindow, odometry_and_truth, spanning
 from relloc.core.recording import FileSkips
@@ -123,32 +123,6 @@ def test_the_turn_rate_filter_refuses_a_lag_that_is_not_a_number(synthetic):
         fit_command_fir(_moving(synthetic), WINDOW, lags_w_s=(0.0, float("nan")))
 
 
-@pytest.mark.parametrize(
-    "fit",
-    [
-        lambda ds, robot: fit_odometry_model(ds, WINDOW, 1.0),
-        lambda ds, robot: fit_odometry_noise(robot, WINDOW),
-        lambda ds, robot: fit_command_fir(robot, WINDOW),
-    ],
-    ids=["model", "noise", "fir"],
-)
-@pytest.mark.parametrize("table", ["groundtruth", "odometry"])
-@pytest.mark.filterwarnings("ignore:invalid value:RuntimeWarning")  # the NaN on its way
-def test_non_finite_truth_or_commands_are_refused_naming_the_robot(synthetic, fit, table):
-    """A NaN inside the window once gave a raw ValueError, a NaN σ or a LinAlgError."""
-    robot = _moving(synthetic, 5)
-    if table == "groundtruth":
-        theta = robot.groundtruth.theta.copy()
-        theta[3000] = np.nan
-        robot = replace(robot, groundtruth=replace(robot.groundtruth, theta=theta))
-    else:
-        v = robot.odometry.v.copy()
-        v[30] = np.inf
-        robot = replace(robot, odometry=replace(robot.odometry, v=v))
-    with pytest.raises(DataError, match="of calib: robot 5: its ground truth or commands there"):
-        fit(synthetic.dataset([robot]), robot)
-
-
 # ----------------------------------------------------------------------------------------------
 # Camera
 # ----------------------------------------------------------------------------------------------
@@ -198,16 +172,18 @@ def test_lag_correlation_over_no_row_is_zero(synthetic):
 
 def _uwb(t, link, uwb_range):
     """A recording of the readings ``uwb_range`` at times ``t`` on links ``link`` (pairs)
-    against a true range of 2 m."""
-    t = np.asarray(t, dtype=float)
-    link = np.asarray(link, dtype=np.int64).reshape(-1, 2)
+    against a true range of 2 m, in time order (a recording's rule)."""
+    order = np.argsort(np.asarray(t, dtype=float), kind="stable")
+    t = np.asarray(t, dtype=float)[order]
+    link = np.asarray(link, dtype=np.int64).reshape(-1, 2)[order]
+    uwb_range = np.asarray(uwb_range, dtype=float)[order]
     skips = FileSkips(file="uwb.csv", rows_read=t.size, rows_kept=t.size)
     return UwbRecording(
         path=Path("uwb.csv"),
         t=t,
         node1=link[:, 0],
         node2=link[:, 1],
-        uwb_range=np.asarray(uwb_range, dtype=float),
+        uwb_range=uwb_range,
         mocap_range=np.full(t.size, 2.0),
         data_rows=t.size,
         skipped=skips,

@@ -226,16 +226,6 @@ def _robot_samples(
     return _RobotSamples(robot, t[ok], v[ok], w[ok])
 
 
-def _require_finite(robot: RobotData, window: CalibrationWindow, *arrays: Array) -> None:
-    """DataError naming the robot and the window unless every value of ``arrays`` (what a fit
-    computed from the robot's ground truth and commands there) is finite: a NaN or infinite
-    input is refused, never passed on as a NaN fit."""
-    if not all(np.isfinite(a).all() for a in arrays):
-        raise window.too_little(
-            f"robot {robot.subject}: its ground truth or commands there are not all finite"
-        )
-
-
 def _command_energy(
     robot: RobotData, command: Array, what: str, unit: str, window: CalibrationWindow
 ) -> float:
@@ -385,10 +375,10 @@ def fit_odometry_model(
     """Latency, per-robot scales and variance rates of every robot's odometry on ``window``
     (module docstring); the rates are fitted over ``integration_s``-long windows. A robot
     without commanded motion in the window, or with a scale ≤ 0, is refused (DataError naming
-    it), as is one whose ground truth or commands there are not finite; a robot without
-    samples in the window keeps scales of 1 and is listed in
+    it); a robot without samples in the window keeps scales of 1 and is listed in
     ``unfitted_robots``; too few whole integration windows for the rates are refused
-    (DataError naming the window)."""
+    (DataError naming the window). Ground truth and commands are finite by construction
+    (:class:`~relloc.datasets.mrclam.GroundTruth`, :class:`~relloc.datasets.mrclam.Odometry`)."""
     from scipy.optimize import nnls
 
     if not (np.isfinite(integration_s) and integration_s > 0):
@@ -405,7 +395,6 @@ def fit_odometry_model(
             unfitted.append(int(s.robot.subject))
             continue
         commands = command_response(s.robot.odometry.at, s.t, tau, lag, DIFFERENCE_STEP_S)
-        _require_finite(s.robot, window, s.v, s.w, *commands)
         sv, sw = _scales(s, commands, window)
         scale_v.append(sv)
         scale_w.append(sw)
@@ -556,8 +545,7 @@ def fit_command_fir(
     Collinear lags (commands held longer than a grid step) get the minimum-norm solution, which
     leaves the fitted values — and so the residual — unchanged. DataError naming the window
     when it holds fewer than ten samples per coefficient, and naming the robot when its
-    turn-rate commands there have an RMS below ``MIN_COMMAND_RMS`` (module docstring) or its
-    ground truth or commands there are not finite."""
+    turn-rate commands there have an RMS below ``MIN_COMMAND_RMS`` (module docstring)."""
     if not lags_w_s:
         raise ConfigError("fit_command_fir: needs at least one turn-rate lag")
     for name, lags in (("lags_w_s", lags_w_s), ("lags_v_s", lags_v_s)):
@@ -571,7 +559,6 @@ def fit_command_fir(
         )
     _command_energy(robot, robot.odometry.at(s.t)[1], "turn-rate filter", "rad/s", window)
     design = _fir_design(robot.odometry, s.t, (lags_w_s, lags_v_s))
-    _require_finite(robot, window, design, s.w)
     beta, *_ = np.linalg.lstsq(design, s.w, rcond=None)
     nw = len(lags_w_s)
     return CommandFir(
@@ -639,8 +626,7 @@ def fit_odometry_noise(
     ``window``, and ``latency_s``, ``time_constant_s`` lie in ``[0, MAX_LATENCY_S]``, ``[0,
     MAX_TIME_CONSTANT_S]`` (what :func:`fit_odometry_model` can fit; the commands lead the
     motion, so neither is negative). DataError naming the window when it holds fewer than two
-    whole integration windows of valid ground truth, and naming the robot when its ground truth
-    or commands there are not finite."""
+    whole integration windows of valid ground truth."""
     for name, value in (
         ("rate_hz", rate_hz),
         ("window_s", window_s),
@@ -689,7 +675,6 @@ def fit_odometry_noise(
     if ok.sum() < 2:
         raise window.too_little(f"robot {robot.subject}: ground truth has gaps in every window")
     D = err[ok].sum(axis=1)
-    _require_finite(robot, window, D)
     sigma = np.sqrt(np.mean(D * D, axis=0) / (dt * window_s))
     bias = D.mean(axis=0) / window_s
     return OdometryNoiseFit(
