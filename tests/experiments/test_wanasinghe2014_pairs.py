@@ -130,3 +130,33 @@ def test_a_pair_the_data_cannot_give_is_counted_and_the_rest_run(
     assert "## Skipped pairs" in report and "- 3 → 1:" in report
     assert f"Met in **{sum(met)} of 8** pair-cases" in report
     assert (out / "pairs_yaw_vs_bound.png").stat().st_size > 0
+
+
+def test_a_pair_robot_without_calibration_samples_is_refused(short_dataset: Path) -> None:
+    """Before: the team fit's placeholder scales of 1 for a robot without samples in the
+    calibration window went into the "calibrated" replay as if they were fitted."""
+    from relloc.calibration.odometry import OdometryModelFit
+    from relloc.calibration.window import CalibrationWindow
+    from relloc.datasets.mrclam import load_mrclam
+    from relloc.errors import DataError
+    from relloc.experiments.wanasinghe2014_mrclam import PairResponse, ReplaySettings
+
+    ds = load_mrclam(short_dataset)
+    fit = OdometryModelFit(
+        calibration_window=CalibrationWindow(5.0, 20.0, "cut"),
+        latency_s=0.1,
+        time_constant_s=0.2,
+        scale_v=(1.1, 1.0, 0.9),
+        scale_w=(1.2, 1.0, 0.8),
+        q_v0=1e-4,
+        k_v=1e-3,
+        q_w0=1e-4,
+        k_w=1e-3,
+        k_wv=0.0,
+        odometry_window_s=1.0,
+        unfitted_robots=(2,),
+    )
+    settings = ReplaySettings(dataset=short_dataset, observer=1, observed=3)
+    assert PairResponse.of_team(fit, ds, settings).scales == ((1.1, 1.2), (0.9, 0.8))
+    with pytest.raises(DataError, match=r"robot 2 of the pair has no odometry .* \[5\.00, 20"):
+        PairResponse.of_team(fit, ds, dataclasses.replace(settings, observed=2))

@@ -347,8 +347,18 @@ class PairResponse:
     def of_team(
         cls, team: OdometryModelFit, ds: MrclamDataset, settings: ReplaySettings
     ) -> PairResponse:
-        """The pair's part of a team fit (its calibration window, latency, lag and scales)."""
-        k = [ds.robot_ids.index(r) for r in (settings.observer, settings.observed)]
+        """The pair's part of a team fit (its calibration window, latency, lag and scales); a
+        DataError where a robot of the pair had no samples in the window (its scales are the
+        fit's placeholder 1, ``unfitted_robots``): the replay would not be calibrated."""
+        pair = (settings.observer, settings.observed)
+        unfitted = [r for r in pair if r in team.unfitted_robots]
+        if unfitted:
+            raise DataError(
+                f"{ds.path}: robot {unfitted[0]} of the pair has no odometry with ground truth in "
+                f"the calibration window {team.calibration_window.describe()}; its odometry "
+                "cannot be calibrated"
+            )
+        k = [ds.robot_ids.index(r) for r in pair]
         return cls(
             window=team.calibration_window,
             latency_s=team.latency_s,
