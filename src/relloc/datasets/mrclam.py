@@ -524,7 +524,7 @@ def _monotonic_mask(
 
 
 def _check_series(
-    container: object, t: object, columns: Mapping[str, object], *, strictly: bool
+    container: object, t: ArrayLike, columns: Mapping[str, ArrayLike], *, strictly: bool
 ) -> None:
     """The checks every per-robot container makes on itself (the loader's output passes them;
     data built by hand or by a transform must too): ``t`` and every column 1-D, of one length
