@@ -18,6 +18,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
+from relloc.core import checks
 from relloc.errors import ConfigError
 
 Policy = Literal["sliding", "partition"]
@@ -25,7 +26,11 @@ Policy = Literal["sliding", "partition"]
 
 @dataclass(frozen=True, kw_only=True)
 class DroneSchedule:
-    """Midpoint schedule for ``n_drones`` drones over ``n_followers`` followers."""
+    """Midpoint schedule for ``n_drones`` drones over ``n_followers`` followers.
+
+    Counts are integers (a whole float such as ``2.0`` is not one): ``n_followers``,
+    ``n_drones`` and ``dwell_steps`` ≥ 1, ``offset`` ≥ 0; else ConfigError naming the field.
+    """
 
     n_followers: int
     n_drones: int
@@ -34,18 +39,14 @@ class DroneSchedule:
     offset: int = 0
 
     def __post_init__(self) -> None:
-        if self.n_followers < 1:
-            raise ConfigError(f"DroneSchedule.n_followers: must be ≥ 1, got {self.n_followers}")
-        if self.n_drones < 1:
-            raise ConfigError(f"DroneSchedule.n_drones: must be ≥ 1, got {self.n_drones}")
-        if self.dwell_steps < 1:
-            raise ConfigError(f"DroneSchedule.dwell_steps: must be ≥ 1, got {self.dwell_steps}")
+        checks.count(self.n_followers, "DroneSchedule.n_followers")
+        checks.count(self.n_drones, "DroneSchedule.n_drones")
+        checks.count(self.dwell_steps, "DroneSchedule.dwell_steps")
+        checks.count(self.offset, "DroneSchedule.offset", low=0)
         if self.policy not in ("sliding", "partition"):
             raise ConfigError(
                 f"DroneSchedule.policy: 'sliding' or 'partition', got {self.policy!r}"
             )
-        if self.offset < 0:
-            raise ConfigError(f"DroneSchedule.offset: must be ≥ 0, got {self.offset}")
 
     def groups(self) -> tuple[tuple[int, ...], ...]:
         """The followers each drone cycles through (``partition``; for ``sliding`` all of them)."""
@@ -62,9 +63,9 @@ class DroneSchedule:
         return tuple(out)
 
     def targets(self, step: int) -> tuple[int, ...]:
-        """Follower whose midpoint each drone is commanded to at time step ``step``."""
-        if step < 0:
-            raise ConfigError(f"DroneSchedule.targets: step must be ≥ 0, got {step}")
+        """Follower whose midpoint each drone is commanded to at time step ``step`` (an
+        integer ≥ 0, else ConfigError)."""
+        checks.count(step, "DroneSchedule.targets: step", low=0)
         n, m = self.n_followers, self.n_drones
         b = step // self.dwell_steps + self.offset
         if self.policy == "partition":

@@ -54,11 +54,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from relloc.control.drone_schedule import DroneSchedule, Policy
-from relloc.control.formation import Frame, desired_relative
+from relloc.control.formation import Frame, desired_relative, formation_offsets
+from relloc.core import checks
 from relloc.core.contract import Estimator
 from relloc.core.estimates import Estimates, Recorder
 from relloc.core.events import run_events
 from relloc.core.gaussian import Gaussian
+from relloc.core.limits import MAX_ABS_POSITION_M, MAX_SPEED_M_S, MAX_YAW_RATE_RAD_S
 from relloc.core.recording import (
     GroundTruth,
     Measurements,
@@ -71,6 +73,7 @@ from relloc.errors import ConfigError
 from relloc.models.airground import drone_velocity
 from relloc.models.unicycle import unicycle_step
 from relloc.models.uwb_noise import UwbNoiseModel, sample_range_errors
+from relloc.sim.scenario import MAX_ANGLE_RAD, MAX_MEASUREMENTS, MAX_SIMULATED_STEPS
 
 Array = NDArray[np.float64]
 PathKind = Literal["arc", "s_curve", "straight"]
@@ -79,15 +82,31 @@ Control = Literal["external", "formation"]
 FOLLOWER_FRAME = "airground_follower"
 
 
-def _positive(owner: str, **values: float) -> None:
+def _positive(owner: str, **values: object) -> None:
+    """Each value a finite number > 0 (:func:`relloc.core.checks.positive`)."""
     for name, value in values.items():
-        if not (math.isfinite(value) and value > 0.0):
-            raise ConfigError(f"{owner}.{name}: must be > 0, got {value!r}")
+        checks.positive(value, f"{owner}.{name}")
+
+
+def _angle_sigma(owner: str, **values: object) -> None:
+    """Each value an angle σ in (0, π] (rad): a wider angle noise carries no information."""
+    for name, value in values.items():
+        checks.number(value, f"{owner}.{name}", low=0.0, open_low=True, high=math.pi)
+
+
+def _instance(owner: str, name: str, value: object, cls: type) -> None:
+    if not isinstance(value, cls):
+        raise ConfigError(f"{owner}.{name}: expected {cls.__name__}, got {value!r:.40}")
 
 
 @dataclass(frozen=True, kw_only=True)
 class CameraSettings:
-    """Downward camera of a drone (defaults: a Raspberry Pi camera, 62°×49° field of view)."""
+    """Downward camera of a drone (defaults: a Raspberry Pi camera, 62°×49° field of view).
+
+    Fields of view in (0, π) rad (a pinhole footprint ``z tan(fov/2)`` is finite and positive
+    only there), altitudes ``0 < min_altitude < max_altitude``, ``marker_margin ≥ 0``,
+    ``p_detect`` in (0, 1], noise σ in (0, π]; all finite, else ConfigError naming the field.
+    """
 
     hfov: float = math.radians(62.0)
     vfov: float = math.radians(49.0)
@@ -99,20 +118,27 @@ class CameraSettings:
     heading_sigma: float = 0.025
 
     def __post_init__(self) -> None:
-        _positive(
-            "CameraSettings",
-            hfov=self.hfov,
-            vfov=self.vfov,
-            min_altitude=self.min_altitude,
-            bearing_sigma=self.bearing_sigma,
-            heading_sigma=self.heading_sigma,
+        for name in ("hfov", "vfov"):
+            checks.number(
+                getattr(self, name),
+                f"CameraSettings.{name}",
+                low=0.0,
+                high=math.pi,
+                open_low=True,
+                open_high=True,
+            )
+        _positive("CameraSettings", min_altitude=self.min_altitude)
+        checks.number(
+            self.max_altitude,
+            "CameraSettings.max_altitude (must exceed min_altitude)",
+            low=self.min_altitude,
+            open_low=True,
         )
-        if not self.max_altitude > self.min_altitude:
-            raise ConfigError("CameraSettings.max_altitude: must exceed min_altitude")
-        if not 0.0 < self.p_detect <= 1.0:
-            raise ConfigError(f"CameraSettings.p_detect: must be in (0, 1], got {self.p_detect}")
-        if not self.marker_margin >= 0.0:
-            raise ConfigError("CameraSettings.marker_margin: must be ≥ 0")
+        checks.number(self.p_detect, "CameraSettings.p_detect", low=0.0, high=1.0, open_low=True)
+        checks.number(self.marker_margin, "CameraSettings.marker_margin", low=0.0)
+        _angle_sigma(
+            "CameraSettings", bearing_sigma=self.bearing_sigma, heading_sigma=self.heading_sigma
+        )
 
     def half_extent(self, altitude: float) -> tuple[float, float]:
         """Usable half-width of the footprint along x and y at ``altitude``."""
@@ -124,7 +150,11 @@ class CameraSettings:
 
 @dataclass(frozen=True, kw_only=True)
 class DroneSettings:
-    """Drone flight: altitude hold (with wander), planar P control, heading-hold error."""
+    """Drone flight: altitude hold (with wander), planar P control, heading-hold error.
+
+    ``altitude``, the time constants and ``gain`` finite and > 0, ``v_max`` in
+    (0, ``MAX_SPEED_M_S``], the σ finite and ≥ 0 (``yaw_sigma`` ≤ π); else ConfigError.
+    """
 
     altitude: float = 1.75
     altitude_sigma: float = 0.04
@@ -141,17 +171,24 @@ class DroneSettings:
             altitude=self.altitude,
             altitude_tau=self.altitude_tau,
             gain=self.gain,
-            v_max=self.v_max,
             yaw_tau=self.yaw_tau,
         )
-        for name in ("altitude_sigma", "yaw_sigma", "midpoint_sigma"):
-            if not getattr(self, name) >= 0.0:
-                raise ConfigError(f"DroneSettings.{name}: must be ≥ 0")
+        checks.number(self.v_max, "DroneSettings.v_max", low=0.0, open_low=True, high=MAX_SPEED_M_S)
+        for name, high in (
+            ("altitude_sigma", math.inf),
+            ("yaw_sigma", math.pi),
+            ("midpoint_sigma", math.inf),
+        ):
+            checks.number(getattr(self, name), f"DroneSettings.{name}", low=0.0, high=high)
 
 
 @dataclass(frozen=True, kw_only=True)
 class LeaderPath:
-    """Leader commands: constant arc ``(v, ω)``, straight ``(v, 0)`` or S-curve."""
+    """Leader commands: constant arc ``(v, ω)``, straight ``(v, 0)`` or S-curve.
+
+    ``speed`` in (0, ``MAX_SPEED_M_S``], ``|turn_rate|`` ≤ ``MAX_YAW_RATE_RAD_S``, ``period``
+    finite and > 0; else ConfigError naming the field.
+    """
 
     kind: PathKind = "arc"
     speed: float = 0.1
@@ -161,9 +198,10 @@ class LeaderPath:
     def __post_init__(self) -> None:
         if self.kind not in ("arc", "s_curve", "straight"):
             raise ConfigError(f"LeaderPath.kind: 'arc', 's_curve' or 'straight', got {self.kind!r}")
-        _positive("LeaderPath", speed=self.speed, period=self.period)
-        if not math.isfinite(self.turn_rate):
-            raise ConfigError("LeaderPath.turn_rate: not finite")
+        checks.number(self.speed, "LeaderPath.speed", low=0.0, open_low=True, high=MAX_SPEED_M_S)
+        bound = MAX_YAW_RATE_RAD_S
+        checks.number(self.turn_rate, "LeaderPath.turn_rate", low=-bound, high=bound)
+        _positive("LeaderPath", period=self.period)
 
     def command(self, t: float) -> tuple[float, float]:
         """``(v_0, ω_0)`` at time ``t``."""
@@ -181,7 +219,19 @@ class AirGroundScenario:
     the followers are commanded rigidly on the leader's arc (``"external"``) or by the
     controller given to :func:`simulate_airground` (``"formation"``). Each follower's estimator
     starts from a guess drawn around the truth with ``init_position_sigma`` /
-    ``init_heading_sigma`` (also its stated prior covariance)."""
+    ``init_heading_sigma`` (also its stated prior covariance).
+
+    Validation (ConfigError naming the field): offsets by
+    :func:`relloc.control.formation.formation_offsets` (finite, no follower on the leader or on
+    another follower); counts (``n_drones``, ``uwb_every``, ``camera_every`` ≥ 1,
+    ``schedule_offset`` ≥ 0) integers; times finite and > 0, with at least one tick
+    (``round(duration / dt) ≥ 1``); ``velocity_noise`` two finite σ ≥ 0 within
+    ``MAX_SPEED_M_S`` and ``MAX_YAW_RATE_RAD_S``; ``|leader_start_heading|`` ≤ 2π;
+    ``init_position_sigma`` ≤ ``MAX_ABS_POSITION_M`` and ``init_heading_sigma`` ≤ π; the
+    settings of their own types, the drones' set altitude inside the camera's detection band.
+    So that no scenario asks for unbounded work,
+    ``robots × ticks`` ≤ :data:`~relloc.sim.scenario.MAX_SIMULATED_STEPS` and the UWB ranges
+    ``links × ticks / uwb_every`` ≤ :data:`~relloc.sim.scenario.MAX_MEASUREMENTS`."""
 
     offsets: tuple[tuple[float, float], ...]
     offset_frame: Frame = "leader"
@@ -209,41 +259,88 @@ class AirGroundScenario:
     init_heading_sigma: float = 0.15
 
     def __post_init__(self) -> None:
-        if not self.offsets:
-            raise ConfigError("AirGroundScenario.offsets: need at least one follower")
-        for i, off in enumerate(self.offsets, start=1):
-            if len(off) != 2 or not all(math.isfinite(v) for v in off):
-                raise ConfigError(f"AirGroundScenario.offsets[{i - 1}]: need two finite numbers")
-            if math.hypot(*off) < 0.1:
-                raise ConfigError(
-                    f"AirGroundScenario.offsets[{i - 1}]: follower {i} sits on the leader"
-                )
+        owner = "AirGroundScenario"
+        formation_offsets(self.offsets, f"{owner}.offsets")
         if self.offset_frame not in ("global", "leader"):
-            raise ConfigError("AirGroundScenario.offset_frame: 'global' or 'leader'")
+            raise ConfigError(f"{owner}.offset_frame: 'global' or 'leader'")
         if self.control not in ("external", "formation"):
-            raise ConfigError("AirGroundScenario.control: 'external' or 'formation'")
-        if self.n_drones < 1:
-            raise ConfigError(f"AirGroundScenario.n_drones: must be ≥ 1, got {self.n_drones}")
-        _positive(
-            "AirGroundScenario",
-            duration=self.duration,
-            dt=self.dt,
-            dwell_time=self.dwell_time,
-            init_position_sigma=self.init_position_sigma,
-            init_heading_sigma=self.init_heading_sigma,
+            raise ConfigError(f"{owner}.control: 'external' or 'formation'")
+        checks.count(self.n_drones, f"{owner}.n_drones")
+        checks.count(self.uwb_every, f"{owner}.uwb_every")
+        checks.count(self.camera_every, f"{owner}.camera_every")
+        checks.count(self.schedule_offset, f"{owner}.schedule_offset", low=0)
+        _positive(owner, duration=self.duration, dt=self.dt, dwell_time=self.dwell_time)
+        checks.number(
+            self.init_position_sigma,
+            f"{owner}.init_position_sigma",
+            low=0.0,
+            open_low=True,
+            high=MAX_ABS_POSITION_M,
         )
-        if self.uwb_every < 1 or self.camera_every < 1:
-            raise ConfigError("AirGroundScenario.uwb_every / camera_every: must be ≥ 1 ticks")
+        _angle_sigma(owner, init_heading_sigma=self.init_heading_sigma)
+        checks.number(
+            self.leader_start_heading,
+            f"{owner}.leader_start_heading",
+            low=-MAX_ANGLE_RAD,
+            high=MAX_ANGLE_RAD,
+        )
         if self.camera_every % self.uwb_every != 0:
             raise ConfigError(
-                "AirGroundScenario.camera_every: must be a multiple of uwb_every (every camera "
+                f"{owner}.camera_every: must be a multiple of uwb_every (every camera "
                 "frame needs fresh ranges for the triangle bearing)"
             )
-        if len(self.velocity_noise) != 2 or min(self.velocity_noise) < 0.0:
-            raise ConfigError("AirGroundScenario.velocity_noise: (σ_v, σ_ω), both ≥ 0")
+        noise = self.velocity_noise
+        if isinstance(noise, (str, bytes)) or not isinstance(noise, Sequence) or len(noise) != 2:
+            raise ConfigError(f"{owner}.velocity_noise: expected (σ_v, σ_ω), got {noise!r:.40}")
+        checks.number(noise[0], f"{owner}.velocity_noise[0]", low=0.0, high=MAX_SPEED_M_S)
+        checks.number(noise[1], f"{owner}.velocity_noise[1]", low=0.0, high=MAX_YAW_RATE_RAD_S)
         if self.control == "external" and self.offset_frame != "leader":
             raise ConfigError(
-                "AirGroundScenario.offset_frame: external (rigid) motion needs 'leader' offsets"
+                f"{owner}.offset_frame: external (rigid) motion needs 'leader' offsets"
+            )
+        if not isinstance(self.uwb_link_bias, bool):
+            raise ConfigError(
+                f"{owner}.uwb_link_bias: expected true or false, got {self.uwb_link_bias!r:.40}"
+            )
+        for name, cls in (
+            ("leader", LeaderPath),
+            ("uwb", UwbNoiseModel),
+            ("camera", CameraSettings),
+            ("drone", DroneSettings),
+        ):
+            _instance(owner, name, getattr(self, name), cls)
+        if not self.camera.min_altitude <= self.drone.altitude <= self.camera.max_altitude:
+            raise ConfigError(
+                f"{owner}.drone.altitude: {self.drone.altitude:g} m is outside the camera's "
+                f"detection band [{self.camera.min_altitude:g}, {self.camera.max_altitude:g}] m; "
+                "the drones would see nothing"
+            )
+        self._check_work()
+        try:
+            self.schedule()
+        except ConfigError as exc:
+            raise ConfigError(f"{owner}.schedule_policy: {exc}") from None
+
+    def _check_work(self) -> None:
+        """At least one tick; at most ``MAX_SIMULATED_STEPS`` robot-ticks and
+        ``MAX_MEASUREMENTS`` UWB ranges (class docstring)."""
+        ticks = self.duration / self.dt
+        robots = self.n_followers + 1 + self.n_drones
+        if robots * ticks > MAX_SIMULATED_STEPS:
+            raise ConfigError(
+                f"AirGroundScenario.duration / dt: {robots} robots × {ticks:.6g} ticks; the "
+                f"limit is {MAX_SIMULATED_STEPS:.0e} robot-ticks (MAX_SIMULATED_STEPS)"
+            )
+        if round(ticks) < 1:
+            raise ConfigError(
+                f"AirGroundScenario.duration: shorter than one tick ({self.duration:g} s at "
+                f"dt = {self.dt:g} s)"
+            )
+        links = (self.n_followers + 1) * self.n_followers // 2
+        if links * ticks / self.uwb_every > MAX_MEASUREMENTS:
+            raise ConfigError(
+                f"AirGroundScenario.uwb_every: {links} UWB links × {ticks / self.uwb_every:.6g} "
+                f"epochs; the limit is {MAX_MEASUREMENTS:.0e} ranges (MAX_MEASUREMENTS)"
             )
 
     @property
@@ -257,11 +354,12 @@ class AirGroundScenario:
         return round(self.duration / self.dt)
 
     def schedule(self) -> DroneSchedule:
-        """The drones' midpoint schedule (dwell ``k_m = dwell_time / dt`` ticks)."""
+        """The drones' midpoint schedule (dwell ``k_m = dwell_time / dt`` ticks; a dwell longer
+        than the run is one window, ``n_steps + 1`` ticks, so that ``k_m`` stays finite)."""
         return DroneSchedule(
             n_followers=self.n_followers,
             n_drones=self.n_drones,
-            dwell_steps=max(1, round(self.dwell_time / self.dt)),
+            dwell_steps=max(1, round(min(self.dwell_time / self.dt, self.n_steps + 1))),
             policy=self.schedule_policy,
             offset=self.schedule_offset,
         )

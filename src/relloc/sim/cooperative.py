@@ -22,14 +22,18 @@ the ``np.random.Generator`` passed in.
 
 from __future__ import annotations
 
+import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.core import checks
 from relloc.core.angles import wrap_angle
 from relloc.core.gaussian import Gaussian
+from relloc.core.limits import MAX_ABS_POSITION_M, MAX_SPEED_M_S, MAX_YAW_RATE_RAD_S
 from relloc.core.recording import (
     NO_TARGET,
     GroundTruth,
@@ -40,13 +44,25 @@ from relloc.core.recording import (
 )
 from relloc.errors import ConfigError
 from relloc.models.unicycle import unicycle_step
+from relloc.sim.scenario import MAX_SIMULATED_STEPS
 
 Array = NDArray[np.float64]
 
 
 @dataclass(frozen=True, kw_only=True)
 class CooperativeScenario:
-    """A planar team scenario; ``waypoints[i]`` is robot ``i``'s cyclic way-point list (k, 2)."""
+    """A planar team scenario; ``waypoints[i]`` is robot ``i``'s cyclic way-point list (k, 2).
+
+    Validation (ConfigError naming the field): poses, way-points and landmarks finite, their
+    positions within ``MAX_ABS_POSITION_M``; every other number finite and > 0, ``speed`` and
+    ``sigma_v`` within ``MAX_SPEED_M_S``, ``max_turn_rate`` and ``sigma_w`` within
+    ``MAX_YAW_RATE_RAD_S``, ``fov`` at most 2π, ``sigma_bearing`` and the heading σ of
+    ``initial_sigma``/``gps_sigma`` at most π, their position σ within ``MAX_ABS_POSITION_M``;
+    ``gps_robots`` distinct robot indices (a robot listed twice would get every fix twice).
+    At least one step (``duration ≥ dt``) and, so that no scenario asks for unbounded work,
+    ``n · (n + landmarks) · steps`` ≤ :data:`~relloc.sim.scenario.MAX_SIMULATED_STEPS`
+    (every pair is tested for a detection at every step).
+    """
 
     start_poses: Array
     waypoints: tuple[Array, ...]
@@ -69,42 +85,72 @@ class CooperativeScenario:
     capture_radius: float = 8.0
 
     def __post_init__(self) -> None:
-        starts = np.asarray(self.start_poses, dtype=float)
+        starts = _points("start_poses", self.start_poses)
         if starts.ndim != 2 or starts.shape[1] != 3 or starts.shape[0] < 1:
             raise ConfigError("CooperativeScenario.start_poses must have shape (n, 3)")
-        if len(self.waypoints) != starts.shape[0]:
+        wps = self.waypoints
+        if (
+            isinstance(wps, (str, bytes))
+            or not isinstance(wps, Sequence)
+            or len(wps) != len(starts)
+        ):
             raise ConfigError("CooperativeScenario.waypoints: one way-point list per robot")
         for i, w in enumerate(self.waypoints):
-            if np.asarray(w).ndim != 2 or np.asarray(w).shape[1] != 2 or len(w) < 1:
+            wi = _points(f"waypoints[{i}]", w)
+            if wi.ndim != 2 or wi.shape[1] != 2 or len(wi) < 1:
                 raise ConfigError(f"CooperativeScenario.waypoints[{i}] must have shape (k, 2)")
-        lm = np.asarray(self.landmarks_xy, dtype=float).reshape(-1, 2)
+        lm = _points("landmarks_xy", self.landmarks_xy)
+        if lm.size % 2:
+            raise ConfigError("CooperativeScenario.landmarks_xy must have shape (k, 2)")
+        lm = lm.reshape(-1, 2)
         object.__setattr__(self, "start_poses", starts)
         object.__setattr__(self, "landmarks_xy", lm)
-        for name in (
-            "speed",
-            "dt",
-            "duration",
-            "sensing_range",
-            "fov",
-            "sigma_v",
-            "sigma_w",
-            "sigma_bearing",
-            "gps_period",
-            "heading_gain",
-            "max_turn_rate",
-            "capture_radius",
+        for name, high in (
+            ("speed", MAX_SPEED_M_S),
+            ("dt", math.inf),
+            ("duration", math.inf),
+            ("sensing_range", math.inf),
+            ("fov", 2.0 * math.pi),
+            ("sigma_v", MAX_SPEED_M_S),
+            ("sigma_w", MAX_YAW_RATE_RAD_S),
+            ("sigma_bearing", math.pi),
+            ("gps_period", math.inf),
+            ("heading_gain", math.inf),
+            ("max_turn_rate", MAX_YAW_RATE_RAD_S),
+            ("capture_radius", math.inf),
         ):
-            value = getattr(self, name)
-            if not (np.isfinite(value) and value > 0):
-                raise ConfigError(f"CooperativeScenario.{name} must be a finite number > 0")
-        if self.sigma_range is not None and not self.sigma_range > 0:
-            raise ConfigError("CooperativeScenario.sigma_range must be > 0 or None")
+            checks.number(
+                getattr(self, name),
+                f"CooperativeScenario.{name}",
+                low=0.0,
+                open_low=True,
+                high=high,
+            )
+        if self.sigma_range is not None:
+            checks.positive(self.sigma_range, "CooperativeScenario.sigma_range")
+        for name in ("initial_sigma", "gps_sigma"):
+            _pose_sigma(name, getattr(self, name))
         if self.duration < self.dt:
             raise ConfigError("CooperativeScenario.duration must be ≥ dt")
-        if any(s <= 0 for s in (*self.initial_sigma, *self.gps_sigma)):
-            raise ConfigError("CooperativeScenario.initial_sigma/gps_sigma must be > 0")
-        if any(not 0 <= r < starts.shape[0] for r in self.gps_robots):
-            raise ConfigError("CooperativeScenario.gps_robots: robot index out of range")
+        gps = self.gps_robots
+        if isinstance(gps, (str, bytes)) or not isinstance(gps, Sequence):
+            raise ConfigError(
+                f"CooperativeScenario.gps_robots: expected robot indices, got {gps!r:.40}"
+            )
+        for k, r in enumerate(gps):
+            where = f"CooperativeScenario.gps_robots[{k}]"
+            if checks.count(r, where, low=0) >= starts.shape[0]:
+                raise ConfigError(f"{where}: robot index {r} out of range 0..{starts.shape[0] - 1}")
+            if r in self.gps_robots[:k]:
+                raise ConfigError(f"{where}: robot {r} is already listed")
+        n, seen = starts.shape[0], starts.shape[0] + lm.shape[0]
+        steps = self.duration / self.dt
+        if n * seen * steps > MAX_SIMULATED_STEPS:
+            raise ConfigError(
+                f"CooperativeScenario.duration / dt: {n} robots × {seen} robots and landmarks × "
+                f"{steps:.6g} steps = {n * seen * steps:.3g} detection tests; the limit is "
+                f"{MAX_SIMULATED_STEPS:.0e} (MAX_SIMULATED_STEPS)"
+            )
 
     @property
     def n_robots(self) -> int:
@@ -114,6 +160,36 @@ class CooperativeScenario:
     def prior_cov(self) -> Array:
         """Initial joint covariance ``diag(σ_x0², σ_y0², σ_ψ0²)`` per robot."""
         return np.diag(np.tile(np.square(self.initial_sigma), self.n_robots))
+
+
+def _points(name: str, value: object) -> Array:
+    """``value`` as a float array of finite coordinates, the positions (first two columns)
+    within ``MAX_ABS_POSITION_M``; else ConfigError naming ``name``."""
+    try:
+        a = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ConfigError(
+            f"CooperativeScenario.{name}: expected numbers, got {value!r:.40}"
+        ) from None
+    if not np.all(np.isfinite(a)):
+        raise ConfigError(f"CooperativeScenario.{name}: non-finite value")
+    xy = a[..., :2] if a.ndim == 2 else a
+    if xy.size and np.max(np.abs(xy)) > MAX_ABS_POSITION_M:
+        raise ConfigError(
+            f"CooperativeScenario.{name}: a position beyond {MAX_ABS_POSITION_M:g} m "
+            "(MAX_ABS_POSITION_M)"
+        )
+    return a
+
+
+def _pose_sigma(name: str, value: object) -> None:
+    """``value`` as ``(σ_x, σ_y, σ_ψ)``: positions in (0, ``MAX_ABS_POSITION_M``], heading in
+    (0, π]; else ConfigError naming ``name``."""
+    where = f"CooperativeScenario.{name}"
+    if isinstance(value, (str, bytes)) or not isinstance(value, Sequence) or len(value) != 3:
+        raise ConfigError(f"{where}: expected (σ_x, σ_y, σ_ψ), got {value!r:.40}")
+    for k, (v, high) in enumerate(zip(value, (MAX_ABS_POSITION_M,) * 2 + (math.pi,), strict=True)):
+        checks.number(v, f"{where}[{k}]", low=0.0, open_low=True, high=high)
 
 
 @dataclass(frozen=True)
@@ -152,8 +228,7 @@ def grid_team_scenario(
     With the default 50 m sensing range every robot sees roughly its eight nearest neighbours; one
     landmark per 25 robots is scattered over the grid.
     """
-    if n < 1:
-        raise ConfigError("grid_team_scenario: n must be ≥ 1")
+    checks.count(n, "grid_team_scenario: n")
     side = int(np.ceil(np.sqrt(n)))
     cells = np.array([(i % side, i // side) for i in range(n)], dtype=float) * spacing
     square = np.array([[10.0, 0.0], [10.0, 10.0], [0.0, 10.0], [0.0, 0.0]])
@@ -319,8 +394,10 @@ def _detection_rows(
 
 
 def _gps(s: CooperativeScenario, t: Array, truth: Array, rng: np.random.Generator) -> Measurements:
-    """Absolute pose rows of the robots in ``gps_robots`` every ``gps_period``."""
-    every = max(1, round(s.gps_period / s.dt))
+    """Absolute pose rows of the robots in ``gps_robots`` every ``gps_period`` (a period
+    longer than the run gives none; it is capped at the run's length so the count stays
+    finite)."""
+    every = max(1, round(min(s.gps_period / s.dt, t.size)))
     ks = np.arange(every, t.size, every) if s.gps_robots else np.zeros(0, dtype=np.int64)
     robots = np.array(s.gps_robots, dtype=np.int64)
     tt = np.repeat(t[ks], robots.size)

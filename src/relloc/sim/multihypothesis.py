@@ -6,7 +6,9 @@ path. Each leader measures, at the direct-fusion rate (paper: 10 Hz),
 
 * the height difference ``h = z_j − z_i`` of every teammate from absolute height references
   (known correspondence, always available);
-* the range ``r`` to every teammate (known correspondence), detected with probability ``P_D``;
+* the range ``r`` to every teammate (known correspondence), detected with probability ``P_D``
+  (its Gaussian noise truncated to keep ``0 < r ≤ MAX_SENSOR_RANGE_M``: redrawn, which only
+  matters when a teammate is closer than a few σ_r);
 * a *set* of bearings ``(α, β)`` with unknown correspondence: each teammate within
   ``max_range`` is seen with probability ``P_D``, plus Poisson clutter uniform over the
   measurement space; the set is shuffled.
@@ -42,12 +44,21 @@ only) — and the true poses on the filter grid.
 
 from __future__ import annotations
 
+import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.core import checks
 from relloc.core.angles import wrap_angle
+from relloc.core.limits import (
+    MAX_ABS_POSITION_M,
+    MAX_SENSOR_RANGE_M,
+    MAX_SPEED_M_S,
+    MAX_YAW_RATE_RAD_S,
+)
 from relloc.core.poses import compose, relative
 from relloc.core.recording import (
     CLUTTER,
@@ -58,6 +69,7 @@ from relloc.core.recording import (
     measurement_rows,
 )
 from relloc.errors import ConfigError
+from relloc.sim.scenario import MAX_MEASUREMENTS, MAX_SIMULATED_STEPS
 
 Array = NDArray[np.float64]
 
@@ -94,6 +106,16 @@ class DeSilvaScenario:
 
     ``kidnap``: ``(robot index, time s, dx m, dy m, dψ rad)`` or ``None``. ``sensing``: the
     indices of the robots that scan (ascending; the paper's: the two leaders).
+
+    Validation (ConfigError naming the field): rates, variances and ``duration`` finite and
+    > 0, with at least one filter step (``round(duration · filter_rate) ≥ 1``); ``max_range``
+    and σ_h, σ_r ≤ ``MAX_SENSOR_RANGE_M``, σ_α, σ_β ≤ π (a wider angle noise carries no
+    information); ``0 ≤ group_speed ≤ MAX_SPEED_M_S`` and
+    ``|group_turn_rate| ≤ MAX_YAW_RATE_RAD_S`` (0: a straight path); indices integers; the
+    kidnap's offsets finite (``|dx|, |dy| ≤ MAX_ABS_POSITION_M``, ``|dψ| ≤ 2π``). So that no
+    setting asks for unbounded work, the five robots' filter steps stay within
+    :data:`~relloc.sim.scenario.MAX_SIMULATED_STEPS` and the expected clutter bearings of the
+    whole run within :data:`~relloc.sim.scenario.MAX_MEASUREMENTS`.
     """
 
     duration: float = 60.0
@@ -114,34 +136,47 @@ class DeSilvaScenario:
     sensing: tuple[int, ...] = (0, 1)
 
     def __post_init__(self) -> None:
-        positive = (
-            "duration",
-            "filter_rate",
-            "direct_rate",
-            "velocity_variance",
-            "angular_variance",
-            "var_azimuth",
-            "var_elevation",
-            "var_height_mm2",
-            "var_range_mm2",
-            "max_range",
-        )
-        for name in positive:
-            value = getattr(self, name)
-            if not (np.isfinite(value) and value > 0.0):
-                raise ConfigError(f"DeSilvaScenario.{name} must be finite and > 0, got {value}")
-        if not 0.0 < self.p_detect <= 1.0:
-            raise ConfigError(f"DeSilvaScenario.p_detect must lie in (0, 1]: {self.p_detect}")
-        if not (np.isfinite(self.clutter_density) and self.clutter_density >= 0.0):
-            raise ConfigError(
-                f"DeSilvaScenario.clutter_density must be ≥ 0: {self.clutter_density}"
+        angle_var, length_var_mm2 = math.pi**2, (MAX_SENSOR_RANGE_M * 1e3) ** 2
+        for name, high in (
+            ("duration", math.inf),
+            ("filter_rate", math.inf),
+            ("direct_rate", math.inf),
+            ("velocity_variance", math.inf),
+            ("angular_variance", math.inf),
+            ("var_azimuth", angle_var),
+            ("var_elevation", angle_var),
+            ("var_height_mm2", length_var_mm2),
+            ("var_range_mm2", length_var_mm2),
+            ("max_range", MAX_SENSOR_RANGE_M),
+        ):
+            checks.number(
+                getattr(self, name), f"DeSilvaScenario.{name}", low=0.0, open_low=True, high=high
             )
+        checks.number(self.p_detect, "DeSilvaScenario.p_detect", low=0.0, high=1.0, open_low=True)
+        checks.number(self.clutter_density, "DeSilvaScenario.clutter_density", low=0.0)
+        checks.number(self.group_speed, "DeSilvaScenario.group_speed", low=0.0, high=MAX_SPEED_M_S)
+        checks.number(
+            self.group_turn_rate,
+            "DeSilvaScenario.group_turn_rate",
+            low=-MAX_YAW_RATE_RAD_S,
+            high=MAX_YAW_RATE_RAD_S,
+        )
         ratio = self.filter_rate / self.direct_rate
-        if self.direct_rate > self.filter_rate or abs(ratio - round(ratio)) > 1e-9:
+        if (
+            self.direct_rate > self.filter_rate
+            or not math.isfinite(ratio)
+            or abs(ratio - round(ratio)) > 1e-9
+        ):
             raise ConfigError(
                 "DeSilvaScenario.direct_rate must divide filter_rate "
                 f"({self.direct_rate} vs {self.filter_rate})"
             )
+        if isinstance(self.sensing, (str, bytes)) or not isinstance(self.sensing, Sequence):
+            raise ConfigError(
+                f"DeSilvaScenario.sensing: expected robot indices, got {self.sensing!r:.40}"
+            )
+        for k, i in enumerate(self.sensing):
+            checks.count(i, f"DeSilvaScenario.sensing[{k}]", low=0)
         if (
             not self.sensing
             or list(self.sensing) != sorted(set(self.sensing))
@@ -152,9 +187,51 @@ class DeSilvaScenario:
                 f"[0, {len(ROBOT_NAMES)}), got {self.sensing}"
             )
         if self.kidnap is not None:
-            robot, time = int(self.kidnap[0]), float(self.kidnap[1])
-            if not 0 <= robot < len(ROBOT_NAMES) or not 0.0 < time < self.duration:
-                raise ConfigError(f"DeSilvaScenario.kidnap: bad robot or time {self.kidnap}")
+            self._check_kidnap(self.kidnap)
+        self._check_work()
+
+    def _check_kidnap(self, kidnap: object) -> None:
+        """``(robot, time, dx, dy, dψ)``: a robot index, a time inside the run, finite offsets."""
+        where = "DeSilvaScenario.kidnap"
+        if isinstance(kidnap, (str, bytes)) or not isinstance(kidnap, Sequence) or len(kidnap) != 5:
+            raise ConfigError(f"{where}: expected (robot, time, dx, dy, dψ), got {kidnap!r:.60}")
+        if checks.count(kidnap[0], f"{where}[0] (robot)", low=0) >= len(ROBOT_NAMES):
+            raise ConfigError(
+                f"{where}[0] (robot): no robot {kidnap[0]} (0 to {len(ROBOT_NAMES) - 1})"
+            )
+        checks.number(
+            kidnap[1],
+            f"{where}[1] (time)",
+            low=0.0,
+            high=self.duration,
+            open_low=True,
+            open_high=True,
+        )
+        for k, (name, bound) in enumerate(
+            (("dx", MAX_ABS_POSITION_M), ("dy", MAX_ABS_POSITION_M), ("dψ", 2.0 * math.pi)),
+            start=2,
+        ):
+            checks.number(kidnap[k], f"{where}[{k}] ({name})", low=-bound, high=bound)
+
+    def _check_work(self) -> None:
+        """At least one filter step; bounded robot-steps and clutter (class docstring)."""
+        steps = self.duration * self.filter_rate
+        if len(ROBOT_NAMES) * steps > MAX_SIMULATED_STEPS:
+            raise ConfigError(
+                f"DeSilvaScenario.duration × filter_rate: {len(ROBOT_NAMES)} robots × "
+                f"{steps:.6g} steps; the limit is {MAX_SIMULATED_STEPS:.0e} (MAX_SIMULATED_STEPS)"
+            )
+        if round(steps) < 1:
+            raise ConfigError(
+                f"DeSilvaScenario.duration: shorter than one filter step ({self.duration:g} s at "
+                f"filter_rate = {self.filter_rate:g} Hz)"
+            )
+        clutter = self.expected_clutter * self.duration * self.direct_rate * len(self.sensing)
+        if clutter > MAX_MEASUREMENTS:
+            raise ConfigError(
+                f"DeSilvaScenario.clutter_density: {clutter:.3g} expected clutter bearings over "
+                f"the run; the limit is {MAX_MEASUREMENTS:.0e} (MAX_MEASUREMENTS)"
+            )
 
     @property
     def sigma_height(self) -> float:
@@ -183,12 +260,18 @@ def path_poses(scenario: DeSilvaScenario, times: Array) -> Array:
 
     The group frame moves on an arc (speed ``group_speed``, turn rate ``group_turn_rate``);
     each robot sits at its oscillating offset in that frame. Ground robots head along their
-    velocity; pods (holonomic) yaw with the group plus their own oscillation.
+    velocity; pods (holonomic) yaw with the group plus their own oscillation. A turn rate of
+    zero, or one so small that the arc's radius ``v / ω`` overflows, gives the arc's limit: a
+    straight path along x.
     """
     t = times[:, None]
-    psi_g = scenario.group_turn_rate * t
-    radius = scenario.group_speed / scenario.group_turn_rate
-    cx, cy = radius * np.sin(psi_g), radius * (1.0 - np.cos(psi_g))
+    v, w = scenario.group_speed, scenario.group_turn_rate
+    psi_g = w * t
+    if w == 0.0 or not math.isfinite(v / w):
+        cx, cy = v * t, np.zeros_like(t)
+    else:
+        radius = v / w
+        cx, cy = radius * np.sin(psi_g), radius * (1.0 - np.cos(psi_g))
     osc = _OSC
     q = _OFFSET[None] + osc[None, :, 0:3] * np.sin(
         2.0 * np.pi * t[..., None] / osc[None, :, 3:6] + osc[None, :, 8:9]
@@ -327,7 +410,10 @@ def _scan(
         if r > scenario.max_range:
             continue
         if rng.random() < scenario.p_detect:
-            rows.range.append((time, i, j, r + scenario.sigma_range * rng.normal()))
+            noisy = r + scenario.sigma_range * rng.normal()
+            while not 0.0 < noisy <= MAX_SENSOR_RANGE_M:  # truncated noise (module docstring)
+                noisy = r + scenario.sigma_range * rng.normal()
+            rows.range.append((time, i, j, noisy))
         if rng.random() < scenario.p_detect:
             az = np.arctan2(rel[1], rel[0]) + sa * rng.normal()
             el = np.arctan2(rel[2], np.hypot(rel[0], rel[1])) + se * rng.normal()

@@ -486,6 +486,8 @@ class Scenario:
         _set(self, "propagation_rate_hz", rate)
         if not isinstance(self.arena, Arena):
             raise ConfigError("arena: expected an arena table")
+        if isinstance(self.robots, (str, bytes)) or not isinstance(self.robots, Sequence):
+            raise ConfigError(f"robots: expected a list of robots, got {_show(self.robots)}")
         robots = tuple(self.robots)
         if not robots:
             raise ConfigError("robots: a scenario needs at least one robot")
@@ -634,7 +636,10 @@ def _robot_from(table: object, where: str) -> RobotSpec:
 
 
 def scenario_from_dict(data: Mapping[str, Any]) -> Scenario:
-    """Build a :class:`Scenario` from a parsed TOML document (errors name the field path)."""
+    """Build a :class:`Scenario` from a parsed TOML document (errors name the field path; a
+    document that is not a table is a ConfigError too)."""
+    if not isinstance(data, Mapping):
+        raise ConfigError(f"scenario: expected a table, got {_show(data)}")
     if "robots" not in data:
         raise ConfigError("robots: required (one [[robots]] table per robot)")
     raw_robots = data["robots"]
