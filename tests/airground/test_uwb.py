@@ -85,3 +85,24 @@ def test_sampler_statistics_and_validation():
     assert lag1 > 0.8  # Gauss–Markov core: exp(−0.1/1.2) ≈ 0.92 (slightly less once truncated)
     with pytest.raises(ConfigError, match="outlier_rate"):
         UwbNoiseModel(bias=0.0, spread=0.1, outlier_rate=1.5, outlier_excess_mean=0.1)
+
+
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [
+        ("bias", "0.3"),
+        ("bias", None),
+        ("spread", True),
+        ("outlier_rate", "0.1"),
+        ("outlier_rate", 1.0),
+        ("outlier_positive_fraction", float("nan")),
+        ("outlier_k", 0.0),
+        ("link_bias_std", -0.1),
+        ("correlation_time", float("inf")),
+    ],
+)
+def test_noise_model_refuses_a_bad_field_by_name(field, value):
+    """Before: a string or None gave a raw TypeError, a bool was taken as a number."""
+    base = dict(bias=0.0, spread=0.1, outlier_rate=0.0, outlier_excess_mean=0.1)
+    with pytest.raises(ConfigError, match=rf"UwbNoiseModel\.{field}: "):
+        UwbNoiseModel(**{**base, field: value})

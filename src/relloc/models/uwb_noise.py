@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.core.checks import number, positive
 from relloc.errors import ConfigError
 
 #: A reading is an outlier when its deviation from its link's offset exceeds ``OUTLIER_K`` σ.
@@ -43,21 +44,16 @@ class UwbNoiseModel:
     outlier_k: float = OUTLIER_K
 
     def __post_init__(self) -> None:
-        checks = {
-            "bias": math.isfinite(self.bias),
-            "spread": math.isfinite(self.spread) and self.spread >= 0.0,
-            "outlier_rate": 0.0 <= self.outlier_rate < 1.0,
-            "outlier_excess_mean": math.isfinite(self.outlier_excess_mean)
-            and self.outlier_excess_mean >= 0.0,
-            "outlier_positive_fraction": 0.0 <= self.outlier_positive_fraction <= 1.0,
-            "link_bias_std": math.isfinite(self.link_bias_std) and self.link_bias_std >= 0.0,
-            "correlation_time": math.isfinite(self.correlation_time)
-            and self.correlation_time >= 0.0,
-            "outlier_k": math.isfinite(self.outlier_k) and self.outlier_k > 0.0,
-        }
-        for name, ok in checks.items():
-            if not ok:
-                raise ConfigError(f"UwbNoiseModel.{name}: invalid value {getattr(self, name)!r}")
+        """Every field a finite number (never a string, ``None`` or a bool): ``bias`` any,
+        ``outlier_rate`` in ``[0, 1)``, ``outlier_positive_fraction`` in ``[0, 1]``,
+        ``outlier_k`` > 0, the others ≥ 0; ConfigError naming the field otherwise."""
+        where = "UwbNoiseModel."
+        number(self.bias, where + "bias")
+        number(self.outlier_rate, where + "outlier_rate", low=0.0, high=1.0, open_high=True)
+        number(self.outlier_positive_fraction, where + "outlier_positive_fraction", low=0, high=1)
+        positive(self.outlier_k, where + "outlier_k")
+        for name in ("spread", "outlier_excess_mean", "link_bias_std", "correlation_time"):
+            number(getattr(self, name), where + name, low=0.0)
 
 
 #: The fit of :func:`relloc.calibration.uwb.fit_uwb_noise` to the TIERS UWB recording (the
