@@ -88,6 +88,7 @@ from numpy.typing import ArrayLike, NDArray
 from relloc.core import recording as rec
 from relloc.core.angles import circular_interp
 from relloc.core.limits import MAX_ABS_POSITION_M, MAX_SPEED_M_S, MAX_YAW_RATE_RAD_S
+from relloc.datasets.columns import check_columns
 from relloc.datasets.paths import DATA_HINT
 from relloc.errors import ConfigError, DataError
 
@@ -523,37 +524,6 @@ def _monotonic_mask(
 # ----------------------------------------------------------------------------------------------
 
 
-def _check_series(
-    container: object, t: ArrayLike, columns: Mapping[str, ArrayLike], *, strictly: bool
-) -> None:
-    """The checks every per-robot container makes on itself (the loader's output passes them;
-    data built by hand or by a transform must too): ``t`` and every column 1-D, of one length
-    and finite, and ``t`` increasing — strictly for ground truth (interpolation needs it), else
-    non-decreasing (several camera rows share a frame's stamp). DataError naming the container
-    and the column otherwise; never a wrong answer from unsorted times or an IndexError later."""
-    name = type(container).__name__
-    arrays = {"t": t, **columns}
-    n = np.shape(t)[0] if np.ndim(t) == 1 else None
-    for key, value in arrays.items():
-        a = np.asarray(value)
-        if a.ndim != 1 or a.shape[0] != n:
-            raise DataError(
-                f"mrclam {name}.{key}: expected a 1-D array of the length of t "
-                f"({n if n is not None else 'a 1-D array'}), got shape {a.shape}"
-            )
-        if a.dtype.kind not in "fiu" or not np.isfinite(a).all():
-            raise DataError(f"mrclam {name}.{key}: values must be finite numbers")
-    steps = np.diff(np.asarray(t, dtype=float))
-    bad = np.flatnonzero(steps <= 0 if strictly else steps < 0)
-    if bad.size:
-        i = int(bad[0])
-        order = "strictly increasing" if strictly else "non-decreasing"
-        raise DataError(
-            f"mrclam {name}.t: times must be {order}; t[{i}] = {float(np.asarray(t)[i])!r}, "
-            f"t[{i + 1}] = {float(np.asarray(t)[i + 1])!r}"
-        )
-
-
 @dataclass(frozen=True)
 class PoseQuery:
     """Ground truth at query times. ``valid = inside & ~in_gap``.
@@ -591,7 +561,8 @@ class GroundTruth:
     gap_threshold: float
 
     def __post_init__(self) -> None:
-        _check_series(self, self.t, {"x": self.x, "y": self.y, "theta": self.theta}, strictly=True)
+        columns = {"x": self.x, "y": self.y, "theta": self.theta}
+        check_columns("mrclam GroundTruth", self.t, columns, strictly=True)
         if not (_is_number(self.gap_threshold) and 0 < self.gap_threshold < math.inf):
             raise DataError(
                 "mrclam GroundTruth.gap_threshold: must be a positive number, got "
@@ -639,7 +610,7 @@ class Odometry:
     omega: FloatArray
 
     def __post_init__(self) -> None:
-        _check_series(self, self.t, {"v": self.v, "omega": self.omega}, strictly=False)
+        check_columns("mrclam Odometry", self.t, {"v": self.v, "omega": self.omega})
 
     def at(self, t_query: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """Zero-order hold of the last command at or before each query (0 before the first)."""
@@ -674,10 +645,7 @@ class Measurements:
             "range": self.range,
             "bearing": self.bearing,
         }
-        _check_series(self, self.t, columns, strictly=False)
-        for key in ("subject", "barcode"):
-            if np.asarray(columns[key]).dtype.kind not in "iu":
-                raise DataError(f"mrclam Measurements.{key}: must be integers")
+        check_columns("mrclam Measurements", self.t, columns, integer=("subject", "barcode"))
 
     def __len__(self) -> int:
         return len(self.t)

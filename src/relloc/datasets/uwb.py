@@ -64,6 +64,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from relloc.core.recording import FileSkips, SkippedRow
+from relloc.datasets.columns import check_columns
 from relloc.datasets.paths import DATA_HINT
 from relloc.errors import DataError
 
@@ -109,28 +110,15 @@ class UwbRecording:
         every column, finite times and ranges, integer node ids of two different nodes, times
         non-decreasing. DataError naming the file and the column otherwise."""
         columns = {
-            "t": self.t,
             "node1": self.node1,
             "node2": self.node2,
             "uwb_range": self.uwb_range,
             "mocap_range": self.mocap_range,
         }
-        n = np.shape(self.t)[0] if np.ndim(self.t) == 1 else None
-        for key, value in columns.items():
-            a = np.asarray(value)
-            if a.ndim != 1 or a.shape[0] != n:
-                raise DataError(
-                    f"{self.path}: UwbRecording.{key}: expected a 1-D array of the length of t, "
-                    f"got shape {a.shape}"
-                )
-            integer = key.startswith("node")
-            if a.dtype.kind not in ("iu" if integer else "fiu") or not np.isfinite(a).all():
-                what = "integer node ids" if integer else "finite numbers"
-                raise DataError(f"{self.path}: UwbRecording.{key}: values must be {what}")
+        where = f"{self.path}: UwbRecording"
+        check_columns(where, self.t, columns, integer=("node1", "node2"))
         if np.any(np.asarray(self.node1) == np.asarray(self.node2)):
-            raise DataError(f"{self.path}: UwbRecording: a row pairs a node with itself")
-        if np.any(np.diff(np.asarray(self.t, dtype=float)) < 0):
-            raise DataError(f"{self.path}: UwbRecording.t: times must be non-decreasing")
+            raise DataError(f"{where}: a row pairs a node with itself")
 
     @property
     def error(self) -> NDArray[np.float64]:
