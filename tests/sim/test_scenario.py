@@ -123,3 +123,17 @@ def test_dataclass_validation_without_toml():
         SensorSpec(min_range=2.0, max_range=1.0)
     with pytest.raises(ConfigError, match=r"period_s\[0\]"):
         VelocityMotion(period_s=(0.0, 1.0, 1.0, 1.0))
+
+
+def test_numpy_scalars_are_numbers():
+    """Before: a numpy integer (e.g. from an array a caller indexed) was refused as 'expected a
+    number'; numpy's bool is still refused, like Python's."""
+    import numpy as np
+
+    motion = WaypointMotion(
+        points=((0, 0), (np.int64(3), 0), (3, np.float32(2))), speed=np.int64(1)
+    )
+    assert motion.speed == 1.0 and isinstance(motion.speed, float)
+    assert motion.points[1] == (3.0, 0.0)
+    with pytest.raises(ConfigError, match="speed: expected a number"):
+        WaypointMotion(points=((0, 0), (3, 0), (3, 2)), speed=np.bool_(True))

@@ -50,6 +50,7 @@ measure at least one (observer, observed) pair.
 from __future__ import annotations
 
 import math
+import numbers
 import re
 import reprlib
 import tomllib
@@ -123,8 +124,9 @@ def _number(
     allow_inf: bool = False,
 ) -> float:
     """``value`` as a float in ``[low, high]`` (``(low, high]`` if ``low_open``; a missing bound
-    is unbounded), finite unless ``allow_inf``; otherwise ConfigError naming ``name``."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
+    is unbounded), finite unless ``allow_inf``; otherwise ConfigError naming ``name``. Any
+    real number but a bool is one (numpy's scalars too, as a Python caller passes them)."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise ConfigError(f"{name}: expected a number, got {_show(value)}")
     try:
         v = float(value)
