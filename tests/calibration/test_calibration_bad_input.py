@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from relloc.calibration.camera import CameraFit, camera_residuals, fit_camera, lag_correlation
-from relloc.calibration.odometry import fit_command_fir, fit_odometry_model
+from relloc.calibration.odometry import fit_command_fir, fit_odometry_model, unfitted_note
 from relloc.calibration.uwb import fit_uwb_noise
 from relloc.calibration.window import CalibrationWindow, odometry_and_truth, spanning
 from relloc.core.recording import FileSkips
@@ -47,6 +47,9 @@ def test_a_robot_without_samples_in_the_window_is_listed_as_unfitted(synthetic):
     assert fit.to_dict()["unfitted_robots"] == (2,)
     alone = fit_odometry_model(synthetic.dataset([_moving(synthetic)]), WINDOW, 1.0)
     assert alone.unfitted_robots == ()
+    # the reports of mrclam-cl and mrclam-association say it beside the fitted scales
+    assert "robot 2 had no odometry" in unfitted_note(fit.unfitted_robots)
+    assert unfitted_note(alone.unfitted_robots) == ""
 
 
 def _fitted_models(odometry):

@@ -447,6 +447,18 @@ def calibrated_commands(
     return replace(od, t=od.t + latency_s, velocity=velocity, where=f"{od.where} calibrated")
 
 
+def unfitted_note(unfitted: Sequence[int]) -> str:
+    """The report's sentence on the robots an odometry fit left unfitted (``unfitted_robots``
+    of :class:`OdometryModelFit`); empty when every robot was fitted."""
+    if not unfitted:
+        return ""
+    names = ", ".join(str(r) for r in unfitted)
+    return (
+        f" Not fitted: robot{'s' if len(unfitted) > 1 else ''} {names} had no odometry with "
+        "ground truth in the calibration window, so its scales are the placeholder 1."
+    )
+
+
 def calibrated_team(odometry: Sequence[Odometry], fit: OdometryModelFit) -> tuple[Odometry, ...]:
     """Every robot's commands calibrated with ``fit`` (:func:`calibrated_commands`): the team's
     latency and time constant, robot ``i``'s scales ``fit.scale_v[i]``, ``fit.scale_w[i]``

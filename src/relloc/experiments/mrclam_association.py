@@ -261,6 +261,7 @@ from relloc.calibration.odometry import (
     calibrated_team,
     fit_largest_odometry_noise,
     fit_odometry_model,
+    unfitted_note,
 )
 from relloc.calibration.window import CalibrationWindow, following
 from relloc.core.estimates import Estimates
@@ -972,6 +973,7 @@ def _models_text(s: dict[str, Any]) -> str:
         f"{c['sigma_range_raw']:.3f} m × √{c['range_inflation']:.1f} = "
         f"{s['sigma_range_m']:.3f} m (every range fused, inflated at the readings' spacing "
         f"{c['correlation']['pair_spacing_s']['median']:.2f} s)."
+        + unfitted_note(o["unfitted_robots"])
     )
 
 

@@ -118,6 +118,7 @@ from relloc.calibration.odometry import (
     OdometryModelFit,
     calibrated_team,
     fit_odometry_model,
+    unfitted_note,
 )
 from relloc.calibration.window import (
     SPLIT_CHOICES,
@@ -906,6 +907,7 @@ def _report(summary: dict[str, Any], figures: list[tuple[str, str]]) -> str:
         f"{f['sigma_range_raw']:.3f} m (MAD) × √{f['range_inflation']:.1f} = "
         f"{f['sigma_range']:.3f} m, at most one range per pair every "
         f"{f['range_interval_s']:g} s. Residual lag-correlations: {f['correlation']}."
+        + unfitted_note(f["unfitted_robots"])
     )
     missed = [
         f"{mode}: {name}"
