@@ -31,13 +31,16 @@ def assign(cost: Array, miss_cost: Array) -> NDArray[np.int64]:
     Args:
         cost: (T, M) assignment costs, ``inf`` where a pairing is not allowed (outside gate).
         miss_cost: (T,) cost of leaving each target without a measurement.
+
+    A NaN or ``−inf`` cost (no pairing is infinitely good) or a non-finite miss cost is a
+    ModelError; a row of ``inf`` leaves its target missed.
     """
     cost = np.asarray(cost, dtype=float)
     miss_cost = np.asarray(miss_cost, dtype=float).reshape(-1)
     if cost.ndim != 2 or miss_cost.size != cost.shape[0]:
         raise ModelError(f"assign: cost {cost.shape} and miss_cost {miss_cost.shape} disagree")
-    if np.isnan(cost).any() or not np.isfinite(miss_cost).all():
-        raise ModelError("assign: NaN cost or non-finite miss cost")
+    if np.isnan(cost).any() or np.isneginf(cost).any() or not np.isfinite(miss_cost).all():
+        raise ModelError("assign: NaN cost, −inf cost or non-finite miss cost")
     n_t, n_m = cost.shape
     big = np.full((n_t, n_m + n_t), _FORBIDDEN)
     big[:, :n_m] = np.where(np.isfinite(cost), cost, _FORBIDDEN)

@@ -29,7 +29,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from relloc.errors import ConfigError
+from relloc.core.checks import number, positive, probability
+from relloc.errors import ModelError
 
 Array = NDArray[np.float64]
 
@@ -56,24 +57,30 @@ class GateSettings:
     p_birth_exclusion: float = 0.9999
 
     def __post_init__(self) -> None:
-        if not 0.0 < self.p_gate < 1.0:
-            raise ConfigError(f"GateSettings.p_gate must lie in (0, 1), got {self.p_gate}")
-        if not (np.isfinite(self.yaw_sigma_uniform) and self.yaw_sigma_uniform > 0.0):
-            raise ConfigError(
-                f"GateSettings.yaw_sigma_uniform must be > 0, got {self.yaw_sigma_uniform}"
-            )
-        if not self.p_gate <= self.p_birth_exclusion < 1.0:
-            raise ConfigError(
-                "GateSettings.p_birth_exclusion must lie in [p_gate, 1), got "
-                f"{self.p_birth_exclusion}"
-            )
-        if not (np.isfinite(self.horizon) and self.horizon >= 0.0):
-            raise ConfigError(f"GateSettings.horizon must be ≥ 0, got {self.horizon}")
+        """Every field is checked with :mod:`relloc.core.checks`: a value of the wrong type (a
+        string, ``None``, a ``bool``) or out of its range is a ConfigError naming the field."""
+        p_gate = probability(self.p_gate, "GateSettings.p_gate")
+        positive(self.yaw_sigma_uniform, "GateSettings.yaw_sigma_uniform")
+        number(
+            self.p_birth_exclusion,
+            "GateSettings.p_birth_exclusion",
+            low=p_gate,
+            high=1.0,
+            open_high=True,
+        )
+        number(self.horizon, "GateSettings.horizon", low=0.0)
 
 
 def mahalanobis_batch(nu: Array, S: Array) -> Array:
-    """Squared Mahalanobis distances for stacks: ``nu`` (..., n), ``S`` (..., n, n) → (...)."""
-    sol = np.linalg.solve(S, nu[..., None])[..., 0]
+    """Squared Mahalanobis distances for stacks: ``nu`` (..., n), ``S`` (..., n, n) → (...).
+
+    A singular ``S`` (no gate exists) is a ModelError, not numpy's ``LinAlgError``."""
+    try:
+        sol = np.linalg.solve(S, nu[..., None])[..., 0]
+    except np.linalg.LinAlgError as exc:
+        raise ModelError(
+            f"mahalanobis_batch: an innovation covariance is singular ({exc})"
+        ) from exc
     return np.einsum("...i,...i->...", nu, sol)
 
 

@@ -39,11 +39,13 @@ uniform over a turn).
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.core.checks import count, number, positive
 from relloc.errors import ConfigError
 
 Array = NDArray[np.float64]
@@ -72,19 +74,27 @@ class FormationSettings:
     birth_yaw_components: int = 8
 
     def __post_init__(self) -> None:
+        """Every field is checked with :mod:`relloc.core.checks`: a value of the wrong type (a
+        string, ``None``, a ``bool``, a float ``birth_yaw_components``) or out of its range is a
+        ConfigError naming the field."""
         for name in ("p_detect", "p_gate", "p_birth"):
-            value = getattr(self, name)
-            if not 0.0 < value <= 1.0:
-                raise ConfigError(f"FormationSettings.{name} must lie in (0, 1], got {value}")
+            number(
+                getattr(self, name), f"FormationSettings.{name}", low=0.0, high=1.0, open_low=True
+            )
         if self.p_gate >= 1.0:
             raise ConfigError("FormationSettings.p_gate must be < 1 (a gate needs a threshold)")
-        bv = tuple(float(v) for v in self.birth_variances)
-        if len(bv) != 4 or not all(np.isfinite(v) and v > 0.0 for v in bv):
+        values = self.birth_variances
+        if (
+            isinstance(values, str)
+            or not isinstance(values, Iterable)
+            or len(vs := tuple(values)) != 4
+        ):
             raise ConfigError(
-                f"FormationSettings.birth_variances needs 4 positive values, got {bv}"
+                f"FormationSettings.birth_variances needs 4 positive values, got {values!r:.60}"
             )
+        bv = tuple(positive(v, f"FormationSettings.birth_variances[{i}]") for i, v in enumerate(vs))
         object.__setattr__(self, "birth_variances", bv)
-        if not 1 <= self.birth_yaw_components <= 64:
+        if count(self.birth_yaw_components, "FormationSettings.birth_yaw_components") > 64:
             raise ConfigError(
                 "FormationSettings.birth_yaw_components must lie in [1, 64], got "
                 f"{self.birth_yaw_components}"
@@ -113,8 +123,9 @@ def formation_weights(
         settings: formation probabilities.
         false_density: density ``κ`` of measurements not originating from the target (> 0),
             a scalar or one value per (track, measurement) pair (K, m).
-        p_detect: ``P_D`` for this scan, a scalar or one value per track (K,); ``None``:
-            ``settings.p_detect``.
+        p_detect: ``P_D`` for this scan, a scalar or one value per track (K,), each in
+            ``[0, 1]`` (else ConfigError: a NaN or a value above 1 would give NaN or negative
+            weights); ``None``: ``settings.p_detect``.
 
     Returns:
         ``(w_false_alarm (K,), w_detected (K, m))`` with zeros outside the gate.
@@ -123,6 +134,8 @@ def formation_weights(
     if not (np.all(np.isfinite(kappa)) and np.all(kappa > 0.0)):
         raise ConfigError(f"formation_weights: false_density must be > 0, got {kappa}")
     pd = _detection(settings, p_detect)
+    if not np.all((pd >= 0.0) & (pd <= 1.0)):
+        raise ConfigError(f"formation_weights: p_detect must lie in [0, 1], got {pd}")
     w_fa = weights * (1.0 - pd * settings.p_gate)
     w_det = np.where(gated, (weights * pd)[:, None] * likelihood / kappa, 0.0)
     return w_fa, w_det

@@ -42,7 +42,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from relloc.core.angles import wrap_angle
-from relloc.errors import ModelError
+from relloc.core.checks import count
+from relloc.errors import ConfigError, ModelError
 
 Array = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -210,9 +211,12 @@ def prune_mask(
 
 def cap_mask(weights: Array, max_components: int, groups: IntArray | None = None) -> BoolArray:
     """Components to keep: the ``max_components`` heaviest of each mixture (ties: the lower
-    index first), in either layout (see :func:`heaviest_mask`)."""
-    if max_components < 1:
-        raise ModelError(f"cap_mask: max_components must be ≥ 1, got {max_components}")
+    index first), in either layout (see :func:`heaviest_mask`). ``max_components`` must be an
+    integer ≥ 1 (:func:`relloc.core.checks.count`), else ModelError."""
+    try:
+        count(max_components, "cap_mask: max_components")
+    except ConfigError as exc:
+        raise ModelError(str(exc)) from exc
     if groups is None:
         order = np.argsort(-weights, axis=-1, kind="stable")
         rank = np.empty_like(order)

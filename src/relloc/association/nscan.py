@@ -14,15 +14,20 @@ import numpy as np
 from numpy.typing import NDArray
 
 from relloc.association.mixture_reduction import heaviest_mask
-from relloc.errors import ModelError
+from relloc.core.checks import count
+from relloc.errors import ConfigError, ModelError
 
 IntArray = NDArray[np.int64]
 
 
 def new_history(ids: IntArray, depth: int) -> IntArray:
-    """Histories for freshly born tracks: their own id repeated (they are their own root)."""
-    if depth < 1:
-        raise ModelError(f"new_history: depth N must be ≥ 1, got {depth}")
+    """Histories for freshly born tracks: their own id repeated (they are their own root).
+
+    ``depth`` must be an integer ≥ 1 (:func:`relloc.core.checks.count`), else ModelError."""
+    try:
+        count(depth, "new_history: depth N")
+    except ConfigError as exc:
+        raise ModelError(str(exc)) from exc
     ids = np.asarray(ids, dtype=np.int64).reshape(-1)
     return np.repeat(ids[:, None], depth + 1, axis=1)
 
@@ -44,8 +49,11 @@ def family_keep_mask(
     ``groups`` labels independent mixtures sharing the arrays (identifiers must be unique
     across them); the family of each group's heaviest track is always kept.
     """
-    if history.shape[0] != weights.size:
-        raise ModelError("family_keep_mask: one history row per weight is required")
+    if history.ndim != 2 or history.shape[0] != weights.size:
+        raise ModelError(
+            f"family_keep_mask: one history row per weight is required, got history "
+            f"{history.shape} for {weights.size} weights"
+        )
     if weights.size == 0:
         return np.zeros(0, dtype=bool)
     roots, inverse = np.unique(history[:, 0], return_inverse=True)

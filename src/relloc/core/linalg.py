@@ -21,6 +21,23 @@ def symmetrise(P: Array) -> Array:
     return S
 
 
+#: Relative asymmetry ``|P_ij − P_ji| / √(P_ii P_jj)`` up to which a covariance counts as
+#: symmetric (rounding of a symmetric computation stays many orders below it).
+SYMMETRY_RTOL = 1e-9
+
+
+def symmetric_within(P: Array, rtol: float = SYMMETRY_RTOL) -> bool:
+    """Whether every covariance of the stack ``P (..., n, n)`` is symmetric: ``|P_ij − P_ji| ≤
+    rtol · √(P_ii P_jj)`` for every entry. A received or hand-built covariance is checked with it
+    before use: a Cholesky factorisation or ``eigvalsh`` reads one triangle only, so an upper
+    triangle unlike the lower one would pass them and reach the filter, which symmetrises, as a
+    different and possibly indefinite matrix. Call it on matrices with a positive diagonal."""
+    P = np.asarray(P, dtype=float)
+    diag = np.diagonal(P, 0, -2, -1)
+    tolerance = rtol * np.sqrt(diag[..., :, None] * diag[..., None, :])
+    return not bool(np.any(np.abs(P - np.swapaxes(P, -1, -2)) > tolerance))
+
+
 def cholesky(P: Array, *, where: str = "", symmetric: bool = False) -> Array:
     """Lower Cholesky factor of ``P``; raises :class:`ModelError` naming ``where`` if ``P`` is not
     finite and positive definite (works on a stack ``(..., n, n)``).

@@ -17,9 +17,14 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from relloc.errors import DataError
+from relloc.core.checks import count, number
+from relloc.core.linalg import symmetric_within
+from relloc.errors import ConfigError, DataError
 
 Array = NDArray[np.float64]
+
+#: Size of a track's state ``(x, y, z, φ)``.
+STATE_DIM = 4
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -27,7 +32,13 @@ class EquivalentMeasurement:
     """The tracks of ``GSF^(sender, subject)`` at ``time`` (Eq. 8).
 
     ``means``/``prior_means`` (K, 4) and ``covs``/``prior_covs`` (K, 4, 4) are the current and
-    the previous-broadcast-propagated tracks; ``weights`` (K,) sum to one.
+    the previous-broadcast-propagated tracks; ``weights`` (K,) sum to one. ``sender`` and
+    ``subject`` are robot indices (integers ≥ 0) and ``time`` a finite number
+    (:mod:`relloc.core.checks`), else DataError.
+
+    Every covariance must be symmetric (:func:`relloc.core.linalg.symmetric_within`: a
+    Cholesky factorisation reads one triangle only). The
+    weights must sum to a finite total (normalised by an infinite one, all would be 0).
 
     Every covariance must be positive definite with a determinant that is > 0 in floating
     point (its Cholesky factor ``L`` exists and ``det P = (Π diag L)² > 0``), else DataError:
@@ -46,20 +57,34 @@ class EquivalentMeasurement:
     weights: Array
 
     def __post_init__(self) -> None:
-        where = f"EquivalentMeasurement({self.sender}→{self.subject} at t={self.time})"
+        sender, subject, time = (f"{v!r:.20}" for v in (self.sender, self.subject, self.time))
+        where = f"EquivalentMeasurement({sender}→{subject} at t={time})"
+        try:
+            count(self.sender, f"{where}: sender", low=0)
+            count(self.subject, f"{where}: subject", low=0)
+            number(self.time, f"{where}: time")
+        except ConfigError as exc:
+            raise DataError(str(exc)) from exc
         if self.sender == self.subject:
             raise DataError(f"{where}: sender and subject must differ")
-        if not np.isfinite(self.time):
-            raise DataError(f"{where}: time must be finite")
-        means = np.atleast_2d(np.asarray(self.means, dtype=float))
-        k, n = means.shape
-        arrays = {
-            "means": (means, (k, n)),
-            "covs": (np.asarray(self.covs, dtype=float), (k, n, n)),
-            "prior_means": (np.atleast_2d(np.asarray(self.prior_means, dtype=float)), (k, n)),
-            "prior_covs": (np.asarray(self.prior_covs, dtype=float), (k, n, n)),
-            "weights": (np.asarray(self.weights, dtype=float).reshape(-1), (k,)),
-        }
+        try:
+            means = np.atleast_2d(np.asarray(self.means, dtype=float))
+            k = means.shape[0]
+            arrays = {
+                "means": (means, (k, STATE_DIM)),
+                "covs": (np.asarray(self.covs, dtype=float), (k, STATE_DIM, STATE_DIM)),
+                "prior_means": (
+                    np.atleast_2d(np.asarray(self.prior_means, dtype=float)),
+                    (k, STATE_DIM),
+                ),
+                "prior_covs": (
+                    np.asarray(self.prior_covs, dtype=float),
+                    (k, STATE_DIM, STATE_DIM),
+                ),
+                "weights": (np.asarray(self.weights, dtype=float).reshape(-1), (k,)),
+            }
+        except (TypeError, ValueError) as exc:
+            raise DataError(f"{where}: the arrays are not numbers ({exc})") from exc
         for name, (arr, shape) in arrays.items():
             if arr.shape != shape:
                 raise DataError(f"{where}: {name} has shape {arr.shape}, expected {shape}")
@@ -75,9 +100,13 @@ class EquivalentMeasurement:
                 regular = False
             if not regular:
                 raise DataError(f"{where}: {name} must be positive definite with a determinant > 0")
+            if not symmetric_within(arrays[name][0]):
+                raise DataError(f"{where}: {name} must be symmetric")
         w = arrays["weights"][0]
-        if k == 0 or np.any(w < 0.0) or w.sum() <= 0.0:
-            raise DataError(f"{where}: needs ≥ 1 track with non-negative weights summing > 0")
+        if k == 0 or np.any(w < 0.0) or not 0.0 < w.sum() < np.inf:
+            raise DataError(
+                f"{where}: needs ≥ 1 track with non-negative weights summing to a finite total > 0"
+            )
         object.__setattr__(self, "weights", w / w.sum())
 
     @property

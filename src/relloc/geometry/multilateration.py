@@ -41,8 +41,12 @@ def fill_by_shortest_paths(D: Array) -> Array:
 
 
 def classical_mds(D: Array, dim: int = 2) -> Array:
-    """Points ``(n, dim)`` whose distances match ``D (n, n)`` (module docstring)."""
-    G = fill_by_shortest_paths(0.5 * (np.asarray(D, float) + np.asarray(D, float).T))
+    """Points ``(n, dim)`` whose distances match ``D (n, n)`` (module docstring); a ``D`` that
+    is not square is a DataError."""
+    D = np.asarray(D, dtype=float)
+    if D.ndim != 2 or D.shape[0] != D.shape[1]:
+        raise DataError(f"classical_mds: the distance matrix must be square (n, n), got {D.shape}")
+    G = fill_by_shortest_paths(0.5 * (D + D.T))
     n = G.shape[0]
     J = np.eye(n) - np.ones((n, n)) / n
     B = -0.5 * J @ (G**2) @ J
@@ -52,9 +56,19 @@ def classical_mds(D: Array, dim: int = 2) -> Array:
 
 
 def rigid_alignment(a: Array, b: Array, *, reflection: bool = False) -> tuple[Array, Array]:
-    """``(R, t)`` with ``R a_i + t ≈ b_i`` in least squares (module docstring)."""
+    """``(R, t)`` with ``R a_i + t ≈ b_i`` in least squares (module docstring).
+
+    ``a`` and ``b`` must be finite point sets of one shape ``(n, d)``, ``n ≥ 1``, else
+    DataError (a NaN point has no alignment)."""
     a = np.asarray(a, dtype=float)
     b = np.asarray(b, dtype=float)
+    if a.ndim != 2 or a.shape != b.shape or a.shape[0] == 0:
+        raise DataError(
+            f"rigid_alignment: needs two point sets of one shape (n ≥ 1, d), got {a.shape} "
+            f"and {b.shape}"
+        )
+    if not (np.isfinite(a).all() and np.isfinite(b).all()):
+        raise DataError("rigid_alignment: the points are not all finite")
     ca, cb = a.mean(axis=0), b.mean(axis=0)
     U, _, Vt = np.linalg.svd((a - ca).T @ (b - cb))
     d = np.ones(a.shape[1])
@@ -71,14 +85,28 @@ def multilaterate(
     distances: Array,
 ) -> Array:
     """Least-squares free points ``(n, 2)`` from ``distances[k]`` between the ends of
-    ``pairs[k]``; index ``i < n`` is free point ``i``, ``i ≥ n`` is ``fixed[i − n]``."""
+    ``pairs[k]``; index ``i < n`` is free point ``i``, ``i ≥ n`` is ``fixed[i − n]``.
+
+    DataError for: an index outside ``[0, n + len(fixed))`` or a pair joining a point to
+    itself, a number of distances other than of pairs, or a non-finite distance, initial or
+    fixed point. Geometry that leaves a point ambiguous (one anchor, collinear anchors: the
+    mirror image fits as well) is not detected; the solution nearest ``initial`` is returned.
+    """
     from scipy.optimize import least_squares
 
     x0 = np.asarray(initial, dtype=float)
     n = x0.shape[0]
     fixed = np.asarray(fixed, dtype=float).reshape(-1, x0.shape[1])
     ij = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
-    d = np.asarray(distances, dtype=float)
+    d = np.asarray(distances, dtype=float).reshape(-1)
+    n_points = n + fixed.shape[0]
+    if ij.size and (ij.min() < 0 or ij.max() >= n_points or np.any(ij[:, 0] == ij[:, 1])):
+        raise DataError(f"multilaterate: pairs must join two different points of 0…{n_points - 1}")
+    if d.size != ij.shape[0]:
+        raise DataError(f"multilaterate: {d.size} distances for {ij.shape[0]} pairs")
+    for name, arr in (("distances", d), ("initial", x0), ("fixed", fixed)):
+        if not np.isfinite(arr).all():
+            raise DataError(f"multilaterate: not every value of {name} is finite")
 
     def points(x: Array) -> Array:
         return np.vstack([x.reshape(n, -1), fixed])

@@ -74,11 +74,16 @@ def triangle_bearing(
     ``min_sin``: refuse when ``sin α_0 < min_sin`` (near-collinear); ``inequality_tol`` (m): how
     far noisy sides may break the triangle inequality before the triple is refused (within the
     tolerance γ is clipped to [−1, 1], which then falls under the collinearity refusal).
+    ``min_sin`` outside (0, 1) or ``inequality_tol`` not ≥ 0 (NaN included) is a ConfigError
+    naming the argument. Sides so small that their products underflow to 0 are refused like a
+    degenerate triangle.
     """
-    if side not in (1, -1):
+    if isinstance(side, bool) or side not in (1, -1):
         raise ConfigError(f"triangle_bearing.side: must be +1 or -1, got {side!r}")
     if not 0.0 < min_sin < 1.0:
         raise ConfigError(f"triangle_bearing.min_sin: must be in (0, 1), got {min_sin}")
+    if not inequality_tol >= 0.0:
+        raise ConfigError(f"triangle_bearing.inequality_tol: must be ≥ 0, got {inequality_tol}")
     values = {"phi_j": phi_j, "d_0j": d_0j, "d_0i": d_0i, "d_ij": d_ij}
     for name, value in values.items():
         if not math.isfinite(value):
@@ -97,22 +102,30 @@ def triangle_bearing(
                 f"(d_0j={a:.3g}, d_0i={b:.3g}, d_ij={c:.3g})"
             ),
         )
-    raw_gamma = (a * a + b * b - c * c) / (2.0 * a * b)
-    alpha = math.acos(min(1.0, max(-1.0, raw_gamma)))
-    sin_a = math.sin(alpha)
-    if sin_a < min_sin:
-        limit = " (the ranges sit at the triangle-inequality limit)" if abs(raw_gamma) >= 1 else ""
+    try:
+        raw_gamma = (a * a + b * b - c * c) / (2.0 * a * b)
+        alpha = math.acos(min(1.0, max(-1.0, raw_gamma)))
+        sin_a = math.sin(alpha)
+        if sin_a < min_sin:
+            limit = (
+                " (the ranges sit at the triangle-inequality limit)" if abs(raw_gamma) >= 1 else ""
+            )
+            return TriangleBearing(
+                bearing=None,
+                reason=(
+                    f"near-collinear robots: angle at R_0 is {math.degrees(alpha):.1f}° "
+                    f"(sin {sin_a:.3f} < {min_sin}){limit}"
+                ),
+                interior_angle=alpha,
+            )
+        da = -(a * a - b * b + c * c) / (2.0 * a * a * b * sin_a)
+        db = -(b * b - a * a + c * c) / (2.0 * a * b * b * sin_a)
+        dc = c / (a * b * sin_a)
+    except ZeroDivisionError:
         return TriangleBearing(
             bearing=None,
-            reason=(
-                f"near-collinear robots: angle at R_0 is {math.degrees(alpha):.1f}° "
-                f"(sin {sin_a:.3f} < {min_sin}){limit}"
-            ),
-            interior_angle=alpha,
+            reason=f"sides too small to resolve (d_0j={a:.3g}, d_0i={b:.3g}, d_ij={c:.3g})",
         )
-    da = -(a * a - b * b + c * c) / (2.0 * a * a * b * sin_a)
-    db = -(b * b - a * a + c * c) / (2.0 * a * b * b * sin_a)
-    dc = c / (a * b * sin_a)
     return TriangleBearing(
         bearing=float(wrap_angle(phi_j + side * alpha)),
         d_bearing=(1.0, side * da, side * db, side * dc),
