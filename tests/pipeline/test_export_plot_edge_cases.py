@@ -104,6 +104,16 @@ def test_track_gap_keeps_every_record(tmp_path: Path) -> None:
     assert _mcap_topics(tmp_path / "out.mcap")["/leader/estimates/r3"] == idx.size
 
 
+@pytest.mark.parametrize("yaw", [float("nan"), "0.3"])
+def test_a_common_frame_yaw_that_is_not_a_number_fails_cleanly(tmp_path: Path, yaw) -> None:  # type: ignore[no-untyped-def]
+    """Before: ``float`` read the string "0.3" as a number, and a NaN wrote NaN quaternions on
+    /tf."""
+    rec = recording()
+    rec = dataclasses.replace(rec, meta={**rec.meta, "common_frame_yaw": yaw})
+    with pytest.raises(DataError, match=r"recording\.meta: common_frame_yaw"):
+        _export(tmp_path, [_rel(rec)], rec)
+
+
 @pytest.mark.parametrize("offset", [-10.0, 2.0**32, 2.0**31 - 3.0])
 def test_stamps_outside_ros_time_fail_cleanly_and_write_nothing(
     tmp_path: Path, offset: float

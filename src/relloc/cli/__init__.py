@@ -107,6 +107,13 @@ def _note_earlier_files(out: Path, started: float) -> None:
         )
 
 
+def error_text(exc: BaseException) -> str:
+    """``relloc: error: …`` and, one per line, the notes the error gathered on its way (e.g.
+    which Monte-Carlo run raised it, and with which seed: :mod:`relloc.pipeline.montecarlo`)."""
+    notes = "".join(f"\n  ({note})" for note in getattr(exc, "__notes__", ()))
+    return f"relloc: error: {exc}{notes}"
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     from relloc.cli.extras import check_command
 
@@ -128,7 +135,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             _note_earlier_files(args.out, started)
         return code
     except RellocError as exc:
-        print(f"relloc: error: {exc}", file=sys.stderr)
+        print(error_text(exc), file=sys.stderr)
         return exc.exit_code
     except KeyboardInterrupt:
         print("relloc: interrupted", file=sys.stderr)

@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from relloc.core.contract import Belief, BeliefStack, TrackEvent, UpdateRecord
-from relloc.errors import ConfigError
+from relloc.errors import ConfigError, DataError, ModelError
 
 Array = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -189,16 +189,26 @@ class Recorder:
 
     def record(self, t: float, owner: str, beliefs: Iterable[Belief]) -> None:
         """Store ``owner``'s ``beliefs`` at time ``t`` (a :class:`BeliefStack` as one copy of
-        its arrays, without a :class:`Belief` per subject)."""
+        its arrays, without a :class:`Belief` per subject).
+
+        ``beliefs`` that are not an iterable of :class:`Belief` (``None``, a belief without a
+        subject, a non-numeric age or diagnostic) break the estimator contract: ModelError
+        naming ``owner`` and ``t``."""
         t = float(t)
         if isinstance(beliefs, BeliefStack):
             mean, cov = beliefs.mean.copy(), beliefs.cov.copy()
             for i, subject in enumerate(beliefs.subjects):
                 self._append((owner, subject, ""), beliefs.frame, t, mean[i], cov[i], beliefs.age)
             return
-        for b in beliefs:
-            key = (owner, b.subject, b.track)
-            self._append(key, b.frame, t, b.mean.copy(), b.cov.copy(), float(b.age), b.info)
+        try:
+            for b in beliefs:
+                key = (owner, b.subject, b.track)
+                self._append(key, b.frame, t, b.mean.copy(), b.cov.copy(), float(b.age), b.info)
+        except (AttributeError, TypeError, ValueError) as exc:
+            raise ModelError(
+                f"beliefs of {owner} at t={t:g}: not a sequence of Belief with numeric age and "
+                f"info ({type(exc).__name__}: {exc})"
+            ) from exc
 
     def _append(
         self,
@@ -210,13 +220,20 @@ class Recorder:
         age: float,
         info: Mapping[str, float] | None = None,
     ) -> None:
-        """One recorded belief of the series ``key`` (``mean`` and ``cov`` kept as given)."""
+        """One recorded belief of the series ``key`` (``mean`` and ``cov`` kept as given).
+
+        A series keeps its frame (ConfigError) and its state dimension (DataError: the rows
+        could not be stacked into ``(K, d)``) from its first record on."""
         rows = self._beliefs.get(key)
         if rows is None:  # (not setdefault: that would build new rows at every call)
-            rows = self._beliefs[key] = _Rows(frame=frame)
+            rows = self._beliefs[key] = _Rows(frame=frame, dim=mean.size)
         if rows.frame != frame:
             raise ConfigError(f"{series_label(key)}: frame changed from {rows.frame} to {frame}")
-        rows.dim = mean.size
+        if mean.size != rows.dim:
+            raise DataError(
+                f"{series_label(key)}: state dimension changed from {rows.dim} to {mean.size} "
+                f"at t={t:g}"
+            )
         rows.t.append(t)
         rows.mean.append(mean)
         rows.cov.append(cov)

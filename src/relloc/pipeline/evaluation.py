@@ -36,7 +36,7 @@ from relloc.core.checks import number, positive
 from relloc.core.estimates import BeliefSeries, Estimates, UpdateSeries, series_label
 from relloc.core.events import TIME_TOL
 from relloc.core.recording import Recording
-from relloc.errors import ConfigError
+from relloc.errors import ConfigError, ModelError
 from relloc.metrics.conditioning import condition_log10_batch
 from relloc.metrics.consistency import (
     anees,
@@ -87,7 +87,11 @@ class SeriesEvaluation:
 
 def series_errors(series: BeliefSeries, recording: Recording) -> Array:
     """``x̂ − x`` of every record of ``series`` against the recording's truth in the series'
-    frame (angles wrapped), ``(T, dim)``."""
+    frame (angles wrapped), ``(T, dim)``.
+
+    A mean or track age that is not finite would make every pooled figure NaN (or drop the
+    record from the steady state) without a word: ModelError naming the series and the first
+    such record."""
     f = frame(series.frame)
     if series.mean.shape[1:] != (f.dim,):
         raise ConfigError(
@@ -95,6 +99,12 @@ def series_errors(series: BeliefSeries, recording: Recording) -> Array:
         )
     if series.t.size == 0:
         return np.zeros((0, f.dim))
+    finite = np.isfinite(series.mean).all(axis=1) & np.isfinite(series.age)
+    if not finite.all():
+        k = int(np.argmin(finite))
+        raise ModelError(
+            f"{series.label}: belief at t={series.t[k]:g} has a mean or age that is not finite"
+        )
     truth = f.truth(recording, series.owner, series.subject, series.t)
     return state_errors(series.mean, truth, f.angles)
 
@@ -110,9 +120,15 @@ def position_rmse(err: Array, frame_name: str) -> float:
 def evaluate_series(
     series: BeliefSeries, updates: UpdateSeries, recording: Recording
 ) -> SeriesEvaluation:
-    """Score one belief series (and its updates) against the recording's truth."""
+    """Score one belief series (and its updates) against the recording's truth; a covariance
+    that NEES or conditioning cannot use is a ModelError naming the series."""
     err = series_errors(series, recording)
     empty = series.t.size == 0
+    try:
+        nees_ = np.zeros(0) if empty else nees(err, series.cov)
+        cond_p = np.zeros(0) if empty else condition_log10_batch(series.cov)
+    except ModelError as exc:
+        raise ModelError(f"{series.label}: {exc}") from exc
     return SeriesEvaluation(
         owner=series.owner,
         subject=series.subject,
@@ -122,9 +138,9 @@ def evaluate_series(
         t=series.t,
         error=err,
         sigma=np.sqrt(np.diagonal(series.cov, axis1=1, axis2=2)),
-        nees=np.zeros(0) if empty else nees(err, series.cov),
+        nees=nees_,
         age=series.age,
-        cond_p=np.zeros(0) if empty else condition_log10_batch(series.cov),
+        cond_p=cond_p,
         update_t=updates.t,
         update_age=updates.age,
         nis=updates.nis,
@@ -326,12 +342,16 @@ def nees_band_check(
 
 def convergence_time(evaluation: SeriesEvaluation, thresholds: Sequence[float]) -> float | None:
     """Seconds from the series' first record until every state's ``|error|`` stays below its
-    threshold for good (``None`` if it never settles)."""
+    threshold for good (``None`` if it never settles). Each threshold must be a finite number
+    > 0 (ConfigError naming it): a NaN or one ≤ 0 is never reached, and would read as a run
+    that never converged."""
     th = np.asarray(thresholds, dtype=float).reshape(-1)
     if th.size != evaluation.error.shape[1]:
         raise ConfigError(
             f"convergence_time: {th.size} thresholds for {evaluation.error.shape[1]} states"
         )
+    for i, x in enumerate(th):
+        positive(x, f"convergence_time: thresholds[{i}]")
     if evaluation.t.size == 0:
         return None
     above = ~np.all(np.abs(evaluation.error) < th, axis=1)

@@ -22,8 +22,9 @@ from types import MappingProxyType
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.core.checks import number
 from relloc.core.recording import Recording
-from relloc.errors import ConfigError
+from relloc.errors import ConfigError, DataError
 
 Array = NDArray[np.float64]
 TruthFn = Callable[[Recording, str, str, Array], Array]
@@ -61,11 +62,23 @@ def _world_position2(rec: Recording, owner: str, subject: str, t: Array) -> Arra
     return np.asarray(pose[:, :2])
 
 
+def common_frame_yaw(rec: Recording) -> float:
+    """The yaw (rad) of the team's common frame in the world, ``recording.meta
+    ["common_frame_yaw"]`` (0 when absent); one that is not a finite number would turn every
+    true state in that frame into NaN (or fail in ``float``): DataError naming it."""
+    try:
+        return number(rec.meta.get("common_frame_yaw", 0.0), "recording.meta: common_frame_yaw")
+    except ConfigError as exc:  # the recording's data, not a setting
+        raise DataError(str(exc)) from None
+
+
 def _airground_follower(rec: Recording, owner: str, subject: str, t: Array) -> Array:
+    """The follower-frame truth (module docstring), in the common frame of
+    :func:`common_frame_yaw`."""
     truth = rec.require_truth("airground_follower truth")
     follower = truth[rec.index(owner)].at(t)
     leader = truth[rec.index(subject)].at(t)
-    yaw = float(rec.meta.get("common_frame_yaw", 0.0))
+    yaw = common_frame_yaw(rec)
     c, s = np.cos(yaw), np.sin(yaw)
     d = leader[:, :2] - follower[:, :2]
     out = np.empty((d.shape[0], 4))

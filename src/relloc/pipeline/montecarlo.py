@@ -110,7 +110,9 @@ def run_monte_carlo(
     """Run ``task(seed_sequence, run_index, *task_args)`` per run; results come in run order.
 
     ``task`` must be a picklable top-level function (or ``functools.partial`` of one); it builds its
-    own ``np.random.default_rng(seed_sequence)``.
+    own ``np.random.default_rng(seed_sequence)``. An error a run raises propagates as it is,
+    with a note naming the run and the seed that reproduce it (:func:`_result`); a process pool
+    is shut down first (:func:`executor_from_spec`).
     """
     seeds = spawn_seeds(seed, n_runs)
     with executor_from_spec(executor) as pool:
@@ -122,8 +124,18 @@ def run_monte_carlo(
             with Progress(transient=True) as progress:
                 bar = progress.add_task(description, total=n_runs)
                 results = []
-                for f in futures:
-                    results.append(f.result())
+                for i, f in enumerate(futures):
+                    results.append(_result(f, i, n_runs, seed, description))
                     progress.advance(bar)
                 return results
-        return [f.result() for f in futures]
+        return [_result(f, i, n_runs, seed, description) for i, f in enumerate(futures)]
+
+
+def _result(future: Future[R], run: int, n_runs: int, seed: int, description: str) -> R:
+    """The result of run ``run``; an error it raised gets the note ``description: run i of n
+    (seed s)``, which tells the run apart from the others and reproduces it alone."""
+    try:
+        return future.result()
+    except Exception as exc:
+        exc.add_note(f"{description}: run {run} of {n_runs} (seed {seed})")
+        raise

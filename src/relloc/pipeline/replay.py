@@ -24,6 +24,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.core.checks import number, positive
 from relloc.core.contract import Estimator
 from relloc.core.estimates import Estimates, Recorder
 from relloc.core.events import TIME_TOL, run_events
@@ -58,9 +59,9 @@ MAX_RECORDS = 10_000_000
 
 def record_grid(t0: float, t1: float, rate_hz: float) -> Array:
     """``t0 + i / rate_hz`` for every ``i`` with ``t0 + i / rate_hz ≤ t1`` (at most
-    :data:`MAX_RECORDS`: ConfigError beyond)."""
-    if not (np.isfinite(rate_hz) and rate_hz > 0):
-        raise ConfigError(f"record_rate_hz: must be > 0, got {rate_hz}")
+    :data:`MAX_RECORDS`: ConfigError beyond, and for a rate that is not a finite number > 0,
+    :func:`relloc.core.checks.positive`)."""
+    rate_hz = positive(rate_hz, "record_rate_hz")
     records = (t1 - t0) * rate_hz
     if not (np.isfinite(records) and records <= MAX_RECORDS):
         raise ConfigError(
@@ -90,6 +91,9 @@ def replay(
     (default: every tick) must be ticks, and readings are fed at the first tick at or after
     their stamp (module docstring). Returns the
     :class:`~relloc.core.estimates.Estimates` of all of them.
+
+    ``start``, ``end`` and ``record_rate_hz`` must be numbers (ConfigError naming the argument,
+    :mod:`relloc.core.checks`), the window finite and not inverted.
     """
     if not estimators:
         raise ConfigError("replay: no estimators given")
@@ -97,8 +101,8 @@ def replay(
         raise ConfigError("replay: one estimator given twice")
     ticks = None if clock is None else _clock_ticks(clock)
     span0, span1 = recording.span if ticks is None else (float(ticks[0]), float(ticks[-1]))
-    t0 = span0 if start is None else float(start)
-    t1 = span1 if end is None else float(end)
+    t0 = span0 if start is None else number(start, "replay: start")
+    t1 = span1 if end is None else number(end, "replay: end")
     if not (np.isfinite(t0) and np.isfinite(t1) and t1 >= t0):
         raise ConfigError(f"replay: the window [{t0}, {t1}] is empty or not finite")
     if ticks is not None:

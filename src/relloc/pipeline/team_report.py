@@ -52,6 +52,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.core.checks import positive
 from relloc.core.contract import TrackEvent
 from relloc.core.estimates import Estimates
 from relloc.core.recording import Recording
@@ -238,9 +239,13 @@ def summarise(
     record_rate_hz: float,
     meta: Mapping[str, Any] | None = None,
 ) -> dict[str, Any]:
-    """Pool runs into the ``summary.json`` dictionary (keys: module docstring)."""
+    """Pool runs into the ``summary.json`` dictionary (keys: module docstring).
+
+    ``record_rate_hz`` must be a finite number > 0 (ConfigError) for one run too, where no
+    run-averaged NEES reads it: the summary states it."""
     if not results:
         raise ConfigError("summarise: no runs to summarise")
+    positive(record_rate_hz, "summarise: record_rate_hz")
     if not any(r.evaluations for r in results):
         raise ConfigError(
             "no results: no observing robot measured another robot in any run, so nothing was "

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from relloc.plotting.style import legend_outside
+from relloc.plotting.style import any_positive, legend_outside
 
 
 def plot_topology(
@@ -61,11 +61,13 @@ def plot_case_series(
     ylabel: str,
     log: bool = False,
 ) -> None:
-    """One quantity (an error or a 3σ bound) over time for several cases (seed 001 Figs. 6–10)."""
+    """One quantity (an error or a 3σ bound) over time for several cases (seed 001 Figs. 6–10).
+    ``log`` takes effect only if some value is positive (:func:`relloc.plotting.style.
+    any_positive`)."""
     t = np.asarray(t, dtype=float)
     for label, values in series.items():
         ax.plot(t, np.asarray(values, dtype=float), lw=1.0, label=label)
-    if log:
+    if log and any_positive(*series.values()):
         ax.set_yscale("log")
     else:
         ax.axhline(0.0, color="0.6", lw=0.5)
@@ -87,19 +89,19 @@ def plot_grouped_bars(
 ) -> None:
     """Bars of ``series[label][g]`` for every group ``g`` (e.g. RMSE per mode and anchor set);
     ``None`` is a missing bar. ``log`` takes effect only if some bar or the reference is
-    positive: with none (every value missing or ≤ 0) matplotlib cannot log-scale the axis and
-    would fail while saving, so the axis stays linear."""
+    positive (:func:`relloc.plotting.style.any_positive`)."""
     x = np.arange(len(groups))
     width = 0.8 / max(len(series), 1)
-    positive = reference is not None and reference > 0
+    bars = []
     for k, (label, values) in enumerate(series.items()):
         vals = np.asarray([np.nan if v is None else v for v in values], dtype=float)
         ax.bar(x + (k - (len(series) - 1) / 2) * width, vals, width, label=label)
-        positive = positive or bool(np.any(vals > 0))
+        bars.append(vals)
     if reference is not None:
         ax.axhline(reference, color="k", ls="--", lw=0.8, label=reference_label)
+        bars.append(np.array([reference], dtype=float))
     ax.set_xticks(x, groups, rotation=20)
-    if log and positive:
+    if log and any_positive(*bars):
         ax.set_yscale("log")
     ax.set_ylabel(ylabel)
     ax.grid(True, alpha=0.3, axis="y", which="both")

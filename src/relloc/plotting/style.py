@@ -5,6 +5,9 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
+from numpy.typing import ArrayLike
+
 
 def legend_outside(ax: Any, **kwargs: Any) -> None:
     """The axes' legend to the right of it, outside the data."""
@@ -19,6 +22,14 @@ def legend_outside(ax: Any, **kwargs: Any) -> None:
             fontsize="small",
             **kwargs,
         )
+
+
+def any_positive(*values: ArrayLike) -> bool:
+    """Whether some value of ``values`` is > 0 (NaN is not). A logarithmic axis needs one:
+    with none matplotlib cannot scale the axis (it warns, and may fail while saving), so a
+    figure keeps that axis linear. Non-positive values among positive ones need no masking
+    here: matplotlib leaves them out of a logarithmic axis itself."""
+    return any(bool(np.any(np.asarray(v, dtype=float) > 0)) for v in values)
 
 
 def plain_log_ticks(ax: Any, axes: str = "y") -> None:

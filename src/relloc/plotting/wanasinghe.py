@@ -15,7 +15,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from relloc.plotting.errors import STATE_LABELS
-from relloc.plotting.style import legend_outside, plain_log_ticks
+from relloc.plotting.style import any_positive, legend_outside, plain_log_ticks
 
 
 def plot_convergence_curves(
@@ -42,7 +42,9 @@ def plot_convergence_curves(
 def plot_rmse_vs_bound(
     axes: Sequence[Any], t: ArrayLike, rmse: ArrayLike, bound_sigma: ArrayLike, *, label: str
 ) -> None:
-    """RMSE ``(K, 4)`` over Monte-Carlo runs against ``sqrt(diag PCRLB)`` ``(K, 4)``."""
+    """RMSE ``(K, 4)`` over Monte-Carlo runs against ``sqrt(diag PCRLB)`` ``(K, 4)``, each
+    state on a logarithmic axis if some value of it is positive
+    (:func:`relloc.plotting.style.any_positive`)."""
     t = np.asarray(t, dtype=float)
     r = np.asarray(rmse, dtype=float)
     b = np.asarray(bound_sigma, dtype=float)
@@ -50,7 +52,8 @@ def plot_rmse_vs_bound(
         ax.plot(t, r[:, i], lw=0.9, label=f"{label} RMSE")
         ax.plot(t, b[:, i], lw=0.9, ls="--", label=f"{label} √PCRLB")
         ax.set_ylabel(STATE_LABELS[i])
-        ax.set_yscale("log")
+        if any_positive(r[:, i], b[:, i]):
+            ax.set_yscale("log")
         ax.grid(True, alpha=0.3, which="both")
     legend_outside(axes[0])
     axes[-1].set_xlabel("time (s)")

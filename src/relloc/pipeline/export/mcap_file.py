@@ -44,6 +44,7 @@ from relloc.pipeline.export.poses import (
     PoseSet,
     yaw_quaternion,
 )
+from relloc.pipeline.frames import common_frame_yaw
 from relloc.pipeline.output import replace_file
 
 Array = NDArray[np.float64]
@@ -175,7 +176,7 @@ def _truth_messages(
         return
     grid = np.unique(np.concatenate([p.t for p in poses.poses]))
     names = poses.names
-    common_yaw = float(recording.meta.get("common_frame_yaw", 0.0))
+    common_yaw = common_frame_yaw(recording)
     pose = np.full((recording.n_robots, grid.size, 4), np.nan)
     for i, gt in enumerate(recording.truth):
         inside = (grid >= gt.t[0]) & (grid <= gt.t[-1])
