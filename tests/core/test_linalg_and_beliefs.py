@@ -90,3 +90,20 @@ def test_mixture_layouts_weights_and_validation():
         )
     with pytest.raises(ModelError, match="non-finite"):
         Gaussian(mean=np.array([np.nan]), cov=np.eye(1))
+
+
+def test_a_bad_covariance_in_a_stack_is_named_alone():
+    """Before: the message printed the eigenvalues of every covariance of the stack."""
+    from relloc.core.linalg import cholesky
+
+    P = np.tile(np.eye(3), (2, 500, 1, 1))
+    P[1, 17, 1, 1] = -1.0
+    with pytest.raises(ModelError) as err:
+        cholesky(P, where="NEES")
+    assert str(err.value) == (
+        "covariance is not positive definite at NEES (matrix (1, 17) of a stack (2, 500)); "
+        "eigenvalues: [-1.  1.  1.]"
+    )
+    P[0, 3, 2, 2] = np.nan
+    with pytest.raises(ModelError, match=r"not finite at NEES \(matrix \(0, 3\) of a stack"):
+        cholesky(P, where="NEES")

@@ -45,7 +45,9 @@ def cholesky(P: Array, *, where: str = "", symmetric: bool = False) -> Array:
     ``P`` is symmetrised first unless ``symmetric`` says it is exactly symmetric already (the
     output of :func:`symmetrise`, whose symmetrisation would change nothing). Where every
     eigenvalue is positive but the factorisation still fails, the message gives the condition
-    number: the matrix is positive definite only beyond double precision.
+    number: the matrix is positive definite only beyond double precision. On a stack the
+    message names the first bad matrix (the worst-conditioned one in that case) and gives its
+    eigenvalues only.
     """
     S = P if symmetric else symmetrise(P)
     L: Array | None
@@ -57,17 +59,33 @@ def cholesky(P: Array, *, where: str = "", symmetric: bool = False) -> Array:
     if L is not None and np.isfinite(L).all():
         return L
     at = f" at {where}" if where else ""
-    if not np.isfinite(S).all():
-        raise ModelError(f"covariance is not finite{at}")
-    eigenvalues = np.linalg.eigvalsh(S)
+    stack = S.shape[:-2]
+    flat = S.reshape(-1, *S.shape[-2:])
+    finite = np.isfinite(flat).all(axis=(1, 2))
+    if not finite.all():
+        raise ModelError(f"covariance is not finite{at}{_which(stack, int(np.argmin(finite)))}")
+    eigenvalues = np.linalg.eigvalsh(flat)
     if np.all(eigenvalues > 0):  # positive, but too ill-conditioned for the factorisation
-        ratio = float(np.max(np.max(eigenvalues, axis=-1) / np.min(eigenvalues, axis=-1)))
+        ratios = eigenvalues.max(axis=1) / eigenvalues.min(axis=1)
+        k = int(np.argmax(ratios))
         raise ModelError(
-            f"covariance is not positive definite in double precision{at}: its condition "
-            f"number λmax/λmin, up to {ratio:.3g}, is beyond what a Cholesky factorisation "
-            f"resolves; eigenvalues: {eigenvalues}"
+            f"covariance is not positive definite in double precision{at}{_which(stack, k)}: its "
+            f"condition number λmax/λmin, {ratios[k]:.3g}, is beyond what a Cholesky "
+            f"factorisation resolves; eigenvalues: {eigenvalues[k]}"
         )
-    raise ModelError(f"covariance is not positive definite{at}; eigenvalues: {eigenvalues}")
+    k = int(np.argmax(eigenvalues.min(axis=1) <= 0))
+    raise ModelError(
+        f"covariance is not positive definite{at}{_which(stack, k)}; eigenvalues: {eigenvalues[k]}"
+    )
+
+
+def _which(stack: tuple[int, ...], k: int) -> str:
+    """`` (matrix i of a stack of shape …)`` for the ``k``-th matrix of a stack (row-major), so
+    that an error names the one bad covariance of a series instead of printing them all;
+    nothing for a single matrix."""
+    if not stack:
+        return ""
+    return f" (matrix {tuple(int(i) for i in np.unravel_index(k, stack))} of a stack {stack})"
 
 
 def solve_psd(S: Array, B: Array, *, where: str = "") -> Array:
