@@ -4,11 +4,11 @@ raw numpy exception."""
 
 import numpy as np
 import pytest
+from gaussian_sum_samples import one_track_message
 
 from relloc.errors import DataError, ModelError
 from relloc.fusion.covariance_intersection import covariance_intersection
 from relloc.fusion.decorrelation import decorrelated_fusion
-from relloc.fusion.messages import EquivalentMeasurement
 
 I2, I4 = np.eye(2), np.eye(4)
 
@@ -46,20 +46,6 @@ def test_decorrelated_fusion_refuses_mismatched_shapes():
         decorrelated_fusion(np.zeros(4), I4, np.zeros(3), I4, np.zeros(4), 2 * I4)
 
 
-def _message(**changes):
-    fields = {
-        "sender": 0,
-        "subject": 1,
-        "time": 0.0,
-        "means": np.zeros((1, 4)),
-        "covs": I4[None],
-        "prior_means": np.zeros((1, 4)),
-        "prior_covs": I4[None],
-        "weights": np.ones(1),
-    }
-    return EquivalentMeasurement(**{**fields, **changes})
-
-
 TWO = {"means": np.zeros((2, 4)), "covs": np.stack([I4, I4])}
 TWO |= {"prior_means": TWO["means"], "prior_covs": TWO["covs"]}
 
@@ -80,4 +66,4 @@ TWO |= {"prior_means": TWO["means"], "prior_covs": TWO["covs"]}
 )
 def test_a_malformed_message_is_a_data_error(changes, match):
     with pytest.raises(DataError, match=match), np.errstate(over="ignore"):
-        _message(**changes)
+        one_track_message(**changes)

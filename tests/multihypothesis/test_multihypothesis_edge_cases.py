@@ -15,7 +15,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from gaussian_sum_samples import gs_settings
+from gaussian_sum_samples import gs_settings, one_track_message
 
 from relloc.association.assignment import assign
 from relloc.association.hypotheses import FormationSettings, formation_weights
@@ -367,6 +367,18 @@ def test_nscan_depth_larger_than_the_history() -> None:
 # ---------------------------------------------------------------- received beliefs
 
 
+def _from_robot_1(cov: np.ndarray) -> EquivalentMeasurement:
+    """Robot 1's one-track message to robot 0: its track at ``X1`` with covariance ``cov``."""
+    return one_track_message(
+        sender=1,
+        subject=0,
+        means=X1[None],
+        covs=cov[None],
+        prior_means=X1[None],
+        prior_covs=cov[None],
+    )
+
+
 @pytest.mark.parametrize(
     "cov",
     [np.zeros((4, 4)), np.diag([0.01, 0.01, 0.01, 0.0]), np.eye(4) * 1e-200],
@@ -380,26 +392,8 @@ def test_a_degenerate_received_covariance_is_refused(cov: np.ndarray) -> None:
     fus = GaussianSumFuser(0, [1, 2], st)
     fus.tracks = _track(-X1, st.nscan_depth)
     with pytest.raises(DataError, match="positive definite"):
-        EquivalentMeasurement(
-            sender=1,
-            subject=0,
-            time=0.0,
-            means=X1[None],
-            covs=cov[None],
-            prior_means=X1[None],
-            prior_covs=cov[None],
-            weights=np.ones(1),
-        )
-    msg = EquivalentMeasurement(
-        sender=1,
-        subject=0,
-        time=0.0,
-        means=X1[None],
-        covs=COV[None],
-        prior_means=X1[None],
-        prior_covs=COV[None],
-        weights=np.ones(1),
-    )
+        _from_robot_1(cov)
+    msg = _from_robot_1(COV)
     assert fus.fuse(msg) == "mutual"
     _assert_sane(fus)
     assert fus.tracks.size == 2
