@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from relloc.core.checks import count, number, positive, probability
+from relloc.core.checks import count, number, positive, probability, sequence
 from relloc.errors import ConfigError
 from relloc.estimators.cooperative import CooperativeSettings, OdometryModel, SensorModel
 from relloc.estimators.gaussian_sum import GaussianSumSettings
@@ -93,3 +93,11 @@ def test_the_checks_take_numpy_scalars_and_refuse_bools_and_strings():
 def test_an_integer_beyond_every_float_is_refused_not_an_overflow():
     with pytest.raises(ConfigError, match=r"^x: must be a finite number"):
         number(10**400, "x")
+
+
+def test_a_sequence_is_a_list_tuple_or_array_of_the_length_asked():
+    assert sequence((1, 2), "w", "two numbers", length=2) == (1, 2)
+    assert len(sequence(np.zeros(3), "w", "numbers")) == 3
+    for bad in ("ab", b"ab", None, 3, {"a": 1}, (1, 2, 3)):
+        with pytest.raises(ConfigError, match=r"^w: expected two numbers, got "):
+            sequence(bad, "w", "two numbers", length=2)

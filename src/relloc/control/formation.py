@@ -26,7 +26,6 @@ command within :data:`~relloc.core.limits.MAX_SPEED_M_S` and
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Literal
 
@@ -54,17 +53,13 @@ def formation_offsets(offsets: object, where: str) -> tuple[tuple[float, float],
     pairs, each finite and within ``MAX_ABS_POSITION_M``, no follower within
     :data:`MIN_SEPARATION_M` of the leader (``r = 0``) or of another follower; else ConfigError
     naming ``where[i]``. The distances do not depend on the frame the offsets are in."""
-    if isinstance(offsets, (str, bytes)) or not isinstance(offsets, Sequence | np.ndarray):
-        raise ConfigError(f"{where}: expected a list of [x, y] offsets, got {offsets!r:.40}")
+    offsets = checks.sequence(offsets, where, "a list of [x, y] offsets")
     if len(offsets) == 0:
         raise ConfigError(f"{where}: need at least one follower")
     out: list[tuple[float, float]] = []
     for i, off in enumerate(offsets):
         at = f"{where}[{i}]"
-        if isinstance(off, (str, bytes)) or not isinstance(off, Sequence | np.ndarray):
-            raise ConfigError(f"{at}: expected two numbers [x, y], got {off!r:.40}")
-        if len(off) != 2:
-            raise ConfigError(f"{at}: expected two numbers [x, y], got {len(off)}")
+        off = checks.sequence(off, at, "two numbers [x, y]", length=2)
         x, y = (
             checks.number(v, f"{at}[{k}]", low=-MAX_ABS_POSITION_M, high=MAX_ABS_POSITION_M)
             for k, v in enumerate(off)

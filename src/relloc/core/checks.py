@@ -7,7 +7,10 @@ from __future__ import annotations
 
 import math
 import numbers
-from collections.abc import Collection, Iterable, Mapping
+from collections.abc import Collection, Iterable, Mapping, Sequence
+from typing import Any
+
+import numpy as np
 
 from relloc.errors import ConfigError
 
@@ -57,6 +60,18 @@ def count(value: object, where: str, *, low: int = 1) -> int:
     if value < low:
         raise ConfigError(f"{where}: must be ≥ {low}, got {value}")
     return int(value)
+
+
+def sequence(value: object, where: str, what: str, *, length: int | None = None) -> Sequence[Any]:
+    """``value`` if it is a list, tuple or array (not a string or bytes, which iterate as
+    characters), of ``length`` items when given; else ConfigError ``where: expected what``."""
+    if (
+        isinstance(value, (str, bytes))
+        or not isinstance(value, Sequence | np.ndarray)
+        or (length is not None and len(value) != length)
+    ):
+        raise ConfigError(f"{where}: expected {what}, got {value!r:.40}")
+    return value  # type: ignore[return-value]
 
 
 def refuse_unread(

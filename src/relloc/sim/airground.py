@@ -289,9 +289,8 @@ class AirGroundScenario:
                 f"{owner}.camera_every: must be a multiple of uwb_every (every camera "
                 "frame needs fresh ranges for the triangle bearing)"
             )
-        noise = self.velocity_noise
-        if isinstance(noise, (str, bytes)) or not isinstance(noise, Sequence) or len(noise) != 2:
-            raise ConfigError(f"{owner}.velocity_noise: expected (σ_v, σ_ω), got {noise!r:.40}")
+        where = f"{owner}.velocity_noise"
+        noise = checks.sequence(self.velocity_noise, where, "(σ_v, σ_ω)", length=2)
         checks.number(noise[0], f"{owner}.velocity_noise[0]", low=0.0, high=MAX_SPEED_M_S)
         checks.number(noise[1], f"{owner}.velocity_noise[1]", low=0.0, high=MAX_YAW_RATE_RAD_S)
         if self.control == "external" and self.offset_frame != "leader":

@@ -23,7 +23,6 @@ the ``np.random.Generator`` passed in.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -88,14 +87,13 @@ class CooperativeScenario:
         starts = _points("start_poses", self.start_poses)
         if starts.ndim != 2 or starts.shape[1] != 3 or starts.shape[0] < 1:
             raise ConfigError("CooperativeScenario.start_poses must have shape (n, 3)")
-        wps = self.waypoints
-        if (
-            isinstance(wps, (str, bytes))
-            or not isinstance(wps, Sequence)
-            or len(wps) != len(starts)
-        ):
-            raise ConfigError("CooperativeScenario.waypoints: one way-point list per robot")
-        for i, w in enumerate(self.waypoints):
+        wps = checks.sequence(
+            self.waypoints,
+            "CooperativeScenario.waypoints",
+            "one way-point list per robot",
+            length=len(starts),
+        )
+        for i, w in enumerate(wps):
             wi = _points(f"waypoints[{i}]", w)
             if wi.ndim != 2 or wi.shape[1] != 2 or len(wi) < 1:
                 raise ConfigError(f"CooperativeScenario.waypoints[{i}] must have shape (k, 2)")
@@ -132,11 +130,7 @@ class CooperativeScenario:
             _pose_sigma(name, getattr(self, name))
         if self.duration < self.dt:
             raise ConfigError("CooperativeScenario.duration must be ≥ dt")
-        gps = self.gps_robots
-        if isinstance(gps, (str, bytes)) or not isinstance(gps, Sequence):
-            raise ConfigError(
-                f"CooperativeScenario.gps_robots: expected robot indices, got {gps!r:.40}"
-            )
+        gps = checks.sequence(self.gps_robots, "CooperativeScenario.gps_robots", "robot indices")
         for k, r in enumerate(gps):
             where = f"CooperativeScenario.gps_robots[{k}]"
             if checks.count(r, where, low=0) >= starts.shape[0]:
@@ -186,8 +180,7 @@ def _pose_sigma(name: str, value: object) -> None:
     """``value`` as ``(σ_x, σ_y, σ_ψ)``: positions in (0, ``MAX_ABS_POSITION_M``], heading in
     (0, π]; else ConfigError naming ``name``."""
     where = f"CooperativeScenario.{name}"
-    if isinstance(value, (str, bytes)) or not isinstance(value, Sequence) or len(value) != 3:
-        raise ConfigError(f"{where}: expected (σ_x, σ_y, σ_ψ), got {value!r:.40}")
+    value = checks.sequence(value, where, "(σ_x, σ_y, σ_ψ)", length=3)
     for k, (v, high) in enumerate(zip(value, (MAX_ABS_POSITION_M,) * 2 + (math.pi,), strict=True)):
         checks.number(v, f"{where}[{k}]", low=0.0, open_low=True, high=high)
 

@@ -45,7 +45,6 @@ only) — and the true poses on the filter grid.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -171,11 +170,8 @@ class DeSilvaScenario:
                 "DeSilvaScenario.direct_rate must divide filter_rate "
                 f"({self.direct_rate} vs {self.filter_rate})"
             )
-        if isinstance(self.sensing, (str, bytes)) or not isinstance(self.sensing, Sequence):
-            raise ConfigError(
-                f"DeSilvaScenario.sensing: expected robot indices, got {self.sensing!r:.40}"
-            )
-        for k, i in enumerate(self.sensing):
+        sensing = checks.sequence(self.sensing, "DeSilvaScenario.sensing", "robot indices")
+        for k, i in enumerate(sensing):
             checks.count(i, f"DeSilvaScenario.sensing[{k}]", low=0)
         if (
             not self.sensing
@@ -193,8 +189,7 @@ class DeSilvaScenario:
     def _check_kidnap(self, kidnap: object) -> None:
         """``(robot, time, dx, dy, dψ)``: a robot index, a time inside the run, finite offsets."""
         where = "DeSilvaScenario.kidnap"
-        if isinstance(kidnap, (str, bytes)) or not isinstance(kidnap, Sequence) or len(kidnap) != 5:
-            raise ConfigError(f"{where}: expected (robot, time, dx, dy, dψ), got {kidnap!r:.60}")
+        kidnap = checks.sequence(kidnap, where, "(robot, time, dx, dy, dψ)", length=5)
         if checks.count(kidnap[0], f"{where}[0] (robot)", low=0) >= len(ROBOT_NAMES):
             raise ConfigError(
                 f"{where}[0] (robot): no robot {kidnap[0]} (0 to {len(ROBOT_NAMES) - 1})"
