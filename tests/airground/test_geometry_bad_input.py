@@ -22,11 +22,24 @@ def test_sides_too_small_to_resolve_are_refused():
         ({"side": True}, "side"),
         ({"inequality_tol": float("nan")}, "inequality_tol"),
         ({"inequality_tol": -1.0}, "inequality_tol"),
+        ({"inequality_tol": "0.05"}, "inequality_tol"),
+        ({"min_sin": None}, "min_sin"),
+        ({"min_sin": 1.0}, "min_sin"),
     ],
 )
 def test_triangle_arguments_are_checked(kwargs, match):
     with pytest.raises(ConfigError, match=match):
         triangle_bearing(0.0, 1.0, 1.0, 1.0, **{"side": 1, **kwargs})
+
+
+@pytest.mark.parametrize("position", range(4))
+@pytest.mark.parametrize("value", ["1.0", None, True])
+def test_triangle_values_that_are_not_numbers_are_named(position, value):
+    names = ("phi_j", "d_0j", "d_0i", "d_ij")
+    values = [0.0, 1.0, 1.0, 1.0]
+    values[position] = value
+    with pytest.raises(DataError, match=f"triangle_bearing.{names[position]}: expected a number"):
+        triangle_bearing(*values, 1)
 
 
 def test_mds_needs_a_square_matrix():

@@ -29,10 +29,12 @@ Partial derivatives (for the measurement covariance), with ``S = sin α_0``:
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 
+from relloc.core import checks
 from relloc.core.angles import wrap_angle
-from relloc.errors import ConfigError
+from relloc.errors import ConfigError, DataError
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -74,18 +76,21 @@ def triangle_bearing(
     ``min_sin``: refuse when ``sin α_0 < min_sin`` (near-collinear); ``inequality_tol`` (m): how
     far noisy sides may break the triangle inequality before the triple is refused (within the
     tolerance γ is clipped to [−1, 1], which then falls under the collinearity refusal).
-    ``min_sin`` outside (0, 1) or ``inequality_tol`` not ≥ 0 (NaN included) is a ConfigError
-    naming the argument. Sides so small that their products underflow to 0 are refused like a
-    degenerate triangle.
+    ``min_sin`` outside (0, 1) or ``inequality_tol`` not a finite number ≥ 0 is a ConfigError
+    naming the argument; a bearing or side that is not a number (a string, None, a bool) is a
+    DataError naming it, while a NaN or infinite one is refused in the result. Sides so small
+    that their products underflow to 0 are refused like a degenerate triangle.
     """
     if isinstance(side, bool) or side not in (1, -1):
         raise ConfigError(f"triangle_bearing.side: must be +1 or -1, got {side!r}")
-    if not 0.0 < min_sin < 1.0:
-        raise ConfigError(f"triangle_bearing.min_sin: must be in (0, 1), got {min_sin}")
-    if not inequality_tol >= 0.0:
-        raise ConfigError(f"triangle_bearing.inequality_tol: must be ≥ 0, got {inequality_tol}")
+    checks.number(
+        min_sin, "triangle_bearing.min_sin", low=0.0, high=1.0, open_low=True, open_high=True
+    )
+    checks.number(inequality_tol, "triangle_bearing.inequality_tol", low=0.0)
     values = {"phi_j": phi_j, "d_0j": d_0j, "d_0i": d_0i, "d_ij": d_ij}
     for name, value in values.items():
+        if isinstance(value, bool) or not isinstance(value, numbers.Real):
+            raise DataError(f"triangle_bearing.{name}: expected a number, got {value!r:.40}")
         if not math.isfinite(value):
             return TriangleBearing(bearing=None, reason=f"{name} is not finite ({value})")
     a, b, c = d_0j, d_0i, d_ij
