@@ -54,6 +54,7 @@ from typing import Any
 import numpy as np
 from scipy.signal import lfilter
 
+from relloc.core.checks import number
 from relloc.errors import ConfigError
 from relloc.metrics.consistency import (
     INTERVAL_BATCHES,
@@ -91,12 +92,16 @@ class IntervalBenchSize:
                 raise ConfigError(
                     f"IntervalBenchSize.{name}: must be an integer ≥ 2, got {value!r}"
                 )
-        for rho in (*self.rhos, self.runs_rho, self.subjects_rho):
-            if not 0.0 <= rho < 1.0:
-                raise ConfigError(f"IntervalBenchSize: ρ {rho!r} outside [0, 1)")
+        rhos = {
+            "rhos": self.rhos,
+            "runs_rho": (self.runs_rho,),
+            "subjects_rho": (self.subjects_rho,),
+        }
+        for name, values in rhos.items():
+            for rho in values:
+                number(rho, f"IntervalBenchSize.{name} (a ρ)", low=0.0, high=1.0, open_high=True)
         for share in self.subject_shares:
-            if not 0.0 <= share <= 1.0:
-                raise ConfigError(f"IntervalBenchSize.subject_shares: {share!r} outside [0, 1]")
+            number(share, "IntervalBenchSize.subject_shares", low=0.0, high=1.0)
         if not self.rhos:
             raise ConfigError("IntervalBenchSize.rhos: at least one ρ")
 

@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from relloc.core.checks import number
+from relloc.core.checks import number, positive
 from relloc.core.gaussian import Gaussian
 from relloc.errors import ConfigError
 
@@ -46,13 +46,6 @@ SIGMA_UNKNOWN_YAW = math.pi / math.sqrt(3.0)
 
 def _diag(sigma_position: float, sigma_yaw: float) -> Array:
     return np.diag([sigma_position**2] * 3 + [sigma_yaw**2])
-
-
-def _check_sigma(name: str, value: float) -> float:
-    v = float(value)
-    if not (math.isfinite(v) and v > 0.0):
-        raise ConfigError(f"{name}: must be finite and > 0, got {value!r}")
-    return v
 
 
 def known_pose(
@@ -241,8 +234,8 @@ class InitPolicy:
     def __post_init__(self) -> None:
         if self.name not in POLICY_NAMES:
             raise ConfigError(f"init: must be one of {', '.join(POLICY_NAMES)}, got {self.name!r}")
-        _check_sigma("sigma_known_position", self.sigma_known_position)
-        _check_sigma("sigma_known_yaw", self.sigma_known_yaw)
+        positive(self.sigma_known_position, "InitPolicy.sigma_known_position")
+        positive(self.sigma_known_yaw, "InitPolicy.sigma_known_yaw")
 
     @property
     def uses_measurement(self) -> bool:

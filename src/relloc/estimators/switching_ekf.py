@@ -53,7 +53,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from relloc.core.angles import wrap_angle
-from relloc.core.checks import positive
+from relloc.core.checks import number, positive, probability
 from relloc.core.contract import Belief, HeldOdometry, Silent, UpdateRecord
 from relloc.core.gaussian import Gaussian
 from relloc.core.kalman import gated_update, prepare_gates
@@ -112,17 +112,10 @@ class SwitchingEkfSettings:
             "sighting_hold",
         ):
             positive(getattr(self, name), f"SwitchingEkfSettings.{name}")
-        if not math.isfinite(self.range_bias):
-            raise ConfigError(f"SwitchingEkfSettings.range_bias: not finite ({self.range_bias})")
-        if self.gate_probability is not None and not 0.0 < self.gate_probability < 1.0:
-            raise ConfigError(
-                "SwitchingEkfSettings.gate_probability: must be in (0, 1) or None, "
-                f"got {self.gate_probability!r}"
-            )
-        if not 0.0 < self.min_sin < 1.0:
-            raise ConfigError(
-                f"SwitchingEkfSettings.min_sin: must be in (0, 1), got {self.min_sin}"
-            )
+        number(self.range_bias, "SwitchingEkfSettings.range_bias")
+        if self.gate_probability is not None:
+            probability(self.gate_probability, "SwitchingEkfSettings.gate_probability")
+        probability(self.min_sin, "SwitchingEkfSettings.min_sin")
 
 
 @dataclass(frozen=True, kw_only=True)

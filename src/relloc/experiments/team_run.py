@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from relloc.core.checks import number, positive
 from relloc.core.estimates import Estimates
 from relloc.core.recording import Recording
 from relloc.errors import ConfigError
@@ -78,10 +79,8 @@ class TeamRunSettings:
             raise ConfigError(f"--runs: must be an integer in 1…{MAX_RUNS}, got {self.runs!r}")
         if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
             raise ConfigError(f"--seed: must be an integer ≥ 0, got {self.seed!r}")
-        if not (np.isfinite(self.settle_s) and self.settle_s >= 0):
-            raise ConfigError(f"settle_s: must be a finite number ≥ 0, got {self.settle_s!r}")
-        if not (np.isfinite(self.record_rate_hz) and self.record_rate_hz > 0):
-            raise ConfigError(f"record_rate_hz: must be > 0, got {self.record_rate_hz!r}")
+        number(self.settle_s, "settle_s", low=0.0)
+        positive(self.record_rate_hz, "record_rate_hz")
 
 
 def simulate_and_track(

@@ -98,6 +98,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.core.checks import count, number, positive
 from relloc.datasets.paths import default_mrclam_dataset
 from relloc.errors import ConfigError
 from relloc.estimators.initialisation import known_pose
@@ -177,20 +178,15 @@ class Wanasinghe2014Config:
 
     def __post_init__(self) -> None:
         for name in ("runs", "replay_runs", "sweep_runs"):
-            if getattr(self, name) < 1:
-                raise ConfigError(f"{name}: must be ≥ 1, got {getattr(self, name)}")
-        if not self.sweep_scales or any(
-            not (s > 0 and math.isfinite(s)) for s in self.sweep_scales
-        ):
-            raise ConfigError(f"sweep_scales: positive numbers, got {self.sweep_scales}")
+            count(getattr(self, name), name)
+        if not self.sweep_scales:
+            raise ConfigError("sweep_scales: at least one scale")
+        for scale in self.sweep_scales:
+            positive(scale, "sweep_scales")
         duration = self.sim.scenario.duration_s
-        if not 0 <= self.steady_state_s < duration:
-            raise ConfigError(
-                f"steady_state_s: must be in [0, {duration:g}) (the scenario's duration), got "
-                f"{self.steady_state_s}"
-            )
-        if not 0 < self.sweep_duration_s:
-            raise ConfigError(f"sweep_duration_s: > 0, got {self.sweep_duration_s}")
+        number(self.steady_state_s, "steady_state_s", low=0.0, high=duration, open_high=True)
+        positive(self.sweep_duration_s, "sweep_duration_s")
+        number(self.replay_steady_state_s, "replay_steady_state_s", low=0.0)
 
     @classmethod
     def from_args(cls, args: ReproduceArgs) -> Wanasinghe2014Config:

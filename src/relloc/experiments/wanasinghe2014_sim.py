@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.core.checks import count, positive
 from relloc.core.estimates import Estimates
 from relloc.core.recording import Recording, relative_pose
 from relloc.errors import ConfigError
@@ -84,10 +85,8 @@ class SimSettings:
                 f"SimSettings.table1_target: {self.table1_target!r} is not observed by "
                 f"{self.observer!r} (targets: {targets})"
             )
-        if self.n_poses < 1:
-            raise ConfigError(f"SimSettings.n_poses: must be ≥ 1, got {self.n_poses}")
-        if not (np.isfinite(self.odometry_scale) and self.odometry_scale > 0):
-            raise ConfigError(f"SimSettings.odometry_scale: > 0, got {self.odometry_scale}")
+        count(self.n_poses, "SimSettings.n_poses")
+        positive(self.odometry_scale, "SimSettings.odometry_scale")
 
     @property
     def targets(self) -> tuple[str, ...]:

@@ -12,6 +12,7 @@ import importlib
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+from relloc.core.checks import count
 from relloc.errors import ConfigError, ModelError
 from relloc.models import symbolic as S
 
@@ -51,9 +52,8 @@ class ModelOptions:
     inputs: tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:
-        if self.landmarks < 0:
-            raise ConfigError(f"--landmarks must be ≥ 0, got {self.landmarks}")
-        if not 1 <= self.robots <= 6:
+        count(self.landmarks, "--landmarks", low=0)
+        if count(self.robots, "--robots") > 6:
             raise ConfigError(f"--robots must be in 1..6 for symbolic analysis, got {self.robots}")
         bad = [m for m in self.modes if m not in S.AIRGROUND_MODES]
         if bad or not self.modes:

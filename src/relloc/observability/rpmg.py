@@ -43,6 +43,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from relloc.core.angles import wrap_angle
+from relloc.core.checks import number, positive
 from relloc.errors import ConfigError, DataError
 from relloc.models.symbolic import unicycle_landmarks, unicycle_team
 from relloc.observability.lie import ObservabilityMatrix
@@ -64,10 +65,8 @@ class SensorSettings:
     fov: float = 2.0 * np.pi
 
     def __post_init__(self) -> None:
-        if not (np.isfinite(self.sensing_range) and self.sensing_range > 0):
-            raise ConfigError(f"SensorSettings.sensing_range must be > 0, got {self.sensing_range}")
-        if not (0 < self.fov <= 2.0 * np.pi):
-            raise ConfigError(f"SensorSettings.fov must be in (0, 2π], got {self.fov}")
+        positive(self.sensing_range, "SensorSettings.sensing_range")
+        number(self.fov, "SensorSettings.fov (rad)", low=0.0, high=2.0 * np.pi, open_low=True)
 
 
 def _check_team(poses: Array, landmarks: Array) -> tuple[Array, Array]:

@@ -40,6 +40,7 @@ from typing import Any
 
 import numpy as np
 
+from relloc.core.checks import number
 from relloc.errors import ConfigError
 from relloc.runtime.keys import check_id
 
@@ -138,15 +139,16 @@ class FaultSettings:
 
     def __post_init__(self) -> None:
         for name in ("drop", "duplicate", "reorder"):
-            value = getattr(self, name)
-            if not (isinstance(value, (int, float)) and 0.0 <= value < 1.0):
-                raise ConfigError(f"faults.{name}: probability {value!r} outside [0, 1)")
+            number(
+                getattr(self, name),
+                f"faults.{name} (a probability)",
+                low=0.0,
+                high=1.0,
+                open_high=True,
+            )
         for name in ("delay_ms", "jitter_ms"):
-            value = getattr(self, name)
-            if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
-                raise ConfigError(f"faults.{name}: {value!r} must be a finite number ≥ 0")
-        if not (0 < self.reorder_hold_s <= 60):
-            raise ConfigError(f"faults.reorder_hold_s: {self.reorder_hold_s} outside (0, 60] s")
+            number(getattr(self, name), f"faults.{name}", low=0.0)
+        number(self.reorder_hold_s, "faults.reorder_hold_s", low=0.0, high=60.0, open_low=True)
         self._check_robot_events()
 
     def _check_robot_events(self) -> None:

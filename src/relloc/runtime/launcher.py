@@ -27,7 +27,6 @@ happens; each one's output goes to ``<out>/logs/<robot>.log``.
 
 from __future__ import annotations
 
-import math
 import multiprocessing
 import os
 import signal
@@ -39,7 +38,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from relloc.core.checks import probability
+from relloc.core.checks import count, number, positive, probability
 from relloc.errors import ConfigError, RellocError
 from relloc.runtime import keys
 from relloc.runtime.access import SecureTeam, secure_team
@@ -56,6 +55,16 @@ from relloc.runtime.transport import (
     loopback_endpoint,
     open_session,
 )
+
+
+def check_pacing(settings: TeamSettings | ProcessTeam) -> None:
+    """The clock step, wall-time limit, pacing and security flags that :class:`TeamSettings`
+    and :class:`ProcessTeam` share, each a ConfigError naming its flag."""
+    number(settings.tick_s, "--tick", low=0.001, high=10.0)
+    positive(settings.wall_timeout_s, "--timeout")
+    number(settings.realtime_factor, "--realtime", low=0.0)
+    if settings.certs_dir is not None and not settings.secure:
+        raise ConfigError("--certs: only with --secure")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -88,18 +97,8 @@ class TeamSettings:
     def __post_init__(self) -> None:
         keys.check_id(self.team, "--team")
         check_source(self.scenario)
-        if not (0.001 <= self.tick_s <= 10):
-            raise ConfigError(f"--tick: {self.tick_s} s outside [0.001, 10]")
-        if self.seed < 0:
-            raise ConfigError(f"--seed: {self.seed} must be ≥ 0")
-        if not 0 < self.wall_timeout_s < math.inf:
-            raise ConfigError(f"--timeout: must be a finite number > 0, got {self.wall_timeout_s}")
-        if not 0 <= self.realtime_factor < math.inf:  # before any process starts
-            raise ConfigError(
-                f"--realtime: must be a finite number ≥ 0, got {self.realtime_factor}"
-            )
-        if self.certs_dir is not None and not self.secure:
-            raise ConfigError("--certs: only with --secure")
+        count(self.seed, "--seed", low=0)
+        check_pacing(self)  # before any process starts
         if self.gate_probability is not None:
             probability(self.gate_probability, "--gate")
 
@@ -241,8 +240,7 @@ class ProcessTeam:
     certs_dir: Path | None = None
 
     def __post_init__(self) -> None:
-        if self.certs_dir is not None and not self.secure:
-            raise ConfigError("--certs: only with --secure")
+        check_pacing(self)
 
     def launch(
         self,

@@ -36,6 +36,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
+from relloc.core.checks import number
 from relloc.errors import ConfigError, require
 from relloc.runtime import keys
 from relloc.runtime.certs import check_tls_files
@@ -77,8 +78,7 @@ class TransportSettings:
                 raise ConfigError(f"transport.{name}: expected endpoints like 'tcp/127.0.0.1:7447'")
         if self.mode == "client" and not self.connect:
             raise ConfigError("transport.connect: a client needs at least one endpoint")
-        if not (0.1 <= self.lease_s <= 600):
-            raise ConfigError(f"transport.lease_s: {self.lease_s} outside [0.1, 600] s")
+        number(self.lease_s, "transport.lease_s (s)", low=0.1, high=600.0)
         if self.config_file is not None and not Path(self.config_file).is_file():
             raise ConfigError(f"transport.config_file: {self.config_file} does not exist")
 
