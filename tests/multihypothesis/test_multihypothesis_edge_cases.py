@@ -18,7 +18,7 @@ import pytest
 from gaussian_sum_samples import gs_settings, one_track_message
 
 from relloc.association.assignment import assign
-from relloc.association.hypotheses import FormationSettings, formation_weights
+from relloc.association.hypotheses import FormationSettings, birth_tracks, formation_weights
 from relloc.association.mixture_reduction import (
     merge_groups,
     merge_moments,
@@ -250,6 +250,31 @@ def test_a_detection_probability_whose_births_underflow_leaves_the_filter_empty(
     fus = GaussianSumFuser(0, [1], st)
     fus.direct_scan([0.5], _ranges(X1), np.array([_bearing(X1)]))
     assert fus.tracks.size == 0 and fus.summary(1) is None
+
+
+@pytest.mark.parametrize(
+    ("r", "alpha", "beta", "h", "match"),
+    [
+        (np.nan, [0.1], [0.0], 0.0, "a bearing, range or height is NaN"),
+        (2.0, [0.1, np.inf], [0.0, 0.0], 0.0, "a bearing, range or height is NaN"),
+        (2.0, [0.1], [0.0], [np.nan], "a bearing, range or height is NaN"),
+        ([2.0, 3.0, 4.0], [0.1, 0.2], [0.0, 0.0], 0.0, "2 azimuths need"),
+        (2.0, [0.1, 0.2], [0.0, 0.0, 0.0], 0.0, "2 azimuths need"),
+    ],
+)
+def test_births_from_a_bad_bearing_are_refused(r, alpha, beta, h, match) -> None:
+    """These gave NaN means and weights, or a raw broadcasting ValueError."""
+    with pytest.raises(DataError, match=f"birth_tracks: {match}"):
+        birth_tracks(
+            r,
+            alpha,
+            beta,
+            h,
+            FormationSettings(),
+            volume=1.0,
+            range_volume=5.0,
+            false_density=0.1,
+        )
 
 
 def test_zero_clutter_uses_the_documented_floor() -> None:

@@ -46,7 +46,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from relloc.core.checks import count, number, positive
-from relloc.errors import ConfigError
+from relloc.errors import ConfigError, DataError
 
 Array = NDArray[np.float64]
 
@@ -160,7 +160,9 @@ def birth_tracks(
     of the range space and ``false_density`` the density ``κ`` (scalar or one value per
     bearing); ``p_detect`` is ``P_D`` (scalar or per bearing; ``None``: ``settings.p_detect``).
     Returns ``(means (mK, 4), covs (mK, 4, 4), weights (mK,))``, the ``K =
-    settings.birth_yaw_components`` yaw components of each bearing consecutive.
+    settings.birth_yaw_components`` yaw components of each bearing consecutive. Shapes that do
+    not match and values that are not finite are a DataError (the estimator passes only
+    finite, positive ranges).
     """
     kappa = np.asarray(false_density, dtype=float)
     if not (volume > 0.0 and range_volume > 0.0 and np.all(kappa > 0.0)):
@@ -170,8 +172,18 @@ def birth_tracks(
         )
     alpha = np.asarray(alpha, dtype=float).reshape(-1)
     beta = np.asarray(beta, dtype=float).reshape(-1)
-    r = np.broadcast_to(np.asarray(r, dtype=float), alpha.shape)
-    h = np.broadcast_to(np.asarray(h, dtype=float), alpha.shape)
+    try:
+        beta, r, h = (
+            np.broadcast_to(np.asarray(v, dtype=float), alpha.shape) for v in (beta, r, h)
+        )
+    except ValueError:
+        raise DataError(
+            f"birth_tracks: {alpha.size} azimuths need as many elevations, and ranges and heights "
+            f"as scalars or one per bearing; got shapes {np.shape(beta)}, {np.shape(r)}, "
+            f"{np.shape(h)}"
+        ) from None
+    if not np.isfinite(np.concatenate([alpha, beta, r, h])).all():
+        raise DataError("birth_tracks: a bearing, range or height is NaN or infinite")
     cb = np.cos(beta)
     means = np.stack(
         [r * cb * np.cos(alpha), r * cb * np.sin(alpha), r * np.sin(beta), np.zeros_like(alpha)],
