@@ -19,10 +19,10 @@ from relloc.pipeline.replay import replay
 FRAME = "world_position2"
 
 
-def _recording(**meta: Any) -> Recording:
+def _recording(truth_end: float = 1.0, **meta: Any) -> Recording:
     still = Odometry(t=np.zeros(0), velocity=np.zeros((0, 4)), sigma=(0, 0, 0, 0))
     rows = measurement_rows("range", t=np.arange(10) * 0.1, observer=1, target=0, value=np.ones(10))
-    truth = GroundTruth(t=np.array([0.0, 1.0]), pose=np.zeros((2, 4)))
+    truth = GroundTruth(t=np.array([0.0, truth_end]), pose=np.zeros((2, 4)))
     return Recording(
         robots=("a", "b"),
         platforms=("ground",) * 2,
@@ -137,3 +137,13 @@ def test_a_covariance_nees_cannot_use_is_a_model_error_naming_the_series(cov):
     est = _replay(lambda k: [Belief("b", FRAME, np.zeros(2), cov)])
     with pytest.raises(ModelError, match=r"^a->b: covariance is not"):
         evaluate(est, _recording())
+
+
+def test_a_truth_the_recording_cannot_give_is_a_data_error_naming_the_series():
+    """The error named the robot or the span, but not which series asked for it."""
+    est = _replay(lambda k: [Belief("ghost", FRAME, np.zeros(2), np.eye(2))])
+    with pytest.raises(DataError, match=r"^a->ghost: unknown robot 'ghost'; the recording has"):
+        evaluate(est, _recording())
+    est = _replay(lambda k: [_belief()])
+    with pytest.raises(DataError, match=r"^a->b: truth: query time outside the recorded span"):
+        evaluate(est, _recording(truth_end=0.5))

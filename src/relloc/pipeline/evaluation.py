@@ -36,7 +36,7 @@ from relloc.core.checks import number, positive
 from relloc.core.estimates import BeliefSeries, Estimates, UpdateSeries, series_label
 from relloc.core.events import TIME_TOL
 from relloc.core.recording import Recording
-from relloc.errors import ConfigError, ModelError
+from relloc.errors import ConfigError, DataError, ModelError
 from relloc.metrics.conditioning import condition_log10_batch
 from relloc.metrics.consistency import (
     anees,
@@ -91,7 +91,8 @@ def series_errors(series: BeliefSeries, recording: Recording) -> Array:
 
     A mean or track age that is not finite would make every pooled figure NaN (or drop the
     record from the steady state) without a word: ModelError naming the series and the first
-    such record."""
+    such record. A truth the recording cannot give (an unknown owner or subject, a time beyond
+    its ground truth) is a DataError naming the series."""
     f = frame(series.frame)
     if series.mean.shape[1:] != (f.dim,):
         raise ConfigError(
@@ -105,7 +106,10 @@ def series_errors(series: BeliefSeries, recording: Recording) -> Array:
         raise ModelError(
             f"{series.label}: belief at t={series.t[k]:g} has a mean or age that is not finite"
         )
-    truth = f.truth(recording, series.owner, series.subject, series.t)
+    try:
+        truth = f.truth(recording, series.owner, series.subject, series.t)
+    except DataError as exc:  # an owner or subject the recording lacks, a time beyond its truth
+        raise DataError(f"{series.label}: {exc}") from exc
     return state_errors(series.mean, truth, f.angles)
 
 
