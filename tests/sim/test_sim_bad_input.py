@@ -13,7 +13,7 @@ from relloc.errors import ConfigError
 from relloc.sim import cooperative, multihypothesis
 from relloc.sim.cooperative import CooperativeScenario, grid_team_scenario, sharma2013_scenario
 from relloc.sim.multihypothesis import DeSilvaScenario
-from relloc.sim.scenario import default_scenario, scenario_from_dict
+from relloc.sim.scenario import Arena, WaypointMotion, default_scenario, scenario_from_dict
 
 # --------------------------------------------------------------------------- scenario API
 
@@ -66,6 +66,17 @@ def test_bad_cooperative_scenario_names_the_field(change, where):
 def test_grid_team_size_must_be_an_integer(n):
     with pytest.raises(ConfigError, match="grid_team_scenario: n"):
         grid_team_scenario(n)
+
+
+def test_numpy_arrays_are_accepted_where_lists_are():
+    """An array of way-points or an array range was refused as 'not a list'."""
+    points = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]]
+    assert WaypointMotion(points=np.array(points)) == WaypointMotion(points=points)
+    assert Arena(x=np.array([0.0, 4.0])) == Arena(x=(0.0, 4.0))
+    with pytest.raises(ConfigError, match=r"points\[0\]: expected 2 numbers, got 3"):
+        WaypointMotion(points=np.zeros((3, 3)))
+    with pytest.raises(ConfigError, match="points: expected a list of at least two"):
+        WaypointMotion(points="abc")
 
 
 def test_a_gps_period_beyond_every_float_tick_gives_no_fixes():

@@ -60,6 +60,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any, Literal
 
+from relloc.core import checks
 from relloc.core.limits import MAX_SPEED_M_S, MAX_YAW_RATE_RAD_S
 from relloc.errors import ConfigError
 
@@ -144,11 +145,10 @@ def _number(
 
 def _vector(name: str, value: object, size: int, **limits: Any) -> tuple[float, ...]:
     """``value`` as ``size`` floats, each checked by :func:`_number` with ``limits``."""
-    if isinstance(value, (str, bytes)) or not isinstance(value, Sequence):
-        raise ConfigError(f"{name}: expected a list of {size} numbers, got {_show(value)}")
-    if len(value) != size:
-        raise ConfigError(f"{name}: expected {size} numbers, got {len(value)}")
-    return tuple(_number(f"{name}[{i}]", v, **limits) for i, v in enumerate(value))
+    items = checks.sequence(value, name, f"a list of {size} numbers")
+    if len(items) != size:
+        raise ConfigError(f"{name}: expected {size} numbers, got {len(items)}")
+    return tuple(_number(f"{name}[{i}]", v, **limits) for i, v in enumerate(items))
 
 
 def _bounded(
@@ -314,9 +314,10 @@ class WaypointMotion:
     def __post_init__(self) -> None:
         if not isinstance(self.closed, bool):
             raise ConfigError(f"closed: expected true or false, got {_show(self.closed)}")
-        pts = self.points
-        if isinstance(pts, (str, bytes)) or not isinstance(pts, Sequence) or len(pts) < 2:
-            raise ConfigError("points: expected a list of at least two [x, y] points")
+        what = "a list of at least two [x, y] points"
+        pts = checks.sequence(self.points, "points", what)
+        if len(pts) < 2:
+            raise ConfigError(f"points: expected {what}, got {len(pts)}")
         if len(pts) > MAX_WAYPOINTS:
             raise ConfigError(
                 f"points: {len(pts)} way-points; the limit is {MAX_WAYPOINTS} (MAX_WAYPOINTS)"
