@@ -53,8 +53,10 @@ def test_window_choices():
         leading_fraction(0.0, 1.0, 0.0, "r")
     with pytest.raises(DataError, match="no time stamps"):
         spanning(np.zeros(0), "r")
-    with pytest.raises(ConfigError, match="empty window"):
+    with pytest.raises(DataError, match="r: every time stamp is 2 s, so no calibration window"):
         spanning(np.array([2.0, 2.0]), "r")  # one instant is no window
+    with pytest.raises(DataError, match="r: a time stamp is not finite"):
+        spanning(np.array([2.0, np.nan]), "r")
 
 
 def test_odometry_and_truth_is_where_a_robot_has_both(synthetic):

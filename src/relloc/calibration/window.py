@@ -143,11 +143,17 @@ def following(start_s: float, length_s: float, source: str) -> CalibrationWindow
 
 
 def spanning(t: ArrayLike, source: str) -> CalibrationWindow:
-    """From the first to the last of the times ``t`` (a whole recording)."""
+    """From the first to the last of the times ``t`` (a whole recording). Times that span no
+    interval (none, one instant) or are not finite are a DataError naming ``source``."""
     tt = np.asarray(t, dtype=float)
     if tt.size == 0:
         raise DataError(f"{source}: no time stamps, so no calibration window")
-    return CalibrationWindow(float(tt.min()), float(tt.max()), source)
+    if not np.isfinite(tt).all():
+        raise DataError(f"{source}: a time stamp is not finite, so no calibration window")
+    start, end = float(tt.min()), float(tt.max())
+    if not end > start:
+        raise DataError(f"{source}: every time stamp is {start:g} s, so no calibration window")
+    return CalibrationWindow(start, end, source)
 
 
 def odometry_and_truth(robot: RobotData, source: str) -> CalibrationWindow:
