@@ -202,8 +202,8 @@ def test_cli_reproduce_smoke(tmp_path, monkeypatch):
 
 
 def test_a_uwb_file_of_rows_out_of_order_says_what_was_skipped(tmp_path):
-    """A reversed CSV once ended in "empty window" alone, not saying that 8,706 rows were
-    skipped as out of order."""
+    """A reversed CSV once ended in "empty window" alone (now "every time stamp is … s"), not
+    saying that 8,706 rows were skipped as out of order."""
     from relloc.datasets.uwb import load_uwb_csv
     from relloc.errors import DataError
     from relloc.experiments.guler2023 import whole_recording
@@ -212,6 +212,8 @@ def test_a_uwb_file_of_rows_out_of_order_says_what_was_skipped(tmp_path):
     path = tmp_path / "reversed.csv"
     path.write_text("\n".join([lines[0], *lines[:0:-1]]) + "\n")
     with pytest.raises(
-        DataError, match=r"empty window .* rows of the file were skipped \(\d+ time"
+        DataError,
+        match=r"every time stamp is \S+ s, so no calibration window; \d+ rows of the file were "
+        r"skipped \(\d+ time",
     ):
         whole_recording(load_uwb_csv(path))
