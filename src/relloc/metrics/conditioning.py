@@ -11,6 +11,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from relloc.errors import ModelError
+from relloc.metrics.arrays import floats
 
 Array = NDArray[np.float64]
 
@@ -23,8 +24,9 @@ def condition_log10_batch(M: ArrayLike) -> Array:
 
     The matrices must be square with ``n ≥ 1`` (a stack of none, ``(0, n, n)``, gives ``(0,)``);
     an empty ``(0, 0)`` matrix, a non-square one or fewer than two axes is a
-    :class:`ModelError`."""
-    A = np.asarray(M, dtype=float)
+    :class:`ModelError`; entries that are not real numbers (text, booleans, ``None``) are a
+    :class:`~relloc.errors.DataError`."""
+    A = floats(M, "condition_log10_batch: M")
     if A.ndim < 2 or A.shape[-1] != A.shape[-2] or A.shape[-1] == 0:
         raise ModelError(
             f"condition_log10_batch: expected square matrices (..., n, n), n ≥ 1, got {A.shape}"

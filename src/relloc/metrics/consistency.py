@@ -76,50 +76,56 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from relloc.core.checks import count
+from relloc.core.checks import count, number, probability
 from relloc.core.kalman import chi2_threshold
 from relloc.core.linalg import cholesky
 from relloc.errors import ConfigError, DataError, ModelError
+from relloc.metrics.arrays import floats
 
 Array = NDArray[np.float64]
 
 
-def _check_probability(p: float) -> float:
-    p = float(p)
-    if not 0.0 < p < 1.0:
-        raise ConfigError(f"probability must be in (0, 1), got {p}")
-    return p
-
-
-def _check_bound(bound: float | ArrayLike, what: str) -> Array:
-    """``bound`` as an array if every entry is finite, else ``ConfigError`` (a NaN bound would
+def _check_bound(bound: float | ArrayLike, what: str, shape: tuple[int, ...]) -> Array:
+    """``bound`` broadcast to the values' ``shape`` if every entry is a finite number and it is
+    one bound or broadcasts to ``shape`` unchanged, else ``ConfigError`` (a NaN bound would
     leave nothing beyond it)."""
-    b = np.asarray(bound, dtype=float)
+    b = floats(bound, f"{what}: bound", ConfigError)
     if not np.isfinite(b).all():
         raise ConfigError(f"{what}: {np.count_nonzero(~np.isfinite(b))} bound(s) not finite")
-    return b
+    if b.size == 1:
+        return np.broadcast_to(b.reshape(()), shape)
+    try:
+        if np.broadcast_shapes(b.shape, shape) == shape:
+            return np.broadcast_to(b, shape)
+    except ValueError:
+        pass
+    raise ConfigError(f"{what}: bound {b.shape} for values {shape}; one, or one per value")
 
 
 def normalised_squared(vector: ArrayLike, cov: ArrayLike) -> Array:
     """``vᵀ C⁻¹ v = ‖L⁻¹ v‖²`` (``C = L Lᵀ``) batched over leading dimensions (NEES with ``P``,
     NIS with ``S``): ``vector (..., n)``, ``cov (..., n, n)`` whose leading dimensions broadcast
-    (``ConfigError`` otherwise). ``C`` must be finite and positive definite
+    (``ConfigError`` otherwise), ``n ≥ 1``. ``C`` must be finite and positive definite
     (:class:`ModelError`); a NaN in ``v`` (an error without truth: a missing record) gives NaN,
-    which :func:`anees`, :func:`percent_beyond` and :func:`percent_beyond_interval` skip."""
-    v = np.asarray(vector, dtype=float)
-    C = np.asarray(cov, dtype=float)
+    which :func:`anees`, :func:`percent_beyond` and :func:`percent_beyond_interval` skip; an
+    infinite entry of ``v`` is a :class:`DataError`."""
+    v = floats(vector, "NEES/NIS: vector")
+    C = floats(cov, "NEES/NIS: covariance")
     message = (
         f"NEES/NIS: vector {v.shape} and covariance {C.shape} must be (..., n) and (..., n, n) "
-        "with leading dimensions that broadcast"
+        "with n ≥ 1 and leading dimensions that broadcast"
     )
-    if v.ndim < 1 or C.shape[-2:] != v.shape[-1:] * 2:
+    if v.ndim < 1 or v.shape[-1] == 0 or C.shape[-2:] != v.shape[-1:] * 2:
         raise ConfigError(message)
+    if np.isinf(v).any():
+        raise DataError(f"NEES/NIS: {np.count_nonzero(np.isinf(v))} infinite vector entries")
     try:
         np.broadcast_shapes(v.shape[:-1], C.shape[:-2])
     except ValueError as exc:
@@ -148,14 +154,21 @@ def projected_nees(error: ArrayLike, cov: ArrayLike, directions: ArrayLike) -> f
     ``M = Aᵀ A``, so ``ε_N = bᵀ A (Aᵀ A)⁻¹ Aᵀ b = ‖Uᵀ b‖²``, the squared length of ``b``'s
     projection on the columns of ``A`` (``U`` their orthonormal basis from the SVD of ``A``):
     never negative. ``P`` must be finite and positive definite (:class:`ModelError`) and the
-    directions linearly independent (``M`` invertible; :class:`ConfigError`)."""
-    e = np.asarray(error, dtype=float).reshape(-1)
-    P = np.asarray(cov, dtype=float)
-    N = np.asarray(directions, dtype=float)
-    if P.shape != (e.size, e.size) or N.ndim != 2 or N.shape[0] != e.size or N.shape[1] < 1:
+    directions linearly independent (``M`` invertible; :class:`ConfigError`); a NaN in ``e``
+    (a missing record) gives NaN, an infinite entry is a :class:`DataError`."""
+    e = floats(error, "projected_nees: error").reshape(-1)
+    P = floats(cov, "projected_nees: covariance")
+    N = floats(directions, "projected_nees: directions")
+    if (
+        e.size == 0
+        or P.shape != (e.size, e.size)
+        or N.ndim != 2
+        or N.shape[0] != e.size
+        or N.shape[1] < 1
+    ):
         raise ConfigError(
             f"projected_nees: error {e.shape}, covariance {P.shape} and directions {N.shape} "
-            "must be (n,), (n, n) and (n, d ≥ 1)"
+            "must be (n,), (n, n) and (n, d ≥ 1) with n ≥ 1"
         )
     if not np.isfinite(N).all():
         raise ConfigError("projected_nees: the directions must be finite")
@@ -166,7 +179,10 @@ def projected_nees(error: ArrayLike, cov: ArrayLike, directions: ArrayLike) -> f
     U, singular, _ = np.linalg.svd(np.linalg.solve(L, N), full_matrices=False)
     if singular[-1] <= singular[0] * max(N.shape) * np.finfo(float).eps:  # matrix_rank's test
         raise ConfigError(f"projected_nees: the directions {N.shape} must be linearly independent")
-    return float(np.sum((U.T @ np.linalg.solve(L, e)) ** 2))
+    value = float(np.sum((U.T @ np.linalg.solve(L, e)) ** 2))
+    if math.isnan(value) and np.isinf(e).any():
+        raise DataError(f"projected_nees: {np.count_nonzero(np.isinf(e))} infinite error entries")
+    return value
 
 
 def nis(residual: ArrayLike, innovation_cov: ArrayLike) -> Array:
@@ -178,13 +194,15 @@ def chi2_upper(dof: int, p: float = 0.95) -> float:
     """One-sided bound ``χ²_dof(p)``, e.g. ``chi2_upper(4) = 9.4877`` (seed 000 Eq. 34): the
     gates' quantile (:func:`relloc.core.kalman.chi2_threshold`), one computation for both.
     ``dof`` is an integer ≥ 1 (``ConfigError`` otherwise, never truncated)."""
-    return chi2_threshold(count(dof, "chi2_upper: dof"), _check_probability(p))
+    return chi2_threshold(
+        count(dof, "chi2_upper: dof"), probability(p, "chi2_upper: p, a probability")
+    )
 
 
 def mean_chi2_band(dof: int, n_samples: int, p: float = 0.95) -> tuple[float, float]:
     """Two-sided ``p`` band of the mean of ``n_samples`` independent χ²(dof) values (both
     integers ≥ 1, ``ConfigError`` otherwise)."""
-    p = _check_probability(p)
+    p = probability(p, "mean_chi2_band: p, a probability")
     k = count(dof, "mean_chi2_band: dof") * count(n_samples, "mean_chi2_band: n_samples")
     from scipy.stats import chi2
 
@@ -197,7 +215,7 @@ def anees(nees_values: ArrayLike, dof: int) -> float:
     (:func:`normalised_squared`) and is skipped; NaN when no value is finite. ``dof`` is an
     integer ≥ 1 (``ConfigError``); a negative NEES is impossible (``DataError``)."""
     dof = count(dof, "anees: dof")
-    values = np.asarray(nees_values, dtype=float)
+    values = floats(nees_values, "anees: nees_values")
     if np.any(values < 0.0):
         raise DataError(f"anees: {np.count_nonzero(values < 0.0)} negative NEES values")
     values = values[np.isfinite(values)]
@@ -233,9 +251,14 @@ def run_average_band(nees_runs: ArrayLike, dof: int, p: float = 0.95) -> dict[st
     ``"over-confident"`` when the share above lies significantly above ``(1 − p)/2`` (its
     interval wholly above), ``"conservative"`` when the share below does, the side with the
     larger share when both do, else ``"consistent"``; ``None`` (with ``reason``) for fewer
-    than two runs, and ``None`` for a single instant.
+    than two runs, and ``None`` for a single instant. ``dof`` and ``p`` are checked as in
+    :func:`mean_chi2_band` whatever the runs; a negative NEES is a :class:`DataError`.
     """
-    v = np.asarray(nees_runs, dtype=float)
+    count(dof, "run_average_band: dof")
+    probability(p, "run_average_band: p, a probability")
+    v = floats(nees_runs, "run_average_band: nees_runs")
+    if np.any(v < 0.0):
+        raise DataError(f"run_average_band: {np.count_nonzero(v < 0.0)} negative NEES values")
     runs = int(v.shape[0]) if v.ndim else 0
     if runs < 2:
         return {"verdict": None, "runs": runs, "reason": "needs at least two independent runs"}
@@ -290,10 +313,12 @@ def run_average_band(nees_runs: ArrayLike, dof: int, p: float = 0.95) -> dict[st
 
 def percent_beyond(values: ArrayLike, bound: float) -> float:
     """Percentage of the finite ``values`` strictly above the finite ``bound`` (seed 000
-    Table 4); non-finite values (missing records) are skipped, NaN when none is left."""
-    b = _check_bound(bound, "percent_beyond")
-    v = np.asarray(values, dtype=float)
-    v = v[np.isfinite(v)]
+    Table 4; one bound, or one per value: ``ConfigError`` otherwise); non-finite values
+    (missing records) are skipped, NaN when none is left."""
+    v = floats(values, "percent_beyond: values")
+    b = _check_bound(bound, "percent_beyond", v.shape)
+    ok = np.isfinite(v)
+    v, b = v[ok], b[ok]
     if v.size == 0:
         return float("nan")
     return float(100.0 * np.count_nonzero(v > b) / v.size)
@@ -313,7 +338,7 @@ def integrated_time(series: ArrayLike) -> float:
     adjacent sample autocorrelations ``Γ_j = ρ_{2j} + ρ_{2j+1}`` are added while positive and
     each is capped at the one before, ``τ̂ = −1 + 2 Σ_j Γ_j`` (never below 1). The same
     quantity as :mod:`relloc.calibration.inflation`'s ``f``, here estimated from the series."""
-    x = np.asarray(series, dtype=float).reshape(-1)
+    x = floats(series, "integrated_time: series").reshape(-1)
     if not np.isfinite(x).all():
         raise DataError("integrated_time: the series must be finite (evenly sampled, no gaps)")
     n = x.size
@@ -322,6 +347,11 @@ def integrated_time(series: ArrayLike) -> float:
         return 1.0
     spectrum = np.fft.rfft(x, 2 * n)
     acov = np.fft.irfft(spectrum * np.conj(spectrum))[:n]
+    if not 0.0 < acov[0] < np.inf:
+        raise DataError(
+            f"integrated_time: the series' spread, {np.ptp(x):g}, over- or underflows its "
+            "variance in double precision"
+        )
     rho = acov / acov[0]
     pairs = rho[: 2 * (n // 2)].reshape(-1, 2).sum(axis=1)
     first_negative = np.flatnonzero(pairs <= 0.0)
@@ -440,16 +470,21 @@ def clopper_pearson(successes: float, size: float, confidence: float) -> tuple[f
     """Clopper–Pearson's two-sided ``confidence`` interval of a proportion with ``successes``
     in ``size`` trials, both possibly fractional (an effective sample size):
     ``[B⁻¹((1−c)/2; k, n−k+1), B⁻¹((1+c)/2; k+1, n−k)]`` with the Beta quantile ``B⁻¹``, 0 and
-    1 at the ends."""
+    1 at the ends. A size beyond what the Beta quantile resolves (a NaN end) is a
+    :class:`ConfigError`."""
     from scipy.stats import beta
 
-    k, n, c = float(successes), float(size), _check_probability(confidence)
-    if not (0 < n < np.inf and 0 <= k <= n):
+    k = number(successes, "clopper_pearson: successes")
+    n = number(size, "clopper_pearson: size")
+    c = probability(confidence, "clopper_pearson: confidence, a probability")
+    if not (0 < n and 0 <= k <= n):
         raise ConfigError(
             f"clopper_pearson: need 0 ≤ successes ≤ size and a finite size > 0, got {k}, {n}"
         )
     lo = float(beta.ppf((1.0 - c) / 2.0, k, n - k + 1)) if k > 0 else 0.0
     hi = float(beta.ppf((1.0 + c) / 2.0, k + 1, n - k)) if k < n else 1.0
+    if np.isnan(lo) or np.isnan(hi):
+        raise ConfigError(f"clopper_pearson: size {n:g} is beyond what the Beta quantile resolves")
     return lo, hi
 
 
@@ -474,13 +509,35 @@ def percent_beyond_interval(
     several, independent; the runs and the time blocks, two-way, when ``shared_recording`` says
     the runs replay one recording. When every cluster sits at ``p̂`` (e.g. none beyond
     anywhere) there is no spread to measure: ``N_eff`` is then ``G`` and the interval
-    Clopper–Pearson's for ``G p̂`` in ``G``.
+    Clopper–Pearson's for ``G p̂`` in ``G``. A ``confidence`` whose ``(1+c)/2`` rounds to ½
+    or 1, a ``shared_recording`` that is not a bool, or times whose span overflows are
+    refused (``ConfigError``, ``DataError``).
     """
-    c = _check_probability(confidence)
-    expected = 100.0 * _check_probability(expected_percent / 100.0)
+    c = probability(confidence, "percent_beyond_interval: confidence, a probability")
+    if not 0.5 < (1.0 + c) / 2.0 < 1.0:
+        raise ConfigError(
+            f"percent_beyond_interval: confidence {c!r} is too close to 0 or 1 for a Student "
+            "quantile in double precision"
+        )
+    expected = 100.0 * (
+        number(
+            expected_percent,
+            "percent_beyond_interval: expected_percent, a probability in %",
+            low=0.0,
+            high=100.0,
+            open_low=True,
+            open_high=True,
+        )
+        / 100.0
+    )
     batches = count(batches, "percent_beyond_interval: batches", low=2)
-    v = np.asarray(values, dtype=float).reshape(-1)
-    t = np.asarray(times, dtype=float).reshape(-1)
+    if not isinstance(shared_recording, (bool, np.bool_)):
+        raise ConfigError(
+            "percent_beyond_interval: shared_recording must be a bool, got "
+            f"{shared_recording!r:.40}"
+        )
+    v = floats(values, "percent_beyond_interval: values").reshape(-1)
+    t = floats(times, "percent_beyond_interval: times").reshape(-1)
     if t.shape != v.shape:
         raise ConfigError(
             f"percent_beyond_interval: {t.size} times for {v.size} values; one time per value"
@@ -491,14 +548,14 @@ def percent_beyond_interval(
             f"percent_beyond_interval: {r.size} run indices ({r.dtype}) for {v.size} values; "
             "one integer per value"
         )
-    b = _check_bound(bound, "percent_beyond_interval")
-    if b.size != 1 and b.shape != v.shape:
-        raise ConfigError(
-            f"percent_beyond_interval: {b.size} bounds for {v.size} values; one, or one per value"
-        )
-    b = np.broadcast_to(b.reshape(-1) if b.size == 1 else b, v.shape)
+    b = _check_bound(bound, "percent_beyond_interval", v.shape)
     ok = np.isfinite(v) & np.isfinite(t)
     v, t, b, r = v[ok], t[ok], b[ok], r[ok].astype(np.int64)
+    if v.size and not np.isfinite(t.max() - t.min()):
+        raise DataError(
+            f"percent_beyond_interval: times from {t.min():g} to {t.max():g}; their span "
+            "overflows double precision"
+        )
     n_runs = int(np.unique(r).size)
     if v.size == 0:
         empty = (0, "time blocks", 0, 0, None, None, None, expected, c)

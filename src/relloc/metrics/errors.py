@@ -16,6 +16,7 @@ from numpy.typing import ArrayLike, NDArray
 from relloc.core import checks
 from relloc.core.angles import wrap_angle
 from relloc.errors import ConfigError, DataError
+from relloc.metrics.arrays import floats
 
 Array = NDArray[np.float64]
 
@@ -28,14 +29,20 @@ def state_errors(
 ) -> Array:
     """``x̂ − x`` with the angle entries wrapped; any matching shapes ``(..., n)``.
 
-    Shapes that differ are a :class:`DataError`; ``angle_indices`` must be a sequence (or an
-    array) of integers in ``[−n, n)`` (:class:`ConfigError` otherwise — a bare integer, a float
-    index, an index beyond the state).
+    Shapes that differ, or infinite entries (NaN ones, missing records, give NaN errors), are a
+    :class:`DataError`; ``angle_indices`` must be a sequence (or an array) of integers in
+    ``[−n, n)`` (:class:`ConfigError` otherwise — a bare integer, a float index, an index
+    beyond the state).
     """
-    est = np.asarray(estimate, dtype=float)
-    tru = np.asarray(truth, dtype=float)
+    est = floats(estimate, "state_errors: estimate")
+    tru = floats(truth, "state_errors: truth")
     if est.shape != tru.shape:
         raise DataError(f"state_errors: estimate shape {est.shape} != truth shape {tru.shape}")
+    for name, x in (("estimate", est), ("truth", tru)):
+        if np.isinf(x).any():
+            raise DataError(
+                f"state_errors: {np.count_nonzero(np.isinf(x))} infinite {name} entries"
+            )
     if isinstance(angle_indices, (str, bytes)) or not isinstance(angle_indices, Iterable):
         raise ConfigError(
             f"state_errors: angle_indices must be a sequence of state indices, got "
@@ -62,12 +69,13 @@ def rmse(errors: ArrayLike, axis: int | tuple[int, ...] | None = 0) -> Array:
 
     ``errors (runs, time, n)`` → RMSE per time and state ``(time, n)``; use
     ``axis=(0, 1)`` for one number per state over runs and time. NaN entries (e.g. no estimate
-    while a track did not exist) are ignored; an all-NaN slice gives NaN.
+    while a track did not exist) are ignored; an all-NaN slice gives NaN. Finite errors whose
+    squares overflow (beyond about 1.3e154) are a :class:`DataError`.
 
     ``axis`` is an integer or a tuple of distinct integers in ``[−ndim, ndim)`` (negative ones
     count from the end), or ``None`` for all axes; anything else is a :class:`ConfigError`.
     """
-    e = np.asarray(errors, dtype=float)
+    e = floats(errors, "rmse: errors")
     axes = tuple(range(e.ndim)) if axis is None else axis if isinstance(axis, tuple) else (axis,)
     if not axes and e.ndim:
         raise ConfigError("rmse: axis must name at least one axis, got ()")
@@ -79,7 +87,10 @@ def rmse(errors: ArrayLike, axis: int | tuple[int, ...] | None = 0) -> Array:
         if k % e.ndim in seen:
             raise ConfigError(f"rmse: axis {axis} names axis {k % e.ndim} twice")
         seen.add(k % e.ndim)
-    sq = np.square(e)
+    with np.errstate(over="ignore"):
+        sq = np.square(e)
+    if np.any(np.isinf(sq) & np.isfinite(e)):
+        raise DataError("rmse: errors beyond 1.3e154 in magnitude overflow their squares")
     count = np.sum(np.isfinite(sq), axis=axis)
     total = np.nansum(sq, axis=axis)
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -92,8 +103,8 @@ def radial_errors(estimate: ArrayLike, truth: ArrayLike) -> Array:
     Its mean over runs is the radial bias (positive: the robot is placed too far away, as the
     plain PLKF does with a noisy bearing sensor).
     """
-    est = np.asarray(estimate, dtype=float)
-    tru = np.asarray(truth, dtype=float)
-    if est.shape != tru.shape or est.shape[-1] < 3:
+    est = floats(estimate, "radial_errors: estimate")
+    tru = floats(truth, "radial_errors: truth")
+    if est.shape != tru.shape or est.ndim == 0 or est.shape[-1] < 3:
         raise DataError(f"radial_errors: shapes {est.shape} and {tru.shape} must match, ≥ 3 wide")
     return np.linalg.norm(est[..., :3], axis=-1) - np.linalg.norm(tru[..., :3], axis=-1)
