@@ -53,12 +53,15 @@ def probability(value: object, where: str) -> float:
     return number(value, where, low=0.0, high=1.0, open_low=True, open_high=True)
 
 
-def count(value: object, where: str, *, low: int = 1) -> int:
-    """``value`` as an integer ≥ ``low`` (a whole float such as ``3.0`` is not an integer)."""
+def count(value: object, where: str, *, low: int = 1, high: int | None = None) -> int:
+    """``value`` as an integer ≥ ``low`` (and ≤ ``high`` when given; a whole float such as
+    ``3.0`` is not an integer)."""
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):
         raise ConfigError(f"{where}: expected an integer, got {value!r:.40}")
     if value < low:
         raise ConfigError(f"{where}: must be ≥ {low}, got {value}")
+    if high is not None and value > high:
+        raise ConfigError(f"{where}: must be ≤ {high}, got {value!r:.40}")
     return int(value)
 
 

@@ -162,11 +162,16 @@ def kalman_update(
     return new_mean, new_cov, Innovation(residual=residual, cov=S, nis=nis, meas_cov=R)
 
 
+#: Most degrees of freedom of a χ² quantile: every integer up to it is a float exactly (scipy's
+#: quantile fails beyond the int64 range and on integers no float holds).
+MAX_CHI2_DOF = 2**53
+
+
 @lru_cache(maxsize=64)
 def chi2_threshold(dim: int, probability: float) -> float:
     """Gate threshold ``γ`` with ``P(χ²(dim) ≤ γ) = probability`` (cached); ``dim`` an integer
-    ≥ 1 and ``probability`` in (0, 1), else ConfigError."""
-    count(dim, "chi2_threshold: dim")
+    in ``[1, MAX_CHI2_DOF]`` and ``probability`` in (0, 1), else ConfigError."""
+    count(dim, "chi2_threshold: dim", high=MAX_CHI2_DOF)
     probability_in_01(probability, "chi2_threshold: probability")
     # scipy.stats is imported here, not at module level: it takes about a second to import and
     # most users of this module (the relative filters) never gate

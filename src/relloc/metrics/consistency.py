@@ -84,7 +84,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from relloc.core.checks import count, number, probability
-from relloc.core.kalman import chi2_threshold
+from relloc.core.kalman import MAX_CHI2_DOF, chi2_threshold
 from relloc.core.linalg import cholesky
 from relloc.errors import ConfigError, DataError, ModelError
 from relloc.metrics.arrays import floats
@@ -195,15 +195,18 @@ def chi2_upper(dof: int, p: float = 0.95) -> float:
     gates' quantile (:func:`relloc.core.kalman.chi2_threshold`), one computation for both.
     ``dof`` is an integer ≥ 1 (``ConfigError`` otherwise, never truncated)."""
     return chi2_threshold(
-        count(dof, "chi2_upper: dof"), probability(p, "chi2_upper: p, a probability")
+        count(dof, "chi2_upper: dof", high=MAX_CHI2_DOF),
+        probability(p, "chi2_upper: p, a probability"),
     )
 
 
 def mean_chi2_band(dof: int, n_samples: int, p: float = 0.95) -> tuple[float, float]:
     """Two-sided ``p`` band of the mean of ``n_samples`` independent χ²(dof) values (both
-    integers ≥ 1, ``ConfigError`` otherwise)."""
+    integers ≥ 1 whose product is at most :data:`~relloc.core.kalman.MAX_CHI2_DOF`,
+    ``ConfigError`` otherwise)."""
     p = probability(p, "mean_chi2_band: p, a probability")
     k = count(dof, "mean_chi2_band: dof") * count(n_samples, "mean_chi2_band: n_samples")
+    count(k, "mean_chi2_band: dof · n_samples", high=MAX_CHI2_DOF)
     from scipy.stats import chi2
 
     lo, hi = chi2.ppf([(1.0 - p) / 2.0, (1.0 + p) / 2.0], k)
