@@ -50,8 +50,7 @@ def _settings_classes() -> dict[str, type]:
                 continue
             fields = [f for f in dataclasses.fields(obj) if f.init]
             if all(
-                f.default is not dataclasses.MISSING
-                or f.default_factory is not dataclasses.MISSING
+                f.default is not dataclasses.MISSING or f.default_factory is not dataclasses.MISSING
                 for f in fields
             ):
                 found[f"{obj.__module__}.{obj.__qualname__}"] = obj

@@ -58,11 +58,12 @@ def count(value: object, where: str, *, low: int = 1, high: int | None = None) -
     ``3.0`` is not an integer)."""
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):
         raise ConfigError(f"{where}: expected an integer, got {value!r:.40}")
-    if value < low:
-        raise ConfigError(f"{where}: must be ≥ {low}, got {value}")
-    if high is not None and value > high:
-        raise ConfigError(f"{where}: must be ≤ {high}, got {value!r:.40}")
-    return int(value)
+    n = int(value)
+    if n < low:
+        raise ConfigError(f"{where}: must be ≥ {low}, got {n}")
+    if high is not None and n > high:
+        raise ConfigError(f"{where}: must be ≤ {high}, got {n!r:.40}")
+    return n
 
 
 def sequence(value: object, where: str, what: str, *, length: int | None = None) -> Sequence[Any]:
