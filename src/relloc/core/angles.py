@@ -30,22 +30,32 @@ def circular_interp(
 ) -> NDArray[np.float64]:
     """Interpolate angles on the circle: unwrap, interpolate linearly, wrap back.
 
-    ``t_known`` must be a non-empty 1-D array of strictly increasing times (unsorted or repeated
-    times make ``np.interp`` return a wrong angle without a word), ``angle_known`` of the same
-    length; otherwise a :class:`~relloc.errors.DataError`. Queries outside the known times get
-    the end angles (no extrapolation). ``assume_sorted`` skips the O(N) order check (only the
-    shapes are checked) for times already validated, e.g. a
-    :class:`~relloc.core.recording.GroundTruth`'s.
+    ``t_known`` must be a non-empty 1-D array of finite, strictly increasing times (unsorted or
+    repeated times make ``np.interp`` return a wrong angle without a word), ``angle_known`` of
+    the same length and finite, the query times ``t`` not NaN; otherwise (strings included) a
+    :class:`~relloc.errors.DataError`. Queries outside the known times get the end angles (no
+    extrapolation). ``assume_sorted`` skips these O(N) checks of the values (only the shapes
+    are checked) for samples and queries already validated, e.g. by a
+    :class:`~relloc.core.recording.GroundTruth`.
     """
-    t_grid = np.asarray(t_known, dtype=float)
-    angles = np.asarray(angle_known, dtype=float)
+    try:
+        t_grid = np.asarray(t_known, dtype=float)
+        angles = np.asarray(angle_known, dtype=float)
+        t_query = np.asarray(t, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise DataError(f"circular_interp: times and angles must be numbers ({exc})") from None
     if t_grid.ndim != 1 or t_grid.size == 0 or angles.shape != t_grid.shape:
         raise DataError(
             f"circular_interp: expected 1-D sample times and angles of one length ≥ 1, got "
             f"{t_grid.shape} and {angles.shape}"
         )
-    if not assume_sorted and not (t_grid[1:] > t_grid[:-1]).all():  # (NaN times too)
-        raise DataError("circular_interp: the sample times must be strictly increasing")
+    if not assume_sorted:
+        if not (t_grid[1:] > t_grid[:-1]).all():  # (NaN times too)
+            raise DataError("circular_interp: the sample times must be strictly increasing")
+        # (increasing: only the first or last time can be infinite)
+        if not (np.isfinite(t_grid[[0, -1]]).all() and np.isfinite(angles).all()):
+            raise DataError("circular_interp: a sample time or angle is not finite")
+        if np.isnan(t_query).any():
+            raise DataError("circular_interp: a query time is NaN")
     unwrapped = np.unwrap(angles)
-    t_query = np.asarray(t, dtype=float)
     return np.asarray(wrap_angle(np.interp(t_query, t_grid, unwrapped)), dtype=float)

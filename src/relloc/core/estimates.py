@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.core import checks
 from relloc.core.contract import Belief, BeliefStack, TrackEvent, UpdateRecord
 from relloc.errors import ConfigError, DataError, ModelError
 
@@ -193,8 +194,11 @@ class Recorder:
 
         ``beliefs`` that are not an iterable of :class:`Belief` (``None``, a belief without a
         subject, a non-numeric age or diagnostic) break the estimator contract: ModelError
-        naming ``owner`` and ``t``."""
-        t = float(t)
+        naming ``owner`` and ``t``; so does a ``t`` that is not a number."""
+        try:
+            t = float(t)
+        except (TypeError, ValueError):
+            raise ModelError(f"beliefs of {owner}: the time {t!r:.40} is not a number") from None
         if isinstance(beliefs, BeliefStack):
             mean, cov = beliefs.mean.copy(), beliefs.cov.copy()
             for i, subject in enumerate(beliefs.subjects):
@@ -245,25 +249,54 @@ class Recorder:
                 col.append(float(info.get(name, np.nan)))
 
     def add_updates(self, owner: str, updates: Iterable[UpdateRecord]) -> None:
-        for u in updates:
-            key = (owner, u.subject, u.track)
-            rows = self._updates.get(key)
-            if rows is None:
-                rows = self._updates[key] = _UpdateRows()
-            rows.t.append(u.t)
-            rows.age.append(u.age)
-            rows.nis.append(u.nis)
-            rows.dof.append(u.dof)
-            rows.cond_r.append(u.cond_r)
-            rows.cond_s.append(u.cond_s)
+        """Store ``owner``'s measurement updates. Anything but an iterable of
+        :class:`UpdateRecord` with numeric fields breaks the estimator contract: ModelError
+        naming ``owner`` (the updates before the bad one are stored, each one whole)."""
+        try:
+            for u in updates:
+                key = (owner, u.subject, u.track)
+                t, age, nis, dof = float(u.t), float(u.age), float(u.nis), int(u.dof)
+                cond_r, cond_s = float(u.cond_r), float(u.cond_s)
+                rows = self._updates.get(key)
+                if rows is None:
+                    rows = self._updates[key] = _UpdateRows()
+                rows.t.append(t)
+                rows.age.append(age)
+                rows.nis.append(nis)
+                rows.dof.append(dof)
+                rows.cond_r.append(cond_r)
+                rows.cond_s.append(cond_s)
+        except (AttributeError, TypeError, ValueError) as exc:
+            raise ModelError(
+                f"updates of {owner}: not a sequence of UpdateRecord with numeric fields "
+                f"({type(exc).__name__}: {exc})"
+            ) from None
 
     def add_events(self, events: Iterable[TrackEvent]) -> None:
+        """Store track events; anything but an iterable of :class:`TrackEvent` breaks the
+        estimator contract: ModelError."""
+        try:
+            events = tuple(events)
+        except TypeError:
+            raise ModelError(f"track events: not a sequence, got {type(events).__name__}") from None
+        for e in events:
+            if not isinstance(e, TrackEvent):
+                raise ModelError(f"track events: expected TrackEvent, got {type(e).__name__}")
         self._events.extend(events)
 
     def count(self, counts: Mapping[str, int]) -> None:
-        """Add estimator counters (summed by name)."""
-        for k, v in counts.items():
-            self._counts[k] = self._counts.get(k, 0) + int(v)
+        """Add estimator counters (summed by name): a mapping of names to integers ≥ 0 (else
+        ConfigError naming the counter; a float would be truncated)."""
+        try:
+            items = counts.items()
+        except AttributeError:
+            raise ConfigError(
+                f"Recorder.count: expected a mapping, got {type(counts).__name__}"
+            ) from None
+        for k, v in items:
+            self._counts[k] = self._counts.get(k, 0) + checks.count(
+                v, f"Recorder.count: counter {k!r}", low=0
+            )
 
     def _belief_series(self, key: SeriesKey, start: int) -> BeliefSeries:
         r = self._beliefs[key]
@@ -338,6 +371,9 @@ def concatenate(parts: Sequence[Estimates]) -> Estimates:
     """Join increments of the same estimators (e.g. a node's reports) into one record."""
     if not parts:
         raise ConfigError("concatenate: no estimates to join")
+    for i, part in enumerate(parts):
+        if not isinstance(part, Estimates):
+            raise ConfigError(f"concatenate: part {i} is a {type(part).__name__}, not Estimates")
     beliefs: dict[SeriesKey, list[BeliefSeries]] = {}
     updates: dict[SeriesKey, list[UpdateSeries]] = {}
     for p in parts:

@@ -13,6 +13,7 @@ lives in core so that estimators, simulators and the runtime all share it.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 
 import numpy as np
@@ -21,7 +22,7 @@ from numpy.typing import NDArray
 from relloc.core.contract import Estimator, HeldOdometry
 from relloc.core.estimates import Recorder
 from relloc.core.recording import Measurements
-from relloc.errors import ConfigError
+from relloc.errors import ConfigError, DataError
 
 Array = NDArray[np.float64]
 TIME_TOL = 1e-9
@@ -43,13 +44,35 @@ def run_events(
     from the previous event up to ``times[k]``; ``measurements`` sorted by time, each fed at the
     first event at or after its stamp; ``record_times`` — for every estimator, or per owner —
     must be among the event times.
+
+    Event times that are not a finite, non-decreasing 1-D array (an estimator would be advanced
+    back in time) and ``held`` or ``stamps`` of another length than ``times`` are a
+    :class:`~relloc.errors.DataError`; no estimators, or ``measurements`` that are not a
+    :class:`~relloc.core.recording.Measurements` table or a ``recorder`` that is not a
+    :class:`~relloc.core.estimates.Recorder`, a :class:`ConfigError`.
     """
-    times = np.asarray(times, dtype=float)
+    times = _event_times(times, held, stamps)
+    if not estimators:
+        raise ConfigError("run_events: no estimators to run")
+    if not isinstance(recorder, Recorder):
+        raise ConfigError(f"run_events: recorder must be a Recorder, got {type(recorder).__name__}")
+    if not isinstance(measurements, Measurements):
+        raise ConfigError(
+            f"run_events: measurements must be a Measurements table, got "
+            f"{type(measurements).__name__}"
+        )
     marks = _record_marks(estimators, times, record_times)
     ends = np.searchsorted(measurements.t, times + TIME_TOL, side="right")
     done = 0
+    previous = -math.inf
     for k, t in enumerate(times):
         t = float(t)
+        if not (math.isfinite(t) and t >= previous):  # (a NaN fails both)
+            raise DataError(
+                f"run_events: event {k} at t={t!r} after t={previous!r}; event times must be "
+                "finite and non-decreasing"
+            )
+        previous = t
         odometry = HeldOdometry(velocity=held[k], stamp=stamps[k])
         for est in estimators:
             est.advance(t, odometry)
@@ -77,11 +100,36 @@ def run_events(
             recorder.count(take_counts())
 
 
+def _event_times(times: Array, held: Array, stamps: Array) -> Array:
+    """``times`` as a 1-D float array of one entry per ``held`` and ``stamps`` row (the order
+    and finiteness are checked event by event, in the loop: a robot node runs a few events per
+    call, where a numpy reduction would cost microseconds)."""
+    try:
+        t = np.asarray(times, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise DataError(f"run_events: event times must be numbers ({exc})") from None
+    if t.ndim != 1:
+        raise DataError(f"run_events: event times must be 1-D, got shape {t.shape}")
+    try:
+        fits = len(held) == t.size and len(stamps) == t.size
+    except TypeError:  # None, a number
+        fits = False
+    if not fits:
+        raise DataError(
+            f"run_events: held velocities {np.shape(held)} and stamps {np.shape(stamps)} need "
+            f"one row per event, {t.size}"
+        )
+    return t
+
+
 def _record_marks(
     estimators: Sequence[Estimator], times: Array, record_times: Array | Mapping[str, Array]
 ) -> list[NDArray[np.bool_]]:
     def marks(rt: Array) -> NDArray[np.bool_]:
-        rt = np.asarray(rt, dtype=float).reshape(-1)
+        try:
+            rt = np.asarray(rt, dtype=float).reshape(-1)
+        except (TypeError, ValueError) as exc:
+            raise ConfigError(f"run_events: record times must be numbers ({exc})") from None
         idx = np.searchsorted(times, rt - TIME_TOL)
         if rt.size and (
             np.any(idx >= times.size)

@@ -44,8 +44,11 @@ def _as_state(mean: Array, cov: Array, what: str, *, factored: bool = False) -> 
     checked for symmetry and positive semi-definiteness within ``τ = PSD_TOL · max_i P_ii``
     (:data:`PSD_TOL`) — unless ``factored`` says it is exactly symmetric and known positive
     definite (the caller has just Cholesky-factored it or its inverse): then neither again."""
-    m = np.asarray(mean, dtype=float).reshape(-1)
-    P = np.asarray(cov, dtype=float)
+    try:
+        m = np.asarray(mean, dtype=float).reshape(-1)
+        P = np.asarray(cov, dtype=float)
+    except (TypeError, ValueError) as exc:  # a string, a ragged list
+        raise ModelError(f"{what}: mean and covariance must be numbers ({exc})") from None
     if P.shape != (m.size, m.size):
         raise ModelError(f"{what}: covariance shape {P.shape} does not match state size {m.size}")
     if not (np.all(np.isfinite(m)) and np.all(np.isfinite(P))):
@@ -150,9 +153,14 @@ class GaussianMixture:
     groups: NDArray[np.int64] | None = None
 
     def __post_init__(self) -> None:
-        means = np.asarray(self.means, dtype=float)
-        covs = np.asarray(self.covs, dtype=float)
-        w = np.asarray(self.weights, dtype=float)
+        try:
+            means = np.asarray(self.means, dtype=float)
+            covs = np.asarray(self.covs, dtype=float)
+            w = np.asarray(self.weights, dtype=float)
+        except (TypeError, ValueError) as exc:  # a string, a ragged list
+            raise ModelError(
+                f"GaussianMixture: means, covs and weights must be numbers ({exc})"
+            ) from None
         shape = w.shape
         n = means.shape[-1] if means.ndim else -1
         if w.ndim == 0 or means.shape[:-1] != shape or covs.shape != (*shape, n, n):
@@ -173,7 +181,10 @@ class GaussianMixture:
             if shape[-1] == 0 or not (w > 0.0).any(axis=-1).all():
                 raise ModelError("GaussianMixture: every mixture needs a component of weight > 0")
         else:
-            groups = np.asarray(self.groups, dtype=np.int64)
+            groups = np.asarray(self.groups)
+            if groups.size and groups.dtype.kind not in "iu":  # 0.5 would become group 0
+                raise ModelError(f"GaussianMixture: groups must be integers, got {groups.dtype}")
+            groups = groups.astype(np.int64, copy=False)
             if w.ndim != 1 or groups.shape != shape or (groups.size and groups.min() < 0):
                 raise ModelError(
                     f"GaussianMixture: groups {groups.shape} must be indices ≥ 0 labelling flat "

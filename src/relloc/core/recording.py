@@ -34,15 +34,17 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
+from numbers import Real
 from types import MappingProxyType
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.core import checks
 from relloc.core.angles import circular_interp, wrap_angle
 from relloc.core.limits import MAX_SENSOR_RANGE_M
-from relloc.errors import DataError
+from relloc.errors import ConfigError, DataError
 
 Array = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -193,15 +195,17 @@ class GroundTruth:
         if t.size < 2:
             raise DataError(f"{self.where}: at least two samples are needed, got {t.size}")
         _check_times(t, f"{self.where}.t", strict=True)
-        if not self.gap_s > 0:
-            raise DataError(f"{self.where}.gap_s: must be > 0, got {self.gap_s}")
+        gap = self.gap_s  # (a number > 0; inf, the default, is no gap at all)
+        if isinstance(gap, bool) or not isinstance(gap, Real) or not gap > 0:
+            raise DataError(f"{self.where}.gap_s: must be a number > 0, got {gap!r:.40}")
         object.__setattr__(self, "t", t)
         object.__setattr__(self, "pose", pose)
 
     def valid_at(self, t: Array | float) -> NDArray[np.bool_]:
         """Whether each time ``t`` is a sample or lies between two samples at most ``gap_s``
-        apart (a pose there is measured, not bridged over a gap or extrapolated)."""
-        tq = np.atleast_1d(np.asarray(t, dtype=float))
+        apart (a pose there is measured, not bridged over a gap or extrapolated); a NaN time is
+        not. Times that are not numbers, or not 1-D: DataError."""
+        tq = _query_times(t, self.where, nan_ok=True)
         hi = np.clip(np.searchsorted(self.t, tq, side="left"), 1, self.t.size - 1)
         inside = (tq >= self.t[0]) & (tq <= self.t[-1])
         bridged = self.t[hi] - self.t[hi - 1] <= self.gap_s
@@ -276,11 +280,19 @@ class Odometry:
         return out
 
 
-def _query_times(t: Array | float, where: str) -> Array:
+def _query_times(t: Array | float, where: str, *, nan_ok: bool = False) -> Array:
     """``t`` as a 1-D float array; a NaN time (which compares false with every bound, so it
-    would pass any span check) is a DataError naming ``where``."""
-    tq = np.atleast_1d(np.asarray(t, dtype=float))
-    if np.isnan(tq).any():
+    would pass any span check) unless ``nan_ok``, a time that is not a number or times of more
+    than one axis are a DataError naming ``where``."""
+    if t is None:  # (numpy would read it as NaN)
+        raise DataError(f"{where}: query times must be numbers, got None")
+    try:
+        tq = np.atleast_1d(np.asarray(t, dtype=float))
+    except (TypeError, ValueError) as exc:  # a string
+        raise DataError(f"{where}: query times must be numbers ({exc})") from None
+    if tq.ndim != 1:
+        raise DataError(f"{where}: query times must be a number or 1-D, got shape {tq.shape}")
+    if not nan_ok and np.isnan(tq).any():
         raise DataError(f"{where}: a query time is NaN")
     return tq
 
@@ -596,7 +608,7 @@ def measurement_rows(
 
     def ints(x: IntArray | int, name: str) -> IntArray:
         arr = numbers(x, (m,), name)
-        if not np.all(arr == np.round(arr)):
+        if np.asarray(x).dtype == bool or not np.all(arr == np.round(arr)):
             raise DataError(f"measurement_rows: {name} must hold integer indices, got {x!r:.60}")
         return arr.astype(np.int64)
 
@@ -624,13 +636,28 @@ class SkippedRow:
 
 @dataclass(frozen=True)
 class FileSkips:
-    """What a loader did with the rows of one file: read = kept + skipped (by reason)."""
+    """What a loader did with the rows of one file: read = kept + skipped (by reason).
+
+    The counts are integers ≥ 0, ``skipped`` a mapping of reasons to counts and ``examples``
+    :class:`SkippedRow` items; anything else is a ConfigError naming the field."""
 
     file: str
     rows_read: int
     rows_kept: int
     skipped: Mapping[str, int] = field(default_factory=dict)
     examples: tuple[SkippedRow, ...] = ()
+
+    def __post_init__(self) -> None:
+        where = f"FileSkips({self.file!r:.60})"
+        checks.count(self.rows_read, f"{where}.rows_read", low=0)
+        checks.count(self.rows_kept, f"{where}.rows_kept", low=0)
+        if not isinstance(self.skipped, Mapping):
+            raise ConfigError(f"{where}.skipped: expected a mapping of reasons to counts")
+        for reason, n in self.skipped.items():
+            checks.count(n, f"{where}.skipped[{reason!r}]", low=0)
+        for i, e in enumerate(self.examples):
+            if not isinstance(e, SkippedRow):
+                raise ConfigError(f"{where}.examples[{i}]: expected a SkippedRow, got {e!r:.40}")
 
     @property
     def n_skipped(self) -> int:
@@ -647,9 +674,15 @@ class FileSkips:
 
 @dataclass(frozen=True)
 class SkipReport:
-    """Rows read, kept and skipped per file and reason, with the first few examples."""
+    """Rows read, kept and skipped per file and reason, with the first few examples
+    (``files``: :class:`FileSkips` items, else a ConfigError)."""
 
     files: tuple[FileSkips, ...] = ()
+
+    def __post_init__(self) -> None:
+        for i, f in enumerate(self.files):
+            if not isinstance(f, FileSkips):
+                raise ConfigError(f"SkipReport.files[{i}]: expected FileSkips, got {f!r:.40}")
 
     @property
     def n_skipped(self) -> int:
@@ -810,7 +843,7 @@ class Recording:
 
     def index(self, robot: str | int) -> int:
         """Index of a robot given its name or index (DataError if unknown)."""
-        if isinstance(robot, (int, np.integer)):
+        if isinstance(robot, (int, np.integer)) and not isinstance(robot, bool):
             if 0 <= int(robot) < self.n_robots:
                 return int(robot)
         elif robot in self.robots:

@@ -29,6 +29,8 @@ from enum import IntEnum
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.errors import ConfigError, DataError
+
 Array = NDArray[np.float64]
 
 #: State layout of a follower's relative filter.
@@ -122,7 +124,17 @@ def heading_h(x: Array, index: int) -> tuple[float, Array]:
 
 
 def mode_measurement(x: Array, mode: Mode) -> tuple[Array, Array, tuple[bool, ...]]:
-    """Stacked Eq. 4 for one mode: ``(h(x), H, is_angle)`` with components in paper order."""
+    """Stacked Eq. 4 for one mode: ``(h(x), H, is_angle)`` with components in paper order.
+    ``mode`` must be a :class:`Mode` (a plain ``1`` would not be ``Mode.PAIR_SEEN``): ConfigError
+    otherwise; ``x`` a finite state of shape (4,): DataError otherwise."""
+    if not isinstance(mode, Mode):
+        raise ConfigError(f"mode_measurement: mode must be a Mode, got {mode!r:.40}")
+    try:
+        finite = np.shape(x) == (STATE_DIM,) and bool(np.isfinite(np.asarray(x, float)).all())
+    except (TypeError, ValueError):  # strings
+        finite = False
+    if not finite:
+        raise DataError(f"mode_measurement: x must be a finite state (4,), got {x!r:.60}")
     parts = [range_h(x)]
     angles: tuple[bool, ...]
     if mode is Mode.PAIR_SEEN:

@@ -41,6 +41,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from relloc.core.checks import positive
 from relloc.errors import ConfigError
 
 Array = NDArray[np.float64]
@@ -54,6 +55,7 @@ PSEUDO_LINEAR_COVARIANCES: tuple[str, ...] = ("simplified", "full")
 class RangeBearingNoise:
     """Sensor noise standard deviations: range ``sigma_r`` (m), azimuth and elevation (rad).
 
+    Each a finite number > 0 (a string, ``None`` or a bool is a ConfigError naming the field).
     Seed 000 Table 2: precise ``(0.0068, 0.0036, 0.0036)``, noisy ``(0.1466, 0.1, 0.1)``.
     """
 
@@ -63,9 +65,7 @@ class RangeBearingNoise:
 
     def __post_init__(self) -> None:
         for name in ("sigma_r", "sigma_azimuth", "sigma_elevation"):
-            value = float(getattr(self, name))
-            if not (np.isfinite(value) and value > 0.0):
-                raise ConfigError(f"RangeBearingNoise.{name}: must be finite and > 0, got {value}")
+            value = positive(getattr(self, name), f"RangeBearingNoise.{name}")
             object.__setattr__(self, name, value)
 
     @property

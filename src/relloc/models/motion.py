@@ -38,7 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from relloc.core.checks import number
+from relloc.core.checks import number, sequence
 from relloc.errors import ConfigError
 
 Array = NDArray[np.float64]
@@ -73,10 +73,12 @@ class VelocityNoise:
 
     @classmethod
     def of(cls, observer: ArrayLike, observed: ArrayLike) -> VelocityNoise:
-        """From any four-element sequences or arrays (an odometry's stated ``sigma``)."""
+        """From any four-element sequences or 1-D arrays (an odometry's stated ``sigma``);
+        anything else (a string, ``None``, a scalar, a 2-D array) is a ConfigError naming it."""
+        what = f"4 sigmas {INPUT_NAMES}"
         return cls(
-            observer=tuple(np.asarray(observer, dtype=float).reshape(-1).tolist()),  # type: ignore[arg-type]
-            observed=tuple(np.asarray(observed, dtype=float).reshape(-1).tolist()),  # type: ignore[arg-type]
+            observer=tuple(sequence(observer, "VelocityNoise.observer", what, length=4)),  # type: ignore[arg-type]
+            observed=tuple(sequence(observed, "VelocityNoise.observed", what, length=4)),  # type: ignore[arg-type]
         )
 
     @property
@@ -112,10 +114,8 @@ def _mv(M: Array, v: Array) -> Array:
 
 
 def _check_dt(dt: float) -> float:
-    dt = float(dt)
-    if not (np.isfinite(dt) and dt >= 0.0):
-        raise ConfigError(f"relative motion: dt must be finite and ≥ 0, got {dt}")
-    return dt
+    """``dt`` as a finite float ≥ 0 (a string, ``None`` or a bool: ConfigError)."""
+    return number(dt, "relative motion: dt", low=0.0)
 
 
 def relative_derivative(x: ArrayLike, u_l: ArrayLike, u_c: ArrayLike) -> Array:

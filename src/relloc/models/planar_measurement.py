@@ -146,10 +146,17 @@ class ScalarRows:
     group: IntArray
 
     def __post_init__(self) -> None:
-        m = np.asarray(self.z).shape[0]
+        z = np.asarray(self.z)
+        if z.ndim != 1:
+            raise ModelError(f"ScalarRows.z: expected shape (m,), got {z.shape}")
+        m = z.shape[0]
         for name in ("kind", "observer", "target", "sigma", "group"):
             if np.asarray(getattr(self, name)).shape != (m,):
                 raise ModelError(f"ScalarRows.{name}: expected shape ({m},)")
+        for name in ("kind", "observer", "target", "group"):
+            column = np.asarray(getattr(self, name))
+            if m and column.dtype.kind not in "iu":  # a float index would be truncated or refused
+                raise ModelError(f"ScalarRows.{name}: expected integers, got {column.dtype}")
         if np.asarray(self.landmark_xy).shape != (m, 2):
             raise ModelError(f"ScalarRows.landmark_xy: expected shape ({m}, 2)")
         if not np.isfinite(self.z).all() or not (np.asarray(self.sigma) > 0).all():
@@ -228,8 +235,14 @@ class LinearisedRows:
 
 
 def linearise_rows(X: Array, rows: ScalarRows) -> LinearisedRows:
-    """Evaluate residuals and sparse Jacobian blocks of ``rows`` at the team mean ``X (n, 3)``."""
+    """Evaluate residuals and sparse Jacobian blocks of ``rows`` at the team mean ``X (n, 3)``
+    (another shape, or ``rows`` not a :class:`ScalarRows`: ModelError)."""
     X = np.asarray(X, dtype=float)
+    if X.ndim != 2 or X.shape[1] != 3 or not isinstance(rows, ScalarRows):
+        raise ModelError(
+            f"linearise_rows: expected a team mean (n, 3) and ScalarRows, got {X.shape} and "
+            f"{type(rows).__name__}"
+        )
     n = X.shape[0]
     m = rows.size
     if m and (rows.observer.min() < 0 or rows.observer.max() >= n or rows.target.max() >= n):

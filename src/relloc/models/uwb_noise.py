@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from relloc.core.checks import number, positive
+from relloc.core.checks import count, number, positive
 from relloc.errors import ConfigError
 
 #: A reading is an outlier when its deviation from its link's offset exceeds ``OUTLIER_K`` σ.
@@ -85,12 +85,18 @@ def sample_range_errors(
     ``e_{k+1} = a e_k + σ√(1−a²) w_k`` with ``a = exp(−dt/τ)`` (white when τ = 0). With
     probability ``outlier_rate`` a reading is replaced by ``±(k·spread + Exp(excess_mean))``.
     ``include_bias`` adds the common ``bias``; ``link_bias`` adds one ``N(0, link_bias_std²)``
-    offset per link, drawn once.
+    offset per link, drawn once. ``n_steps`` and ``n_links`` are integers ≥ 0, ``dt`` a finite
+    number > 0, ``model`` a :class:`UwbNoiseModel` and ``rng`` a numpy ``Generator``; anything
+    else is a ConfigError naming the argument.
     """
-    if n_steps < 0 or n_links < 0 or not dt > 0.0:
-        raise ConfigError(
-            f"sample_range_errors: bad sizes n_steps={n_steps}, n_links={n_links}, dt={dt}"
-        )
+    where = "sample_range_errors: "
+    if not isinstance(model, UwbNoiseModel):
+        raise ConfigError(f"{where}model: expected a UwbNoiseModel, got {type(model).__name__}")
+    if not isinstance(rng, np.random.Generator):
+        raise ConfigError(f"{where}rng: expected a numpy Generator, got {type(rng).__name__}")
+    n_steps = count(n_steps, where + "n_steps", low=0)
+    n_links = count(n_links, where + "n_links", low=0)
+    dt = positive(dt, where + "dt")
     a = math.exp(-dt / model.correlation_time) if model.correlation_time > 0.0 else 0.0
     drive = model.spread * math.sqrt(1.0 - a * a)
     core = np.empty((n_steps, n_links))
