@@ -70,7 +70,7 @@ def test_recording_survives_pickling():
         ({"value": [[1.0, 0.0]], "kind": "range_bearing_elevation"}, "value is not (1, 3)"),
         ({"sigma": [1.0, 1.0]}, "sigma is not (1, 1) numbers"),
         ({"target": [1, 2]}, "target is not (1,) numbers"),
-        ({"t": ["x"]}, "t is not (-1,) numbers"),
+        ({"t": ["x"]}, "t: expected real numbers"),
         ({"kind": ["range"]}, "kind ['range'] is not a kind's name"),
     ],
 )

@@ -59,7 +59,7 @@ TWO |= {"prior_means": TWO["means"], "prior_covs": TWO["covs"]}
         ({"time": "x"}, "time"),
         ({"means": np.zeros((1, 2)), "prior_means": np.zeros((1, 2))}, "means"),
         ({"means": np.zeros((1, 1, 4))}, "means"),
-        ({"means": np.array([["a"] * 4])}, "not numbers"),
+        ({"means": np.array([["a"] * 4])}, "means: expected real numbers"),
         ({"covs": np.array([[[1, 5, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1.0]]])}, "symm"),
         ({"weights": np.array([1e308, 1e308]), **TWO}, "finite total"),
     ],

@@ -35,7 +35,7 @@ from numpy.typing import NDArray
 from relloc.core import checks
 from relloc.core.angles import wrap_angle
 from relloc.core.limits import MAX_ABS_POSITION_M, MAX_SPEED_M_S, MAX_YAW_RATE_RAD_S
-from relloc.errors import ConfigError, DataError
+from relloc.errors import ConfigError, DataError, RellocError
 
 Array = NDArray[np.float64]
 Frame = Literal["global", "leader"]
@@ -153,13 +153,10 @@ def formation_command(
 
 
 def _finite_vector(
-    value: object, size: int, what: str, error: type[Exception] = DataError
+    value: object, size: int, what: str, error: type[RellocError] = DataError
 ) -> Array:
     """``value`` as ``size`` finite floats, or ``error`` naming ``what``."""
-    try:
-        x = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise error(f"{what}: expected {size} numbers, got {value!r:.60}") from None
+    x = checks.floats(value, what, error)
     if x.shape != (size,) or not np.all(np.isfinite(x)):
         raise error(f"{what}: expected {size} finite numbers, got {value!r:.60}")
     return x

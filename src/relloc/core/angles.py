@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from relloc.core.checks import floats
 from relloc.errors import DataError
 
 
@@ -38,12 +39,9 @@ def circular_interp(
     are checked) for samples and queries already validated, e.g. by a
     :class:`~relloc.core.recording.GroundTruth`.
     """
-    try:
-        t_grid = np.asarray(t_known, dtype=float)
-        angles = np.asarray(angle_known, dtype=float)
-        t_query = np.asarray(t, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise DataError(f"circular_interp: times and angles must be numbers ({exc})") from None
+    t_grid = floats(t_known, "circular_interp: t_known")
+    angles = floats(angle_known, "circular_interp: angle_known")
+    t_query = floats(t, "circular_interp: t")
     if t_grid.ndim != 1 or t_grid.size == 0 or angles.shape != t_grid.shape:
         raise DataError(
             f"circular_interp: expected 1-D sample times and angles of one length ≥ 1, got "

@@ -1,7 +1,8 @@
 """Checks of settings values: each returns the value as a plain ``float`` or ``int``, or raises
 a :class:`~relloc.errors.ConfigError` naming the field (``where``) — also for a value of the
 wrong type (a string, ``None``, a ``bool``), which arithmetic would reject with a raw
-``TypeError`` or, worse, accept (``"0.1" * 2``)."""
+``TypeError`` or, worse, accept (``"0.1" * 2``). :func:`floats` does the same for an array
+argument, with the error its caller names (a DataError for data, a ModelError for a state)."""
 
 from __future__ import annotations
 
@@ -11,8 +12,11 @@ from collections.abc import Collection, Iterable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
-from relloc.errors import ConfigError
+from relloc.errors import ConfigError, DataError, RellocError
+
+_FLOAT64 = np.dtype(np.float64)
 
 
 def number(
@@ -98,3 +102,20 @@ def refuse_unread(
             raise ConfigError(
                 f"{flag}: {label or target} does not read it; read by {', '.join(readers)}"
             )
+
+
+def floats(value: object, where: str, error: type[RellocError] = DataError) -> NDArray[np.float64]:
+    """``value`` as a float array, or ``error`` naming ``where`` when it holds anything but
+    integers and floats: ``None`` or an object array (``np.asarray(…, dtype=float)`` reads
+    ``None`` as NaN), text or ragged nesting (a raw ``ValueError``), booleans (read as 0 and 1)
+    or complex numbers (their imaginary part dropped). A float64 array comes back as it is;
+    shapes and values are the caller's to check."""
+    if type(value) is np.ndarray and value.dtype is _FLOAT64:
+        return value
+    try:
+        raw = np.asarray(value)
+    except ValueError as exc:  # ragged nesting
+        raise error(f"{where}: expected an array of numbers ({exc})") from None
+    if raw.dtype.kind not in "iuf":
+        raise error(f"{where}: expected real numbers, got {raw.dtype} ({value!r:.40})")
+    return np.asarray(raw, dtype=float)

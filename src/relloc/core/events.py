@@ -19,6 +19,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.core.checks import floats
 from relloc.core.contract import Estimator, HeldOdometry
 from relloc.core.estimates import Recorder
 from relloc.core.recording import Measurements
@@ -104,10 +105,7 @@ def _event_times(times: Array, held: Array, stamps: Array) -> Array:
     """``times`` as a 1-D float array of one entry per ``held`` and ``stamps`` row (the order
     and finiteness are checked event by event, in the loop: a robot node runs a few events per
     call, where a numpy reduction would cost microseconds)."""
-    try:
-        t = np.asarray(times, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise DataError(f"run_events: event times must be numbers ({exc})") from None
+    t = floats(times, "run_events: event times")
     if t.ndim != 1:
         raise DataError(f"run_events: event times must be 1-D, got shape {t.shape}")
     try:
@@ -126,10 +124,7 @@ def _record_marks(
     estimators: Sequence[Estimator], times: Array, record_times: Array | Mapping[str, Array]
 ) -> list[NDArray[np.bool_]]:
     def marks(rt: Array) -> NDArray[np.bool_]:
-        try:
-            rt = np.asarray(rt, dtype=float).reshape(-1)
-        except (TypeError, ValueError) as exc:
-            raise ConfigError(f"run_events: record times must be numbers ({exc})") from None
+        rt = floats(rt, "run_events: record times", ConfigError).reshape(-1)
         idx = np.searchsorted(times, rt - TIME_TOL)
         if rt.size and (
             np.any(idx >= times.size)

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.core.checks import floats
 from relloc.core.linalg import solve_psd, symmetrise
 from relloc.errors import ModelError
 
@@ -44,11 +45,8 @@ def _as_state(mean: Array, cov: Array, what: str, *, factored: bool = False) -> 
     checked for symmetry and positive semi-definiteness within ``τ = PSD_TOL · max_i P_ii``
     (:data:`PSD_TOL`) — unless ``factored`` says it is exactly symmetric and known positive
     definite (the caller has just Cholesky-factored it or its inverse): then neither again."""
-    try:
-        m = np.asarray(mean, dtype=float).reshape(-1)
-        P = np.asarray(cov, dtype=float)
-    except (TypeError, ValueError) as exc:  # a string, a ragged list
-        raise ModelError(f"{what}: mean and covariance must be numbers ({exc})") from None
+    m = floats(mean, f"{what}: mean", ModelError).reshape(-1)
+    P = floats(cov, f"{what}: covariance", ModelError)
     if P.shape != (m.size, m.size):
         raise ModelError(f"{what}: covariance shape {P.shape} does not match state size {m.size}")
     if not (np.all(np.isfinite(m)) and np.all(np.isfinite(P))):
@@ -153,14 +151,9 @@ class GaussianMixture:
     groups: NDArray[np.int64] | None = None
 
     def __post_init__(self) -> None:
-        try:
-            means = np.asarray(self.means, dtype=float)
-            covs = np.asarray(self.covs, dtype=float)
-            w = np.asarray(self.weights, dtype=float)
-        except (TypeError, ValueError) as exc:  # a string, a ragged list
-            raise ModelError(
-                f"GaussianMixture: means, covs and weights must be numbers ({exc})"
-            ) from None
+        means = floats(self.means, "GaussianMixture: means", ModelError)
+        covs = floats(self.covs, "GaussianMixture: covs", ModelError)
+        w = floats(self.weights, "GaussianMixture: weights", ModelError)
         shape = w.shape
         n = means.shape[-1] if means.ndim else -1
         if w.ndim == 0 or means.shape[:-1] != shape or covs.shape != (*shape, n, n):

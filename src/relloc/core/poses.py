@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from relloc.core.checks import floats
 from relloc.errors import ModelError
 
 Array = NDArray[np.float64]
@@ -23,10 +24,7 @@ Array = NDArray[np.float64]
 def _check(p: Array, name: str) -> Array:
     """``p`` as a flat float pose of 3 or 4 entries (else ModelError naming ``name``). Values
     are not checked for NaN: these run at every step, on states the filters keep finite."""
-    try:
-        p = np.asarray(p, dtype=float).reshape(-1)
-    except (TypeError, ValueError) as exc:  # a string, a ragged list
-        raise ModelError(f"{name}: a pose is numbers, got {p!r:.40} ({exc})") from None
+    p = floats(p, name, ModelError).reshape(-1)
     if p.size not in (3, 4):
         raise ModelError(f"{name}: a pose has 3 (x, y, θ) or 4 (x, y, z, φ) entries, got {p.size}")
     return p

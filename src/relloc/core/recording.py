@@ -134,10 +134,7 @@ def kind_code(name: str) -> int:
 def _float_array(
     value: object, shape_tail: tuple[int, ...], where: str, *, nan_ok: bool = False
 ) -> Array:
-    try:
-        arr = np.asarray(value, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise DataError(f"{where}: not numeric ({exc})") from exc
+    arr = checks.floats(value, where)
     if arr.ndim != 1 + len(shape_tail) or arr.shape[1:] != shape_tail:
         expected = "(N" + "".join(f", {d}" for d in shape_tail) + ")"
         raise DataError(f"{where}: expected shape {expected}, got {arr.shape}")
@@ -284,12 +281,7 @@ def _query_times(t: Array | float, where: str, *, nan_ok: bool = False) -> Array
     """``t`` as a 1-D float array; a NaN time (which compares false with every bound, so it
     would pass any span check) unless ``nan_ok``, a time that is not a number or times of more
     than one axis are a DataError naming ``where``."""
-    if t is None:  # (numpy would read it as NaN)
-        raise DataError(f"{where}: query times must be numbers, got None")
-    try:
-        tq = np.atleast_1d(np.asarray(t, dtype=float))
-    except (TypeError, ValueError) as exc:  # a string
-        raise DataError(f"{where}: query times must be numbers ({exc})") from None
+    tq = np.atleast_1d(checks.floats(t, f"{where}: query times"))
     if tq.ndim != 1:
         raise DataError(f"{where}: query times must be a number or 1-D, got shape {tq.shape}")
     if not nan_ok and np.isnan(tq).any():
@@ -592,10 +584,10 @@ def measurement_rows(
 
     def numbers(x: object, shape: tuple[int, ...], name: str, *, reshape: bool = False) -> Array:
         """``x`` as floats of ``shape``: reshaped (same size) or broadcast (from fewer)."""
+        arr = checks.floats(x, f"measurement_rows: {name}")
         try:
-            arr = np.asarray(x, dtype=float)
             return arr.reshape(shape) if reshape else np.broadcast_to(arr, shape).copy()
-        except (ValueError, TypeError) as exc:
+        except ValueError as exc:
             raise DataError(f"measurement_rows: {name} is not {shape} numbers ({exc})") from None
 
     t = numbers(t, (-1,), "t", reshape=True)
@@ -608,7 +600,7 @@ def measurement_rows(
 
     def ints(x: IntArray | int, name: str) -> IntArray:
         arr = numbers(x, (m,), name)
-        if np.asarray(x).dtype == bool or not np.all(arr == np.round(arr)):
+        if not np.all(arr == np.round(arr)):
             raise DataError(f"measurement_rows: {name} must hold integer indices, got {x!r:.60}")
         return arr.astype(np.int64)
 
@@ -725,10 +717,7 @@ def _items(value: object, where: str, what: str) -> tuple[Any, ...]:
 def _landmarks(value: object) -> Array:
     """Landmark positions as a read-only ``(L, 3)`` array (an empty input: ``(0, 3)``)."""
     where = "recording.landmarks"
-    try:
-        raw = np.asarray(value, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise DataError(f"{where}: not numeric ({exc})") from exc
+    raw = checks.floats(value, where)
     if raw.size == 0:
         raw = raw.reshape(0, 3)
     if raw.ndim != 2 or raw.shape[1] != 3:

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from relloc.core.checks import count, number
+from relloc.core.checks import count, floats, number
 from relloc.core.linalg import symmetric_within
 from relloc.errors import ConfigError, DataError
 
@@ -67,24 +67,21 @@ class EquivalentMeasurement:
             raise DataError(str(exc)) from exc
         if self.sender == self.subject:
             raise DataError(f"{where}: sender and subject must differ")
-        try:
-            means = np.atleast_2d(np.asarray(self.means, dtype=float))
-            k = means.shape[0]
-            arrays = {
-                "means": (means, (k, STATE_DIM)),
-                "covs": (np.asarray(self.covs, dtype=float), (k, STATE_DIM, STATE_DIM)),
-                "prior_means": (
-                    np.atleast_2d(np.asarray(self.prior_means, dtype=float)),
-                    (k, STATE_DIM),
-                ),
-                "prior_covs": (
-                    np.asarray(self.prior_covs, dtype=float),
-                    (k, STATE_DIM, STATE_DIM),
-                ),
-                "weights": (np.asarray(self.weights, dtype=float).reshape(-1), (k,)),
-            }
-        except (TypeError, ValueError) as exc:
-            raise DataError(f"{where}: the arrays are not numbers ({exc})") from exc
+        means = np.atleast_2d(floats(self.means, f"{where}: means"))
+        k = means.shape[0]
+        arrays = {
+            "means": (means, (k, STATE_DIM)),
+            "covs": (floats(self.covs, f"{where}: covs"), (k, STATE_DIM, STATE_DIM)),
+            "prior_means": (
+                np.atleast_2d(floats(self.prior_means, f"{where}: prior_means")),
+                (k, STATE_DIM),
+            ),
+            "prior_covs": (
+                floats(self.prior_covs, f"{where}: prior_covs"),
+                (k, STATE_DIM, STATE_DIM),
+            ),
+            "weights": (floats(self.weights, f"{where}: weights").reshape(-1), (k,)),
+        }
         for name, (arr, shape) in arrays.items():
             if arr.shape != shape:
                 raise DataError(f"{where}: {name} has shape {arr.shape}, expected {shape}")

@@ -10,8 +10,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from relloc.core.checks import floats
 from relloc.errors import ModelError
-from relloc.metrics.arrays import floats
 
 Array = NDArray[np.float64]
 

@@ -83,11 +83,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from relloc.core.checks import count, number, probability
+from relloc.core.checks import count, floats, number, probability
 from relloc.core.kalman import MAX_CHI2_DOF, chi2_threshold
 from relloc.core.linalg import cholesky
 from relloc.errors import ConfigError, DataError, ModelError
-from relloc.metrics.arrays import floats
 
 Array = NDArray[np.float64]
 

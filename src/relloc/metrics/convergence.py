@@ -20,9 +20,8 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from relloc.core.checks import positive
+from relloc.core.checks import floats, positive
 from relloc.errors import ConfigError, DataError
-from relloc.metrics.arrays import floats
 
 Array = NDArray[np.float64]
 

@@ -16,7 +16,6 @@ from numpy.typing import ArrayLike, NDArray
 from relloc.core import checks
 from relloc.core.angles import wrap_angle
 from relloc.errors import ConfigError, DataError
-from relloc.metrics.arrays import floats
 
 Array = NDArray[np.float64]
 
@@ -34,8 +33,8 @@ def state_errors(
     ``[−n, n)`` (:class:`ConfigError` otherwise — a bare integer, a float index, an index
     beyond the state).
     """
-    est = floats(estimate, "state_errors: estimate")
-    tru = floats(truth, "state_errors: truth")
+    est = checks.floats(estimate, "state_errors: estimate")
+    tru = checks.floats(truth, "state_errors: truth")
     if est.shape != tru.shape:
         raise DataError(f"state_errors: estimate shape {est.shape} != truth shape {tru.shape}")
     for name, x in (("estimate", est), ("truth", tru)):
@@ -75,7 +74,7 @@ def rmse(errors: ArrayLike, axis: int | tuple[int, ...] | None = 0) -> Array:
     ``axis`` is an integer or a tuple of distinct integers in ``[−ndim, ndim)`` (negative ones
     count from the end), or ``None`` for all axes; anything else is a :class:`ConfigError`.
     """
-    e = floats(errors, "rmse: errors")
+    e = checks.floats(errors, "rmse: errors")
     axes = tuple(range(e.ndim)) if axis is None else axis if isinstance(axis, tuple) else (axis,)
     if not axes and e.ndim:
         raise ConfigError("rmse: axis must name at least one axis, got ()")
@@ -103,8 +102,8 @@ def radial_errors(estimate: ArrayLike, truth: ArrayLike) -> Array:
     Its mean over runs is the radial bias (positive: the robot is placed too far away, as the
     plain PLKF does with a noisy bearing sensor).
     """
-    est = floats(estimate, "radial_errors: estimate")
-    tru = floats(truth, "radial_errors: truth")
+    est = checks.floats(estimate, "radial_errors: estimate")
+    tru = checks.floats(truth, "radial_errors: truth")
     if est.shape != tru.shape or est.ndim == 0 or est.shape[-1] < 3:
         raise DataError(f"radial_errors: shapes {est.shape} and {tru.shape} must match, ≥ 3 wide")
     return np.linalg.norm(est[..., :3], axis=-1) - np.linalg.norm(tru[..., :3], axis=-1)

@@ -159,12 +159,7 @@ class CooperativeScenario:
 def _points(name: str, value: object) -> Array:
     """``value`` as a float array of finite coordinates, the positions (first two columns)
     within ``MAX_ABS_POSITION_M``; else ConfigError naming ``name``."""
-    try:
-        a = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise ConfigError(
-            f"CooperativeScenario.{name}: expected numbers, got {value!r:.40}"
-        ) from None
+    a = checks.floats(value, f"CooperativeScenario.{name}", ConfigError)
     if not np.all(np.isfinite(a)):
         raise ConfigError(f"CooperativeScenario.{name}: non-finite value")
     xy = a[..., :2] if a.ndim == 2 else a
