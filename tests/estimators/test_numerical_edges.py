@@ -117,6 +117,15 @@ def test_a_large_time_step_stays_finite():
     assert np.linalg.eigvalsh(join_symmetric(tracker._cov)).min() > 0.0
 
 
+@pytest.mark.parametrize("dt", [None, "abc", -0.1, math.nan])
+def test_a_time_step_that_is_not_a_number_or_negative_is_a_config_error(dt):
+    """None and text raised a raw TypeError/ValueError."""
+    with pytest.raises(ConfigError, match=r"relative (filter|tracker): dt must be"):
+        predict_arrays(PRIOR.mean, PRIOR.cov, U_L, U_C, dt, _settings("plkf").motion_noise)
+    with pytest.raises(ConfigError, match=r"relative (filter|tracker): dt must be"):
+        RelativeTracker(PRIOR, _settings("plkf")).predict(U_L, U_C, dt)
+
+
 # ------------------------------------------------------------------ NaN where it comes in
 #
 # kalman_update does not check the prior mean (see relloc.core.kalman): every estimator checks

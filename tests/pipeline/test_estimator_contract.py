@@ -51,7 +51,7 @@ import pytest
 from numpy.typing import NDArray
 
 from relloc.core.angles import wrap_angle
-from relloc.core.contract import Estimator
+from relloc.core.contract import Estimator, HeldOdometry
 from relloc.core.estimates import Estimates
 from relloc.core.events import TIME_TOL
 from relloc.core.gaussian import Gaussian
@@ -68,6 +68,7 @@ from relloc.core.recording import (
     measurement_rows,
     relative_pose,
 )
+from relloc.errors import DataError
 from relloc.estimators.cooperative import (
     CooperativeEstimator,
     CooperativeSettings,
@@ -461,6 +462,24 @@ def test_evaluation_runs_on_the_estimates(name: str) -> None:
         summary = accuracy_and_consistency([e for e in evals if e.frame == f], settle_s=0.0)
         assert summary["samples"] > 0
         assert np.isfinite(summary["position_rmse_m"]) and np.isfinite(summary["anees"])
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_an_estimator_advanced_back_in_time_or_to_nan_is_a_data_error(name: str) -> None:
+    """One rule (:func:`relloc.core.events.elapsed`): some estimators refused a step back as a
+    ConfigError, the UWB range filters and the Gaussian-sum estimator not at all (they set their
+    clock back, or predicted with a negative step), and a NaN time slipped through some."""
+    case = _case(name)
+    still = HeldOdometry.still(case.recording.n_robots)
+    t0 = case.recording.span[0]
+    for est in case.build(case.recording):
+        est.advance(t0, still)
+        est.advance(t0 + 1.0, still)
+        with pytest.raises(DataError, match=r": time went back from .* to "):
+            est.advance(t0 + 0.5, still)
+    for est in case.build(case.recording):
+        with pytest.raises(DataError, match=r": time nan is not a finite number"):
+            est.advance(float("nan"), still)
 
 
 # ---------------------------------------------------------------------------------- linear cases

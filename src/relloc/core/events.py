@@ -14,7 +14,9 @@ lives in core so that estimators, simulators and the runtime all share it.
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Mapping, Sequence
+from typing import overload
 
 import numpy as np
 from numpy.typing import NDArray
@@ -28,6 +30,26 @@ from relloc.errors import ConfigError, DataError
 Array = NDArray[np.float64]
 TIME_TOL = 1e-9
 """Event times closer than this are one event."""
+
+
+@overload
+def elapsed(previous: None, t: object, where: str) -> None: ...
+@overload
+def elapsed(previous: float, t: object, where: str) -> float: ...
+def elapsed(previous: float | None, t: object, where: str) -> float | None:
+    """``t − previous`` (s) for an estimator advanced to ``t``; ``None`` at its first event
+    (``previous`` None). ``t`` must be a finite number no earlier than ``previous − TIME_TOL``
+    (one event that rounding split): otherwise a DataError naming ``where`` — an estimator
+    advanced back in time would predict over one interval twice, or keep a clock that went
+    back."""
+    if isinstance(t, bool) or not isinstance(t, numbers.Real) or not math.isfinite(t):
+        raise DataError(f"{where}: time {t!r:.40} is not a finite number")
+    if previous is None:
+        return None
+    dt = float(t) - previous
+    if dt < -TIME_TOL:
+        raise DataError(f"{where}: time went back from {previous!r} to {t!r}")
+    return dt
 
 
 def run_events(

@@ -107,7 +107,7 @@ from numpy.typing import NDArray
 from relloc.association.gating import mahalanobis_batch
 from relloc.core.checks import count, number, positive, probability
 from relloc.core.contract import BeliefStack, HeldOdometry, Silent, UpdateRecord
-from relloc.core.events import TIME_TOL
+from relloc.core.events import TIME_TOL, elapsed
 from relloc.core.gaussian import Gaussian
 from relloc.core.kalman import chi2_threshold, prepare_gates
 from relloc.core.recording import NO_TARGET, Measurements, kind_code
@@ -844,13 +844,12 @@ class CooperativeEstimator(Silent):
 
     def advance(self, t: float, odometry: HeldOdometry) -> None:
         """Note the commands held over ``(previous event, t]``; the steps are taken lazily."""
+        dt = elapsed(None if np.isnan(self._t) else self._t, t, "CooperativeEstimator.advance")
         t = float(t)
-        if np.isnan(self._t):
+        if dt is None:
             self._t_start = self._t = self._t_applied = t
             return
-        if t < self._t:
-            raise ConfigError(f"CooperativeEstimator.advance: time went back from {self._t} to {t}")
-        if t > self._t:
+        if dt > 0:
             self._held.append(odometry)
             self._held_t.append(t)
             self._t = t

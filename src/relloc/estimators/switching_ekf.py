@@ -55,6 +55,7 @@ from numpy.typing import NDArray
 from relloc.core.angles import wrap_angle
 from relloc.core.checks import number, positive, probability
 from relloc.core.contract import Belief, HeldOdometry, Silent, UpdateRecord
+from relloc.core.events import TIME_TOL, elapsed
 from relloc.core.gaussian import Gaussian
 from relloc.core.kalman import gated_update, prepare_gates
 from relloc.core.linalg import condition_log10
@@ -80,8 +81,6 @@ BLOCKS = tuple(BLOCK_DIMS)
 #: Name of the estimator (``Estimates.estimator``) and the frame of its beliefs.
 NAME = "switching_ekf"
 FRAME = "airground_follower"
-#: Times closer than this are one instant (as in the replay loop).
-TIME_TOL = 1e-9
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -266,9 +265,7 @@ class SwitchingEkf(Silent):
 
     def advance(self, t: float, odometry: HeldOdometry) -> None:
         """Predict from the previous event to ``t`` with ``u = [v_i, ω_i, v_0, ω_0]``."""
-        dt = float(t) - self._t
-        if not dt > -TIME_TOL:
-            raise DataError(f"SwitchingEkf {self.owner}: time went back from {self._t} to {t}")
+        dt = elapsed(self._t, t, f"SwitchingEkf {self.owner}")
         if dt > 0.0:
             v = np.asarray(odometry.velocity, dtype=float)
             if v.shape != (len(self._names), 4):

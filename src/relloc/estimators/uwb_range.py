@@ -38,6 +38,7 @@ from numpy.typing import NDArray
 from relloc.association.mixture_reduction import merge_moments
 from relloc.core.checks import count, number, positive, probability
 from relloc.core.contract import Belief, HeldOdometry, Silent, UpdateRecord
+from relloc.core.events import elapsed
 from relloc.core.kalman import chi2_threshold, gated_update, kalman_update
 from relloc.core.recording import NO_TARGET, Measurements, kind_code
 from relloc.errors import ConfigError, DataError
@@ -103,14 +104,15 @@ class RangePairBank(Silent):
         self._gated = 0
 
     def advance(self, t: float, odometry: HeldOdometry) -> None:
-        if self.t is not None and self.means.shape[0] and t > self.t:
+        dt = elapsed(self.t, t, f"{self.owner}->{self.subject} RangePairBank.advance")
+        if dt is not None and self.means.shape[0] and dt > 0:
             u = odometry.velocity
             self.means, self.covs = predict_arrays(
                 self.means,
                 self.covs,
                 np.broadcast_to(u[self.owner_index], self.means.shape),
                 np.broadcast_to(u[self.subject_index], self.means.shape),
-                t - self.t,
+                dt,
                 self.noise,
                 where=f"{self.owner}->{self.subject}",
             )
@@ -298,10 +300,10 @@ class RangeTeamFilter(Silent):
 
     def advance(self, t: float, odometry: HeldOdometry) -> None:
         del odometry  # a range-only team has no odometry: the motion prior is constant velocity
-        if self.t is None:
+        dt = elapsed(self.t, t, "RangeTeamFilter.advance")
+        if dt is None:
             self.t = self.started = t
             return
-        dt = t - self.t
         if dt > 0 and self.free:
             q = self.settings.q
             F1 = np.array([[1.0, 0, dt, 0], [0, 1.0, 0, dt], [0, 0, 1.0, 0], [0, 0, 0, 1.0]])
@@ -436,14 +438,15 @@ class RelativeDeadReckoning(Silent):
         self.mean, self.cov = mean.copy(), cov.copy()
 
     def advance(self, t: float, odometry: HeldOdometry) -> None:
-        if t > self.t:
+        dt = elapsed(self.t, t, f"RelativeDeadReckoning {self._where}")
+        if dt > 0:
             u = odometry.velocity
             self.mean, self.cov = predict_arrays(
                 self.mean,
                 self.cov,
                 u[self.owner_index],
                 u[self.subject_index],
-                t - self.t,
+                dt,
                 self.noise,
                 where=self._where,
             )

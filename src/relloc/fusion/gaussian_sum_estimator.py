@@ -47,6 +47,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from relloc.core.contract import Belief, EventKind, HeldOdometry, TrackEvent, UpdateRecord
+from relloc.core.events import elapsed
 from relloc.core.recording import KIND_NAMES, NO_TARGET, Measurements, kind_code
 from relloc.errors import ConfigError, DataError
 from relloc.estimators.gaussian_sum import GaussianSumFuser, GaussianSumSettings
@@ -153,10 +154,11 @@ class GaussianSumEstimator:
 
     def advance(self, t: float, odometry: HeldOdometry) -> None:
         """Fuse the queued messages, then predict from the previous event to ``t``."""
+        dt = elapsed(self._t, t, f"{self.owner} (gaussian_sum).advance")
         t = float(t)
         if self._pending:
             self._fuse_pending()
-        if self._t is None:
+        if dt is None:
             self._t = self._t0 = t
             return
         u = odometry.velocity
@@ -165,7 +167,7 @@ class GaussianSumEstimator:
                 f"{self.owner} (gaussian_sum): odometry of {u.shape[0]} robots, "
                 f"expected {len(self.robots)} {self.robots}"
             )
-        self.fuser.predict(u[self.index], u[self._team], t - self._t)
+        self.fuser.predict(u[self.index], u[self._team], dt)
         self._t = t
 
     def measure(self, batch: Measurements) -> None:
