@@ -72,8 +72,11 @@ def test_arrays_that_are_not_real_numbers_are_a_data_error(call, message) -> Non
         (lambda: chi2_upper(2, None), r"chi2_upper: p"),  # raw TypeError
         (lambda: chi2_upper(2, "0.9"), r"chi2_upper: p"),  # was read as 0.9
         (lambda: mean_chi2_band(2, 3, [0.9]), r"mean_chi2_band: p"),
-        (lambda: chi2_upper(10**400), r"chi2_upper: dof: must be ≤ 9007199254740992"),  # Overflow
-        (lambda: mean_chi2_band(10**10, 10**10), r"mean_chi2_band: dof · n_samples: must be ≤"),
+        (
+            lambda: chi2_upper(10**400),
+            r"chi2_upper: dof: must be in 1…9007199254740992",
+        ),  # Overflow
+        (lambda: mean_chi2_band(10**10, 10**10), r"mean_chi2_band: dof · n_samples: must be in 1…"),
         (lambda: run_average_band(np.ones((3, 5)), 2, "0.9"), r"run_average_band: p"),
         (lambda: run_average_band(np.ones((1, 5)), 2, NAN), r"run_average_band: p"),  # unchecked
         (lambda: run_average_band(np.ones((1, 5)), 0), r"run_average_band: dof"),

@@ -63,10 +63,9 @@ def count(value: object, where: str, *, low: int = 1, high: int | None = None) -
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):
         raise ConfigError(f"{where}: expected an integer, got {value!r:.40}")
     n = int(value)
-    if n < low:
-        raise ConfigError(f"{where}: must be ≥ {low}, got {n}")
-    if high is not None and n > high:
-        raise ConfigError(f"{where}: must be ≤ {high}, got {n!r:.40}")
+    if n < low or (high is not None and n > high):
+        bounds = f"≥ {low}" if high is None else f"in {low}…{high}"
+        raise ConfigError(f"{where}: must be {bounds}, got {n!r:.40}")
     return n
 
 

@@ -49,6 +49,7 @@ import numpy as np
 
 from relloc.calibration.uwb import fit_uwb_noise
 from relloc.control.formation import FormationController
+from relloc.core.checks import count
 from relloc.core.gaussian import Gaussian
 from relloc.datasets.paths import default_uwb_csv
 from relloc.datasets.uwb import load_uwb_csv
@@ -181,8 +182,8 @@ class GulerTeamSettings(ProcessTeam):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        if self.runs < 1:
-            raise ConfigError(f"--runs: {self.runs} must be ≥ 1")
+        count(self.runs, "--runs")
+        count(self.seed, "--seed", low=0)
         if self.case not in CASES:
             raise ConfigError(f"--case: {self.case!r} is not one of {', '.join(CASES)}")
         if self.faults.stalls:

@@ -73,10 +73,9 @@ class ReproduceArgs:
     sensing: str | None = None
 
     def __post_init__(self) -> None:
-        if self.runs is not None and not 1 <= self.runs <= MAX_RUNS:
-            raise ConfigError(f"--runs must be in 1…{MAX_RUNS}, got {self.runs}")
-        if self.seed < 0:
-            raise ConfigError(f"--seed must be ≥ 0, got {self.seed}")
+        if self.runs is not None:
+            checks.count(self.runs, "--runs", high=MAX_RUNS)
+        checks.count(self.seed, "--seed", low=0)
         if self.pairs is not None:
             if not self.pairs:
                 raise ConfigError("--pair: at least one pair OBSERVER,OBSERVED")

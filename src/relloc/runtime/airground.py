@@ -81,6 +81,7 @@ from typing import Any
 
 import numpy as np
 
+from relloc.core.checks import count, number, positive
 from relloc.core.estimates import Recorder
 from relloc.core.gaussian import Gaussian
 from relloc.core.recording import Measurements, Recording, empty_measurements
@@ -90,7 +91,15 @@ from relloc.pipeline.output import replace_file, write_json_file
 from relloc.runtime import keys
 from relloc.runtime.admission import CLOCK_SENDER, SenderBudget, admit, check_stamps
 from relloc.runtime.faults import FaultSettings, LinkEmulator, RobotEvent
-from relloc.runtime.messages import DEFAULT_MAX_BYTES, Message, MessageRejected, encode, est_bodies
+from relloc.runtime.messages import (
+    DEFAULT_MAX_BYTES,
+    MAX_MESSAGE_BYTES,
+    MIN_MESSAGE_BYTES,
+    Message,
+    MessageRejected,
+    encode,
+    est_bodies,
+)
 from relloc.runtime.shared_rows import rows_body, rows_from_body
 from relloc.runtime.teammates import SeenSequences
 from relloc.runtime.transport import (
@@ -137,11 +146,9 @@ class WorldSettings:
 
     def __post_init__(self) -> None:
         keys.check_id(self.team, "world.team")
-        if not self.realtime_factor >= 0:
-            raise ConfigError(f"world.realtime_factor: {self.realtime_factor} < 0")
+        number(self.realtime_factor, "world.realtime_factor", low=0.0)
         for name in ("cmd_timeout_s", "startup_timeout_s"):
-            if not getattr(self, name) > 0:
-                raise ConfigError(f"world.{name}: must be > 0")
+            positive(getattr(self, name), f"world.{name}")
 
 
 @dataclass
@@ -394,8 +401,9 @@ class RobotSettings:
     def __post_init__(self) -> None:
         keys.check_id(self.team, "robot.team")
         keys.check_id(self.robot, "--robot")
-        if not self.input_timeout_s > 0:
-            raise ConfigError("robot.input_timeout_s: must be > 0")
+        count(self.fault_seed, "robot.fault_seed", low=0)
+        positive(self.input_timeout_s, "robot.input_timeout_s")
+        count(self.max_bytes, "robot.max_bytes", low=MIN_MESSAGE_BYTES, high=MAX_MESSAGE_BYTES)
         if self.faults.stalls:
             raise ConfigError("--stall: the air-ground team's robots do not emulate link stalls")
 

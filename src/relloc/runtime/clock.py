@@ -25,7 +25,6 @@ clock counts it); a robot that disappears is dropped from the barrier.
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -33,6 +32,7 @@ from typing import Any
 
 import numpy as np
 
+from relloc.core.checks import number, positive
 from relloc.errors import ConfigError, RellocError
 from relloc.pipeline.output import write_json_file
 from relloc.runtime import keys
@@ -74,17 +74,13 @@ class ClockSettings:
             raise ConfigError(f"clock.roster: a robot named twice in {','.join(self.roster)}")
         # a kill of a robot off the roster would keep the clock waiting for it forever
         FaultSettings(kills=self.kills, restarts=self.restarts).check_robots(self.roster)
-        if not 0 < self.duration_s < math.inf:
-            raise ConfigError(f"--duration: must be a finite number > 0, got {self.duration_s}")
-        if not (0 < self.tick_s <= self.duration_s):
-            raise ConfigError(f"clock.tick_s: need 0 < tick_s ≤ duration_s, got {self.tick_s}")
-        if not 0 <= self.realtime_factor < math.inf:
-            raise ConfigError(
-                f"--realtime: must be a finite number ≥ 0, got {self.realtime_factor}"
-            )
+        duration = positive(self.duration_s, "--duration")
+        number(
+            self.tick_s, "clock.tick_s (at most duration_s)", low=0.0, high=duration, open_low=True
+        )
+        number(self.realtime_factor, "--realtime", low=0.0)
         for name in ("ack_timeout_s", "startup_timeout_s"):
-            if not 0 < getattr(self, name) < math.inf:
-                raise ConfigError(f"clock.{name}: must be a finite number > 0")
+            positive(getattr(self, name), f"clock.{name}")
 
     @property
     def n_ticks(self) -> int:

@@ -33,7 +33,6 @@ Randomness comes only from the ``np.random.Generator`` given to the emulator.
 from __future__ import annotations
 
 import heapq
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -60,7 +59,9 @@ class Partition:
             raise ConfigError("partition.side: list at least one robot")
         for r in self.side:
             check_id(r, "partition.side")
-        if not (0 <= self.start_s < self.end_s) or not math.isfinite(self.end_s):
+        number(self.start_s, "partition: start (s)", low=0.0)
+        number(self.end_s, "partition: end (s)")
+        if not self.start_s < self.end_s:
             raise ConfigError(f"partition: need 0 ≤ start < end, got {self.start_s}–{self.end_s} s")
 
     @property
@@ -93,10 +94,8 @@ class Stall:
         check_id(self.receiver, "stall receiver")
         if self.sender == self.receiver:
             raise ConfigError(f"stall: sender and receiver are both {self.sender!r}")
-        if not (math.isfinite(self.at_s) and self.at_s >= 0):
-            raise ConfigError(f"stall: time {self.at_s} must be ≥ 0 s")
-        if not (0 < self.wall_s <= MAX_STALL_S):
-            raise ConfigError(f"stall: {self.wall_s} wall s outside (0, {MAX_STALL_S:g}]")
+        number(self.at_s, "stall: time (s)", low=0.0)
+        number(self.wall_s, "stall: wall time (s)", low=0.0, high=MAX_STALL_S, open_low=True)
 
     @property
     def arg(self) -> str:
@@ -113,8 +112,7 @@ class RobotEvent:
 
     def __post_init__(self) -> None:
         check_id(self.robot, "robot event")
-        if not (math.isfinite(self.at_s) and self.at_s >= 0):
-            raise ConfigError(f"robot event {self.robot}: time {self.at_s} must be ≥ 0 s")
+        number(self.at_s, f"robot event {self.robot}: time (s)", low=0.0)
 
     @property
     def arg(self) -> str:

@@ -90,6 +90,9 @@ VERSION_CHANGES = {
 """What each schema version introduced over the one before."""
 DEFAULT_MAX_BYTES = 65_536
 """Default size limit of one encoded message (bytes); larger payloads are rejected unread."""
+MIN_MESSAGE_BYTES = 256
+MAX_MESSAGE_BYTES = 16 * 2**20
+"""The range a process's message size limit (``max_bytes``) may be set in."""
 
 STATE_DIM = 4
 """Relative state (x, y, z, φ) of seed 000 carried by ``eqm`` and ``mail`` (``est`` carries

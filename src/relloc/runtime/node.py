@@ -68,6 +68,7 @@ from typing import Any
 
 import numpy as np
 
+from relloc.core.checks import count, number, positive
 from relloc.core.recording import Measurements, Recording, empty_measurements
 from relloc.errors import ConfigError, DataError
 from relloc.estimators.relative import FRAME
@@ -79,6 +80,8 @@ from relloc.runtime.handoff import Handoff
 from relloc.runtime.mail import mail_body, mail_items
 from relloc.runtime.messages import (
     DEFAULT_MAX_BYTES,
+    MAX_MESSAGE_BYTES,
+    MIN_MESSAGE_BYTES,
     STATE_DIM,
     Message,
     MessageRejected,
@@ -163,15 +166,12 @@ class NodeSettings:
             raise ConfigError(f"node.roster: duplicate robot ids in {self.roster}")
         if not set(self.talkers) <= set(self.roster):
             raise ConfigError(f"node.talkers: {self.talkers} are not all on the roster")
+        count(self.fault_seed, "node.fault_seed", low=0)
         for name in ("eqm_period_s", "report_period_s", "clock_timeout_s"):
-            if not getattr(self, name) > 0:
-                raise ConfigError(f"node.{name}: {getattr(self, name)} must be > 0")
-        if not 0 <= self.paced_factor < np.inf:
-            raise ConfigError(f"--paced: must be a finite number ≥ 0, got {self.paced_factor}")
-        if not (isinstance(self.max_lag_ticks, int) and 1 <= self.max_lag_ticks <= 1000):
-            raise ConfigError(f"node.max_lag_ticks: {self.max_lag_ticks} outside [1, 1000]")
-        if not (256 <= self.max_bytes <= 16 * 2**20):
-            raise ConfigError(f"node.max_bytes: {self.max_bytes} outside [256, 16 MiB]")
+            positive(getattr(self, name), f"node.{name}")
+        number(self.paced_factor, "--paced", low=0.0)
+        count(self.max_lag_ticks, "node.max_lag_ticks", high=1000)
+        count(self.max_bytes, "node.max_bytes", low=MIN_MESSAGE_BYTES, high=MAX_MESSAGE_BYTES)
 
 
 @dataclass(frozen=True)

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from relloc.core.checks import number, positive
 from relloc.errors import ConfigError
 from relloc.runtime.estimation import WindowDriver
 from relloc.runtime.node import NodeSettings, RobotNode, _Window
@@ -47,10 +48,9 @@ class WallClockSettings:
 
     def __post_init__(self) -> None:
         for name in ("duration_s", "tick_s", "deadline_s"):
-            if not (np.isfinite(getattr(self, name)) and getattr(self, name) > 0):
-                raise ConfigError(f"realtime.{name}: {getattr(self, name)} must be > 0")
-        if not (0 <= self.lag_s <= 10):
-            raise ConfigError(f"realtime.lag_s: {self.lag_s} outside [0, 10] s")
+            positive(getattr(self, name), f"realtime.{name}")
+        number(self.t0, "realtime.t0")
+        number(self.lag_s, "realtime.lag_s", low=0.0, high=10.0)
         if self.tick_s > self.duration_s:
             raise ConfigError("realtime.tick_s: longer than the duration")
 
