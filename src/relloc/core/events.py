@@ -42,7 +42,10 @@ def elapsed(previous: float | None, t: object, where: str) -> float | None:
     (one event that rounding split): otherwise a DataError naming ``where`` — an estimator
     advanced back in time would predict over one interval twice, or keep a clock that went
     back."""
-    if isinstance(t, bool) or not isinstance(t, numbers.Real) or not math.isfinite(t):
+    # float first: the numbers.Real check costs about 0.3 µs
+    if not (
+        isinstance(t, float) or (isinstance(t, numbers.Real) and not isinstance(t, bool))
+    ) or not math.isfinite(t):
         raise DataError(f"{where}: time {t!r:.40} is not a finite number")
     if previous is None:
         return None
