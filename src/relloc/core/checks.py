@@ -117,4 +117,12 @@ def floats(value: object, where: str, error: type[RellocError] = DataError) -> N
         raise error(f"{where}: expected an array of numbers ({exc})") from None
     if raw.dtype.kind not in "iuf":
         raise error(f"{where}: expected real numbers, got {raw.dtype} ({value!r:.40})")
+    if not isinstance(value, np.ndarray) and raw.size and _holds_a_bool(value):
+        raise error(f"{where}: expected real numbers, got a bool among them ({value!r:.40})")
     return np.asarray(raw, dtype=float)
+
+
+def _holds_a_bool(value: object) -> bool:
+    """Whether a nesting of numbers holds a bool, which numpy turns into 0 or 1 when the other
+    entries are numbers (``np.asarray([True, 2.5])`` is ``[1.0, 2.5]``)."""
+    return any(isinstance(x, (bool, np.bool_)) for x in np.asarray(value, dtype=object).flat)
