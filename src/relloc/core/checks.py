@@ -51,6 +51,14 @@ def positive(value: object, where: str) -> float:
     return number(value, where, low=0.0, open_low=True)
 
 
+def time_step(dt: object, where: str) -> float:
+    """``dt`` as a finite float ≥ 0 (a ConfigError naming ``where`` otherwise). A float takes a
+    fast path: :func:`number`'s type checks cost a tracker's prediction about 2.5 %."""
+    if isinstance(dt, float) and math.isfinite(dt) and dt >= 0.0:
+        return float(dt)
+    return number(dt, f"{where}: dt", low=0.0)
+
+
 def probability(value: object, where: str) -> float:
     """``value`` as a probability strictly between 0 and 1 (a χ² gate's: one of 1 is
     infinite)."""

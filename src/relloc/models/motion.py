@@ -38,7 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from relloc.core.checks import number, sequence
+from relloc.core.checks import number, sequence, time_step
 from relloc.errors import ConfigError
 
 Array = NDArray[np.float64]
@@ -113,11 +113,6 @@ def _mv(M: Array, v: Array) -> Array:
     return np.einsum("...ij,...j->...i", M, v)
 
 
-def _check_dt(dt: float) -> float:
-    """``dt`` as a finite float ≥ 0 (a string, ``None`` or a bool: ConfigError)."""
-    return number(dt, "relative motion: dt", low=0.0)
-
-
 def relative_derivative(x: ArrayLike, u_l: ArrayLike, u_c: ArrayLike) -> Array:
     """Continuous-time ``ẋ = f(x, u_l, u_c)`` of seed 000 Eq. 1 (with ``φ̇ = ω_c − ω_l``)."""
     x = np.asarray(x, dtype=float)
@@ -138,7 +133,7 @@ def relative_derivative(x: ArrayLike, u_l: ArrayLike, u_c: ArrayLike) -> Array:
 
 def relative_step(x: ArrayLike, u_l: ArrayLike, u_c: ArrayLike, dt: float) -> Array:
     """Exact zero-order-hold step ``x⁺ = f_d(x, u_l, u_c, dt)`` (see module docstring)."""
-    dt = _check_dt(dt)
+    dt = time_step(dt, "relative motion")
     x = np.asarray(x, dtype=float)
     u_l = np.asarray(u_l, dtype=float)
     u_c = np.asarray(u_c, dtype=float)
@@ -169,7 +164,7 @@ def relative_jacobians(
         ∂p⁺/∂ω_l = −dt J p⁺ − R_l (dt²/2)(sinc'_l I + sinc_l J) R(ω_l dt/2) v_l
         ∂p⁺/∂ω_c = R_l (dt²/2)(sinc'_c I + sinc_c J) R(φ + ω_c dt/2) v_c
     """
-    dt = _check_dt(dt)
+    dt = time_step(dt, "relative motion")
     x = np.asarray(x, dtype=float)
     u_l = np.asarray(u_l, dtype=float)
     u_c = np.asarray(u_c, dtype=float)
