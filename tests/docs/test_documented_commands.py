@@ -1,0 +1,110 @@
+"""Every ``relloc …`` command line the README or a module docstring shows names a real command.
+
+The command lines are taken from code spans (````relloc …```` and ``` ``relloc …`` ```) and from
+lines of fenced code blocks. Each is walked through the real argument parser
+(:func:`relloc.cli.build_parser`): its words must name existing (sub)commands, its ``--flags``
+must be options of the command they follow, and a lower-case name given to ``reproduce``,
+``bench`` or ``observability`` must be a registered experiment, benchmark or built-in model.
+Placeholders (``NAME``, ``DIR``, ``SCENARIO.toml``, ``...``) are not checked. A renamed flag or
+experiment then fails here instead of leaving the documentation wrong.
+"""
+
+from __future__ import annotations
+
+import argparse
+import ast
+import re
+from pathlib import Path
+
+import pytest
+
+from relloc.bench import BENCHMARKS
+from relloc.cli import build_parser
+from relloc.experiments.registry import EXPERIMENTS
+from relloc.observability.builtin import BUILTIN_MODELS
+
+ROOT = Path(__file__).resolve().parents[2]
+SPAN = re.compile(r"``?(relloc [^`]+?)``?")
+NAMED = {
+    "reproduce": set(EXPERIMENTS),
+    "bench": set(BENCHMARKS),
+    "observability": set(BUILTIN_MODELS),
+}
+PARSER = build_parser()
+
+
+def documented_commands() -> list[tuple[str, str]]:
+    """``(where, command line)`` for every ``relloc …`` line of the README and the docstrings."""
+    texts = [("README.md", (ROOT / "README.md").read_text())]
+    for path in sorted((ROOT / "src" / "relloc").rglob("*.py")):
+        tree = ast.parse(path.read_text())
+        for node in ast.walk(tree):
+            if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef)):
+                doc = ast.get_docstring(node)
+                if doc:
+                    texts.append((str(path.relative_to(ROOT)), doc))
+    found = []
+    for where, text in texts:
+        lines = [m.group(1) for m in SPAN.finditer(text)]
+        fenced = re.findall(r"```[a-z]*\n(.*?)```", text, flags=re.S)
+        lines += [ln.strip() for block in fenced for ln in block.splitlines()]
+        for line in lines:
+            line = line.split("#")[0].strip()
+            if line.startswith("relloc "):
+                found.append((where, " ".join(line.split())))
+    return sorted(set(found))
+
+
+def subcommands(parser: argparse.ArgumentParser) -> dict[str, argparse.ArgumentParser]:
+    """The subcommands of ``parser`` by name (empty for a command that runs)."""
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            return dict(action.choices)
+    return {}
+
+
+def problems(line: str) -> list[str]:
+    """What in ``line`` does not exist in the parser (empty when everything does)."""
+    words = line.split()[1:]
+    parser, path = PARSER, []
+    while words and words[0] in subcommands(parser):
+        path.append(words[0])
+        parser = subcommands(parser)[words.pop(0)]
+    found = []
+    if words and subcommands(parser) and re.fullmatch(r"[a-z][a-z0-9-]*", words[0]):
+        found.append(f"'{' '.join(path)}' has no subcommand {words[0]!r}")
+    if words and path and path[-1] in NAMED and re.fullmatch(r"[a-z][a-z0-9_-]*", words[0]):
+        if words[0] not in NAMED[path[-1]]:
+            found.append(f"'{path[-1]}' knows no {words[0]!r}")
+    options = set(parser._option_string_actions)
+    for word in words:
+        flag = re.match(r"\[?(--[a-z][a-z0-9-]*)", word)
+        if flag and flag.group(1) not in options:
+            found.append(f"'{' '.join(path)}' has no option {flag.group(1)}")
+    return found
+
+
+COMMANDS = documented_commands()
+
+
+def test_the_documentation_shows_commands() -> None:
+    where = {w for w, _ in COMMANDS}
+    assert "README.md" in where and len(COMMANDS) >= 30, COMMANDS
+
+
+@pytest.mark.parametrize(("where", "line"), COMMANDS, ids=[f"{w}:{c}" for w, c in COMMANDS])
+def test_a_documented_command_exists(where: str, line: str) -> None:
+    assert problems(line) == [], f"{where}: {line}"
+
+
+@pytest.mark.parametrize(
+    ("line", "expected"),
+    [
+        ("relloc reproduce sharma2013 --runz 3", "has no option --runz"),
+        ("relloc reproduce sharma2031", "knows no 'sharma2031'"),
+        ("relloc team upp default", "has no subcommand 'upp'"),
+        ("relloc bench filterz", "knows no 'filterz'"),
+    ],
+)
+def test_a_wrong_command_is_caught(line: str, expected: str) -> None:
+    assert any(expected in p for p in problems(line)), problems(line)
