@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from relloc.errors import ConfigError, DataError
-from relloc.observability.rank import numeric_rank
+from relloc.observability.rank import numeric_rank, singular_values, stacked_singular_values
 from relloc.observability.rpmg import (
     SensorSettings,
     adjacency_matrix,
@@ -160,6 +160,32 @@ def test_twenty_robots_and_bad_input() -> None:
         build_rpmg(bad, marks, WIDE)
     with pytest.raises(ConfigError, match="sensing_range"):
         SensorSettings(sensing_range=-1.0)
+
+
+def test_stacked_singular_values_are_those_of_the_stacked_rows() -> None:
+    """Chunks of any height (none, thinner than the width, taller) and a rank-deficient stack."""
+    rng = np.random.default_rng(11)
+    chunks = [rng.normal(size=(k, 9)) for k in (0, 2, 1, 30, 4)]
+    full = np.linalg.svd(np.vstack(chunks), compute_uv=False)
+    assert np.allclose(stacked_singular_values(chunks, 9), full, rtol=1e-12, atol=1e-12)
+    basis = rng.normal(size=(4, 9))
+    thin = [c[:, :4] @ basis for c in chunks]
+    sv = stacked_singular_values(thin, 9)
+    assert sv.shape == (9,) and np.count_nonzero(sv > 1e-8 * sv[0]) == 4
+    assert np.all(stacked_singular_values([], 9) == 0.0)
+
+
+def test_team_figures_folded_chunk_by_chunk_are_the_assembled_matrix_ones() -> None:
+    """A complete 40-robot graph: 780 pairs, folded into the triangular factor in three chunks,
+    give the rank and σ_min of the SVD of the whole team matrix."""
+    rng = np.random.default_rng(40)
+    n = 40
+    poses = np.column_stack([rng.uniform(0, 300, (n, 2)), rng.uniform(-np.pi, np.pi, n)])
+    speeds, marks = _moving(n, rng), np.array([[100.0, 100.0], [250.0, 40.0]])
+    r = team_observability(poses, speeds, marks, WIDE)
+    M = team_observability_matrix(build_rpmg(poses, marks, WIDE), poses, speeds, marks)
+    assert r.rank == numeric_rank(M) == 3 * n
+    assert r.sigma_min == pytest.approx(singular_values(M)[-1], rel=1e-9)
 
 
 def test_minimal_moving_sets() -> None:

@@ -19,7 +19,7 @@ decision does not hinge on double rounding.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 
 import numpy as np
 from numpy.typing import NDArray
@@ -79,6 +79,20 @@ def padded_singular_values(A: Array, n: int) -> Array:
         sv = np.linalg.svd(A, compute_uv=False)
         out[: sv.size] = sv[:n]
     return out
+
+
+def stacked_singular_values(chunks: Iterable[Array], n: int) -> Array:
+    """Singular values (length ``n``, zeros padded) of the rows of every chunk ``(k_i, n)``
+    stacked, without stacking them: the running triangular factor ``R ← qr([R; chunk])`` is an
+    orthogonal transform of all rows so far, so its singular values are theirs, while memory
+    stays one chunk plus ``n × n`` (rows taken as already normalised, as in
+    :func:`padded_singular_values`)."""
+    R = np.zeros((0, n))
+    for chunk in chunks:
+        R = np.vstack([R, np.asarray(chunk, dtype=float).reshape(-1, n)])
+        if R.shape[0] > n:
+            R = np.asarray(np.linalg.qr(R, mode="r"), dtype=float)
+    return padded_singular_values(R, n)
 
 
 def rank_from_singular_values(sv: Array, *, rtol: float = RANK_RTOL) -> int:

@@ -34,7 +34,7 @@ collinear with the robots, or GPS), generically. The rank is ``Σ_c (3 n_c − d
 from __future__ import annotations
 
 import itertools
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -49,8 +49,8 @@ from relloc.models.symbolic import unicycle_landmarks, unicycle_team
 from relloc.observability.lie import ObservabilityMatrix
 from relloc.observability.rank import (
     numeric_rank,
-    padded_singular_values,
     rank_from_singular_values,
+    stacked_singular_values,
     unit_rows,
 )
 
@@ -294,8 +294,10 @@ def _team_singular_values(blocks: list[tuple[tuple[int, ...], Array]], n: int) -
     together); then the rows of all blocks on the same robots (both directions of a pair, every
     landmark and GPS row of one robot) are replaced by their triangular QR factor, at most
     6 (or 3) rows. That is an orthogonal transform of the rows, so the singular values are
-    those of the full matrix, while the matrix handed to the SVD has at most
-    ``6 · pairs + 3 · n`` rows instead of ~15 per edge (200 robots: seconds, not minutes).
+    those of the full matrix, while it has at most ``6 · pairs + 3 · n`` rows instead of ~15
+    per edge (200 robots: seconds, not minutes). Those rows are folded into one running
+    ``3n × 3n`` triangular factor a chunk at a time (:func:`.rank.stacked_singular_values`), so
+    memory grows as ``n²``, not as the number of pairs times ``n``.
     """
     if not blocks:
         return np.zeros(3 * n)
@@ -322,13 +324,22 @@ def _team_singular_values(blocks: list[tuple[tuple[int, ...], Array]], n: int) -
         if A.shape[0] > A.shape[1]:
             A = np.asarray(np.linalg.qr(A, mode="r"), dtype=float)
         parts.append((key, A))
-    M = np.zeros((sum(A.shape[0] for _, A in parts), 3 * n))
-    at = 0
-    for key, A in parts:
-        for slot, r in enumerate(key):
-            M[at : at + A.shape[0], 3 * r : 3 * r + 3] = A[:, 3 * slot : 3 * slot + 3]
-        at += A.shape[0]
-    return padded_singular_values(M, 3 * n)
+    return stacked_singular_values(_team_rows(parts, n), 3 * n)
+
+
+def _team_rows(parts: list[tuple[tuple[int, ...], Array]], n: int) -> Iterator[Array]:
+    """The rows of ``parts`` (at most 6 each) placed in the team's ``3n`` columns, ``8n`` parts
+    (about ``48n`` rows, so folding ``3n`` more rows in costs little) at a time: a complete
+    200-robot graph never holds its 119,400 × 600 matrix at once."""
+    for start in range(0, len(parts), 8 * n):
+        batch = parts[start : start + 8 * n]
+        M = np.zeros((sum(A.shape[0] for _, A in batch), 3 * n))
+        at = 0
+        for key, A in batch:
+            for slot, r in enumerate(key):
+                M[at : at + A.shape[0], 3 * r : 3 * r + 3] = A[:, 3 * slot : 3 * slot + 3]
+            at += A.shape[0]
+        yield M
 
 
 @dataclass(frozen=True)
