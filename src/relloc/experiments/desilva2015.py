@@ -67,16 +67,21 @@ summary.json keys: ``experiment, seed, runs, duration_s, settings`` (the scenari
 s; ``rmse_scored_percent``: the share of (run, scan) cells from 5 s on that have a dominant track,
 over which they are taken), ``wrong_association_rate`` (bearings used by the dominant track that
 came from another robot or clutter, after its first confirmation; ``joint_decision``: the same for
-the fuser's one-to-one assignment of bearings to teammates), ``consistency`` (ANEES of the dominant
-track against its own covariance, descriptive, and the % of NEES values above the χ²(4) 95 % bound,
-t ≥ 5 s; ``nees_run_average``: the verdict from the NEES averaged over the independent runs at each
-scan against the band of such a mean, :func:`relloc.metrics.run_average_band`), ``no_sharing`` (the
-same figures with mutual/indirect fusion off), ``covariance_intersection`` (the same with CI
+the fuser's one-to-one assignment of bearings to teammates), ``consistency`` (``anees`` of the
+dominant track against its own covariance, descriptive, with ``per_pair_anees``, and
+``nees_percent_beyond_chi2_95``, the % of NEES values above the χ²(4) 95 % bound, t ≥ 5 s;
+``ideal``: both for a consistent filter; ``nees_run_average``: the verdict from the NEES averaged
+over the independent runs at each scan against the band of such a mean,
+:func:`relloc.metrics.run_average_band`), ``no_sharing`` (the same figures with mutual/indirect
+fusion off, ``joint_wrong_association_rate`` for ``joint_decision``; here only, the
+``success_per_pair``), ``covariance_intersection`` (the same with CI
 fusion), ``mutual_confirmed`` (the same with the restricted sharing policy), ``clutter_sweep``
 (``"1"``, ``"10"``, ``"100"``, ``"1000"`` → ``success_rate``, ``pos_rmse_m``, ``yaw_rmse_rad``,
-``wrong_association_rate``, ``anees``, ``expected_clutter_per_scan``, ``runs``), ``pd_sweep``
-(``"0.95"``, ``"0.8"``, ``"0.6"`` → the same), ``kidnapped`` (``refound_rate``,
-``time_to_refind_s``), ``fig5`` (file names), ``departures`` (every departure from the paper)."""
+``wrong_association_rate``, ``anees``, ``hypotheses``, ``expected_clutter_per_scan``,
+``p_detect``, ``runs``), ``pd_sweep`` (``"0.95"``, ``"0.8"``, ``"0.6"`` → the same),
+``kidnapped`` (the ``robot``, ``time_s`` and ``jump`` of the kidnapping, ``runs``,
+``refound_rate``, ``time_to_refind_s``), ``figures`` (figure → file name: ``fig4``, ``fig5``,
+``fig5_no_sharing``, ``sweeps``), ``departures`` (every departure from the paper)."""
 
 from __future__ import annotations
 

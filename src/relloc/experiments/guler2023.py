@@ -39,13 +39,21 @@ time is several minutes on 2 cores.
 
 summary.json keys: ``experiment, seed, runs, uwb_noise_fit, one_drone, two_drones, formation,
 sweep_dwell_time, sweep_drones, ablation_uwb_link_bias, ablation_no_gate,
-ablation_white_range_model, formation_size, camera_noise, sweep_camera_noise, departures, paper``.
-Each scenario
-holds ``rmse_m`` (follower → ``x``/``y``, mean over runs of the per-run Eq. 5 RMSE),
-``rmse_m_max_over_runs``, ``mode_fraction`` (``sw1``/``sw2``/``sw3``, over followers, ticks and
-runs), ``formation_rmse_m`` (true ``r − r_des``), ``nees_run_average`` (the consistency
-verdict, below), ``anees_position`` (descriptive), ``gate_rejections`` and
-``triangle_refusals``, and the paper's value where it gives one.
+ablation_white_range_model, formation_size, camera_noise, sweep_camera_noise, departures, paper``;
+``runs`` is a map (``one_drone``, ``two_drones``, ``formation``: each scenario's run count;
+``sweep_point``: the runs of each point of the three ``sweep_*`` and of each ablation). Each
+scenario
+holds ``runs``, ``rmse_m`` (follower → ``x``/``y``, mean over runs of the per-run Eq. 5 RMSE),
+``rmse_m_max_over_runs``, ``rmse_m_worst`` and ``rmse_m_mean`` (the largest and the mean over
+followers, axes and runs), ``heading_rmse_rad`` (follower → θ_i RMSE), ``mode_fraction``
+(``sw1``/``sw2``/``sw3``, over followers, ticks and runs), ``formation_rmse_m`` (true
+``r − r_des``) with ``formation_rmse_m_worst``, ``nees_run_average`` (the consistency verdict,
+below), ``anees_position`` (descriptive), ``gate_rejections`` (block kind → ``rejected``,
+``applied``), ``mean_nis_per_dof`` (block kind), ``triangle_refusals`` with up to three
+``triangle_refusal_examples``, and the paper's value where it gives one (``paper``;
+``two_drones`` also ``meets_paper_bound``). The ablations keep ``rmse_m``, ``rmse_m_worst``,
+``rmse_m_mean``, ``anees_position``, ``nees_run_average`` and ``gate_rejections``; the sweeps
+are ``parameter`` and ``points``.
 
 Scoring: the estimation RMSE per follower and axis (and of θ_i) is
 :func:`relloc.pipeline.evaluation.accuracy_and_consistency` of the follower's series of the

@@ -227,15 +227,17 @@ all records × teammates) — all the unknown-correspondence means over the runs
 ``unknown_mutual_confirmed``, ``unknown_no_clutter`` and ``camera`` (the other models'
 figures, run 0's frames),
 ``association_bound`` (``with_clutter``, ``no_clutter``: accuracy, bearings used, correct),
-``tracking_reference`` (the tracked fraction of dead reckoning reset to the truth at every
-sighting, run 0's records: ``sighting_reset_reference``; ``by_age``: by the time since the last
-sighting), ``tracked_by_age`` (the headline's run 0, the same bins: ``from_s``, ``to_s``,
-``records``, ``tracked_fraction``), ``bearings`` (counts of robot,
+``tracking_reference`` (dead reckoning reset to the truth at every sighting,
+:func:`~relloc.experiments.association_bound.sighting_reset_reference`, on run 0's records:
+``tracked_fraction`` of ``records``, ``tracked``, ``truth_missing``, ``median_age_s``;
+``by_age``: by the time since the last sighting), ``tracked_by_age`` (the headline's run 0,
+the same bins: ``from_s``, ``to_s``, ``records``, ``tracked_fraction``), ``bearings`` (counts
+of robot,
 landmark and injected bearings, scans with several robots, ``unknown_subject``: camera rows of
 no other robot and no landmark,
 skipped by the conversion, and ``truth_missing``: filter ticks × robots inside a Vicon gap
 longer than the dataset's gap threshold, scored against the interpolated pose), ``scans``
-(camera frames used), ``load_report``.
+(camera frames used), ``load_report``, ``figures`` (``errors``: the figure's file name).
 """
 
 from __future__ import annotations

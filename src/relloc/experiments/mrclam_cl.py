@@ -85,7 +85,10 @@ lies wholly below 10 %: the target is met on the share, but one run cannot show 
 95 % confidence. With ``--calibration-window second-half`` both are 0.02 %, interval 0.0–2.8 %
 and 0.0–3.0 %: conservative, as said above.
 
-summary.json keys: ``cases.<mode>/<anchors>``: ``pos_rmse_m`` and ``heading_rmse_rad`` (per robot
+summary.json keys: ``experiment``, ``seed``, ``runs`` (1: one replay of the recording),
+``calibration_window_choice`` (the ``--calibration-window`` value), ``dataset``, ``robots``,
+``two_landmarks`` (the subjects of the ``2_landmarks`` anchors);
+``cases.<mode>/<anchors>``: ``pos_rmse_m`` and ``heading_rmse_rad`` (per robot
 "1"…"5" and ``mean`` = arithmetic mean over robots), ``final_pos_err_m`` (same layout),
 ``nees_pct_beyond`` (per-robot 3-DOF NEES above χ²₃(0.95), pooled; ``nees_beyond_interval``
 its 95 % interval by batch means over time, :func:`relloc.metrics.percent_beyond_interval`,
@@ -95,12 +98,18 @@ with the verdict), ``anees``, ``used``,
 truth; robots with some only) and ``robots_without_truth`` (robots with none, left out of the
 per-robot figures and their mean; also said in report.md), the same over the held-out window
 (``heldout_records_without_truth``, ``heldout_robots_without_truth``),
-``heldout`` (the same accuracy numbers over the held-out window only); ``fit`` (the fitted models),
-``scored_on`` (the held-out window, after the calibration window), ``targets`` (the issue's
+``heldout`` (the same accuracy numbers over the held-out window only),
+``heading_by_landmark_gap`` (``all_landmarks`` cases with measurements only:
+:func:`heading_error_by_landmark_gap`), ``note`` (``dead_reckoning`` cases only: its anchor
+entries are one run); ``fit`` (the fitted models),
+``scored_on`` (the held-out window, on the other side of the span from the calibration window:
+after it by default, before it with ``second-half`` or ``T:``), ``targets`` (the issue's
 targets and whether each is met, judged on the held-out window; the whole-run figures under
-``in_sample``), ``load_report`` (rows the loader
-and :func:`relloc.datasets.mrclam.to_recording` skipped, by reason). The fitted latency, scales
-and bearing biases are applied to the recording before the replay (:func:`build_recording`).
+``in_sample``), ``paper_reference`` (the run-6 figures behind the targets: a plain joint EKF's
+``joint_ekf_pos_rmse_m`` and dead reckoning's ``dead_reckoning_pos_rmse_m``), ``load_report``
+(rows the loader and :func:`relloc.datasets.mrclam.to_recording` skipped, by reason). The
+fitted latency, scales and bearing biases are applied to the recording before the replay
+(:func:`build_recording`).
 """
 
 from __future__ import annotations

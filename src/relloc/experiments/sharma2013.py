@@ -88,6 +88,10 @@ within the 99.9 % band 1.20–5.88, plain 17.1 above it).
 
 summary.json keys
 -----------------
+``experiment``, ``seed``, ``runs`` (Monte-Carlo runs); ``scenario``: the simulated team's
+settings (``n_robots``, ``landmarks``, ``sensing_range_m``, ``speed_mps``, ``ts_s``,
+``duration_s``, ``initial_sigma``, ``sigma_v``, ``sigma_w``, ``sigma_bearing``, ``gps_sigma``,
+``gps_period_s``);
 ``cases.<case>`` (the plain EIF), ``cases_first_estimates.<case>`` (the FEJ EIF) and
 ``cases_observability_constrained.<case>`` (the OC EIF):
 ``pos_rmse_m``, ``x_rmse_m``, ``y_rmse_m``, ``heading_rmse_rad`` — each a map
@@ -107,7 +111,10 @@ along the unobservable directions (:func:`frame_nees`; ``dof`` d, ``per_run``, t
 against the 95 % ``band`` of a mean of that many χ²(d) values and the ``verdict``,
 ``pct_beyond`` χ²_d(0.95) with its ``beyond_interval``, and ``along_the_run``: ``t``, the
 ``mean_over_runs`` at each and :func:`relloc.metrics.run_average_band`'s keys); in ``cases`` only,
-``observability_rank`` with ``full_rank`` and the paper's predicted rank (Theorems 2–4).
+``observability_rank`` (:func:`observability_ranks`: ``rank`` of ``state_dim`` at the mid-run
+RPMG, ``full_rank``, ``paper_rank`` the paper's predicted rank (Theorems 2–4), ``robot_edges``,
+``landmark_edges``, ``available``; only ``available`` false and the ``reason`` where the
+symbolic tool cannot be imported).
 ``observability_aware``: the headline observability-aware filter (``block``, ``filter``),
 whether it meets the target (``target_met``, ``target``: NEES beyond ≤ 10 % in
 ``no_landmark`` and ``one_landmark`` with position RMSE not above the plain EIF's), each
@@ -115,8 +122,9 @@ filter's ``meets_target`` and ``worst_nees_pct_beyond``, and the headline filter
 ``nees_beyond_interval``, ``nees_pct_beyond_per_run`` and ``frame_nees`` in those cases.
 ``filters``: what each block ran; ``nees_on``: what the NEES is computed on; ``departures``: every
 choice that departs from the paper.
-``rpmg``: fraction of time the robot graph is connected and the fraction with β(G₅²) = 1
-(seed 001 Eq. 22: every robot has a path to both landmarks).
+``rpmg``: fraction of time the robot graph is connected (``connected_fraction``) and the
+fraction with β(G₅²) = 1 (``beta_fraction``; seed 001 Eq. 22: every robot has a path to both
+landmarks).
 
 Boundedness criterion (fixed before looking at results): with ``e(t)`` the position RMS error
 over runs and robots and ``s(t)`` the mean 1σ position bound, the error is *bounded* when

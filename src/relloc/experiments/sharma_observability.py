@@ -19,9 +19,11 @@ Seed 001 (Sharma, Quebe, Beard & Taylor 2013) §3–4.1:
 
 summary.json keys: ``experiment``, ``seed``, ``runs``, ``cases`` (name → ``rank``,
 ``state_dim``, ``conditions``, ``unobservable_directions``, ``paper_claim``, ``agrees``,
-``evidence``), ``fig2`` (``t``, ``beta``, ``sigma_min``, ``rank``, ``agreement_fraction``),
-``pcrlb_robot2`` (case → ``sqrt_bound_final``, ``sqrt_bound_mean_second_half`` for x, y, ψ),
-``timing_s``.
+``evidence``; the two edge cases also a ``note``), ``fig2`` (``t``, ``beta``, ``sigma_min``,
+``rank``, ``n_edges``, ``agreement_fraction``), ``pcrlb_robot2`` (case → ``sqrt_bound_final``,
+``sqrt_bound_mean_second_half``, each for the ``states`` x, y, ψ), ``timing_s`` (seconds of
+``edge_analysis``, ``random_teams``, ``fig2``, ``twenty_robot_matrix``,
+``team_pcrlb_4_cases``).
 """
 
 from __future__ import annotations

@@ -39,19 +39,22 @@ pairs :mod:`relloc.experiments.tiers_uwb_pairs`):
     bias correction) and, for pairs, odometry alone (both odometries integrated from the true
     relative pose at the start of the scored stretch).
 
-summary.json: ``bags.<name>``: ``loader`` (offsets header → bag time, unknown topics, skips),
-``calibration`` (``source`` ``window`` or ``bag``, the ``window``, the ``fit``, ``link_bias_m``
-by radio names, ``bias_drift_m``, ``range_sigma_m`` the filters use, ``mapping_sigma_replaced_m``
-the mapping's ``uwb.sigma`` it replaces (``None`` without one), ``heldout`` range errors raw and
-corrected), ``scored_window_s``, ``team.aligned`` and ``team.anchored`` (``pos_rmse_m``,
-``nees_pct_beyond``: share of record times whose 2-DOF NEES exceeds χ²₂(0.95), with
-``nees_beyond_interval`` its 95 % interval by batch means over time (widened on short blocks,
-:func:`relloc.metrics.percent_beyond_interval`) and the verdict —
-one run, whose records are correlated in time —, ``converged_after_s`` (error below 0.3 m for
-good), ``per_robot`` (anchored), ``baselines.uncalibrated`` / ``baselines.multilateration``
-``pos_rmse_m``, ``anchors``, ``mode``, ``mirror_ambiguous``, ``mirror_image_scored``),
-``pairs.<a->b>`` (the same keys in the owner's body frame, ``ranges_gated`` the ranges the
-filter's χ² gate rejected, ``baselines.odometry_alone``, ``observability``).
+summary.json: ``experiment``, ``seed`` (``None``: nothing is drawn at random), ``runs`` (1),
+``bags.<name>``: ``loader`` (offsets header → bag time, unknown topics, skips),
+``calibration`` (``source`` ``window`` or ``bag`` with that ``bag``'s path, the ``window``,
+the ``fit``, ``link_bias_m`` by radio names, ``bias_drift_m``, ``range_sigma_m`` the filters
+use, ``mapping_sigma_replaced_m`` the mapping's ``uwb.sigma`` it replaces (``None`` without
+one), ``heldout`` range errors raw and corrected), ``scored_window_s``, ``team.aligned`` and
+``team.anchored`` (``pos_rmse_m`` over ``records``, ``nees_pct_beyond``: share of record
+times whose 2-DOF NEES exceeds χ²₂(0.95), with ``nees_beyond_interval`` its 95 % interval by
+batch means over time (widened on short blocks, :func:`relloc.metrics.percent_beyond_interval`)
+and the verdict — one run, whose records are correlated in time —, ``converged_after_s``
+(error below 0.3 m for good), ``per_robot`` (anchored), ``baselines.uncalibrated`` /
+``baselines.multilateration`` ``pos_rmse_m``, ``anchors``, ``mode``, ``mirror_ambiguous``,
+``mirror_image_scored``; ``team.anchored`` is only ``skipped`` with its reason when the bag
+has fewer than two anchors), ``pairs.<a->b>`` (the same keys in the owner's body frame,
+``ranges_gated`` the ranges the filter's χ² gate rejected, ``baselines.odometry_alone``,
+``observability``).
 """
 
 from __future__ import annotations

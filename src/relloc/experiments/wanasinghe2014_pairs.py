@@ -40,13 +40,13 @@ position RMSE no worse than the raw replay's), ``paper[case]`` (seed 000's Table
 Table-4 % NEES beyond);
 ``pairs``: one record per replayed pair with ``observer``, ``observed``, ``windows``
 (``calibration`` and ``scored``, disjoint), ``steady_state_range_m`` (mean horizontal range in
-the steady state) and ``cases[case]``: ``calibrated`` and ``raw`` (PLKF ``yaw_rmse_rad``,
-``yaw_rmse_per_draw``, ``nees_percent_beyond`` with ``nees_beyond_interval``, its 95 %
-interval by cluster means over the draws and over time and the verdict, ``position_rmse_m``),
-``yaw_bound_rad`` (√PCRLB of φ, calibrated model), ``truth_velocity_yaw_bound_rad``,
-``yaw_ok``, ``nees_ok``, ``position_ok`` and ``met`` (all three);
-``relative_yaw_random_walk_rad``: the calibrated commands' relative-yaw random walk over the
-steady state, on the calibration and on the scored window
+the steady state), ``relative_yaw_random_walk_rad`` (below) and ``cases[case]``:
+``calibrated`` and ``raw`` (PLKF ``yaw_rmse_rad``, ``yaw_rmse_per_draw``,
+``nees_percent_beyond`` with ``nees_beyond_interval``, its 95 % interval by cluster means over
+the draws and over time and the verdict, ``position_rmse_m``), ``yaw_bound_rad`` (√PCRLB of φ,
+calibrated model), ``truth_velocity_yaw_bound_rad``, ``yaw_ok``, ``nees_ok``, ``position_ok``
+and ``met`` (all three); a pair's ``relative_yaw_random_walk_rad``: the calibrated commands'
+relative-yaw random walk over the steady state, on the calibration and on the scored window
 (:mod:`relloc.calibration.turn_rate`; a scored window with a smaller walk than its calibration
 window is kinder than the noise fitted there); ``skipped``: ``{observer, observed, reason}`` of
 each pair not replayed; ``tally``: cells (pair × case) replayed and

@@ -20,8 +20,8 @@ summary.json keys: ``experiment``, ``seed``, ``runs``, ``cases`` (name → ``ran
 ``state_dim``, ``conditions`` (minimal sets of input groups that must be non-zero),
 ``conditions_text``, ``input_conditions`` (the same over scalar inputs),
 ``unobservable_directions``, ``paper_claim``, ``agrees`` (true/false, null where the paper makes
-no claim), ``evidence``, ``elapsed_s``), ``equation_checks`` (equation → ``paper``, ``ours``,
-``agrees``, ``witness``), ``total_symbolic_s``.
+no claim), ``evidence``, ``note``, ``elapsed_s``), ``equation_checks`` (equation → ``paper``,
+``ours``, ``agrees``, ``witness``), ``total_symbolic_s``.
 """
 
 from __future__ import annotations
