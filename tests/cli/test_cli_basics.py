@@ -36,6 +36,7 @@ def test_unknown_experiment_is_config_error(tmp_path, capsys):
         (["--sensing", "all"], "--sensing: sharma2013 does not read it; read by desilva2015"),
         (["--runs", "7"], "--runs: mrclam-cl does not read it"),  # one replay of one run
         (["--runs", "7"], "--runs: tiers-uwb does not read it"),
+        (["--seed", "7"], "--seed: tiers-uwb does not read it"),  # it draws nothing at random
         (["--runs", "0"], "--runs: must be in 1…1000000, got 0"),
     ],
 )

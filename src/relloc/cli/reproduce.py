@@ -31,7 +31,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     p.add_argument("name", help="experiment name: " + ", ".join(registry.EXPERIMENTS))
     p.add_argument("--out", type=Path, required=True, help="output folder")
     p.add_argument("--runs", type=int, default=None, help="Monte-Carlo runs (default: the paper's)")
-    p.add_argument("--seed", type=int, default=2026, help="master seed (default 2026)")
+    p.add_argument(
+        "--seed", type=int, default=None, help=f"master seed (default {registry.DEFAULT_SEED})"
+    )
     p.add_argument("--dataset", type=Path, default=None, help="a folder in MRCLAM layout")
     p.add_argument(
         "--executor",

@@ -255,13 +255,14 @@ def export_run0(args: ReproduceArgs, runs: int, config: RunConfig) -> dict[str, 
     from relloc.pipeline.export import export_estimates
 
     assert args.export is not None
-    recording = simulate(config.scenario, np.random.default_rng(spawn_seeds(args.seed, runs)[0]))
+    run0 = spawn_seeds(args.master_seed, runs)[0]
+    recording = simulate(config.scenario, np.random.default_rng(run0))
     estimates = leader_estimates(recording, config)
     return export_estimates(
         args.export,
         estimates,
         recording,
-        run=f"run 0 of {runs} (seed {args.seed}): {EXPORTED_RUN}",
+        run=f"run 0 of {runs} (seed {args.master_seed}): {EXPORTED_RUN}",
     )
 
 
@@ -456,7 +457,7 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
         return run_monte_carlo(
             _task,
             n,
-            args.seed,
+            args.master_seed,
             executor=args.executor,
             task_args=(config,),
             description=label,
@@ -501,7 +502,7 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
     figures = _figures(out, paper_res, nosh_res, clutter_sweep, pd_sweep)
     summary: dict[str, Any] = {
         "experiment": "desilva2015",
-        "seed": args.seed,
+        "seed": args.master_seed,
         "runs": runs,
         "duration_s": DURATION_S,
         "settings": {

@@ -660,10 +660,10 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
     w = _windows(folder)
     fov = w.fov_fit.half_width_rad
     runs = args.runs if args.runs is not None else SPREAD_RUNS
-    spread_runs = _spread_runs(w, args.seed, runs)
+    spread_runs = _spread_runs(w, args.master_seed, runs)
     spread = _spread(spread_runs)
     clock = _clock(w, 0.0)
-    rng = np.random.default_rng(spawn_seeds(args.seed, runs)[0])
+    rng = np.random.default_rng(spawn_seeds(args.master_seed, runs)[0])
     rec, counts = _hidden_correspondence(w.raw, clock[0], clock[-1], fov, rng)
     counts["unknown_subject"] = rec.skips.skipped_by_reason().get(UNMAPPED_SUBJECT, 0)
     counts["truth_missing"] = sum(
@@ -701,7 +701,7 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
     camera, _ = _evaluate(_run(rec, w.models.camera, clock, sharing=True), clock[0], names)
     summary: dict[str, Any] = {
         "experiment": "mrclam-association",
-        "seed": args.seed,
+        "seed": args.master_seed,
         "runs": runs,
         "dataset": str(folder),
         "window_s": [w.t_start, w.t_end],

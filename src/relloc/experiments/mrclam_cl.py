@@ -565,7 +565,7 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
     spec = args.calibration_window if args.calibration_window is not None else SPLIT_CHOICES[0]
     window, scored = split_span(spec, t0, ds.truth_end, str(folder))
     fit = fit_models(ds, window)
-    prepared = build_recording(ds, fit, np.random.default_rng(args.seed))
+    prepared = build_recording(ds, fit, np.random.default_rng(args.master_seed))
     heldout = CalibrationWindow(
         max(scored.start_s, prepared.t_start),
         min(scored.end_s, float(prepared.out_t[-1])),
@@ -577,7 +577,7 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
     results = run_monte_carlo(
         run_case,
         len(keys),
-        args.seed,
+        args.master_seed,
         executor=args.executor,
         task_args=(prepared, settings),
         description="mrclam-cl cases",
@@ -618,7 +618,7 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
     targets = _targets(cases)
     summary: dict[str, Any] = {
         "experiment": "mrclam-cl",
-        "seed": args.seed,
+        "seed": args.master_seed,
         "runs": 1,
         "calibration_window_choice": spec,
         "dataset": str(folder),

@@ -47,6 +47,7 @@ EXPERIMENTS: dict[str, str] = {
 @dataclass(frozen=True, kw_only=True)
 class ReproduceArgs:
     """What every reproduction receives. ``runs=None`` means the paper's run count;
+    ``seed=None`` the default master seed :data:`DEFAULT_SEED` (:attr:`master_seed`);
     ``export`` the ``--mcap``/``--tum`` request (module docstring), ``None`` when not asked.
 
     ``bag``, ``map`` and ``calibrate_on`` are read by the experiments on ROS 2 bags (a bag, its
@@ -60,7 +61,7 @@ class ReproduceArgs:
 
     out_dir: Path
     runs: int | None = None
-    seed: int = 2026
+    seed: int | None = None
     dataset: Path | None = None
     executor: str | None = None
     quiet: bool = False
@@ -75,7 +76,8 @@ class ReproduceArgs:
     def __post_init__(self) -> None:
         if self.runs is not None:
             checks.count(self.runs, "--runs", high=MAX_RUNS)
-        checks.count(self.seed, "--seed", low=0)
+        if self.seed is not None:
+            checks.count(self.seed, "--seed", low=0)
         if self.pairs is not None:
             if not self.pairs:
                 raise ConfigError("--pair: at least one pair OBSERVER,OBSERVED")
@@ -85,9 +87,18 @@ class ReproduceArgs:
             if len(set(self.pairs)) != len(self.pairs):
                 raise ConfigError(f"--pair: a pair is given twice in {list(self.pairs)}")
 
+    @property
+    def master_seed(self) -> int:
+        """The seed every random draw of the reproduction derives from."""
+        return DEFAULT_SEED if self.seed is None else self.seed
+
+
+#: The master seed of a reproduction not given ``--seed``.
+DEFAULT_SEED = 2026
 
 #: :class:`ReproduceArgs` inputs read by only some experiments → those experiments.
 READ_BY: dict[str, tuple[str, ...]] = {
+    "seed": tuple(name for name in EXPERIMENTS if name != "tiers-uwb"),  # it draws nothing
     "runs": (
         "wanasinghe2014",
         "wanasinghe-observability",

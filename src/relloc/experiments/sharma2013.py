@@ -429,13 +429,13 @@ def export_run0(args: ReproduceArgs, runs: int) -> dict[str, Any]:
     from relloc.pipeline.export import export_estimates
 
     assert args.export is not None
-    scenario, sim, t, step = _simulated(spawn_seeds(args.seed, runs)[0])
+    scenario, sim, t, step = _simulated(spawn_seeds(args.master_seed, runs)[0])
     estimates, _ = _case_estimates(sim, case_settings(scenario, EXPORTED_CASE), t[::step])
     return export_estimates(
         args.export,
         estimates,
         sim.recording,
-        run=f"run 0 of {runs} (seed {args.seed}): {EXPORTED_RUN}",
+        run=f"run 0 of {runs} (seed {args.master_seed}): {EXPORTED_RUN}",
     )
 
 
@@ -763,7 +763,7 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
     results = run_monte_carlo(
         run_once,
         runs,
-        args.seed,
+        args.master_seed,
         executor=args.executor,
         description="sharma2013",
         quiet=args.quiet,
@@ -777,7 +777,7 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
         cases[case]["observability_rank"] = ranks[case]
     summary: dict[str, Any] = {
         "experiment": "sharma2013",
-        "seed": args.seed,
+        "seed": args.master_seed,
         "runs": runs,
         "scenario": {
             "n_robots": n,

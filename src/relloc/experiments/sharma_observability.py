@@ -222,7 +222,7 @@ def _team_cases(args: ReproduceArgs, runs: int) -> dict[str, dict[str, Any]]:
         results = run_monte_carlo(
             random_team_task,
             runs,
-            args.seed + k,
+            args.master_seed + k,
             executor=args.executor,
             task_args=(case,),
             description=case,
@@ -247,7 +247,7 @@ def _team_cases(args: ReproduceArgs, runs: int) -> dict[str, dict[str, Any]]:
                 "conditions_of": "team 0 (minimal sets of robots that must move)",
                 "conditions_enumerated_for": len(must_move),
                 "robots_that_must_move_mean": float(np.mean(must_move)),
-                "seed": args.seed + k,
+                "seed": args.master_seed + k,
             },
         }
     return out
@@ -439,11 +439,11 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
     out_dir = prepare_out_dir(args.out_dir)
     runs = args.runs or 50
     t0 = time.perf_counter()
-    cases = _edge_cases(5, args.seed)
+    cases = _edge_cases(5, args.master_seed)
     t_edges = time.perf_counter() - t0
     cases.update(_team_cases(args, runs))
     t_teams = time.perf_counter() - t0 - t_edges
-    cases["block_assembly_vs_symbolic_3_robots"] = _block_assembly_check(args.seed)
+    cases["block_assembly_vs_symbolic_3_robots"] = _block_assembly_check(args.master_seed)
     t1 = time.perf_counter()
     fig2 = fig2_series()
     t_fig2 = time.perf_counter() - t1
@@ -466,7 +466,7 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
             "fraction_beta_1": float(np.mean(fig2["beta"] == 1)),
         },
     }
-    cases["twenty_robots"] = _twenty_robots(args.seed)
+    cases["twenty_robots"] = _twenty_robots(args.master_seed)
     t2 = time.perf_counter()
     bounds = team_bounds()
     t_bounds = time.perf_counter() - t2
@@ -481,7 +481,7 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
     }
     summary = {
         "experiment": "sharma-observability",
-        "seed": args.seed,
+        "seed": args.master_seed,
         "runs": runs,
         "cases": cases,
         "fig2": {k: v for k, v in fig2.items() if k != "poses"},

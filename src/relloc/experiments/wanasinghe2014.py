@@ -227,7 +227,7 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
     return run_reproduction(
         Wanasinghe2014Config.from_args(args),
         args.out_dir,
-        seed=args.seed,
+        seed=args.master_seed,
         executor=args.executor,
         quiet=args.quiet,
         export=args.export,

@@ -99,7 +99,7 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
         config,
         args.pairs,
         args.out_dir,
-        seed=args.seed,
+        seed=args.master_seed,
         executor=args.executor,
         quiet=args.quiet,
     )

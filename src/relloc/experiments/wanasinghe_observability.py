@@ -351,16 +351,16 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
     t0 = time.perf_counter()
     cases: dict[str, dict[str, Any]] = {}
     for case in _cases():
-        r = analyse(case.model, order=2, samples=samples, seed=args.seed, precise=True)
+        r = analyse(case.model, order=2, samples=samples, seed=args.master_seed, precise=True)
         cases[case.name] = _case_entry(case, r)
         if not args.quiet:
             print(f"{case.name}: rank {r.rank}/{r.state_dim}, {r.conditions_text()}")
-    cases.update(_vertical_counterexamples(samples, args.seed))
+    cases.update(_vertical_counterexamples(samples, args.master_seed))
     checks = _equation_checks()
     total = time.perf_counter() - t0
     summary = {
         "experiment": "wanasinghe-observability",
-        "seed": args.seed,
+        "seed": args.master_seed,
         "runs": samples,
         "cases": cases,
         "equation_checks": checks,
@@ -368,7 +368,7 @@ def reproduce(args: ReproduceArgs) -> dict[str, Any]:
     }
     figures = _figures(out_dir, cases)
     write_summary(out_dir, summary)
-    write_report(out_dir, _report(cases, checks, figures, args.seed, samples, total))
+    write_report(out_dir, _report(cases, checks, figures, args.master_seed, samples, total))
     return summary
 
 
