@@ -37,6 +37,9 @@ def test_unknown_experiment_is_config_error(tmp_path, capsys):
         (["--runs", "7"], "--runs: mrclam-cl does not read it"),  # one replay of one run
         (["--runs", "7"], "--runs: tiers-uwb does not read it"),
         (["--seed", "7"], "--seed: tiers-uwb does not read it"),  # it draws nothing at random
+        (["--executor", "serial"], "--executor: mrclam-association does not read it"),
+        (["--executor", "serial"], "--executor: wanasinghe-observability does not read it"),
+        (["--executor", "serial"], "--executor: tiers-uwb does not read it"),
         (["--runs", "0"], "--runs: must be in 1…1000000, got 0"),
     ],
 )

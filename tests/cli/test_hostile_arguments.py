@@ -124,8 +124,78 @@ def a_file(tmp_path: Path) -> Path:
         (["node", "--robot", "observer", "--run", "-1"], "--run: must be ≥ 0"),
         (["node", "--robot", "observer", "--tick", "nan"], "--tick: must be a finite number"),
         (["node", "--robot", "observer", "--partition", "x,y@1-2"], "unknown robot 'x'"),
-        (["node", "--robot", "observer", "--case", "nope"], "--case: read by a reproduction's"),
+        (
+            ["node", "--robot", "observer", "--case", "nope"],
+            "--case: default does not read it; read by sharma2013, --estimator cooperative",
+        ),
         (["node", "--robot", "observer", "--fit", "f.json"], "--fit: read with --dataset"),
+        # options a mode does not read were accepted and ignored: the bag's range-only filter
+        # (the tracker's settings were recorded in its summary, unused) ...
+        *(
+            (["run", "bag", "--map", "m.toml", flag, value], f"{flag}: a bag (its UWB ranges")
+            for flag, value in (
+                ("--filter", "tekf"),
+                ("--init", "known"),
+                ("--yaw-bank", "4"),
+                ("--keep-window", "1"),
+                ("--gate", "0.5"),
+                ("--seed", "7"),
+            )
+        ),
+        # ... a reproduction's team (its own hub port, no export, guler2023's own tick) ...
+        (
+            ["team", "up", "sharma2013", "--port", "7000"],
+            "--port: sharma2013 does not read it; read by --estimator track",
+        ),
+        (["team", "up", "desilva2015", "--mcap", "x.mcap"], "--mcap: desilva2015 does not read"),
+        (["team", "up", "guler2023", "--tum", "t"], "--tum: guler2023 does not read it"),
+        (
+            ["team", "up", "guler2023", "--tick", "0.2"],
+            "--tick: guler2023 does not read it; read by desilva2015, sharma2013",
+        ),
+        # ... a robot process' team source (a reproduction's estimators, a scenario's track
+        # manager) and mode (the clock's ticks, or --realtime)
+        (
+            ["node", "--robot", "1", "--scenario", "sharma2013", "--filter", "tekf"],
+            "--filter: sharma2013 does not read it; read by --estimator track",
+        ),
+        (
+            ["node", "--robot", "L1", "--scenario", "desilva2015", "--init", "known"],
+            "--init: desilva2015 does not read it; read by --estimator track",
+        ),
+        (
+            ["node", "--robot", "L1", "--scenario", "desilva2015", "--case", "two_landmarks"],
+            "--case: desilva2015 does not read it; read by sharma2013",
+        ),
+        (
+            ["node", "--robot", "observer", "--run", "2"],
+            "--run: default does not read it; read by desilva2015, sharma2013",
+        ),
+        (
+            ["node", "--robot", "observer", "--estimator", "cooperative"],
+            "--estimator: default does not read it; read with --dataset only",
+        ),
+        (
+            ["node", "--robot", "observer", "--duration", "3"],
+            "--duration: default does not read it; read by desilva2015, sharma2013, --estimator "
+            "cooperative, --realtime",
+        ),
+        (
+            ["node", "--robot", "observer", "--tick", "0.5"],
+            "--tick: a node on the clock's ticks does not read it; read by --realtime",
+        ),
+        (
+            ["node", "--robot", "observer", "--teammates", "network"],
+            "--teammates: a node on the clock's ticks does not read it; read by --realtime",
+        ),
+        (
+            ["node", "--realtime", "--robot", "robot1", "--dataset", "d", "--clock-timeout", "1"],
+            "--clock-timeout: --realtime does not read it; read by a node on the clock's ticks",
+        ),
+        (
+            ["node", "--realtime", "--robot", "robot1", "--dataset", "d", "--paced", "2"],
+            "--paced: --realtime does not read it; read by a node on the clock's ticks",
+        ),
     ],
 )
 def test_a_bad_argument_is_refused_before_any_work(tmp_path, monkeypatch, capsys, argv, message):

@@ -132,13 +132,15 @@ def test_relloc_run_on_a_bag(tmp_path, capsys):
     assert "turtlebot1->turtlebot3" in capsys.readouterr().out
     # --no-plots is honoured; flags a single replay cannot use are refused, not ignored
     plain = tmp_path / "plain"
-    assert main([*argv[:5], str(plain), "--no-plots", "--quiet", "--gate", "0.99"]) == 0
+    assert main([*argv[:5], str(plain), "--no-plots", "--quiet"]) == 0
     assert sorted(p.name for p in plain.iterdir()) == ["report.md", "summary.json"]
     plain_summary = json.loads((plain / "summary.json").read_text())
     assert plain_summary["antenna_offset_not_modelled_m"] == 0
-    # the track managers' settings are stated, as for a simulated team
-    assert plain_summary["gate_probability"] == 0.99 and summary["gate_probability"] is None
-    assert {"init", "keep_window_s", "yaw_bank_components"} <= set(plain_summary)
+    # the range-only filter is stated; no track manager runs on a bag's ranges, so none of
+    # their settings is stated and a flag that sets one is refused
+    assert plain_summary["filter"] == "range_pair"
+    assert not {"seed", "init", "keep_window_s", "gate_probability"} & set(plain_summary)
+    assert main([*argv[:5], str(tmp_path / "gated"), "--gate", "0.99"]) == 2
     assert "offsets" not in capsys.readouterr().err
     # an antenna offset this range filter does not model is said, not dropped silently
     from importlib import resources

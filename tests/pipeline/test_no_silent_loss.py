@@ -59,13 +59,10 @@ def _bag(path: Path) -> Path:
 def test_relloc_run_counts_the_uwb_readings_no_filter_uses(tmp_path):
     from relloc.datasets.bag_mapping import parse_mapping
     from relloc.experiments.bag_run import run_bag
-    from relloc.experiments.team_run import TeamRunSettings
 
     path = _bag(tmp_path / "bag")
     out = tmp_path / "out"
-    summary, _ = run_bag(
-        path, parse_mapping(_mapping(), "loss.toml"), TeamRunSettings(runs=1), out, plots=False
-    )
+    summary, _ = run_bag(path, parse_mapping(_mapping(), "loss.toml"), out, plots=False)
     loader = summary["loader"]
     assert loader["uwb_readings"] == 10 + 3 + 4
     # the 4 readings to the radio of unknown position never reach the recording: said so

@@ -16,6 +16,9 @@ recording (``--teammates replay``) or taken from their processes (``--teammates 
 it prints measurement-to-estimate latency and missed deadlines::
 
     relloc node --realtime --robot robot1 --dataset MRCLAM_Dataset6 --duration 3
+
+A flag that the team source (:data:`READ_BY`) or the mode (:data:`MODE_READ_BY`: the clock's
+ticks or ``--realtime``) does not read is refused, not ignored.
 """
 
 from __future__ import annotations
@@ -125,7 +128,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     )
     p.add_argument("--seed", type=int, default=0, help="simulation seed (same for the team)")
     p.add_argument(
-        "--run", type=int, default=0, help="Monte-Carlo run of a reproduction's team (desilva2015)"
+        "--run",
+        type=int,
+        default=None,
+        help="Monte-Carlo run of a reproduction's team (desilva2015, sharma2013; default 0)",
     )
     p.add_argument(
         "--case",
@@ -136,8 +142,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     p.add_argument(
         "--estimator",
         choices=("track", "cooperative"),
-        default="track",
-        help="with --dataset: seed 000's track manager, or seed 001's team EIF (mrclam-cl)",
+        default=None,
+        help="with --dataset: seed 000's track manager (default), or seed 001's team EIF "
+        "(mrclam-cl)",
     )
     add_sharing_policy_argument(p)
     add_sensing_argument(p)
@@ -151,8 +158,14 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         help="simulated seconds of a reproduction's team (default: the paper's); with "
         "--realtime, wall seconds to run (default: the whole recording)",
     )
-    p.add_argument("--filter", default="plkf", help="plkf | tekf | bcplkf")
-    p.add_argument("--init", default="measurement", help="track initialisation policy")
+    p.add_argument(
+        "--filter", default=None, help="seed 000's track manager: plkf (default) | tekf | bcplkf"
+    )
+    p.add_argument(
+        "--init",
+        default=None,
+        help="seed 000's track manager: track initialisation policy (default measurement)",
+    )
     p.add_argument(
         "--gate",
         type=float,
@@ -167,13 +180,15 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         help="run on wall time (the dataset/scenario replayed in real time through the live "
         "sensor API) instead of the clock process' ticks; reports latency and deadlines",
     )
-    p.add_argument("--tick", type=float, default=0.1, help="--realtime: wall seconds per tick")
+    p.add_argument(
+        "--tick", type=float, default=None, help="--realtime: wall seconds per tick (0.1)"
+    )
     p.add_argument(
         "--teammates",
         choices=("replay", "network"),
-        default="replay",
-        help="--realtime: teammates' odometry replayed from the recording, or from their "
-        "processes on the network",
+        default=None,
+        help="--realtime: teammates' odometry replayed from the recording (default), or from "
+        "their processes on the network",
     )
     p.add_argument(
         "--only-needed-streams",
@@ -184,15 +199,18 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     p.add_argument(
         "--paced",
         type=float,
-        default=0.0,
+        default=None,
         metavar="FACTOR",
         help="the clock paces its ticks at FACTOR x real time (team up --realtime): report "
-        "measurement-to-estimate latency and missed deadlines",
+        "measurement-to-estimate latency and missed deadlines (not with --realtime)",
     )
     p.add_argument("--eqm-period", type=float, default=1.0, help="equivalent-measurement period, s")
     p.add_argument("--max-bytes", type=int, default=65_536, help="message size limit")
     p.add_argument(
-        "--clock-timeout", type=float, default=60.0, help="exit after this long without a tick"
+        "--clock-timeout",
+        type=float,
+        default=None,
+        help="exit after this long without a tick, s (60; not with --realtime)",
     )
     add_transport_arguments(p)
     add_network_fault_arguments(p)
@@ -203,11 +221,16 @@ def run(args: argparse.Namespace) -> int:
     from relloc.errors import ConfigError, RellocError
     from relloc.runtime.node import RobotNode
 
-    if args.run < 0:
+    if args.run is not None and args.run < 0:
         raise ConfigError(f"--run: must be ≥ 0, got {args.run}")
     for flag, value in (("--duration", args.duration), ("--tick", args.tick)):
         if value is not None and not 0 < value < math.inf:
             raise ConfigError(f"{flag}: must be a finite number > 0, got {value}")
+    refuse_desilva_only(args)
+    refuse_node_unread(args)
+    for name, value in NODE_DEFAULTS.items():
+        if getattr(args, name) is None:
+            setattr(args, name, value)
     parts = node_parts(args)
     if args.realtime:
         return run_realtime(args, parts)
@@ -290,7 +313,6 @@ def node_parts(args: argparse.Namespace) -> NodeParts:
     from relloc.experiments.desilva2015 import sensing_robots
     from relloc.experiments.team_sources import named_node_parts, team_names
 
-    refuse_desilva_only(args)
     cooperative = args.dataset is not None and args.estimator == "cooperative"
     if args.fit is not None and not cooperative:
         raise ConfigError("--fit: read with --dataset and --estimator cooperative only")
@@ -325,9 +347,77 @@ def node_parts(args: argparse.Namespace) -> NodeParts:
             args.duration,
             args.case or DEFAULT_CASE,
         )
-    if args.case is not None:  # seed 000's track manager has no case
-        raise ConfigError("--case: read by a reproduction's team or --estimator cooperative only")
-    return track_manager_parts(args)
+    return track_manager_parts(args)  # --case, which it has none of, refused before
+
+
+COOPERATIVE = "--estimator cooperative"
+"""The team EIF of a dataset folder (a target kind of :data:`READ_BY`, here and in
+``relloc team up``)."""
+TRACKS = "--estimator track"
+"""Seed 000's track managers of a scenario, ``default`` or a dataset folder."""
+READ_BY: dict[str, tuple[str, ...]] = {
+    "filter": (TRACKS,),
+    "init": (TRACKS,),
+    "run": ("desilva2015", "sharma2013"),
+    "case": ("sharma2013", COOPERATIVE),
+    "duration": ("desilva2015", "sharma2013", COOPERATIVE, "--realtime"),
+}
+"""The kinds of team source (:func:`target_kind`) that read each of these flags (and, for
+``--duration``, every source with ``--realtime``); another is refused, never ignored."""
+ON_TICKS = "a node on the clock's ticks"
+"""A node without ``--realtime`` (a target of :data:`MODE_READ_BY`)."""
+MODE_READ_BY: dict[str, tuple[str, ...]] = {
+    "tick": ("--realtime",),
+    "teammates": ("--realtime",),
+    "clock_timeout": (ON_TICKS,),
+    "paced": (ON_TICKS,),
+}
+"""The flags read only with ``--realtime`` (its wall-clock ticks) or only without it (the
+clock process' ticks)."""
+NODE_DEFAULTS: dict[str, object] = {
+    "run": 0,
+    "estimator": "track",
+    "filter": "plkf",  # relloc.runtime.launcher.DEFAULT_FILTER: a team gives no other
+    "init": "measurement",
+    "tick": 0.1,
+    "teammates": "replay",
+    "paced": 0.0,
+    "clock_timeout": 60.0,
+}
+"""The values of the flags above that were not given (after :func:`refuse_node_unread`)."""
+
+
+def target_kind(args: argparse.Namespace) -> str:
+    """The kind of team source of ``relloc node`` (:data:`READ_BY`): a reproduction, a dataset
+    folder's team EIF, or the track manager of a scenario, ``default`` or a dataset folder."""
+    from relloc.experiments.team_sources import KIDNAPPED, team_names
+
+    if args.dataset is None and args.scenario in KIDNAPPED:
+        return "desilva2015"
+    if args.dataset is None and args.scenario in team_names():
+        return str(args.scenario)
+    return COOPERATIVE if args.dataset is not None and args.estimator == "cooperative" else TRACKS
+
+
+def refuse_node_unread(args: argparse.Namespace) -> None:
+    """ConfigError naming a flag that the node's team source (:data:`READ_BY`) or mode
+    (:data:`MODE_READ_BY`) does not read, before any work: such a flag was once ignored."""
+    from relloc.core.checks import refuse_unread
+    from relloc.errors import ConfigError
+
+    if args.estimator is not None and args.dataset is None:
+        raise ConfigError(
+            f"--estimator: {args.scenario} does not read it; read with --dataset only (a "
+            "scenario runs seed 000's track manager, a reproduction its own estimators)"
+        )
+    kind = target_kind(args)
+    given = [name for name in READ_BY if getattr(args, name) is not None]
+    if args.realtime:  # every source on wall time reads --duration (the seconds to run)
+        given = [name for name in given if name != "duration"]
+    refuse_unread(kind, given, READ_BY, label=args.dataset or args.scenario)
+    mode = "--realtime" if args.realtime else ON_TICKS
+    given = [name for name in MODE_READ_BY if getattr(args, name) is not None]
+    refuse_unread(mode, given, MODE_READ_BY)
 
 
 def track_manager_parts(args: argparse.Namespace) -> NodeParts:

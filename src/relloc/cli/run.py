@@ -12,7 +12,10 @@ Runs a team scenario (default: the built-in seed-000 air-ground team), prints th
 per pair in a table that fits the terminal (:mod:`relloc.cli.console`; the full table is in
 ``report.md``), writes ``DIR/summary.json``, ``DIR/report.md`` and figures, and lists every
 file written. Without matplotlib (a core install) it writes no figures and says so. A bad
-scenario file is a configuration error (exit code 2) naming the field.
+scenario file is a configuration error (exit code 2) naming the field. A bag (``relloc run BAG
+--map MAP``) is one replay whose UWB ranges go to the range-only filter: it refuses the options it
+does not read (``--runs``, ``--duration``, ``--executor`` and the track managers' ``--seed``,
+``--filter``, ``--init``, ``--yaw-bank``, ``--keep-window``, ``--gate``).
 """
 
 from __future__ import annotations
@@ -60,9 +63,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         "--map", type=Path, default=None, help="the bag's topic mapping TOML (SCENARIO is a bag)"
     )
     p.add_argument("--out", type=Path, default=DEFAULT_OUT, help=f"output folder ({DEFAULT_OUT})")
-    p.add_argument(
-        "--seed", type=int, default=defaults.seed, help=f"master seed (default {defaults.seed})"
-    )
+    p.add_argument("--seed", type=int, default=None, help=f"master seed (default {defaults.seed})")
     p.add_argument(
         "--runs",
         type=int,
@@ -72,19 +73,19 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     p.add_argument(
         "--filter",
         choices=UPDATE_KINDS,
-        default=tracker.filter,
+        default=None,
         help=f"relative filter (default {tracker.filter})",
     )
     p.add_argument(
         "--init",
         choices=POLICY_NAMES,
-        default=tracker.init.name,
+        default=None,
         help="track initialisation (default: from the first measurement, yaw unknown)",
     )
     p.add_argument(
         "--yaw-bank",
         type=int,
-        default=DEFAULT_YAW_BANK,
+        default=None,
         metavar="K",
         help=(
             "start tracks whose yaw is unknown as a bank of K yaw hypotheses "
@@ -100,7 +101,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     p.add_argument(
         "--keep-window",
         type=float,
-        default=tracker.keep_window_s,
+        default=None,
         metavar="S",
         help=(
             "seconds a track is predicted without measurements before deletion "
@@ -158,6 +159,7 @@ def run(args: argparse.Namespace) -> int:
 
     if args.map is not None:
         return _run_bag(args)
+    _tracker_defaults(args)
     scenario = default_scenario() if args.scenario is None else load_scenario(args.scenario)
     if args.duration is not None:
         try:
@@ -222,6 +224,31 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+TRACKER_OPTIONS = ("seed", "filter", "init", "yaw_bank", "keep_window", "gate")
+"""The options read by a scenario's track managers only: a bag's rows are UWB ranges
+(:mod:`relloc.datasets.rosbag`), which the range-only filter tracks, so ``relloc run BAG --map``
+refuses them (:func:`relloc.core.checks.refuse_unread`) instead of recording settings it never
+used."""
+
+
+def _tracker_defaults(args: argparse.Namespace) -> None:
+    """Set the options of :data:`TRACKER_OPTIONS` not given to the library's defaults
+    (:class:`TeamRunSettings`, :data:`DEFAULT_YAW_BANK`; ``--gate``: off)."""
+    from relloc.experiments.team_run import DEFAULT_YAW_BANK, TeamRunSettings
+
+    defaults = TeamRunSettings()
+    tracker = defaults.tracker
+    for name, value in (
+        ("seed", defaults.seed),
+        ("filter", tracker.filter),
+        ("init", tracker.init.name),
+        ("yaw_bank", DEFAULT_YAW_BANK),
+        ("keep_window", tracker.keep_window_s),
+    ):
+        if getattr(args, name) is None:
+            setattr(args, name, value)
+
+
 def _guess_view(scenario: Scenario) -> FieldOfView:
     """Where arbitrary initial guesses are drawn: inside the narrowest sensor view, out to the
     shortest maximum range (capped by the arena's diagonal when a sensor is unlimited)."""
@@ -264,12 +291,10 @@ def _run_bag(args: argparse.Namespace) -> int:
     from relloc.cli import console
     from relloc.cli.extras import available
     from relloc.cli.flags import flag_errors
+    from relloc.core.checks import refuse_unread
     from relloc.datasets.bag_mapping import load_mapping
     from relloc.errors import ConfigError
-    from relloc.estimators.initialisation import InitPolicy
-    from relloc.estimators.track_manager import TrackManagerSettings
     from relloc.experiments.bag_run import run_bag
-    from relloc.experiments.team_run import TeamRunSettings
 
     if args.scenario is None:
         raise ConfigError("--map: give the bag to run as SCENARIO (relloc run BAG --map MAP)")
@@ -278,28 +303,22 @@ def _run_bag(args: argparse.Namespace) -> int:
             raise ConfigError(f"{flag}: a bag is replayed once and whole; leave {flag} out")
     if args.executor is not None:
         raise ConfigError("--executor: a bag is one replay in this process; leave it out")
-    with flag_errors():
-        settings = TeamRunSettings(
-            runs=1,
-            seed=args.seed,
-            tracker=TrackManagerSettings(
-                filter=args.filter,
-                keep_window_s=args.keep_window,
-                init=InitPolicy(name=args.init),
-                yaw_bank=_yaw_bank(args.yaw_bank),
-                gate_probability=args.gate,
-            ),
-            settle_s=args.settle,
-            quiet=args.quiet,
-        )
-    summary, _ = run_bag(
-        args.scenario,
-        load_mapping(args.map),
-        settings,
-        args.out,
-        export=export_request(args),
-        plots=not args.no_plots and available("plot"),
+    refuse_unread(
+        "bag",
+        [name for name in TRACKER_OPTIONS if getattr(args, name) is not None],
+        dict.fromkeys(TRACKER_OPTIONS, ("a scenario's track managers",)),
+        label="a bag (its UWB ranges go to the range-only filter)",
     )
+    mapping = load_mapping(args.map)
+    with flag_errors():  # --settle
+        summary, _ = run_bag(
+            args.scenario,
+            mapping,
+            args.out,
+            settle_s=args.settle,
+            export=export_request(args),
+            plots=not args.no_plots and available("plot"),
+        )
     if summary["antenna_offset_not_modelled_m"] > 0:
         print(
             f"relloc: note: the mapping's antenna offsets (up to "

@@ -24,8 +24,9 @@ paper's leaders L1, L2, as for ``relloc reproduce desilva2015``). ``guler2023`` 
 air-ground team in closed loop: a world process, the leader, followers and drones as processes,
 ``--case`` one of its paper scenarios, default ``two_drones``; see
 :mod:`relloc.experiments.guler2023_team`) takes the same flags but those two; its tick is the
-scenario's 0.05 s, not ``--tick``. A flag the target does not read (:data:`READ_BY`) is
-refused, not ignored.
+scenario's 0.05 s, so it refuses ``--tick``. ``--port`` and ``--mcap``/``--tum`` are read by the
+track managers of a scenario, ``default`` or a dataset only. A flag the target does not read
+(:data:`READ_BY`) is refused, not ignored.
 
 ``relloc team clock`` runs only the clock/simulator process (for robots started by hand).
 """
@@ -39,6 +40,8 @@ from typing import Any
 from relloc.cli.console import plain_text
 from relloc.cli.export_args import add_export_arguments, export_request, print_export
 from relloc.cli.node import (
+    COOPERATIVE,
+    TRACKS,
     add_network_fault_arguments,
     add_sensing_argument,
     add_sharing_policy_argument,
@@ -47,6 +50,9 @@ from relloc.cli.node import (
     refuse_desilva_only,
     transport_from_args,
 )
+
+DEFAULT_TICK_S = 0.1
+"""``team up --tick`` not given: the clock's tick, s (guler2023 ticks at its scenario's step)."""
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -101,7 +107,13 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         help="a scenario's or a dataset's tracks: reject a measurement whose NIS exceeds the "
         "χ²(3) quantile P (as relloc run --gate; default off)",
     )
-    up.add_argument("--tick", type=float, default=0.1, help="clock tick (publication period), s")
+    up.add_argument(
+        "--tick",
+        type=float,
+        default=None,
+        help=f"clock tick (publication period), s (default {DEFAULT_TICK_S:g}; guler2023: the "
+        "scenario's)",
+    )
     up.add_argument(
         "--realtime",
         type=float,
@@ -109,7 +121,12 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         metavar="FACTOR",
         help="pace ticks at FACTOR x real time (0: as fast as the team can go)",
     )
-    up.add_argument("--port", type=int, default=None, help="hub port on 127.0.0.1 (default free)")
+    up.add_argument(
+        "--port",
+        type=int,
+        default=None,
+        help="a scenario's or a dataset's tracks: hub port on 127.0.0.1 (default free)",
+    )
     up.add_argument("--timeout", type=float, default=300.0, help="wall-clock limit, s")
     up.add_argument(
         "--secure",
@@ -129,7 +146,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     faults = add_network_fault_arguments(up)
     faults.add_argument("--kill", action="append", default=[], metavar="ROBOT@SECONDS")
     faults.add_argument("--restart", action="append", default=[], metavar="ROBOT@SECONDS")
-    add_export_arguments(up, "the distributed estimates")
+    add_export_arguments(up, "the distributed estimates (a scenario's or a dataset's tracks)")
     up.set_defaults(func=run_up)
 
     clock = actions.add_parser("clock", help="run only the clock/simulator process")
@@ -154,10 +171,6 @@ def _robot_events(args: argparse.Namespace) -> dict[str, tuple[object, ...]]:
     }
 
 
-COOPERATIVE = "--estimator cooperative"
-"""The team EIF of a dataset folder (as a target kind of :data:`READ_BY`)."""
-TRACKS = "--estimator track"
-"""The track managers of a scenario, ``default`` or a dataset folder."""
 READ_BY: dict[str, tuple[str, ...]] = {
     "runs": ("guler2023", "desilva2015", "sharma2013"),
     "duration": ("guler2023", "desilva2015", "sharma2013", COOPERATIVE),
@@ -166,6 +179,10 @@ READ_BY: dict[str, tuple[str, ...]] = {
     "estimator": (COOPERATIVE, TRACKS),
     "filter": (TRACKS,),
     "gate": (TRACKS,),
+    "tick": ("desilva2015", "sharma2013", COOPERATIVE, TRACKS),  # guler2023: its scenario's
+    "port": (TRACKS,),
+    "mcap": (TRACKS,),
+    "tum": (TRACKS,),
 }
 """The kinds of target (:func:`target_kind`) that read each of these flags; another is refused,
 never ignored (:func:`relloc.core.checks.refuse_unread`)."""
@@ -191,8 +208,10 @@ def run_up(args: argparse.Namespace) -> int:
     refuse_desilva_only(args)
     given = [name for name in READ_BY if getattr(args, name) is not None]
     refuse_unread(target_kind(args), given, READ_BY, label=args.scenario)
-    if args.runs is None:  # the default of the targets that read it
+    if args.runs is None:  # the defaults of the targets that read them
         args.runs = 1
+    if args.tick is None:
+        args.tick = DEFAULT_TICK_S
     if args.scenario == "guler2023":
         from relloc.cli.airground import run_team_up
 

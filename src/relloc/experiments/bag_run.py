@@ -1,14 +1,15 @@
 """``relloc run BAG --map MAP.toml``: the main job of ``relloc run`` on a recorded ROS 2 bag.
 
 The bag is read through its mapping (:mod:`relloc.datasets.rosbag`) into a
-:class:`~relloc.core.recording.Recording` and replayed once (a recording is one run): every robot
-that measures others with ``range_bearing_elevation`` rows gets its
-:class:`~relloc.estimators.track_manager.TrackManager` (as on a scenario), and every pair of robots
+:class:`~relloc.core.recording.Recording`, whose readings are UWB ``range`` rows, and replayed once
+(a recording is one run): every pair of robots
 that both report odometry and are linked by UWB ``range`` rows gets seed 000's range-only relative
 filter (:class:`~relloc.estimators.uwb_range.RangePairBank`, owner the first robot of the pair in
 the mapping) from an unknown start; a pair linked by ranges of which one robot reports no odometry
 (fewer than two samples) gets none, and is named with its count of ranges
-(``range_pairs_without_odometry``, and a note in report.md and on stderr). The run is scored against
+(``range_pairs_without_odometry``, and a note in report.md and on stderr). No track manager runs
+(they take ``range_bearing_elevation`` rows, which no bag mapping yields), so the summary states
+no track-manager settings and draws nothing at random (no seed). The run is scored against
 the bag's motion capture and written like a scenario's (:mod:`relloc.pipeline.team_report`:
 summary.json, report.md, figures), with the loader's report (time offsets, unknown topics, skipped
 messages, the UWB readings kept at radio level only: ``uwb_readings_not_in_recording``, also
@@ -29,21 +30,21 @@ from typing import Any
 
 import numpy as np
 
+from relloc.core.checks import number, positive
 from relloc.core.recording import Recording, kind_code
 from relloc.datasets.bag_mapping import BagMapping
 from relloc.datasets.rosbag import load_bag
 from relloc.errors import DataError
-from relloc.estimators.track_manager import managers_for
 from relloc.estimators.uwb_range import RangePairBank, RangePairSettings
-from relloc.experiments.team_run import TeamRunSettings
 from relloc.models.motion import VelocityNoise
 from relloc.pipeline.export import ExportRequest, export_estimates
 from relloc.pipeline.replay import replay
 from relloc.pipeline.team_report import (
+    RECORD_RATE_HZ,
+    SETTLE_S,
     RunResult,
     score_run,
     summarise,
-    tracker_meta,
     write_team_report,
 )
 
@@ -97,16 +98,19 @@ def antenna_offset_m(mapping: BagMapping) -> float:
 def run_bag(
     path: Path,
     mapping: BagMapping,
-    settings: TeamRunSettings,
     out_dir: Path | None = None,
     *,
+    settle_s: float = SETTLE_S,
+    record_rate_hz: float = RECORD_RATE_HZ,
     export: ExportRequest | None = None,
     plots: bool = True,
 ) -> tuple[dict[str, Any], list[RunResult]]:
     """Read, track, score and (with ``out_dir``) write one bag (module docstring), its figures
-    unless ``plots`` is false; write its
-    estimates as MCAP/TUM files if ``export`` asks
-    (:func:`relloc.pipeline.export.export_estimates`)."""
+    unless ``plots`` is false; ``settle_s`` and ``record_rate_hz`` as for a scenario
+    (:class:`~relloc.experiments.team_run.TeamRunSettings`); write its estimates as MCAP/TUM
+    files if ``export`` asks (:func:`relloc.pipeline.export.export_estimates`)."""
+    settle_s = number(settle_s, "settle_s", low=0.0)
+    record_rate_hz = positive(record_rate_hz, "record_rate_hz")
     bag = load_bag(path, mapping)
     rec = bag.recording
     rec.require_truth(f"relloc run on {path} (scoring against motion capture)")
@@ -115,14 +119,11 @@ def run_bag(
         if mapping.uwb is None or mapping.uwb.sigma is None
         else mapping.uwb.sigma
     )
-    rng = np.random.default_rng(settings.seed)
-    banks, without_odometry = range_pairs(rec, sigma)
-    estimators: list[Any] = [*managers_for(rec, settings.tracker, rng=rng), *banks]
+    estimators, without_odometry = range_pairs(rec, sigma)
     if not estimators:
         raise DataError(
-            f"{path}: nothing to track: no robot measures another with range_bearing_elevation "
-            "rows and no two robots with odometry are linked by UWB ranges (see `relloc bag "
-            "inspect` and the mapping)"
+            f"{path}: nothing to track: no two robots with odometry are linked by UWB ranges "
+            "(see `relloc bag inspect` and the mapping)"
         )
     offset = antenna_offset_m(mapping)
     notes = []
@@ -151,18 +152,17 @@ def run_bag(
             f"Not in the recording: {sum(radio_only.values())} of the bag's "
             f"{bag.ranges.t.size} UWB readings ({counts}), which no filter can use."
         )
-    estimates = replay(rec, estimators, record_rate_hz=settings.record_rate_hz)
+    estimates = replay(rec, estimators, record_rate_hz=record_rate_hz)
     result = score_run(estimates, rec, keep_paths=True)
     summary = summarise(
         [result],
-        settle_s=settings.settle_s,
-        record_rate_hz=settings.record_rate_hz,
+        settle_s=settle_s,
+        record_rate_hz=record_rate_hz,
         meta={
             "experiment": "run",
             "bag": str(path),
             "mapping": mapping.source,
-            "seed": settings.seed,
-            **tracker_meta(settings.tracker),
+            "filter": RangePairBank.name,
             "range_sigma_m": sigma,
             "antenna_offset_not_modelled_m": offset,
             "range_pairs_without_odometry": without_odometry,
@@ -172,7 +172,7 @@ def run_bag(
     )
     if export is not None and export.wanted:
         summary["export"] = export_estimates(
-            export, estimates, rec, run=f"the bag {path.name}", settle_s=settings.settle_s
+            export, estimates, rec, run=f"the bag {path.name}", settle_s=settle_s
         )
     if out_dir is not None:
         write_team_report(

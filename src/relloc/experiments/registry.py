@@ -108,6 +108,11 @@ READ_BY: dict[str, tuple[str, ...]] = {
         "mrclam-association",
         "guler2023",
     ),
+    "executor": tuple(
+        name
+        for name in EXPERIMENTS
+        if name not in ("tiers-uwb", "wanasinghe-observability", "mrclam-association")
+    ),  # those three run in this process
     "dataset": ("wanasinghe2014", "wanasinghe2014-pairs", "mrclam-cl", "mrclam-association"),
     "bag": ("tiers-uwb",),
     "map": ("tiers-uwb",),

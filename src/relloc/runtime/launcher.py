@@ -67,6 +67,10 @@ def check_pacing(settings: TeamSettings | ProcessTeam) -> None:
         raise ConfigError("--certs: only with --secure")
 
 
+DEFAULT_FILTER = "plkf"
+"""The track managers' filter of ``relloc node`` not given ``--filter`` (and of a team)."""
+
+
 @dataclass(frozen=True, kw_only=True)
 class TeamSettings:
     """One ``team up`` run. ``scenario`` is a team source: ``"default"``, a scenario TOML file or
@@ -81,7 +85,7 @@ class TeamSettings:
     realtime_factor: float = 0.0
     port: int | None = None
     wall_timeout_s: float = 300.0
-    filter_kind: str = "plkf"
+    filter_kind: str = DEFAULT_FILTER
     gate_probability: float | None = None
     """The track managers' NIS gate (``--gate``; :class:`TrackManagerSettings`), or none."""
     secure: bool = False
@@ -148,8 +152,6 @@ def node_command(
         "--team",
         settings.team,
         *transport_arguments(endpoint, secure, robot),
-        "--filter",
-        settings.filter_kind,
         "--drop",
         repr(f.drop),
         "--delay",
@@ -167,6 +169,8 @@ def node_command(
         cmd += ["--stall", st.arg]
     if settings.realtime_factor > 0:
         cmd += ["--paced", repr(settings.realtime_factor)]
+    if settings.filter_kind != DEFAULT_FILTER:  # the node's own default otherwise: a
+        cmd += ["--filter", settings.filter_kind]  # reproduction's robot refuses the flag
     if settings.gate_probability is not None:
         cmd += ["--gate", repr(settings.gate_probability)]
     return cmd + list(settings.node_args)
