@@ -3,7 +3,8 @@ README: "keys are documented in the experiment module's docstring"), on the smal
 tests already make: sharma2013 as in ``test_export_hooks`` (5 s runs, one run, symbolic ranks
 off), mrclam-cl on the synthetic MRCLAM-layout folder of ``tests/cooperative`` and tiers-uwb on
 the two stretches of the real bag that ``test_tiers_uwb`` cuts. The other experiments' smallest
-runs take longer; their docstrings are checked by hand."""
+runs take longer; their docstrings are checked by hand. ``relloc run``'s keys (top, pair, team)
+are checked against :mod:`relloc.pipeline.team_report`'s docstring on an 8 s run."""
 
 from __future__ import annotations
 
@@ -22,16 +23,31 @@ from relloc.experiments import registry
 HERE = Path(__file__).parent
 
 
-def named_in_docstring(name: str) -> set[str]:
-    """The identifiers inside the ``literal`` spans of experiment ``name``'s module docstring."""
-    doc = importlib.import_module(registry.EXPERIMENTS[name]).__doc__ or ""
-    spans = re.findall(r"``(.+?)``", doc, flags=re.S)
+def named_in(doc: str | None) -> set[str]:
+    """The identifiers inside the ``literal`` spans of docstring ``doc``."""
+    spans = re.findall(r"``(.+?)``", doc or "", flags=re.S)
     return {word for span in spans for word in re.findall(r"[A-Za-z_][A-Za-z0-9_]*", span)}
 
 
 def undocumented(name: str, out: Path) -> list[str]:
     summary = json.loads((out / "summary.json").read_text())
-    return [key for key in summary if key not in named_in_docstring(name)]
+    named = named_in(importlib.import_module(registry.EXPERIMENTS[name]).__doc__)
+    return [key for key in summary if key not in named]
+
+
+def test_relloc_run(tmp_path: Path) -> None:
+    """``relloc run``'s keys, at the top, per pair and for the team, are named in the team
+    report's docstring (which the README points to)."""
+    from relloc.pipeline import team_report
+
+    out = tmp_path / "r"
+    argv = ["run", "--out", str(out), "--runs", "2", "--duration", "8", "--executor", "serial",
+            "--settle", "2", "--quiet", "--no-plots"]  # fmt: skip
+    assert main(argv) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    named = named_in(team_report.__doc__)
+    keys = [*summary, *next(iter(summary["pairs"].values())), *summary["team"]]
+    assert [key for key in keys if key not in named] == []
 
 
 def test_sharma2013(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:

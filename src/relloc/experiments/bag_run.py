@@ -20,6 +20,10 @@ and a note in report.md). Ranges are used as recorded (σ from the mapping's ``u
 modelled (a range names only the observer's radio), so where a carried radio has one the largest is
 reported (``antenna_offset_not_modelled_m``, and a note in report.md and on stderr); the calibrated
 comparison, which uses them, is ``relloc reproduce tiers-uwb``.
+
+Its settings in ``summary.json``: ``experiment`` (``run``), the ``bag`` path, the ``mapping``'s
+source, the ``filter`` (``range_pair``) and its ``range_sigma_m``, beside the team report's
+``runs`` (1), ``settle_s`` and ``record_rate_hz``.
 """
 
 from __future__ import annotations

@@ -8,12 +8,22 @@
 (:func:`score_run`), pool the runs into ``summary.json`` (:func:`summarise`,
 :func:`build_summary`) and write ``report.md`` with figures (:func:`write_team_report`).
 
-Summary keys (``summary.json``), per pair under ``pairs["observer->observed"]``, computed
-over all runs on the *steady-state* samples (track age ≥ ``settle_s``):
+Summary keys (``summary.json``): the settings first — ``experiment`` (``run``), ``runs``,
+``settle_s``, ``record_rate_hz``; for a simulated scenario (:func:`scenario_meta`) its
+``scenario`` name, ``seed``, ``duration_s``, ``propagation_rate_hz``, per robot
+``odometry_sigma`` and, per observing robot, ``sensor_sigma`` (r, θ, α) and ``sensor_rate_hz``,
+and the track managers' settings (:func:`tracker_meta`: ``filter``, ``init``,
+``keep_window_s``, ``yaw_bank_components``, ``pseudo_linear_covariance``, ``gate_probability``);
+a bag states its own (:mod:`relloc.experiments.bag_run`). ``events_run0`` lists run 0's track
+events (``t``, ``observer``, ``observed``, ``kind``). Per pair under
+``pairs["observer->observed"]`` (``observer``, ``observed``, the ``observed_kind`` of platform),
+computed over all runs on the *steady-state* samples (track age ≥ ``settle_s``, their number
+``samples``):
 
 - ``position_rmse_m``, ``yaw_rmse_rad``, ``rmse`` per state ``x, y, z, phi``;
 - ``within_3sigma_percent`` per state: share of samples with ``|e_i| ≤ 3σ_i``;
 - ``anees`` (ideal 1) and ``nees_percent_beyond`` the single-run bound ``χ²(4, 0.95)``
+  (``nees_bound``)
   (seed 000 Table 4; about 5 % for a consistent filter), ``nees_beyond_interval`` its 95 %
   interval by cluster means (the independent runs; one run's record times in blocks), with
   the verdict (:func:`relloc.metrics.consistency.percent_beyond_interval`);
@@ -25,7 +35,7 @@ over all runs on the *steady-state* samples (track age ≥ ``settle_s``):
   nees_band_check` — with ``nees_run_average_blocks_short``, whether those intervals' blocks of
   times last less than ten correlation times (:attr:`relloc.metrics.BeyondShare.blocks_short`;
   the intervals are then widened to the correlation-time interval);
-- ``anis`` (NIS/3, ideal 1) and ``nis_percent_beyond`` ``χ²(3, 0.95)``;
+- ``anis`` (NIS/3, ideal 1) and ``nis_percent_beyond`` ``χ²(3, 0.95)`` (``nis_bound``);
 - ``max_condition_log10`` of ``P``, ``R`` and ``S`` (seed 000 §7.3; > 6 is ill-conditioned);
 - ``track_events``: created / deleted / re-created counts over all runs;
 - ``position_rmse_over_runs``, ``yaw_rmse_over_runs``: the spread of the per-run steady-state
