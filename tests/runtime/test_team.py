@@ -13,6 +13,7 @@ Every process is started by the launcher and killed in its ``finally`` block.
 from __future__ import annotations
 
 import json
+import re
 import threading
 import time
 
@@ -177,3 +178,12 @@ def test_team_up_with_a_gate_gates_as_the_in_process_run(trio_scenario, tmp_path
     assert summary["messages"]["per_robot"]["observer"]["tracks"]["rows_gated"] > 0
     agree = summary["agreement"]
     assert agree["within_tolerance"], agree
+    # every top-level key is documented: the team report's, or the ones team up adds
+    from relloc.pipeline import team_report
+    from relloc.runtime import team
+
+    docs = (team_report.__doc__ or "") + (team.__doc__ or "")
+    named = {
+        w for span in re.findall(r"``(.+?)``", docs, flags=re.S) for w in re.findall(r"\w+", span)
+    }
+    assert [key for key in summary if key not in named] == []

@@ -4,10 +4,14 @@ The distributed estimates are rebuilt into an :class:`~relloc.core.estimates.Est
 and scored by the very functions of the in-process ``relloc run``
 (:func:`relloc.pipeline.team_report.build_summary` and
 :func:`~relloc.pipeline.team_report.write_team_report`) on the same seeded recording (run 0 of
-``relloc run --seed SEED``), so ``summary.json`` and ``report.md`` have the same layout. Added
-keys:
+``relloc run --seed SEED``), so ``summary.json`` and ``report.md`` have the same layout
+(``experiment`` is ``team_up``; a dataset team states its ``source`` instead of a scenario's
+rates, :func:`team_meta`). Added keys:
 
-- ``processes``: robot processes, the clock process, kills and restarts;
+- ``processes``: robot processes, the clock process, kills and restarts (with ``exit_codes``);
+  ``presence``: each liveliness event seen (``member``, ``token``, ``event``, ``wall_s``);
+  ``wall_s`` and ``simulated_s``: how long the team ran on the wall clock and in the recording;
+- ``faults``: the injected network faults as given (:class:`~relloc.runtime.faults.FaultSettings`);
 - ``messages.per_robot[robot]``: ``sent`` / ``received_wire`` / ``received_delivered`` per
   stream, ``rejected`` (by reason), duplicates dropped, late odometry samples, fault tallies,
   ``estimates``, track counts, ``latency_us`` p50/p99; ``messages.team``: totals and the
