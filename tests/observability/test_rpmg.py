@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from relloc.errors import ConfigError, DataError
+from relloc.observability import rpmg
 from relloc.observability.rank import numeric_rank, singular_values, stacked_singular_values
 from relloc.observability.rpmg import (
     SensorSettings,
@@ -175,9 +176,13 @@ def test_stacked_singular_values_are_those_of_the_stacked_rows() -> None:
     assert np.all(stacked_singular_values([], 9) == 0.0)
 
 
-def test_team_figures_folded_chunk_by_chunk_are_the_assembled_matrix_ones() -> None:
-    """A complete 40-robot graph: 780 pairs, folded into the triangular factor in three chunks,
-    give the rank and σ_min of the SVD of the whole team matrix."""
+def test_team_figures_folded_chunk_by_chunk_are_the_assembled_matrix_ones(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A complete 40-robot graph: 780 pairs, folded into the triangular factor in chunks of
+    48n = 1920 rows (the smallest chunk, :data:`rpmg.CHUNK_BYTES` set to 1), give the rank and
+    σ_min of the SVD of the whole team matrix."""
+    monkeypatch.setattr(rpmg, "CHUNK_BYTES", 1)
     rng = np.random.default_rng(40)
     n = 40
     poses = np.column_stack([rng.uniform(0, 300, (n, 2)), rng.uniform(-np.pi, np.pi, n)])

@@ -89,7 +89,8 @@ def stacked_singular_values(chunks: Iterable[Array], n: int) -> Array:
     :func:`padded_singular_values`)."""
     R = np.zeros((0, n))
     for chunk in chunks:
-        R = np.vstack([R, np.asarray(chunk, dtype=float).reshape(-1, n)])
+        rows = np.asarray(chunk, dtype=float).reshape(-1, n)
+        R = np.vstack([R, rows]) if R.shape[0] else rows
         if R.shape[0] > n:
             R = np.asarray(np.linalg.qr(R, mode="r"), dtype=float)
     return padded_singular_values(R, n)

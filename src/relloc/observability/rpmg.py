@@ -327,18 +327,28 @@ def _team_singular_values(blocks: list[tuple[tuple[int, ...], Array]], n: int) -
     return stacked_singular_values(_team_rows(parts, n), 3 * n)
 
 
+#: Bytes of team-matrix rows folded into the triangular factor at once (:func:`_team_rows`).
+CHUNK_BYTES = 64 * 2**20
+
+
 def _team_rows(parts: list[tuple[tuple[int, ...], Array]], n: int) -> Iterator[Array]:
-    """The rows of ``parts`` (at most 6 each) placed in the team's ``3n`` columns, ``8n`` parts
-    (about ``48n`` rows, so folding ``3n`` more rows in costs little) at a time: a complete
-    200-robot graph never holds its 119,400 × 600 matrix at once."""
-    for start in range(0, len(parts), 8 * n):
-        batch = parts[start : start + 8 * n]
-        M = np.zeros((sum(A.shape[0] for _, A in batch), 3 * n))
+    """The rows of ``parts`` placed in the team's ``3n`` columns, about :data:`CHUNK_BYTES` at a
+    time (and never fewer than ``48n`` rows, so folding the ``3n`` rows of the factor in costs
+    little): a complete 200-robot graph never holds its 119,400 × 600 matrix at once."""
+    per_chunk = max(CHUNK_BYTES // (8 * 3 * n), 48 * n)
+    start = 0
+    while start < len(parts):
+        stop, rows = start, 0
+        while stop < len(parts) and rows < per_chunk:
+            rows += parts[stop][1].shape[0]
+            stop += 1
+        M = np.zeros((rows, 3 * n))
         at = 0
-        for key, A in batch:
+        for key, A in parts[start:stop]:
             for slot, r in enumerate(key):
                 M[at : at + A.shape[0], 3 * r : 3 * r + 3] = A[:, 3 * slot : 3 * slot + 3]
             at += A.shape[0]
+        start = stop
         yield M
 
 
