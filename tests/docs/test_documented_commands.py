@@ -4,9 +4,10 @@ The command lines are taken from code spans (````relloc …```` and ``` ``relloc
 lines of fenced code blocks. Each is walked through the real argument parser
 (:func:`relloc.cli.build_parser`): its words must name existing (sub)commands, its ``--flags``
 must be options of the command they follow, and a lower-case name given to ``reproduce``,
-``bench`` or ``observability`` must be a registered experiment, benchmark or built-in model.
-Placeholders (``NAME``, ``DIR``, ``SCENARIO.toml``, ``...``) are not checked. A renamed flag or
-experiment then fails here instead of leaving the documentation wrong.
+``bench`` or ``observability`` must be a registered experiment, benchmark or built-in model, and
+one given to ``team up`` a reproduction it runs as processes or ``default``. Placeholders
+(``NAME``, ``DIR``, ``SCENARIO.toml``, ``...``) are not checked. A renamed flag or experiment
+then fails here instead of leaving the documentation wrong.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from relloc.bench import BENCHMARKS
 from relloc.cli import build_parser
 from relloc.experiments.registry import EXPERIMENTS
 from relloc.observability.builtin import BUILTIN_MODELS
+from relloc.runtime.scenario import REPRODUCTIONS
 
 ROOT = Path(__file__).resolve().parents[2]
 SPAN = re.compile(r"``?(relloc [^`]+?)``?")
@@ -29,6 +31,7 @@ NAMED = {
     "reproduce": set(EXPERIMENTS),
     "bench": set(BENCHMARKS),
     "observability": set(BUILTIN_MODELS),
+    "up": {*REPRODUCTIONS, "guler2023", "default"},  # or a scenario file or a dataset folder
 }
 PARSER = build_parser()
 
@@ -104,6 +107,7 @@ def test_a_documented_command_exists(where: str, line: str) -> None:
         ("relloc reproduce sharma2031", "knows no 'sharma2031'"),
         ("relloc team upp default", "has no subcommand 'upp'"),
         ("relloc bench filterz", "knows no 'filterz'"),
+        ("relloc team up sharma2031 --out d", "knows no 'sharma2031'"),
     ],
 )
 def test_a_wrong_command_is_caught(line: str, expected: str) -> None:
