@@ -12,7 +12,9 @@ the machine was):
   connected teams of n = 5, 10, 20 robots with two landmarks (best of 3, blocks already
   lambdified), with the rank checked against the graph formula; the baseline
   ``symbolic_team_build_s`` builds the full symbolic 3-robot team matrix (the route edge blocks
-  avoid).
+  avoid). ``teams["200_complete"]``: 200 robots that all see each other, also with
+  ``peak_mb``, the peak memory traced in one call, beside ``assembled_mb``, what the reduced
+  team matrix would take assembled whole.
 * ``pcrlb_s``: the seed-000 pair bound over 2000 steps and a 5-robot team bound over 200 steps.
 
 On a machine shared by many processes, multi-threaded BLAS (used by the QR/SVD of large team
@@ -65,6 +67,41 @@ def _connected_team(rng: np.random.Generator, n: int) -> tuple[np.ndarray, np.nd
     return P, marks
 
 
+#: Robots of the complete-graph point of ``teams`` (:func:`_large_team`).
+LARGE_TEAM = 200
+
+
+def _large_team() -> dict[str, Any]:
+    """:data:`LARGE_TEAM` robots that all see each other and two landmarks: time (best of 2),
+    ``peak_mb`` the largest memory traced during one call (:mod:`tracemalloc`, which sees
+    numpy's arrays), and its baseline ``assembled_mb``, the bytes of the reduced team matrix
+    (6 rows per pair, 3n columns) had it been assembled whole."""
+    import tracemalloc
+
+    rng = np.random.default_rng(LARGE_TEAM)
+    n = LARGE_TEAM
+    P = np.column_stack([rng.uniform(0, 400, (n, 2)), rng.uniform(-np.pi, np.pi, n)])
+    speeds = np.column_stack([np.full(n, 5.0), rng.uniform(-0.3, 0.3, n)])
+    marks = rng.uniform(0, 400, (2, 2))
+    everyone = SensorSettings(sensing_range=1e6)
+    tracemalloc.start()
+    try:
+        team = team_observability(P, speeds, marks, everyone)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    seconds = _best(lambda: team_observability(P, speeds, marks, everyone), repeats=2)
+    pairs = n * (n - 1) // 2
+    return {
+        "team_matrix_s": seconds,
+        "rank": team.rank,
+        "expected_rank": team.expected_rank,
+        "edges": team.n_edges,
+        "peak_mb": peak / 2**20,
+        "assembled_mb": 6 * pairs * 3 * n * 8 / 2**20,
+    }
+
+
 def run(quiet: bool = False) -> dict[str, Any]:
     rng = np.random.default_rng(0)
     symbolic: dict[str, dict[str, Any]] = {}
@@ -100,6 +137,7 @@ def run(quiet: bool = False) -> dict[str, Any]:
             "expected_rank": team.expected_rank,
             "edges": team.n_edges,
         }
+    teams[f"{LARGE_TEAM}_complete"] = _large_team()
     t0 = time.perf_counter()
     ObservabilityMatrix.build(
         S.unicycle_team(
@@ -181,6 +219,11 @@ def run(quiet: bool = False) -> dict[str, Any]:
                 f"  n = {n_r:>2s}: {v['team_matrix_s'] * 1e3:8.1f} ms  rank {v['rank']} "
                 f"(graph formula {v['expected_rank']}), {v['edges']} edges"
             )
+            if "peak_mb" in v:
+                print(
+                    f"    peak memory {v['peak_mb']:.0f} MB (the assembled matrix alone: "
+                    f"{v['assembled_mb']:.0f} MB)"
+                )
         print(f"  baseline: symbolic 3-robot team build {symbolic_team:.2f} s")
         print(f"PCRLB: pair 2000 steps {pair_s:.3f} s, 5-robot team 200 steps {team_s:.3f} s")
         print(f"load average {result['load_average']}")
