@@ -158,3 +158,13 @@ def test_bad_sensing_robots_of_a_team_are_refused_as_for_reproduce(tmp_path, cap
         capsys.readouterr().err
     )
     assert not out.exists()
+
+
+def test_an_input_the_experiment_does_not_read_is_refused_from_python_too(tmp_path):
+    from relloc.errors import ConfigError
+    from relloc.experiments import registry
+
+    args = registry.ReproduceArgs(out_dir=tmp_path / "out", seed=5)
+    with pytest.raises(ConfigError, match="--seed: tiers-uwb does not read it"):
+        registry.get("tiers-uwb")(args)
+    assert not (tmp_path / "out").exists()

@@ -4,7 +4,8 @@
 replayed robots of wanasinghe2014 (one pair) and wanasinghe2014-pairs (repeatable);
 ``--sensing``: desilva2015's sensing robots; the last two: one representative run's estimates,
 where the experiment states one — :func:`relloc.experiments.registry.exported_run`). A flag
-the experiment does not read is refused (:func:`relloc.experiments.registry.refuse_unread`).
+the experiment does not read is refused (:func:`relloc.experiments.registry.refuse_unread`, run by
+the function :func:`relloc.experiments.registry.get` returns).
 
 Prints the seed and run counts, the report's ours-vs-paper tables laid out for the terminal
 (:mod:`relloc.cli.comparison`) and every file written.
@@ -100,7 +101,6 @@ def run(args: argparse.Namespace) -> int:
         pairs=robot_pairs(args.pair),
         sensing=args.sensing,
     )
-    registry.refuse_unread(args.name, request)
     summary = reproduce(request)
     if not args.quiet:
         from relloc.cli.comparison import comparison_text

@@ -11,7 +11,8 @@ sentence) and, when ``args.export`` is set, writes that run's
 ``summary["export"]``. :func:`exported_run` reads the constant (``None``: nothing to export).
 
 Some of :class:`ReproduceArgs`' inputs are read by only some experiments (:data:`READ_BY`);
-:func:`refuse_unread` refuses them for the others, so a flag is never silently ignored.
+:func:`refuse_unread` refuses them for the others (the function :func:`get` returns does so
+before it runs), so a flag is never silently ignored.
 """
 
 from __future__ import annotations
@@ -139,11 +140,18 @@ def available() -> list[str]:
 
 
 def get(name: str) -> Callable[[ReproduceArgs], dict[str, Any]]:
-    """The ``reproduce`` function of experiment ``name`` (ConfigError if unknown)."""
+    """The ``reproduce`` function of experiment ``name`` (ConfigError if unknown), which first
+    refuses an input the experiment does not read (:func:`refuse_unread`), from the command
+    line and from Python alike."""
     if name not in EXPERIMENTS or importlib.util.find_spec(EXPERIMENTS[name]) is None:
         raise ConfigError(f"unknown experiment {name!r}; available: {', '.join(available())}")
     module = importlib.import_module(EXPERIMENTS[name])
-    return module.reproduce  # type: ignore[no-any-return]
+
+    def reproduce(args: ReproduceArgs) -> dict[str, Any]:
+        refuse_unread(name, args)
+        return module.reproduce(args)  # type: ignore[no-any-return]
+
+    return reproduce
 
 
 def exported_run(name: str) -> str | None:
