@@ -5,7 +5,8 @@ lines of fenced code blocks. Each is walked through the real argument parser
 (:func:`relloc.cli.build_parser`): its words must name existing (sub)commands, its ``--flags``
 must be options of the command they follow, and a lower-case name given to ``reproduce``,
 ``bench`` or ``observability`` must be a registered experiment, benchmark or built-in model, and
-one given to ``team up`` a reproduction it runs as processes or ``default``. Placeholders
+one given to ``team up`` a reproduction it runs as processes or ``default``; a flag given to
+``reproduce`` or ``team up`` must be one that target reads (their ``READ_BY``). Placeholders
 (``NAME``, ``DIR``, ``SCENARIO.toml``, ``...``) are not checked. A renamed flag or experiment
 then fails here instead of leaving the documentation wrong.
 """
@@ -20,7 +21,10 @@ from pathlib import Path
 import pytest
 
 from relloc.bench import BENCHMARKS
-from relloc.cli import build_parser
+from relloc.cli import build_parser, team
+from relloc.core.checks import refuse_unread
+from relloc.errors import ConfigError
+from relloc.experiments import registry
 from relloc.experiments.registry import EXPERIMENTS
 from relloc.observability.builtin import BUILTIN_MODELS
 from relloc.runtime.scenario import REPRODUCTIONS
@@ -34,6 +38,21 @@ NAMED = {
     "up": {*REPRODUCTIONS, "guler2023", "default"},  # or a scenario file or a dataset folder
 }
 PARSER = build_parser()
+#: Commands whose flags are read by only some targets: the target's kind and the map of which
+#: kinds read each flag (a documented line must not show a flag its target refuses).
+READ_BY = {
+    "reproduce": lambda name, words: (registry.READ_BY, name),
+    "up": lambda name, words: (
+        team.READ_BY,
+        team.target_kind(
+            argparse.Namespace(
+                scenario=name, estimator="cooperative" if "cooperative" in words else None
+            )
+        ),
+    ),
+}
+#: A flag whose field has another name (``--pair`` sets ``pairs``).
+FIELDS = {flag: field for field, flag in registry.FLAGS.items()}
 
 
 def documented_commands() -> list[tuple[str, str]]:
@@ -79,11 +98,16 @@ def problems(line: str) -> list[str]:
     if words and path and path[-1] in NAMED and re.fullmatch(r"[a-z][a-z0-9_-]*", words[0]):
         if words[0] not in NAMED[path[-1]]:
             found.append(f"'{path[-1]}' knows no {words[0]!r}")
-    options = set(parser._option_string_actions)
-    for word in words:
-        flag = re.match(r"\[?(--[a-z][a-z0-9-]*)", word)
-        if flag and flag.group(1) not in options:
-            found.append(f"'{' '.join(path)}' has no option {flag.group(1)}")
+    options = parser._option_string_actions
+    flags = [m.group(1) for m in (re.match(r"\[?(--[a-z][a-z0-9-]*)", w) for w in words) if m]
+    found += [f"'{' '.join(path)}' has no option {flag}" for flag in flags if flag not in options]
+    if not found and words and path and path[-1] in READ_BY and words[0] in NAMED[path[-1]]:
+        read_by, kind = READ_BY[path[-1]](words[0], words)
+        given = [FIELDS.get(flag, options[flag].dest) for flag in flags]
+        try:
+            refuse_unread(kind, given, read_by, flags={v: k for k, v in FIELDS.items()})
+        except ConfigError as exc:
+            found.append(str(exc))
     return found
 
 
@@ -108,6 +132,8 @@ def test_a_documented_command_exists(where: str, line: str) -> None:
         ("relloc team upp default", "has no subcommand 'upp'"),
         ("relloc bench filterz", "knows no 'filterz'"),
         ("relloc team up sharma2031 --out d", "knows no 'sharma2031'"),
+        ("relloc reproduce tiers-uwb --seed 3", "--seed: tiers-uwb does not read it"),
+        ("relloc team up guler2023 --tick 0.2", "--tick: guler2023 does not read it"),
     ],
 )
 def test_a_wrong_command_is_caught(line: str, expected: str) -> None:
