@@ -219,6 +219,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
 
 def run(args: argparse.Namespace) -> int:
     from relloc.errors import ConfigError, RellocError
+    from relloc.runtime.launcher import DEFAULT_FILTER
     from relloc.runtime.node import RobotNode
 
     if args.run is not None and args.run < 0:
@@ -228,7 +229,7 @@ def run(args: argparse.Namespace) -> int:
             raise ConfigError(f"{flag}: must be a finite number > 0, got {value}")
     refuse_desilva_only(args)
     refuse_node_unread(args)
-    for name, value in NODE_DEFAULTS.items():
+    for name, value in {**NODE_DEFAULTS, "filter": DEFAULT_FILTER}.items():
         if getattr(args, name) is None:
             setattr(args, name, value)
     parts = node_parts(args)
@@ -377,14 +378,15 @@ clock process' ticks)."""
 NODE_DEFAULTS: dict[str, object] = {
     "run": 0,
     "estimator": "track",
-    "filter": "plkf",  # relloc.runtime.launcher.DEFAULT_FILTER: a team gives no other
     "init": "measurement",
     "tick": 0.1,
     "teammates": "replay",
     "paced": 0.0,
     "clock_timeout": 60.0,
 }
-"""The values of the flags above that were not given (after :func:`refuse_node_unread`)."""
+"""The values of the flags above that were not given (after :func:`refuse_node_unread`);
+``--filter``'s is :data:`relloc.runtime.launcher.DEFAULT_FILTER`, the filter a team's launcher
+does not pass."""
 
 
 def target_kind(args: argparse.Namespace) -> str:

@@ -220,7 +220,7 @@ def run_up(args: argparse.Namespace) -> int:
         return run_reproduction(args)
     if args.estimator == "cooperative":
         return run_mrclam(args)
-    from relloc.runtime.launcher import TeamSettings
+    from relloc.runtime.launcher import DEFAULT_FILTER, TeamSettings
     from relloc.runtime.team import run_team
 
     settings = TeamSettings(
@@ -233,7 +233,7 @@ def run_up(args: argparse.Namespace) -> int:
         realtime_factor=args.realtime,
         port=args.port,
         wall_timeout_s=args.timeout,
-        filter_kind=args.filter or "plkf",
+        filter_kind=args.filter or DEFAULT_FILTER,
         gate_probability=args.gate,
         secure=args.secure,
         certs_dir=args.certs,
