@@ -6,7 +6,7 @@ import networkx as nx
 import numpy as np
 import pytest
 
-from relloc.errors import ConfigError, DataError
+from relloc.errors import ConfigError, DataError, ModelError
 from relloc.observability import rpmg
 from relloc.observability.rank import numeric_rank, singular_values, stacked_singular_values
 from relloc.observability.rpmg import (
@@ -174,6 +174,8 @@ def test_stacked_singular_values_are_those_of_the_stacked_rows() -> None:
     sv = stacked_singular_values(thin, 9)
     assert sv.shape == (9,) and np.count_nonzero(sv > 1e-8 * sv[0]) == 4
     assert np.all(stacked_singular_values([], 9) == 0.0)
+    with pytest.raises(ModelError, match=r"a chunk of shape \(4, 3\) for 9 columns"):
+        stacked_singular_values([np.ones((4, 3))], 9)  # was silently re-wrapped to (?, 9)
 
 
 def test_team_figures_folded_chunk_by_chunk_are_the_assembled_matrix_ones(

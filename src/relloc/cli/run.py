@@ -290,8 +290,7 @@ def _run_bag(args: argparse.Namespace) -> int:
     """``relloc run BAG --map MAP.toml``: one replay of a recorded bag (no Monte Carlo)."""
     from relloc.cli import console
     from relloc.cli.extras import available
-    from relloc.cli.flags import flag_errors
-    from relloc.core.checks import refuse_unread
+    from relloc.core.checks import number, refuse_unread
     from relloc.datasets.bag_mapping import load_mapping
     from relloc.errors import ConfigError
     from relloc.experiments.bag_run import run_bag
@@ -309,16 +308,15 @@ def _run_bag(args: argparse.Namespace) -> int:
         dict.fromkeys(TRACKER_OPTIONS, ("a scenario's track managers",)),
         label="a bag (its UWB ranges go to the range-only filter)",
     )
-    mapping = load_mapping(args.map)
-    with flag_errors():  # --settle
-        summary, _ = run_bag(
-            args.scenario,
-            mapping,
-            args.out,
-            settle_s=args.settle,
-            export=export_request(args),
-            plots=not args.no_plots and available("plot"),
-        )
+    settle_s = number(args.settle, "--settle", low=0.0)
+    summary, _ = run_bag(
+        args.scenario,
+        load_mapping(args.map),
+        args.out,
+        settle_s=settle_s,
+        export=export_request(args),
+        plots=not args.no_plots and available("plot"),
+    )
     if summary["antenna_offset_not_modelled_m"] > 0:
         print(
             f"relloc: note: the mapping's antenna offsets (up to "

@@ -17,6 +17,7 @@ before it runs), so a flag is never silently ignored.
 
 from __future__ import annotations
 
+import functools
 import importlib
 import importlib.util
 from collections.abc import Callable
@@ -147,6 +148,7 @@ def get(name: str) -> Callable[[ReproduceArgs], dict[str, Any]]:
         raise ConfigError(f"unknown experiment {name!r}; available: {', '.join(available())}")
     module = importlib.import_module(EXPERIMENTS[name])
 
+    @functools.wraps(module.reproduce)
     def reproduce(args: ReproduceArgs) -> dict[str, Any]:
         refuse_unread(name, args)
         return module.reproduce(args)  # type: ignore[no-any-return]

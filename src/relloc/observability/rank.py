@@ -85,11 +85,16 @@ def stacked_singular_values(chunks: Iterable[Array], n: int) -> Array:
     """Singular values (length ``n``, zeros padded) of the rows of every chunk ``(k_i, n)``
     stacked, without stacking them: the running triangular factor ``R ← qr([R; chunk])`` is an
     orthogonal transform of all rows so far, so its singular values are theirs, while memory
-    stays one chunk plus ``n × n`` (rows taken as already normalised, as in
-    :func:`padded_singular_values`)."""
+    stays a few chunks (the chunk, its copy under ``R`` and the QR's working copy) instead of
+    all rows (rows taken as already normalised, as in :func:`padded_singular_values`). A chunk
+    that is not ``(k, n)`` is a :class:`ModelError`."""
     R = np.zeros((0, n))
     for chunk in chunks:
-        rows = np.asarray(chunk, dtype=float).reshape(-1, n)
+        rows = np.asarray(chunk, dtype=float)
+        if rows.ndim != 2 or rows.shape[1] != n:
+            raise ModelError(
+                f"stacked_singular_values: a chunk of shape {rows.shape} for {n} columns"
+            )
         R = np.vstack([R, rows]) if R.shape[0] else rows
         if R.shape[0] > n:
             R = np.asarray(np.linalg.qr(R, mode="r"), dtype=float)
