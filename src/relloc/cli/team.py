@@ -50,9 +50,7 @@ from relloc.cli.node import (
     refuse_desilva_only,
     transport_from_args,
 )
-
-DEFAULT_TICK_S = 0.1
-"""``team up --tick`` not given: the clock's tick, s (guler2023 ticks at its scenario's step)."""
+from relloc.runtime import CLOCK_TICK_S
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -111,7 +109,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         "--tick",
         type=float,
         default=None,
-        help=f"clock tick (publication period), s (default {DEFAULT_TICK_S:g}; guler2023: the "
+        help=f"clock tick (publication period), s (default {CLOCK_TICK_S:g}; guler2023: the "
         "scenario's)",
     )
     up.add_argument(
@@ -151,7 +149,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
 
     clock = actions.add_parser("clock", help="run only the clock/simulator process")
     clock.add_argument("--roster", required=True, help="comma-separated robot ids")
-    clock.add_argument("--tick", type=float, default=0.1, help="tick period, simulated s")
+    clock.add_argument("--tick", type=float, default=CLOCK_TICK_S, help="tick period, simulated s")
     clock.add_argument("--duration", type=float, required=True, help="simulated duration, s")
     clock.add_argument("--realtime", type=float, default=0.0, metavar="FACTOR")
     clock.add_argument("--ack-timeout", type=float, default=10.0, help="wall s per tick barrier")
@@ -211,7 +209,7 @@ def run_up(args: argparse.Namespace) -> int:
     if args.runs is None:  # the defaults of the targets that read them
         args.runs = 1
     if args.tick is None:
-        args.tick = DEFAULT_TICK_S
+        args.tick = CLOCK_TICK_S
     if args.scenario == "guler2023":
         from relloc.cli.airground import run_team_up
 

@@ -40,7 +40,7 @@ from typing import Any
 
 from relloc.core.checks import count, number, positive, probability
 from relloc.errors import ConfigError, RellocError
-from relloc.runtime import keys
+from relloc.runtime import CLOCK_TICK_S, keys
 from relloc.runtime.access import SecureTeam, secure_team
 from relloc.runtime.admission import admit, check_stamps
 from relloc.runtime.faults import FaultSettings, RobotEvent
@@ -80,7 +80,7 @@ class TeamSettings:
     out_dir: Path
     seed: int = 0
     team: str = "team"
-    tick_s: float = 0.1
+    tick_s: float = CLOCK_TICK_S
     faults: FaultSettings = field(default_factory=FaultSettings)
     realtime_factor: float = 0.0
     port: int | None = None
@@ -235,7 +235,7 @@ class ProcessTeam:
     made in each run's folder). Settings of a reproduction's team extend it with what the
     reproduction needs."""
 
-    tick_s: float = 0.1
+    tick_s: float = CLOCK_TICK_S
     faults: FaultSettings = field(default_factory=FaultSettings)
     team: str = "team"
     wall_timeout_s: float = 300.0
