@@ -1,14 +1,15 @@
 """Every ``relloc …`` command line the README or a module docstring shows names a real command.
 
 The command lines are taken from code spans (````relloc …```` and ``` ``relloc …`` ```) and from
-lines of fenced code blocks. Each is walked through the real argument parser
-(:func:`relloc.cli.build_parser`): its words must name existing (sub)commands, its ``--flags``
-must be options of the command they follow, and a lower-case name given to ``reproduce``,
-``bench`` or ``observability`` must be a registered experiment, benchmark or built-in model, and
-one given to ``team up`` a reproduction it runs as processes or ``default``; a flag given to
-``reproduce`` or ``team up`` must be one that target reads (their ``READ_BY``). Placeholders
-(``NAME``, ``DIR``, ``SCENARIO.toml``, ``...``) are not checked. A renamed flag or experiment
-then fails here instead of leaving the documentation wrong.
+lines of fenced code blocks (a line ending in ``\\`` joined to the next). Each is walked
+through the real argument parser (:func:`relloc.cli.build_parser`): its words must name
+existing (sub)commands, its ``--flags`` must be options of the command they follow, a
+lower-case name given to ``reproduce``, ``bench`` or ``observability`` must be a registered
+experiment, benchmark or built-in model, and one given to ``team up`` a reproduction it runs as
+processes or ``default``; a flag given to ``reproduce`` or ``team up`` must be one that target
+reads (their ``READ_BY``). Placeholders (``NAME``, ``DIR``, ``SCENARIO.toml``, ``...``) are not
+checked. A renamed flag or experiment then fails here instead of leaving the documentation
+wrong.
 """
 
 from __future__ import annotations
@@ -69,7 +70,8 @@ def documented_commands() -> list[tuple[str, str]]:
     for where, text in texts:
         lines = [m.group(1) for m in SPAN.finditer(text)]
         fenced = re.findall(r"```[a-z]*\n(.*?)```", text, flags=re.S)
-        lines += [ln.strip() for block in fenced for ln in block.splitlines()]
+        joined = (re.sub(r"\\\n\s*", " ", block) for block in fenced)  # `\` continues a line
+        lines += [ln.strip() for block in joined for ln in block.splitlines()]
         for line in lines:
             line = line.split("#")[0].strip()
             if line.startswith("relloc "):
