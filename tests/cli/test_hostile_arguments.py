@@ -79,7 +79,11 @@ def a_file(tmp_path: Path) -> Path:
         ),
         (
             ["node", "--robot", "1", "--scenario", "sharma2013", "--gate", "0.99"],
-            "--gate: read by seed 000's track manager only",
+            "--gate: sharma2013 does not read it; read by --estimator track",
+        ),
+        (
+            ["node", "--robot", "1", "--scenario", "desilva2015", "--gate", "0.99"],
+            "--gate: desilva2015 does not read it; read by --estimator track",
         ),
         (
             ["node", "--robot", "observer", "--scenario", "default", "--gate", "nan"],
@@ -128,7 +132,10 @@ def a_file(tmp_path: Path) -> Path:
             ["node", "--robot", "observer", "--case", "nope"],
             "--case: default does not read it; read by sharma2013, --estimator cooperative",
         ),
-        (["node", "--robot", "observer", "--fit", "f.json"], "--fit: read with --dataset"),
+        (
+            ["node", "--robot", "observer", "--fit", "f.json"],
+            "--fit: default does not read it; read by --estimator cooperative",
+        ),
         # options a mode does not read were accepted and ignored: the bag's range-only filter
         # (the tracker's settings were recorded in its summary, unused) ...
         *(

@@ -1,28 +1,33 @@
 """Every ``relloc …`` command line the README or a module docstring shows names a real command.
 
-The command lines are taken from code spans (````relloc …```` and ``` ``relloc …`` ```) and from
-lines of fenced code blocks (a line ending in ``\\`` joined to the next). Each is walked
+The command lines are taken from code spans (````relloc …```` and ``` ``relloc …`` ```), from
+lines of fenced code blocks and from the literal blocks of docstrings (the indented lines after
+a paragraph ending in ``::``), a line ending in ``\\`` joined to the next. Each is walked
 through the real argument parser (:func:`relloc.cli.build_parser`): its words must name
 existing (sub)commands, its ``--flags`` must be options of the command they follow, a
 lower-case name given to ``reproduce``, ``bench`` or ``observability`` must be a registered
 experiment, benchmark or built-in model, and one given to ``team up`` a reproduction it runs as
 processes or ``default``; a flag given to ``reproduce`` or ``team up`` must be one that target
-reads (their ``READ_BY``). Placeholders (``NAME``, ``DIR``, ``SCENARIO.toml``, ``...``) are not
-checked. A renamed flag or experiment then fails here instead of leaving the documentation
-wrong.
+reads (their ``READ_BY``). A ``relloc node --robot …`` line that is not a synopsis (no ``|``
+or ``[…]``) is parsed whole and put through the node's own checks
+(:func:`relloc.cli.node.check_arguments`: its ``READ_BY`` and ``MODE_READ_BY``).
+Placeholders (``NAME``, ``DIR``, ``SCENARIO.toml``, ``...``) are not checked. A renamed flag or
+experiment then fails here instead of leaving the documentation wrong.
 """
 
 from __future__ import annotations
 
 import argparse
 import ast
+import contextlib
+import io
 import re
 from pathlib import Path
 
 import pytest
 
 from relloc.bench import BENCHMARKS
-from relloc.cli import build_parser, team
+from relloc.cli import build_parser, node, team
 from relloc.core.checks import refuse_unread
 from relloc.errors import ConfigError
 from relloc.experiments import registry
@@ -61,22 +66,51 @@ def documented_commands() -> list[tuple[str, str]]:
     texts = [("README.md", (ROOT / "README.md").read_text())]
     for path in sorted((ROOT / "src" / "relloc").rglob("*.py")):
         tree = ast.parse(path.read_text())
-        for node in ast.walk(tree):
-            if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef)):
-                doc = ast.get_docstring(node)
+        for item in ast.walk(tree):
+            if isinstance(item, (ast.Module, ast.ClassDef, ast.FunctionDef)):
+                doc = ast.get_docstring(item)
                 if doc:
                     texts.append((str(path.relative_to(ROOT)), doc))
     found = []
     for where, text in texts:
         lines = [m.group(1) for m in SPAN.finditer(text)]
-        fenced = re.findall(r"```[a-z]*\n(.*?)```", text, flags=re.S)
-        joined = (re.sub(r"\\\n\s*", " ", block) for block in fenced)  # `\` continues a line
+        blocks = re.findall(r"```[a-z]*\n(.*?)```", text, flags=re.S) + literal_blocks(text)
+        joined = (re.sub(r"\\\n\s*", " ", block) for block in blocks)  # `\` continues a line
         lines += [ln.strip() for block in joined for ln in block.splitlines()]
         for line in lines:
             line = line.split("#")[0].strip()
             if line.startswith("relloc "):
                 found.append((where, " ".join(line.split())))
     return sorted(set(found))
+
+
+def literal_blocks(text: str) -> list[str]:
+    """The reStructuredText literal blocks of ``text``: the indented (or blank) lines that
+    follow a line ending in ``::``."""
+    blocks, block, inside = [], [], False
+    for line in [*text.splitlines(), "end"]:
+        if inside and (not line.strip() or line[0] in " \t"):
+            block.append(line)
+            continue
+        if block:
+            blocks.append("\n".join(block))
+        block, inside = [], line.rstrip().endswith("::")
+    return blocks
+
+
+def node_problems(words: list[str]) -> list[str]:
+    """What the node's own checks refuse in a whole ``relloc node`` line (its words after
+    ``relloc``): the parser's error, or :func:`relloc.cli.node.check_arguments`'."""
+    stderr = io.StringIO()
+    try:
+        with contextlib.redirect_stderr(stderr):
+            args = PARSER.parse_args(words)
+        node.check_arguments(args)
+    except SystemExit:
+        return [stderr.getvalue().strip().splitlines()[-1]]
+    except ConfigError as exc:
+        return [str(exc)]
+    return []
 
 
 def subcommands(parser: argparse.ArgumentParser) -> dict[str, argparse.ArgumentParser]:
@@ -110,6 +144,9 @@ def problems(line: str) -> list[str]:
             refuse_unread(kind, given, read_by, flags={v: k for k, v in FIELDS.items()})
         except ConfigError as exc:
             found.append(str(exc))
+    synopsis = any("|" in w or w.startswith("[") for w in words)  # alternatives, optionals
+    if not found and path == ["node"] and "--robot" in words and not synopsis:
+        found += node_problems(line.split()[1:])
     return found
 
 
@@ -136,6 +173,11 @@ def test_a_documented_command_exists(where: str, line: str) -> None:
         ("relloc team up sharma2031 --out d", "knows no 'sharma2031'"),
         ("relloc reproduce tiers-uwb --seed 3", "--seed: tiers-uwb does not read it"),
         ("relloc team up guler2023 --tick 0.2", "--tick: guler2023 does not read it"),
+        ("relloc node --robot a --scenario sharma2013 --gate 0.9", "--gate: sharma2013 does not"),
+        ("relloc node --robot a --tick 0.2", "--tick: a node on the clock's ticks does not"),
+        ("relloc node --robot a --realtime --paced 2", "--paced: --realtime does not read it"),
+        ("relloc node --robot a --run -1", "--run: must be ≥ 0"),
+        ("relloc node --robot a --seed x", "invalid int value: 'x'"),
     ],
 )
 def test_a_wrong_command_is_caught(line: str, expected: str) -> None:

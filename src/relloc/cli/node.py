@@ -218,17 +218,11 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
 
 
 def run(args: argparse.Namespace) -> int:
-    from relloc.errors import ConfigError, RellocError
+    from relloc.errors import RellocError
     from relloc.runtime.launcher import DEFAULT_FILTER
     from relloc.runtime.node import RobotNode
 
-    if args.run is not None and args.run < 0:
-        raise ConfigError(f"--run: must be ≥ 0, got {args.run}")
-    for flag, value in (("--duration", args.duration), ("--tick", args.tick)):
-        if value is not None and not 0 < value < math.inf:
-            raise ConfigError(f"{flag}: must be a finite number > 0, got {value}")
-    refuse_desilva_only(args)
-    refuse_node_unread(args)
+    check_arguments(args)
     for name, value in {**NODE_DEFAULTS, "filter": DEFAULT_FILTER}.items():
         if getattr(args, name) is None:
             setattr(args, name, value)
@@ -247,6 +241,21 @@ def run(args: argparse.Namespace) -> int:
             f"(after {counters.get('ticks', 0)} ticks; --clock-timeout {args.clock_timeout:g} s)"
         )
     return 0
+
+
+def check_arguments(args: argparse.Namespace) -> None:
+    """ConfigError naming the flag, before any work, for a value out of its range or a flag
+    that the node's team source or mode does not read (:func:`refuse_desilva_only`,
+    :func:`refuse_node_unread`)."""
+    from relloc.errors import ConfigError
+
+    if args.run is not None and args.run < 0:
+        raise ConfigError(f"--run: must be ≥ 0, got {args.run}")
+    for flag, value in (("--duration", args.duration), ("--tick", args.tick)):
+        if value is not None and not 0 < value < math.inf:
+            raise ConfigError(f"{flag}: must be a finite number > 0, got {value}")
+    refuse_desilva_only(args)
+    refuse_node_unread(args)
 
 
 def node_settings(args: argparse.Namespace, parts: NodeParts) -> NodeSettings:
@@ -315,14 +324,9 @@ def node_parts(args: argparse.Namespace) -> NodeParts:
     from relloc.experiments.team_sources import named_node_parts, team_names
 
     cooperative = args.dataset is not None and args.estimator == "cooperative"
-    if args.fit is not None and not cooperative:
-        raise ConfigError("--fit: read with --dataset and --estimator cooperative only")
-    reproduction = args.dataset is None and args.scenario in team_names()
-    if args.gate is not None:
-        if reproduction or cooperative:
-            raise ConfigError("--gate: read by seed 000's track manager only (--estimator track)")
+    if args.gate is not None:  # read by the track manager only (READ_BY)
         probability(args.gate, "--gate")
-    if reproduction:
+    if args.dataset is None and args.scenario in team_names():
         return named_node_parts(
             args.scenario,
             args.robot,
@@ -359,6 +363,8 @@ TRACKS = "--estimator track"
 READ_BY: dict[str, tuple[str, ...]] = {
     "filter": (TRACKS,),
     "init": (TRACKS,),
+    "gate": (TRACKS,),
+    "fit": (COOPERATIVE,),
     "run": ("desilva2015", "sharma2013"),
     "case": ("sharma2013", COOPERATIVE),
     "duration": ("desilva2015", "sharma2013", COOPERATIVE, "--realtime"),
