@@ -188,10 +188,28 @@ def test_one_instant_gives_no_interval():
     assert empty.samples == 0 and np.isnan(empty.percent) and empty.interval is None
 
 
-@pytest.mark.parametrize("batches", [1, 0, True, 2.5])
+@pytest.mark.parametrize("batches", [1, 0, True, 2.5, 10**9 + 1, 10**30])
 def test_bad_batches_are_refused(batches):
     with pytest.raises(ConfigError, match="batches"):
         percent_beyond_interval([1.0, 2.0], [0.0, 1.0], 1.0, batches=batches)
+
+
+@pytest.mark.parametrize("scale", [-1, 2**40, 2**61])
+def test_run_indices_are_labels_of_any_size(scale):
+    # the (run, block) cells ``run · batches + block`` of labels as large as 2**61 wrapped
+    # around int64: with 8 blocks every run fell into the same cells
+    rng = np.random.default_rng(11)
+    values, t = rng.chisquare(3, 400), np.tile(np.arange(100.0), 4)
+    runs = np.repeat(np.arange(4), 100)
+    for shared in (False, True):
+        plain, scaled = (
+            percent_beyond_interval(values, t, 7.81, runs=r, shared_recording=shared, batches=8)
+            for r in (runs, (runs + 1) * scale)
+        )
+        assert (scaled.clusters, scaled.effective_samples) == pytest.approx(
+            (plain.clusters, plain.effective_samples), rel=1e-12
+        )
+        assert scaled.interval == pytest.approx(plain.interval, rel=1e-12)
 
 
 def test_times_must_match_the_values():

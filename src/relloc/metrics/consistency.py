@@ -329,6 +329,9 @@ def percent_beyond(values: ArrayLike, bound: float) -> float:
 #: Blocks of :func:`percent_beyond_interval` by default: ten, so that a 450 s window gives
 #: 45 s blocks (longer than the seconds over which odometry errors persist on MRCLAM).
 INTERVAL_BATCHES = 10
+#: The most time blocks :func:`percent_beyond_interval` accepts: a block index and a
+#: (run, block) cell must stay exact 64-bit integers.
+MAX_INTERVAL_BATCHES = 10**9
 #: Time blocks shorter than this many correlation times of the values make the interval too
 #: narrow (module docstring); :attr:`BeyondShare.blocks_short` says when they are.
 BLOCK_CORRELATION_TIMES = 10.0
@@ -512,8 +515,10 @@ def percent_beyond_interval(
     the runs replay one recording. When every cluster sits at ``p̂`` (e.g. none beyond
     anywhere) there is no spread to measure: ``N_eff`` is then ``G`` and the interval
     Clopper–Pearson's for ``G p̂`` in ``G``. A ``confidence`` whose ``(1+c)/2`` rounds to ½
-    or 1, a ``shared_recording`` that is not a bool, or times whose span overflows are
-    refused (``ConfigError``, ``DataError``).
+    or 1, ``batches`` beyond :data:`MAX_INTERVAL_BATCHES`, a ``shared_recording`` that is not
+    a bool, or times whose span overflows are refused (``ConfigError``, ``DataError``). Run
+    indices are labels: any integers, renumbered ``0 … runs − 1`` before they are combined
+    with the blocks.
     """
     c = probability(confidence, "percent_beyond_interval: confidence, a probability")
     if not 0.5 < (1.0 + c) / 2.0 < 1.0:
@@ -532,7 +537,7 @@ def percent_beyond_interval(
         )
         / 100.0
     )
-    batches = count(batches, "percent_beyond_interval: batches", low=2)
+    batches = count(batches, "percent_beyond_interval: batches", low=2, high=MAX_INTERVAL_BATCHES)
     if not isinstance(shared_recording, (bool, np.bool_)):
         raise ConfigError(
             "percent_beyond_interval: shared_recording must be a bool, got "
@@ -552,7 +557,8 @@ def percent_beyond_interval(
         )
     b = _check_bound(bound, "percent_beyond_interval", v.shape)
     ok = np.isfinite(v) & np.isfinite(t)
-    v, t, b, r = v[ok], t[ok], b[ok], r[ok].astype(np.int64)
+    v, t, b = v[ok], t[ok], b[ok]
+    r = np.unique(r[ok], return_inverse=True)[1].astype(np.int64)  # labels 0 … runs − 1
     if v.size and not np.isfinite(t.max() - t.min()):
         raise DataError(
             f"percent_beyond_interval: times from {t.min():g} to {t.max():g}; their span "
