@@ -117,9 +117,10 @@ def test_a_large_time_step_stays_finite():
     assert np.linalg.eigvalsh(join_symmetric(tracker._cov)).min() > 0.0
 
 
-@pytest.mark.parametrize("dt", [None, "abc", -0.1, math.nan])
+@pytest.mark.parametrize("dt", [None, "abc", -0.1, math.nan, math.inf, 1e150])
 def test_a_time_step_that_is_not_a_number_or_negative_is_a_config_error(dt):
-    """None and text raised a raw TypeError/ValueError."""
+    """None and text raised a raw TypeError/ValueError; a step of 1e150 s (beyond
+    ``MAX_TIME_STEP_S``) overflowed the covariance to inf silently."""
     with pytest.raises(
         ConfigError,
         match=r"relative (filter|tracker): dt: (expected a number|must be a finite number)",

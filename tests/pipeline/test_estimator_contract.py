@@ -51,6 +51,7 @@ import pytest
 from numpy.typing import NDArray
 
 from relloc.core.angles import wrap_angle
+from relloc.core.checks import MAX_TIME_STEP_S
 from relloc.core.contract import Estimator, HeldOdometry
 from relloc.core.estimates import Estimates
 from relloc.core.events import TIME_TOL
@@ -468,7 +469,9 @@ def test_evaluation_runs_on_the_estimates(name: str) -> None:
 def test_an_estimator_advanced_back_in_time_or_to_nan_is_a_data_error(name: str) -> None:
     """One rule (:func:`relloc.core.events.elapsed`): some estimators refused a step back as a
     ConfigError, the UWB range filters and the Gaussian-sum estimator not at all (they set their
-    clock back, or predicted with a negative step), and a NaN time slipped through some."""
+    clock back, or predicted with a negative step), and a NaN time slipped through some. A step
+    beyond ``MAX_TIME_STEP_S`` was accepted by all but one, which raised a raw OverflowError;
+    the others' beliefs overflowed silently at 1e150 s."""
     case = _case(name)
     still = HeldOdometry.still(case.recording.n_robots)
     t0 = case.recording.span[0]
@@ -480,6 +483,11 @@ def test_an_estimator_advanced_back_in_time_or_to_nan_is_a_data_error(name: str)
     for est in case.build(case.recording):
         with pytest.raises(DataError, match=r": time nan is not a finite number"):
             est.advance(float("nan"), still)
+    for est in case.build(case.recording):
+        est.advance(t0, still)
+        est.advance(t0 + MAX_TIME_STEP_S, still)  # the longest step is taken
+        with pytest.raises(DataError, match=r": time jumped 1e\+150 s from "):
+            est.advance(t0 + MAX_TIME_STEP_S + 1e150, still)
 
 
 # ---------------------------------------------------------------------------------- linear cases

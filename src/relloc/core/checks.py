@@ -51,12 +51,20 @@ def positive(value: object, where: str) -> float:
     return number(value, where, low=0.0, open_low=True)
 
 
+#: The longest prediction step (s) an estimator takes, about 32,000 years: longer is no robot's
+#: (a clock in the wrong unit, or a first stamp read as a step), and the powers of the step in
+#: a prediction's covariance overflow double precision long before the step does (a relative
+#: filter's at 1e150 s).
+MAX_TIME_STEP_S = 1e12
+
+
 def time_step(dt: object, where: str) -> float:
-    """``dt`` as a finite float ≥ 0 (a ConfigError naming ``where`` otherwise). A float takes a
-    fast path: :func:`number`'s type checks cost a tracker's prediction about 2.5 %."""
-    if isinstance(dt, float) and math.isfinite(dt) and dt >= 0.0:
+    """``dt`` as a float in ``0 … MAX_TIME_STEP_S`` (a ConfigError naming ``where``
+    otherwise). A float takes a fast path: :func:`number`'s type checks cost a tracker's
+    prediction about 2.5 %."""
+    if isinstance(dt, float) and 0.0 <= dt <= MAX_TIME_STEP_S:
         return float(dt)
-    return number(dt, f"{where}: dt", low=0.0)
+    return number(dt, f"{where}: dt", low=0.0, high=MAX_TIME_STEP_S)
 
 
 def probability(value: object, where: str) -> float:

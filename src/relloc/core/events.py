@@ -21,7 +21,7 @@ from typing import overload
 import numpy as np
 from numpy.typing import NDArray
 
-from relloc.core.checks import floats
+from relloc.core.checks import MAX_TIME_STEP_S, floats
 from relloc.core.contract import Estimator, HeldOdometry
 from relloc.core.estimates import Recorder
 from relloc.core.recording import Measurements
@@ -39,9 +39,10 @@ def elapsed(previous: float, t: object, where: str) -> float: ...
 def elapsed(previous: float | None, t: object, where: str) -> float | None:
     """``t − previous`` (s) for an estimator advanced to ``t``; ``None`` at its first event
     (``previous`` None). ``t`` must be a finite number no earlier than ``previous − TIME_TOL``
-    (one event that rounding split): otherwise a DataError naming ``where`` — an estimator
-    advanced back in time would predict over one interval twice, or keep a clock that went
-    back."""
+    (one event that rounding split) and no later than ``previous +``
+    :data:`~relloc.core.checks.MAX_TIME_STEP_S`: otherwise a DataError naming ``where`` — an
+    estimator advanced back in time would predict over one interval twice, or keep a clock that
+    went back, and one advanced by more would overflow its prediction."""
     # float first: the numbers.Real check costs about 0.3 µs
     if not (
         isinstance(t, float) or (isinstance(t, numbers.Real) and not isinstance(t, bool))
@@ -52,6 +53,11 @@ def elapsed(previous: float | None, t: object, where: str) -> float | None:
     dt = float(t) - previous
     if dt < -TIME_TOL:
         raise DataError(f"{where}: time went back from {previous!r} to {t!r}")
+    if dt > MAX_TIME_STEP_S:
+        raise DataError(
+            f"{where}: time jumped {dt:g} s from {previous!r} to {t!r}, more than the "
+            f"{MAX_TIME_STEP_S:g} s an estimator predicts over"
+        )
     return dt
 
 
