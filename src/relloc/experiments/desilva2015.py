@@ -60,28 +60,46 @@ of the truth; a teammate is *found and tracked to the end* in a run when it is t
 ≥ 90 % of the scans of the last 10 s. A track is *confirmed* (for the time to the first
 confirmed track) when it is dominant with weight ≥ 0.8, position σ ≤ 0.3 m and yaw σ ≤ 0.35 rad.
 
-summary.json keys: ``experiment, seed, runs, duration_s, settings`` (the scenario's values;
-``sensing``: the sensing robots' names, ``paper_sensing``: the paper's), ``success_rate``
-(``overall`` and per ``"L1->P2"`` pair, paper 1.0), ``time_to_first_confirmed_s``, ``hypotheses``
-(components per filter: ``mean``, ``max``), ``pos_rmse_m`` / ``yaw_rmse_rad`` (dominant track, t ≥ 5
-s; ``rmse_scored_percent``: the share of (run, scan) cells from 5 s on that have a dominant track,
-over which they are taken), ``wrong_association_rate`` (bearings used by the dominant track that
-came from another robot or clutter, after its first confirmation; ``joint_decision``: the same for
-the fuser's one-to-one assignment of bearings to teammates), ``consistency`` (``anees`` of the
-dominant track against its own covariance, descriptive, with ``per_pair_anees``, and
-``nees_percent_beyond_chi2_95``, the % of NEES values above the χ²(4) 95 % bound, t ≥ 5 s;
-``ideal``: both for a consistent filter; ``nees_run_average``: the verdict from the NEES averaged
-over the independent runs at each scan against the band of such a mean,
-:func:`relloc.metrics.run_average_band`), ``no_sharing`` (the same figures with mutual/indirect
-fusion off, ``joint_wrong_association_rate`` for ``joint_decision``; here only, the
-``success_per_pair``), ``covariance_intersection`` (the same with CI
-fusion), ``mutual_confirmed`` (the same with the restricted sharing policy), ``clutter_sweep``
+summary.json keys (null where a figure has no value): ``experiment, seed, runs, duration_s,
+settings`` (the paper configuration's values: ``velocity_variance_m2_s2``,
+``angular_variance_rad2_s2``, ``var_azimuth_rad2``, ``var_elevation_rad2``, ``var_height_mm2``,
+``var_range_mm2``, ``p_detect``, ``clutter_density_per_rad2_mm`` (λ),
+``expected_clutter_per_scan`` (λV, false bearings per scan of one sensing robot), the filters'
+``p_birth`` (P_B) and ``p_gate`` (P_G), ``rates_hz`` (``filter``, ``direct``,
+``mutual_indirect``); ``sensing``: the sensing robots' names, ``paper_sensing``: the paper's),
+``success_rate`` (the share of runs in which the teammate is found and tracked to the end:
+``overall`` over every run and pair, ``per_pair`` per ``"L1->P2"`` pair of sensing robot and
+teammate, ``paper`` 1.0), ``time_to_first_confirmed_s`` (s from the run's start to the first
+scan with a confirmed track, the mean over the (run, pair) cells that have one: ``overall``,
+``per_pair``),
+``hypotheses`` (components per filter over every scan and run: ``mean``, ``max``, and
+``per_pair`` the same per pair), ``pos_rmse_m`` / ``yaw_rmse_rad`` (dominant track, 3-D
+position and yaw, t ≥ 5 s: ``overall``, ``per_pair``; ``rmse_scored_percent``, the same
+shape: the share of (run, scan) cells from 5 s on that have a dominant track, over which they
+are taken), ``wrong_association_rate`` (bearings used by the dominant track that came from
+another robot or clutter, after its first confirmation, of all it used: ``overall``,
+``per_pair``; ``joint_decision``: the same, over all pairs, for the fuser's one-to-one
+assignment of bearings to teammates), ``consistency`` (``anees`` of the dominant track against
+its own covariance, descriptive, with ``per_pair_anees``, and ``nees_percent_beyond_chi2_95``,
+the % of NEES values above the χ²(4) 95 % bound, t ≥ 5 s; ``ideal``: both for a consistent
+filter; ``nees_run_average``: the verdict from the NEES averaged over the independent runs at
+each scan against the band of such a mean, :func:`relloc.metrics.run_average_band`, whose
+keys it has), ``no_sharing`` (the same figures, overall only and flat, with mutual/indirect
+fusion off: ``runs``, ``success_rate``, ``time_to_first_confirmed_s``, ``hypotheses``,
+``pos_rmse_m``, ``rmse_scored_percent``, ``yaw_rmse_rad``, ``wrong_association_rate``,
+``anees``, ``nees_percent_beyond_chi2_95``, ``nees_run_average`` and
+``joint_wrong_association_rate`` for ``joint_decision``; here only, the ``success_per_pair``),
+``covariance_intersection`` (the same keys but ``success_per_pair``, with CI fusion),
+``mutual_confirmed`` (the same with the restricted sharing policy), ``clutter_sweep``
 (``"1"``, ``"10"``, ``"100"``, ``"1000"`` → ``success_rate``, ``pos_rmse_m``, ``yaw_rmse_rad``,
 ``wrong_association_rate``, ``anees``, ``hypotheses``, ``expected_clutter_per_scan``,
 ``p_detect``, ``runs``), ``pd_sweep`` (``"0.95"``, ``"0.8"``, ``"0.6"`` → the same),
-``kidnapped`` (the ``robot``, ``time_s`` and ``jump`` of the kidnapping, ``runs``,
-``refound_rate``, ``time_to_refind_s``), ``figures`` (figure → file name: ``fig4``, ``fig5``,
-``fig5_no_sharing``, ``sweeps``), ``departures`` (every departure from the paper)."""
+``kidnapped`` (the ``robot`` moved, ``time_s`` (s) and ``jump`` (``dx_m``, ``dy_m``,
+``dyaw_rad``) of the kidnapping, ``runs``, ``refound_rate``: the share of (run, other sensing
+robot) in which the robot is tracked to the end, ``time_to_refind_s``: the mean time from the
+jump to the first scan at which it is tracked again), ``figures`` (figure → file name:
+``fig4``, ``fig5``, ``fig5_no_sharing``, ``sweeps``), ``departures`` (every departure from
+the paper)."""
 
 from __future__ import annotations
 

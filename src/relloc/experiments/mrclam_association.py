@@ -120,9 +120,10 @@ fitted on the data it is scored on:
   ``b_i(η̃) = c_i·(1, η̃, η̃²)`` removed from its bearing and the range bias
   ``b(η̃, ρ̃) = c·(1, η̃, η̃², ρ̃, ρ̃η̃²)`` from its range (``corrected_readings``, at the
   measured reading, as fitted) before the bearings lose their barcodes; the filter's bearing
-  and range σ (``sigma_bearing_rad``, ``sigma_range_m``) are the MAD of what the biases leave,
-  inflated by the Bartlett factor ``1 + 2 Σ ρ(kΔ)`` of the residuals' measured correlation at
-  the readings' spacing (the filter fuses every range: ``RANGE_INTERVAL_S`` = 0);
+  and range σ (``sigma_bearing_rad``, ``sigma_range_m``) are the MAD σ of what the biases
+  leave times ``√(1 + 2 Σ ρ(kΔ))``: the variance is inflated by the Bartlett factor of the
+  residuals' measured correlation at the readings' spacing (the filter fuses every range:
+  ``RANGE_INTERVAL_S`` = 0);
 - the detection probabilities (``fit_detection_in_view``, ``fit_detection_probability``).
 
 The field of view, which sets where the injected clutter falls and where the camera can see,
@@ -211,33 +212,56 @@ at every sighting and lets it dead-reckon between them
 
 summary.json keys: ``experiment, seed, runs, dataset, window_s, scored_on,
 calibration_window_s, calibration_window, clutter_per_scan, field_of_view_rad,
-field_of_view_window, odometry_noise`` (fitted σ, the detection-probability fits, the widest
-range of the window and the range span), ``odometry_model`` and ``camera_model`` (the fitted
-odometry and camera models; their window is ``calibration_window``), ``sigma_range_m``,
-``sigma_bearing_rad`` (the filters' σ), ``association_accuracy`` (fraction of the bearings
-used by the dominant track of a filter that really came from that robot, after its first
-confirmation), ``association_accuracy_joint`` (of the fuser's one-to-one decision),
-``wrong_clutter`` and ``wrong_robot`` (shares of those bearings that were injected clutter or
-another robot), ``pos_rmse_m``, ``pos_median_m`` (dominant track vs Vicon ground truth, planar
-position, after 10 s), ``yaw_rmse_rad``, ``tracked_fraction`` (records with the dominant track
-within 0.5 m and 0.5 rad, of the records with a track), ``coverage`` (records with a track, of
-all records × teammates) — all the unknown-correspondence means over the runs —, ``spread``
-(``runs``: each run's figures and clock offset; per figure ``mean, min, max``), ``run0`` (run
-0's figures with ``per_observer``), ``unknown_ranges_all_around``, ``unknown_shared``,
-``unknown_mutual_confirmed``, ``unknown_no_clutter`` and ``camera`` (the other models'
-figures, run 0's frames),
-``association_bound`` (``with_clutter``, ``no_clutter``: accuracy, bearings used, correct),
-``tracking_reference`` (dead reckoning reset to the truth at every sighting,
+field_of_view_window`` (``scored_on`` and the two windows: ``start_s``, ``end_s`` in s and the
+``source`` folder), ``odometry_noise`` (what the filters were given, fitted on the calibration
+window: ``sigma_v``, ``sigma_lateral`` (m/s) and ``sigma_w`` (rad/s), the RMS over robots of
+each robot's σ at its ``noise_window_s`` (s, one per robot in dataset order), floored at
+``MIN_SIGMA_V`` / ``MIN_SIGMA_W``; ``p_detect_in_view``, the in-view detection fit
+(:class:`~relloc.calibration.camera.InViewDetectionFit`: ``p_detect``, ``half_width_rad``,
+``pairs_in_view``, ``detected_in_view``, ``detected_outside``, its ``calibration_window``);
+``p_detect_all_frames``, seed 002's constant ``P_D``, reported only; ``widest_range_m``, the
+widest robot range of the window (null: none), and ``range_span_m``, the filters'
+``max_range``), ``odometry_model`` (:class:`~relloc.calibration.odometry.OdometryModelFit`
+without its window: ``latency_s``, ``time_constant_s``, ``scale_v`` and ``scale_w`` per robot,
+the variance rates ``q_v0``, ``k_v``, ``q_w0``, ``k_w``, ``k_wv`` over ``odometry_window_s``
+windows, reported and not used by the filters, ``unfitted_robots``) and
+``camera_model`` (:class:`~relloc.calibration.camera.CameraFit` without its window:
+``bearing_offset`` per robot, ``bearing_bias_coeffs`` and ``bearing_bias_limits`` flat,
+robot-major, ``range_bias_coeffs``, ``sigma_bearing_raw`` / ``sigma_range_raw`` (MAD),
+``bearing_inflation`` / ``range_inflation`` (variance factors), ``sigma_bearing`` /
+``sigma_range``, ``range_interval_s``, ``correlation`` (``range`` and ``bearing``: lag → measured
+correlation; ``pair_spacing_s``: ``median``), ``n_residuals``; both windows are
+``calibration_window``), ``sigma_range_m``, ``sigma_bearing_rad`` (the filters' σ, m and rad),
+``association_accuracy`` (fraction of the bearings used by the dominant track of a filter that
+really came from that robot, after its first confirmation), ``association_accuracy_joint`` (of
+the fuser's one-to-one decision), ``wrong_clutter`` and ``wrong_robot`` (shares of those
+bearings that were injected clutter or another robot), ``pos_rmse_m``, ``pos_median_m``
+(dominant track vs Vicon ground truth, planar position, after 10 s), ``yaw_rmse_rad``,
+``tracked_fraction`` (records with the dominant track within 0.5 m and 0.5 rad, of the records
+with a track), ``coverage`` (records with a track, of all records × teammates, after 10 s) —
+all the unknown-correspondence means over the runs, null where no run has a value —,
+``spread`` (``runs``: one entry per run, its ``run`` index, ``clock_offset_s`` and the nine
+figures above; per figure ``mean, min, max``), ``run0`` (run 0's figures, the same as
+``spread.runs[0]``, with ``per_observer``: robot ``"R1"``… → ``association_accuracy``,
+``bearings_used`` (count after the first confirmation), ``pos_rmse_m``, ``tracked_fraction``,
+``coverage``), ``unknown_ranges_all_around``, ``unknown_shared``,
+``unknown_mutual_confirmed``, ``unknown_no_clutter`` and ``camera`` (the other models' nine
+figures, run 0's frames, no ``per_observer``), ``association_bound`` (``with_clutter``,
+``no_clutter``: ``accuracy``, ``used`` bearings, ``correct``), ``tracking_reference`` (dead
+reckoning reset to the truth at every sighting,
 :func:`~relloc.experiments.association_bound.sighting_reset_reference`, on run 0's records:
 ``tracked_fraction`` of ``records``, ``tracked``, ``truth_missing``, ``median_age_s``;
 ``by_age``: by the time since the last sighting), ``tracked_by_age`` (the headline's run 0,
-the same bins: ``from_s``, ``to_s``, ``records``, ``tracked_fraction``), ``bearings`` (counts
-of robot,
-landmark and injected bearings, scans with several robots, ``unknown_subject``: camera rows of
-no other robot and no landmark,
-skipped by the conversion, and ``truth_missing``: filter ticks × robots inside a Vicon gap
-longer than the dataset's gap threshold, scored against the interpolated pose), ``scans``
-(camera frames used), ``load_report``, ``figures`` (``errors``: the figure's file name).
+the same bins: ``from_s``, ``to_s``, ``records``, ``tracked_fraction``), ``bearings`` (run 0's
+counts over the scoring window: ``robot`` bearings, ``landmark_skipped`` rows, ``injected``
+clutter bearings, ``scans_with_several_robots``; ``unknown_subject``: camera rows of no other
+robot and no landmark, skipped by the conversion, over the whole run; and ``truth_missing``:
+filter ticks × robots where the Vicon pose is not valid (inside a gap longer than the
+dataset's gap threshold, or outside its span), scored against the interpolated pose),
+``scans`` (camera frames in the scoring window, every robot's), ``load_report`` (the loader's
+rows read, kept and skipped, :class:`relloc.datasets.mrclam.LoadReport`: ``folder``,
+``n_skipped``, ``skipped_by_reason``, ``files`` → ``rows_read``, ``rows_kept``, ``skipped``,
+``examples``), ``figures`` (``errors``: the figure's file name).
 """
 
 from __future__ import annotations

@@ -11,7 +11,8 @@ Seed 001 (Sharma, Quebe, Beard & Taylor 2013) §3–4.1:
 - the team matrix assembled from edge blocks checked against the full symbolic 3-robot model;
 - Fig. 2: five robots and two landmarks (sensing range 120 m, V = 5 m/s, T_s = 0.1 s) moving so
   that the RPMG connectivity changes; β (Eq. 22) and σ_min of the observability matrix over
-  time, and whether "β = 1 ⇔ rank 3n" holds at every instant;
+  200 s, every 0.5 s (every fifth step), and whether "β = 1 ⇔ rank 3n" holds at each of those
+  instants;
 - a 20-robot team (rank and timing);
 - the PCRLB of robot 2 along the Fig. 2 trajectories for the four cases of seed 001 Figs. 8–10
   (no landmark, one, two, GPS on robot 1), with
@@ -24,6 +25,39 @@ summary.json keys: ``experiment``, ``seed``, ``runs``, ``cases`` (name → ``ran
 ``sqrt_bound_mean_second_half``, each for the ``states`` x, y, ψ), ``timing_s`` (seconds of
 ``edge_analysis``, ``random_teams``, ``fig2``, ``twenty_robot_matrix``,
 ``team_pcrlb_4_cases``).
+
+The cases, and what their keys hold:
+
+- ``edge_robot_robot``, ``edge_robot_landmark`` (Lemmas 1–2; generic rank from 5 random
+  states): ``conditions`` are the minimal sets of scalar inputs that must be non-zero
+  (``[["v_2"]]``); ``evidence``: ``rank_at`` (motion → rank at that state of the rows of the
+  inputs it makes non-zero, words up to order 2) and ``witness`` (state name → value of the
+  generic witness state);
+- ``theorem2_connected_no_landmarks``, ``theorem3_two_landmarks``,
+  ``theorem4_gps_on_one_robot``, ``one_landmark``, ``disconnected_two_groups`` (``--runs``
+  random teams each): ``rank`` is the median over the teams, ``conditions`` team 0's minimal
+  sets of robots that must move (``"robot 2 moving"``), ``unobservable_directions`` those of the
+  team with the most, ``agrees`` whether every team has the case's expected rank and the graph
+  formula's; ``evidence``: ``teams``, ``rank_counts`` (rank → teams), ``beta_counts`` (β →
+  teams), ``matches_graph_rank_formula`` (teams whose rank is the graph formula's),
+  ``conditions_of``, ``conditions_enumerated_for`` (teams whose moving sets were enumerated:
+  the first ``CONDITION_RUNS``), ``robots_that_must_move_mean`` (over those, the size of the
+  smallest set), ``seed`` (the case's Monte-Carlo seed, ``--seed`` + its index);
+- ``block_assembly_vs_symbolic_3_robots``: ``rank`` and ``conditions`` of the full symbolic
+  matrix at the last trial; ``evidence``: ``trials`` and ``same_row_space`` (trials in which
+  the edge-block matrix has the full matrix's rank and row space);
+- ``fig2_beta_equals_full_rank``: ``rank`` the largest over the Fig. 2 instants, ``conditions``
+  at t = 0; ``evidence``: ``agreement_fraction`` (as in ``fig2``) and ``fraction_beta_1`` (the
+  share of instants with β = 1);
+- ``twenty_robots`` (``conditions`` null): ``evidence``: ``edges`` (RPMG edges), ``beta``,
+  ``seconds`` (one team analysis, after a warm-up call) and ``conditions_note``.
+
+``fig2``: lists over the instants above (``t`` in s, ``n_edges`` the RPMG's edges);
+``agreement_fraction``: the share of instants at which rank 3n and β = 1 hold together or fail
+together. ``pcrlb_robot2``: cases ``"no landmarks"``, ``"one landmark"``,
+``"two landmarks"``, ``"GPS on robot 1"``; √PCRLB in m, m, rad at t = 200 s
+(``sqrt_bound_final``) and averaged over the second half of the run
+(``sqrt_bound_mean_second_half``).
 """
 
 from __future__ import annotations

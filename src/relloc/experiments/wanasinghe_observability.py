@@ -20,8 +20,35 @@ summary.json keys: ``experiment``, ``seed``, ``runs``, ``cases`` (name → ``ran
 ``state_dim``, ``conditions`` (minimal sets of input groups that must be non-zero),
 ``conditions_text``, ``input_conditions`` (the same over scalar inputs),
 ``unobservable_directions``, ``paper_claim``, ``agrees`` (true/false, null where the paper makes
-no claim), ``evidence``, ``note``, ``elapsed_s``), ``equation_checks`` (equation → ``paper``,
-``ours``, ``agrees``, ``witness``), ``total_symbolic_s``.
+no claim), ``evidence``, ``note`` (empty when none), ``elapsed_s`` (s)), ``equation_checks``
+(equation → ``paper``, the printed expression, ``ours``, the derived one, ``agrees``,
+``witness``, a text naming where they differ or that the identity holds), ``total_symbolic_s``
+(s, every case and check).
+
+The cases, in the summary's order: ``case1_range_bearing_pseudo_linear``,
+``case2_bearing_pseudo_linear``, ``case2_bearing_pseudo_linear_eq12_as_printed``,
+``appendix1_bearing_pseudo_linear_only_v_c_v_l``, ``case3_range_nonlinear``,
+``case3_range_nonlinear_without_v_l``, ``case1_range_bearing_nonlinear``,
+``case2_bearing_nonlinear``, ``appendix1_bearing_nonlinear_only_v_c_v_l``, seed 003's
+``guler_sw1_range_bearing_headings``, ``guler_sw2_range_triangle_bearing_leader_heading``,
+``guler_sw3_range_only``, then the counter-examples ``lemma1_vertical_v_c_only`` and
+``lemma2_vertical_v_c_with_omega_l``. The equation checks: ``eq16_gradient_row1``,
+``eq20_det_H_pmo``, ``eq21_gram_grad_phi_L_f2_h``, ``eq30_gram_bearing_rows``,
+``eq31_gram_grad_phi_L_f2_h2``.
+
+The analysed cases' ``evidence``: ``witness_state`` (state name → value) and
+``witness_parameters`` (the measured bearings the pseudo-linear rows take as constants, name →
+value; empty for the other models) of the state at which the generic rank is attained,
+``singular_values`` of the observability matrix there, ``precise_rank`` (its rank re-checked in
+50-digit arithmetic) and ``subset_ranks`` (``"v_l+v_c"``, …, ``"none"`` → the generic rank with
+only those input groups non-zero). The two counter-examples differ: ``rank`` is the rank at
+:data:`WITNESS_STATE` with a purely vertical ``v_c`` (and, for Lemma 2, ``omega_l`` = 0.3;
+:func:`~relloc.observability.analysis.rank_at`), ``conditions`` are scalar inputs (``v_xc`` or
+``v_yc``), ``input_conditions`` is null, and ``unobservable_directions`` are those of the
+generic analysis with the inputs ``v_l``, ``omega_l``, ``v_zc``, ``omega_c``; their
+``evidence``: ``witness_state``, ``inputs_vertical`` and ``inputs_horizontal`` (scalar input
+→ value), ``rank_vertical`` and ``rank_horizontal`` (the rank at each),
+``generic_rank_with_vertical_v_c_and_all_other_inputs``.
 """
 
 from __future__ import annotations
