@@ -34,6 +34,7 @@ Every key is checked: an unknown key, a wrong type or a bad value is a
 from __future__ import annotations
 
 import re
+import sys
 import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -329,17 +330,39 @@ def mapping_from_dict(data: Mapping[str, Any], source: str = "") -> BagMapping:
 
 
 def parse_mapping(text: str, origin: str) -> BagMapping:
-    """Parse mapping TOML text; errors are :class:`ConfigError` prefixed with ``origin``."""
+    """Parse mapping TOML text; errors are :class:`ConfigError` prefixed with ``origin``.
+    ``tomllib`` reads integers of any size; one of more digits than Python writes as text
+    (``sys.get_int_max_str_digits()``, a hexadecimal one included) is an error naming its
+    key."""
     try:
         data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
+    except ValueError as exc:  # a TOMLDecodeError, or an integer of over 4300 digits
         raise ConfigError(f"{origin}: not valid TOML ({exc})") from None
     except RecursionError:
         raise ConfigError(f"{origin}: not valid TOML (nested too deeply)") from None
     try:
+        _check_integers(data, "")
         return mapping_from_dict(data, origin)
     except ConfigError as exc:
         raise ConfigError(f"{origin}: {exc}") from None
+
+
+def _check_integers(value: object, where: str) -> None:
+    """ConfigError naming the key of the first integer of a parsed TOML document that has more
+    digits than ``str`` writes: every later message may quote the value (``{value!r}``)."""
+    if isinstance(value, dict):
+        for key, item in value.items():
+            _check_integers(item, f"{where}.{key}" if where else str(key))
+    elif isinstance(value, list):
+        for k, item in enumerate(value):
+            _check_integers(item, f"{where}[{k}]")
+    elif isinstance(value, int):
+        try:
+            str(value)
+        except ValueError:
+            raise ConfigError(
+                f"{where}: an integer of over {sys.get_int_max_str_digits()} digits"
+            ) from None
 
 
 def load_mapping(path: Path | str) -> BagMapping:

@@ -81,7 +81,7 @@ def checked_fit(path: Path, ds: Any) -> FittedModels:
 
 def parse_case(case: str) -> tuple[str, str]:
     """``MODE/ANCHORS`` of :data:`relloc.experiments.mrclam_cl.MODES` and ``ANCHORS``."""
-    mode, _, anchors = case.partition("/")
+    mode, _, anchors = case.partition("/") if isinstance(case, str) else ("", "", "")
     if mode not in MODES or anchors not in ANCHORS:
         raise ConfigError(
             f"--case: {case!r} is not MODE/ANCHORS with MODE in {MODES}, ANCHORS in {ANCHORS}"

@@ -72,16 +72,19 @@ messages also :func:`~relloc.runtime.admission.check_stamps` and a per-tick
 
 from __future__ import annotations
 
+import lzma
 import time
+import zlib
 from collections import Counter
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
+from zipfile import BadZipFile
 
 import numpy as np
 
-from relloc.core.checks import count, number, positive
+from relloc.core.checks import count, floats, number, positive
 from relloc.core.estimates import Recorder
 from relloc.core.gaussian import Gaussian
 from relloc.core.recording import Measurements, Recording, empty_measurements
@@ -362,27 +365,51 @@ def save_world(world: AirGroundWorld, path: Path) -> None:
 
 
 def load_world(path: Path, sc: AirGroundScenario) -> tuple[Recording, np.ndarray]:
-    """The recording and the formation error ``(K, N, 2)`` that :func:`save_world` wrote."""
+    """The recording and the formation error that :func:`save_world` wrote: for ``K`` ticks
+    (``K ≤ sc.n_steps``) of the ``R`` robots and ``N`` followers of ``sc``, truth
+    ``(K+1, R, 4)``, commands ``(K, R, 4)`` and the formation error ``(K, N, 2)``, all finite,
+    and readings that :class:`Measurements` accepts. Anything else is a DataError naming the
+    file."""
     try:
         with np.load(path) as f:
             data = {k: f[k] for k in f.files}
-    except (OSError, ValueError) as exc:
+    except (OSError, ValueError, EOFError, BadZipFile, zlib.error, lzma.LZMAError) as exc:
         raise DataError(f"{path}: not a world file ({exc})") from exc
+    except (NotImplementedError, RuntimeError) as exc:  # zipfile: a feature, or encryption
+        raise DataError(f"{path}: not a world file (unsupported zip: {exc})") from exc
     missing = {"truth", "commands", "formation_error", *(f"m_{n}" for n in MEASUREMENT_FIELDS)}
     missing -= set(data)
     if missing:
         raise DataError(f"{path}: missing {sorted(missing)}")
-    ticks = data["commands"].shape[0]
-    readings = Measurements(**{n: data[f"m_{n}"] for n in MEASUREMENT_FIELDS})
-    recording = airground_recording(
-        sc,
-        robot_names(sc),
-        tick_times(sc)[: ticks + 1],
-        data["truth"],
-        data["commands"],
-        [readings],
-    )
-    return recording, data["formation_error"]
+    names = robot_names(sc)
+    arrays = {n: floats(data[n], f"{path}: {n}") for n in ("commands", "truth", "formation_error")}
+    commands = arrays["commands"]
+    if commands.ndim != 3:
+        raise DataError(f"{path}: commands: expected shape (K, R, 4), got {commands.shape}")
+    ticks = commands.shape[0]
+    if ticks > sc.n_steps:
+        raise DataError(f"{path}: commands: {ticks} ticks, more than the run's {sc.n_steps}")
+    shapes = {
+        "commands": ("(K, R, 4)", (ticks, len(names), 4)),
+        "truth": ("(K+1, R, 4)", (ticks + 1, len(names), 4)),
+        "formation_error": ("(K, N, 2)", (ticks, sc.n_followers, 2)),
+    }
+    for name, (layout, shape) in shapes.items():
+        if arrays[name].shape != shape:
+            raise DataError(
+                f"{path}: {name}: expected shape {layout} = {shape} (R = {len(names)} robots, "
+                f"N = {sc.n_followers} followers), got {arrays[name].shape}"
+            )
+    if not np.all(np.isfinite(arrays["formation_error"])):
+        raise DataError(f"{path}: formation_error: holds NaN or inf")
+    try:
+        readings = Measurements(**{n: data[f"m_{n}"] for n in MEASUREMENT_FIELDS})
+        recording = airground_recording(
+            sc, names, tick_times(sc)[: ticks + 1], arrays["truth"], commands, [readings]
+        )
+    except DataError as exc:
+        raise DataError(f"{path}: {exc}") from None
+    return recording, arrays["formation_error"]
 
 
 # ---------------------------------------------------------------------------- robot processes

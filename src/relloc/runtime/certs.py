@@ -91,7 +91,10 @@ def make_team_certs(
 def load_team_certs(folder: Path) -> TeamCerts:
     """The certificate folder written by :func:`make_team_certs`, checked to be complete and
     to belong together (:func:`check_member`): a mismatch found only by the TLS handshake
-    left every process waiting for links that never came up."""
+    left every process waiting for links that never came up. The manifest's team and robots
+    must be ids as :func:`make_team_certs` takes them (:func:`relloc.runtime.keys.check_id`;
+    robots distinct, at least one, none the launcher's), so every file it names lies in
+    ``folder``."""
     folder = Path(folder)
     manifest_path = folder / "team.json"
     try:
@@ -99,8 +102,16 @@ def load_team_certs(folder: Path) -> TeamCerts:
         robots = manifest["robots"]
         if not isinstance(robots, list) or not all(isinstance(r, str) for r in robots):
             raise TypeError(f"robots must be a list of ids, got {robots!r:.60}")
-        certs = TeamCerts(folder, str(manifest["team"]), tuple(robots))
-    except (OSError, ValueError, KeyError, TypeError, RecursionError) as exc:
+        team = manifest["team"]
+        keys.check_id(team, "team")
+        for r in robots:
+            keys.check_id(r, "robots")
+        if not robots or LAUNCHER_ID in robots or len(set(robots)) != len(robots):
+            raise ValueError(
+                f"robots: none, duplicate ids or the reserved id {LAUNCHER_ID!r}: {robots!r:.60}"
+            )
+        certs = TeamCerts(folder, team, tuple(robots))
+    except (OSError, ValueError, KeyError, TypeError, RecursionError, ConfigError) as exc:
         raise DataError(f"{manifest_path}: not a relloc certificate folder ({exc})") from None
     missing = [
         str(p)

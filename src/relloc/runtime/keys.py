@@ -27,10 +27,11 @@ from __future__ import annotations
 
 import re
 
-from relloc.errors import ConfigError
+from relloc.errors import ConfigError, DataError
 
 ROBOT_KINDS = ("odom", "meas", "rows", "eqm", "mail", "est", "evt", "stats", "ack", "cmd", "sync")
 CLOCK_KINDS = ("tick", "ctl", "sense")
+PRESENCE_TOKENS = ("alive", "ready")
 _ID = re.compile(r"[A-Za-z0-9_-]{1,64}")
 
 
@@ -90,6 +91,8 @@ def ready_wildcard(team: str) -> str:
 
 def parse_robot_key(key: str) -> tuple[str, str] | None:
     """``(robot, kind)`` of a robot key expression, or None if it is not one."""
+    if not isinstance(key, str):
+        return None
     parts = key.split("/")
     if len(parts) == 5 and parts[0] == "relloc" and parts[2] == "robot" and parts[4] in ROBOT_KINDS:
         return parts[3], parts[4]
@@ -99,6 +102,8 @@ def parse_robot_key(key: str) -> tuple[str, str] | None:
 def parse_clock_key(key: str) -> str | None:
     """The kind (one of :data:`CLOCK_KINDS`) of a clock key expression, or None if it is not
     one."""
+    if not isinstance(key, str):
+        return None
     parts = key.split("/")
     if len(parts) == 4 and parts[0] == "relloc" and parts[2] == "clock":
         if parts[3] in CLOCK_KINDS:
@@ -107,6 +112,13 @@ def parse_clock_key(key: str) -> str | None:
 
 
 def parse_presence_key(key: str) -> tuple[str, str]:
-    """``(token kind, member)`` of a liveliness key: kind is ``alive`` or ``ready``."""
-    parts = key.split("/")
-    return parts[-2], parts[-1]
+    """``(token kind, member)`` of a liveliness key ``relloc/<team>/<kind>/<member>``: kind
+    is ``alive`` or ``ready``. Any other key is a DataError naming it (a liveliness
+    subscriber of :func:`alive_wildcard` or :func:`ready_wildcard` hears no other)."""
+    parts = key.split("/") if isinstance(key, str) else []
+    if len(parts) != 4 or parts[0] != "relloc" or parts[2] not in PRESENCE_TOKENS or "" in parts:
+        raise DataError(
+            f"presence key {key!r:.80}: not relloc/<team>/alive/<member> or "
+            "relloc/<team>/ready/<member>"
+        )
+    return parts[2], parts[3]
