@@ -197,14 +197,3 @@ class FormationController:
             return formation_command(estimate, off, self.frame, leader_u, self.settings)
         except DataError as exc:
             raise DataError(f"FormationController follower {follower}: {exc}") from None
-
-    def commands(self, estimates: Array, leader_u: tuple[float, float]) -> Array:
-        """``(N, 2)`` commands ``(v_i, ω_i)`` from the followers' estimates ``(N, 4)``
-        ``[r_x, r_y, θ_i, θ_0]`` and the leader's broadcast command ``(v_0, ω_0)``."""
-        x = np.asarray(estimates, dtype=float)
-        if x.shape != (len(self.offsets), 4):
-            raise ConfigError(
-                f"FormationController: estimates of shape {x.shape} for "
-                f"{len(self.offsets)} followers (expected ({len(self.offsets)}, 4))"
-            )
-        return np.array([self.command(i, x[i - 1], leader_u) for i in range(1, len(x) + 1)])

@@ -115,12 +115,6 @@ def range_bias_features(bearing: Array, rng: Array) -> Array:
     return np.stack([np.ones_like(bearing), bearing, bearing**2, rng, rng * bearing**2], axis=-1)
 
 
-def pose_measurement(pose: Array) -> tuple[Array, Array]:
-    """GPS-like absolute pose: ``h(X) = X`` and ``H = I₃`` (batched ``(…,3)`` → ``(…,3,3)``)."""
-    pose = np.asarray(pose, dtype=float)
-    return pose.copy(), np.broadcast_to(np.eye(3), (*pose.shape[:-1], 3, 3)).copy()
-
-
 @dataclass(frozen=True)
 class ScalarRows:
     """A batch of scalar measurement rows on a team of robots (one joint update epoch).

@@ -423,7 +423,3 @@ class LinkEmulator:
             if held is not None:
                 out.append(held[1])
         return out
-
-    @property
-    def pending(self) -> int:
-        return len(self._heap) + len(self._held)

@@ -31,7 +31,6 @@ from __future__ import annotations
 
 import json
 from collections import Counter
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -348,7 +347,3 @@ def print_summary(summary: dict[str, Any]) -> None:
         console.print(
             f"fault {o['fault']}: {json.dumps({k: v for k, v in o.items() if k != 'fault'})}"
         )
-
-
-def load_summary(out_dir: Path) -> dict[str, Any]:
-    return json.loads((Path(out_dir) / "summary.json").read_text())

@@ -184,13 +184,6 @@ class Arena:
                 raise ConfigError(f"{axis}: lower bound {lo:g} must be below upper bound {hi:g}")
             _set(self, axis, (lo, hi))
 
-    def contains(self, x: float, y: float, z: float, *, margin: float = 1e-9) -> bool:
-        return bool(
-            self.x[0] - margin <= x <= self.x[1] + margin
-            and self.y[0] - margin <= y <= self.y[1] + margin
-            and self.z[0] - margin <= z <= self.z[1] + margin
-        )
-
 
 @dataclass(frozen=True, kw_only=True)
 class SensorSpec:
