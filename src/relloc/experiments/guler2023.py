@@ -41,19 +41,48 @@ summary.json keys: ``experiment, seed, runs, uwb_noise_fit, one_drone, two_drone
 sweep_dwell_time, sweep_drones, ablation_uwb_link_bias, ablation_no_gate,
 ablation_white_range_model, formation_size, camera_noise, sweep_camera_noise, departures, paper``;
 ``runs`` is a map (``one_drone``, ``two_drones``, ``formation``: each scenario's run count;
-``sweep_point``: the runs of each point of the three ``sweep_*`` and of each ablation). Each
-scenario
-holds ``runs``, ``rmse_m`` (follower → ``x``/``y``, mean over runs of the per-run Eq. 5 RMSE),
-``rmse_m_max_over_runs``, ``rmse_m_worst`` and ``rmse_m_mean`` (the largest and the mean over
-followers, axes and runs), ``heading_rmse_rad`` (follower → θ_i RMSE), ``mode_fraction``
-(``sw1``/``sw2``/``sw3``, over followers, ticks and runs), ``formation_rmse_m`` (true
-``r − r_des``) with ``formation_rmse_m_worst``, ``nees_run_average`` (the consistency verdict,
-below), ``anees_position`` (descriptive), ``gate_rejections`` (block kind → ``rejected``,
-``applied``), ``mean_nis_per_dof`` (block kind), ``triangle_refusals`` with up to three
-``triangle_refusal_examples``, and the paper's value where it gives one (``paper``;
-``two_drones`` also ``meets_paper_bound``). The ablations keep ``rmse_m``, ``rmse_m_worst``,
-``rmse_m_mean``, ``anees_position``, ``nees_run_average`` and ``gate_rejections``; the sweeps
-are ``parameter`` and ``points``.
+``sweep_point``: the runs of each point of the three ``sweep_*`` and of each ablation).
+``uwb_noise_fit`` (:meth:`relloc.calibration.uwb.UwbNoiseFit.to_dict`, lengths in m):
+``bias_m`` (median range error of every row in the window), ``spread_m`` (1.4826·MAD of the
+within-link residuals), ``outlier_rate`` (share of residuals beyond ``outlier_threshold_sigma``
+× ``spread_m``), ``outlier_excess_mean_m`` (their mean |residual| beyond that threshold),
+``outlier_positive_fraction`` (the share of them that are positive), ``link_bias_std_m`` (std
+of the per-link medians), ``correlation_time_s`` and ``lag1_correlation`` (medians over the links),
+``sample_period_s`` (median spacing of a link's readings, s), ``link_biases_m`` (``"1-3"`` …:
+each link's median error), ``n_rows`` (rows in the window), ``n_links``, ``rows_skipped`` (by
+the loader), ``calibration_window`` (``start_s``, ``end_s``: the recording's own time stamps,
+s; ``source``) and ``source`` (the CSV read).
+Each scenario (``one_drone``, ``two_drones``, ``formation``)
+holds ``runs``, ``rmse_m`` (follower ``"R1"``… → ``x``/``y``, m, mean over runs of the per-run
+Eq. 5 RMSE over the whole run), ``rmse_m_max_over_runs`` (the same layout, the largest over
+runs), ``rmse_m_worst`` and ``rmse_m_mean`` (the largest and the mean over followers, axes and
+runs), ``heading_rmse_rad`` (follower → θ_i RMSE, mean over runs), ``mode_fraction``
+(``sw1``/``sw2``/``sw3``, over followers, ticks and runs), ``formation_rmse_m`` (follower →
+``x``/``y``: RMSE of the true ``r − r_des`` over the ticks, mean over runs) with
+``formation_rmse_m_worst`` (the largest over followers, axes and runs),
+``nees_run_average`` (the consistency verdict, below; :func:`relloc.metrics.run_average_band`'s
+keys), ``anees_position`` (descriptive), ``gate_rejections`` (block kind ``range``,
+``camera``, ``triangle``, ``leader_heading`` → ``rejected``, ``applied``: blocks summed over
+followers and runs), ``mean_nis_per_dof`` (block kind → NIS summed over every block of that
+kind, applied or gated out, divided by its dimension times their count), ``triangle_refusals``
+(count over followers and runs) with up to three ``triangle_refusal_examples`` (texts), and
+``paper``: ``one_drone``'s ``t_m_s`` and ``note`` (the paper gives no RMSE for it),
+``two_drones``' ``rmse_bound_m`` (with ``meets_paper_bound``: ``rmse_m_worst`` below it),
+``formation``'s ``formation_rmse_bound_m`` and ``estimation_rmse_bound_m``. The ablations keep
+``rmse_m``, ``rmse_m_worst``, ``rmse_m_mean``, ``anees_position``, ``nees_run_average`` and
+``gate_rejections``; the sweeps are ``parameter`` (``"t_m"``, ``"M"``, ``"scale"``) and
+``points``: one per value, that value under the parameter's name, then ``runs``,
+``rmse_m_mean``, ``rmse_m_worst``, ``formation_rmse_m_worst``, ``mode_fraction``,
+``anees_position`` and ``nees_run_average`` (every point of a sweep on the same seeds);
+``sweep_camera_noise`` points also give the scaled ``bearing_sigma_rad`` and
+``heading_sigma_rad``. ``formation_size``: ``derived_side_m`` (:func:`hexagon_side`, m),
+``note``, ``points`` (per side: ``side_m``, ``headline`` (the derived side, whose figures are
+the headline scenarios'), ``one_drone`` and ``two_drones`` with a sweep point's figures).
+``camera_noise``: the headline camera σ (``bearing_sigma_rad``, ``heading_sigma_rad``) and
+their ``source``. ``departures``: every departure from the paper (texts). ``paper``: the
+paper's figures (:data:`PAPER`: ``two_drones_rmse_bound_m``, ``experiments_rmse_bound_m``,
+``formation_rmse_bound_m`` in m, ``one_drone_t_m_s`` in s, ``two_drones_runs``,
+``formation_experiments``).
 
 Scoring: the estimation RMSE per follower and axis (and of θ_i) is
 :func:`relloc.pipeline.evaluation.accuracy_and_consistency` of the follower's series of the

@@ -88,28 +88,61 @@ and 0.0–3.0 %: conservative, as said above.
 summary.json keys: ``experiment``, ``seed``, ``runs`` (1: one replay of the recording),
 ``calibration_window_choice`` (the ``--calibration-window`` value), ``dataset``, ``robots``,
 ``two_landmarks`` (the subjects of the ``2_landmarks`` anchors);
-``cases.<mode>/<anchors>``: ``pos_rmse_m`` and ``heading_rmse_rad`` (per robot
-"1"…"5" and ``mean`` = arithmetic mean over robots), ``final_pos_err_m`` (same layout),
+``cases.<mode>/<anchors>``, scored at the output times (every ``OUTPUT_DT_S`` = 0.5 s) of the
+whole replay, from the first common ground-truth time to the end (calibration and held-out
+windows together): ``pos_rmse_m`` (planar) and ``heading_rmse_rad`` (per robot
+"1"…"5" and ``mean`` = arithmetic mean over robots), ``final_pos_err_m`` (same layout: the
+planar error at the robot's last scored output time, m),
 ``nees_pct_beyond`` (per-robot 3-DOF NEES above χ²₃(0.95), pooled; ``nees_beyond_interval``
 its 95 % interval by batch means over time, :func:`relloc.metrics.percent_beyond_interval`,
-with the verdict), ``anees``, ``used``,
-``rejected`` (χ² gate + degenerate geometry + unknown barcodes), ``counts`` (the breakdown),
+with the verdict: :class:`relloc.metrics.BeyondShare`'s keys), ``anees`` (mean NEES / 3),
+``used`` (detections and fixes the filter used), ``rejected`` (χ² gate + degenerate geometry +
+unknown barcodes + unmapped subjects), ``counts`` (the breakdown: the filter's
+:class:`relloc.estimators.cooperative.Counts` ``used``, ``rejected``, ``detections_used``,
+``fixes_used``, ``rejected_gate``, ``rejected_degenerate``, ``ignored_not_anchor``,
+``ignored_robot_detection``, ``ignored_unused``, ``ignored_unmodelled``, ``ranges_thinned``,
+``epochs``, ``stale_odometry_s`` (per robot in ``robots`` order, s without fresh odometry),
+then the conversion's ``unknown_barcodes`` and ``unmapped_subjects``),
 ``records_without_truth`` (per robot, the output times not scored for want of valid ground
 truth; robots with some only) and ``robots_without_truth`` (robots with none, left out of the
 per-robot figures and their mean; also said in report.md), the same over the held-out window
 (``heldout_records_without_truth``, ``heldout_robots_without_truth``),
-``heldout`` (the same accuracy numbers over the held-out window only),
+``heldout`` (over the held-out window only, and only the means over robots:
+``pos_rmse_m``, ``heading_rmse_rad``, with ``nees_pct_beyond``, ``nees_beyond_interval`` and
+``anees``; no per-robot figures, no ``final_pos_err_m``),
 ``heading_by_landmark_gap`` (``all_landmarks`` cases with measurements only:
-:func:`heading_error_by_landmark_gap`), ``note`` (``dead_reckoning`` cases only: its anchor
-entries are one run); ``fit`` (the fitted models),
-``scored_on`` (the held-out window, on the other side of the span from the calibration window:
-after it by default, before it with ``second-half`` or ``T:``), ``targets`` (the issue's
-targets and whether each is met, judged on the held-out window; the whole-run figures under
-``in_sample``), ``paper_reference`` (the run-6 figures behind the targets: a plain joint EKF's
-``joint_ekf_pos_rmse_m`` and dead reckoning's ``dead_reckoning_pos_rmse_m``), ``load_report``
-(rows the loader and :func:`relloc.datasets.mrclam.to_recording` skipped, by reason). The
-fitted latency, scales and bearing biases are applied to the recording before the replay
-(:func:`build_recording`).
+:func:`heading_error_by_landmark_gap`, over the whole replay: bins ``"0-1s"``, ``"1-5s"``,
+``"5-infs"`` of the time since the robot last detected a landmark → ``time_share``,
+``heading_rmse_rad``, ``squared_error_share``), ``note`` (``dead_reckoning`` cases only: its
+anchor entries are one run); ``fit`` (the fitted models, flat: ``t_lo`` and ``t_hi``, the
+calibration window's ends in s; the odometry fit,
+:class:`~relloc.calibration.odometry.OdometryModelFit` without its window: ``latency_s``,
+``time_constant_s``, ``scale_v`` and ``scale_w`` per robot, the variance rates ``q_v0``,
+``k_v``, ``q_w0``, ``k_w``, ``k_wv`` (the filters take them times ``k²``),
+``odometry_window_s``, ``unfitted_robots``; the camera fit,
+:class:`~relloc.calibration.camera.CameraFit` without its window: ``bearing_offset`` per robot,
+``bearing_bias_coeffs`` and ``bearing_bias_limits`` flat, robot-major, ``range_bias_coeffs``,
+``sigma_bearing_raw`` / ``sigma_range_raw`` (MAD), ``bearing_inflation`` / ``range_inflation``
+(variance factors), ``sigma_bearing`` / ``sigma_range`` (what the filters use, rad and m),
+``range_interval_s``, ``correlation`` (``range`` and ``bearing``: lag → measured correlation;
+``pair_spacing_s``: ``median``), ``n_residuals``; ``odometry_inflation``: ``k``, ``met``,
+``target_percent``, ``tried`` (``k`` and its ``nees_pct_beyond`` per factor tried), ``cases``,
+``fitted_on`` and ``checked_on`` (the two halves, null when not fitted), ``not_fitted`` (empty,
+or why); ``calibration_window``: ``start_s``, ``end_s``, ``source``),
+``scored_on`` (the held-out window, ``start_s``, ``end_s`` (s) and ``source``, on the other side
+of the span from the calibration window: after it by default, before it with ``second-half``
+or ``T:``; clipped to the replay's output times), ``targets`` (the issue's targets, judged on
+the held-out window of the ``all_landmarks`` cases, per mode ``range_bearing`` and ``bearing``:
+``pos_rmse_m`` with ``pos_ok`` (≤ 0.13 m), ``heading_rmse_rad`` with ``heading_ok``
+(≤ 0.09 rad), ``improvement_over_dead_reckoning`` (dead reckoning's held-out ``pos_rmse_m``
+over the filter's; null at a zero error) with ``improvement_ok`` (≥ 20), ``nees_pct_beyond``
+with ``nees_ok`` (≤ 10 %) and ``nees_beyond_interval``; the whole-run figures under
+``in_sample``: ``pos_rmse_m``, ``heading_rmse_rad``, ``improvement_over_dead_reckoning``,
+``nees_pct_beyond``), ``paper_reference`` (the run-6 figures behind the targets: a plain joint
+EKF's ``joint_ekf_pos_rmse_m`` and dead reckoning's ``dead_reckoning_pos_rmse_m``),
+``load_report`` (rows the loader and :func:`relloc.datasets.mrclam.to_recording` skipped:
+``n_skipped`` and ``by_reason``, reason → count). The fitted latency, scales and bearing
+biases are applied to the recording before the replay (:func:`build_recording`).
 """
 
 from __future__ import annotations

@@ -89,42 +89,49 @@ within the 99.9 % band 1.20–5.88, plain 17.1 above it).
 summary.json keys
 -----------------
 ``experiment``, ``seed``, ``runs`` (Monte-Carlo runs); ``scenario``: the simulated team's
-settings (``n_robots``, ``landmarks``, ``sensing_range_m``, ``speed_mps``, ``ts_s``,
-``duration_s``, ``initial_sigma``, ``sigma_v``, ``sigma_w``, ``sigma_bearing``, ``gps_sigma``,
-``gps_period_s``);
+settings (``n_robots``, ``landmarks`` (a count), ``sensing_range_m``, ``speed_mps``, ``ts_s``,
+``duration_s``, ``initial_sigma`` (m, m, rad), ``sigma_v`` (m/s), ``sigma_w`` (rad/s),
+``sigma_bearing`` (rad), ``gps_sigma`` (m, m, rad), ``gps_period_s``);
 ``cases.<case>`` (the plain EIF), ``cases_first_estimates.<case>`` (the FEJ EIF) and
 ``cases_observability_constrained.<case>`` (the OC EIF):
 ``pos_rmse_m``, ``x_rmse_m``, ``y_rmse_m``, ``heading_rmse_rad`` — each a map
-robot ("1"…"5") → RMSE over runs and time, plus ``"mean"`` (RMS over robots); ``bounded``
-(true/false) with ``paper_bounded``; ``growth`` (the ratios behind ``bounded``);
-``final_pos_err_m``; ``nees_pct_beyond`` (share of per-robot NEES samples beyond χ²₃(0.95),
+robot ("1"…"5") → RMSE over runs and the output instants (every ``OUTPUT_EVERY_S`` = 0.5 s
+from t = 0; ``pos_rmse_m`` planar), plus ``"mean"`` (RMS over robots); ``bounded``
+(true/false) with ``paper_bounded``; ``growth`` (the ratios behind ``bounded``, criterion
+below: ``error_ratio`` of ``e``, ``sigma_ratio`` of ``s``, last quarter over second quarter);
+``final_pos_err_m`` (RMS over runs and robots of the planar position error at the last output
+instant, m); ``nees_pct_beyond`` (share of per-robot NEES samples beyond χ²₃(0.95),
 about 5 % for a consistent filter; ``nees_beyond_interval`` its 95 % interval by cluster
-means, each independent run one cluster, with the verdict), ``nees_pct_beyond_per_run`` (each
-run's own share) and ``anees``;
+means, each independent run one cluster, with the verdict: :class:`relloc.metrics.BeyondShare`'s
+keys), ``nees_pct_beyond_per_run`` (each run's own share, %) and ``anees`` (mean NEES / 3);
 ``nees_run_average``: the NEES averaged over the independent runs at each output instant, per
 robot, against the two-sided 95 % band of such a mean (:func:`relloc.metrics.run_average_band`:
 ``in_band_percent``, about 95 % when consistent, ``below_band_percent``,
 ``above_band_percent`` with their intervals ``below_band_interval``, ``above_band_interval``,
-``band``, ``runs``, ``verdict``; needs ≥ 2 runs); ``used`` / ``rejected`` measurement counts
+``band``, ``runs``, ``instants``, ``blocks_short``, ``verdict``; with one run only
+``verdict`` null, ``runs`` and ``reason``); ``used`` / ``rejected`` measurement counts
 (mean per run); ``frame_nees`` (``None`` with two landmarks or GPS): each run's final NEES
 along the unobservable directions (:func:`frame_nees`; ``dof`` d, ``per_run``, their ``mean``
 against the 95 % ``band`` of a mean of that many χ²(d) values and the ``verdict``,
 ``pct_beyond`` χ²_d(0.95) with its ``beyond_interval``, and ``along_the_run``: ``t``, the
 ``mean_over_runs`` at each and :func:`relloc.metrics.run_average_band`'s keys); in ``cases`` only,
-``observability_rank`` (:func:`observability_ranks`: ``rank`` of ``state_dim`` at the mid-run
-RPMG, ``full_rank``, ``paper_rank`` the paper's predicted rank (Theorems 2–4), ``robot_edges``,
-``landmark_edges``, ``available``; only ``available`` false and the ``reason`` where the
+``observability_rank`` (:func:`observability_ranks`: ``rank`` of ``state_dim`` at run 0's
+mid-run RPMG, ``full_rank``, ``paper_rank`` the paper's predicted rank (Theorems 2–4),
+``robot_edges`` (the edges of the spanning tree used), ``landmark_edges`` (one per anchor
+landmark seen then), ``available``; only ``available`` false and the ``reason`` where the
 symbolic tool cannot be imported).
 ``observability_aware``: the headline observability-aware filter (``block``, ``filter``),
 whether it meets the target (``target_met``, ``target``: NEES beyond ≤ 10 % in
 ``no_landmark`` and ``one_landmark`` with position RMSE not above the plain EIF's), each
-filter's ``meets_target`` and ``worst_nees_pct_beyond``, and the headline filter's
-``nees_beyond_interval``, ``nees_pct_beyond_per_run`` and ``frame_nees`` in those cases.
-``filters``: what each block ran; ``nees_on``: what the NEES is computed on; ``departures``: every
+filter's ``meets_target`` and ``worst_nees_pct_beyond`` (block → value; the worst over those
+two cases), and the headline filter's ``nees_beyond_interval``, ``nees_pct_beyond_per_run``
+and ``frame_nees`` in those cases (case → the case's entry). ``filters``: what each block ran
+(block name → text); ``nees_on``: what the NEES is computed on; ``departures``: every
 choice that departs from the paper.
-``rpmg``: fraction of time the robot graph is connected (``connected_fraction``) and the
-fraction with β(G₅²) = 1 (``beta_fraction``; seed 001 Eq. 22: every robot has a path to both
-landmarks).
+``rpmg``: over run 0's detection epochs, the fraction at which every robot is in one
+component of that epoch's detection graph of robots and landmarks, possibly through a landmark
+(``connected_fraction``), and the fraction with β(G₅²) = 1 (``beta_fraction``; seed 001
+Eq. 22: every robot has a path to both landmarks).
 
 Boundedness criterion (fixed before looking at results): with ``e(t)`` the position RMS error
 over runs and robots and ``s(t)`` the mean 1σ position bound, the error is *bounded* when

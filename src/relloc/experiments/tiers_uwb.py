@@ -40,21 +40,50 @@ pairs :mod:`relloc.experiments.tiers_uwb_pairs`):
     relative pose at the start of the scored stretch).
 
 summary.json: ``experiment``, ``seed`` (``None``: nothing is drawn at random), ``runs`` (1),
-``bags.<name>``: ``loader`` (offsets header → bag time, unknown topics, skips),
-``calibration`` (``source`` ``window`` or ``bag`` with that ``bag``'s path, the ``window``,
-the ``fit``, ``link_bias_m`` by radio names, ``bias_drift_m``, ``range_sigma_m`` the filters
-use, ``mapping_sigma_replaced_m`` the mapping's ``uwb.sigma`` it replaces (``None`` without
-one), ``heldout`` range errors raw and corrected), ``scored_window_s``, ``team.aligned`` and
-``team.anchored`` (``pos_rmse_m`` over ``records``, ``nees_pct_beyond``: share of record
-times whose 2-DOF NEES exceeds χ²₂(0.95), with ``nees_beyond_interval`` its 95 % interval by
-batch means over time (widened on short blocks, :func:`relloc.metrics.percent_beyond_interval`)
-and the verdict — one run, whose records are correlated in time —, ``converged_after_s``
-(error below 0.3 m for good), ``per_robot`` (anchored), ``baselines.uncalibrated`` /
-``baselines.multilateration`` ``pos_rmse_m``, ``anchors``, ``mode``, ``mirror_ambiguous``,
-``mirror_image_scored``; ``team.anchored`` is only ``skipped`` with its reason when the bag
-has fewer than two anchors), ``pairs.<a->b>`` (the same keys in the owner's body frame,
-``ranges_gated`` the ranges the filter's χ² gate rejected, ``baselines.odometry_alone``,
-``observability``).
+``bags.<name>`` (times in s on the bag's clock, from ``loader.time_origin_unix_s``):
+``loader`` (:meth:`relloc.datasets.rosbag.BagRecording.to_dict`: ``bag``, ``mapping``,
+``time_origin_unix_s``, ``stamp_offset_s`` (topic → median receive − header stamp, s, and
+``bag``: the pooled median), ``stamps_from_receive`` (topic → messages with an unset header
+stamp, timed by their receive time),
+``unknown_topics``, ``uwb_readings``, ``uwb_readings_not_in_recording`` (reason → count),
+``skips``: ``rows_skipped``, ``by_reason``, ``files`` → ``rows_read``, ``rows_kept``,
+``skipped``, ``examples``), ``calibration`` (``source`` ``window`` or ``bag`` with that
+``bag``'s path, the ``window`` (``start_s``, ``end_s``, ``source``), the ``fit``
+(:meth:`relloc.calibration.uwb.UwbNoiseFit.to_dict`, lengths in m: ``bias_m``, ``spread_m``,
+``outlier_rate``, ``outlier_threshold_sigma``, ``outlier_excess_mean_m``,
+``outlier_positive_fraction``, ``link_bias_std_m``, ``correlation_time_s``,
+``lag1_correlation``, ``sample_period_s``, ``link_biases_m`` keyed by radio indices ``"0-1"``
+…, ``n_rows``, ``n_links``, ``rows_skipped``, ``calibration_window``; as guler2023's
+``uwb_noise_fit`` describes them),
+``link_bias_m`` the same biases by radio names ``"n_3-n_4"`` …, ``bias_drift_m`` (how far a
+link's bias moves within the window, :func:`relloc.calibration.uwb_bag.bias_drift`),
+``range_sigma_m`` the σ of one range the filters use, ``mapping_sigma_replaced_m`` the
+mapping's ``uwb.sigma`` it replaces (``None`` without one), ``heldout``: the range error
+(reading − true distance) over the scored window, ``rows`` and, where there are any, ``raw``
+and ``calibrated`` (``mean_m``, ``std_m``, ``rmse_m``)), ``scored_window_s`` (``[start,
+end]``), ``team.aligned`` and ``team.anchored`` (``pos_rmse_m``, m, over ``records``, the
+record times at 10 Hz at which every scored robot has an estimate; ``nees_pct_beyond``: share
+of the scored robots' 2-DOF NEES values at those times that exceed χ²₂(0.95), with
+``nees_beyond_interval`` its 95 % interval by batch means over time (widened on short blocks,
+:func:`relloc.metrics.percent_beyond_interval`; :class:`relloc.metrics.BeyondShare`'s keys)
+and the verdict — one run, whose records are correlated in time —, ``converged_after_s`` (s
+from the first record until every scored robot's error stays below 0.3 m for good; null if it
+never does), ``per_robot`` (anchored only: robot → ``pos_rmse_m``),
+``baselines.uncalibrated`` / ``baselines.multilateration`` ``pos_rmse_m`` (the latter at
+5 Hz), ``anchors`` (robot names; empty when aligned), ``mode`` (``"aligned"``, ``"anchors"``
+or ``"leave-one-out"``), ``mirror_ambiguous`` (exactly two anchors), ``mirror_image_scored``
+(the mirror image in their line was the closer and was scored); where no record has every
+scored robot's estimate, ``pos_rmse_m`` is null, ``records`` 0 and the NEES and convergence
+keys are absent; ``team.anchored`` is
+only ``skipped`` with its reason when the bag has fewer than two anchors), ``pairs.<a->b>``
+(one per pair of :func:`~relloc.experiments.tiers_uwb_pairs.moving_pairs`, in the owner's body
+frame, with keys of their own: ``pos_rmse_m`` of the 3-D relative position, ``nees_pct_beyond``
+of the 4-DOF NEES beyond χ²₄(0.95) with ``nees_beyond_interval``, ``converged_after_s``
+(position error below 0.3 m on each axis and yaw error below 0.5 rad for good), ``records``,
+``ranges_gated`` the ranges the filter's χ² gate rejected, ``baselines.uncalibrated`` and
+``baselines.odometry_alone`` ``pos_rmse_m``, ``observability``: ``verdict``,
+``full_rank_share`` (share of the ``samples`` instants of the scored stretch at full rank),
+``max_rank``, ``state_dim``, ``samples``, ``generic_conditions`` (text)).
 """
 
 from __future__ import annotations

@@ -35,61 +35,98 @@ the calibration window the next one (``S`` = ``--seed``).
 
 summary.json keys
 -----------------
-``experiment``, ``seed``, ``runs``, ``replay_runs``, ``sweep_runs``, ``seeds``;
-``accuracy[robot]``: steady-state (t ≥ 10 s) position RMSE (3-D, m), yaw RMSE (rad), RMSE per
-state (``position_rmse_m``, ``yaw_rmse_rad``, ``rmse``); over every update, the fraction of
-updates with the error inside ±3σ per state (``inside_3sigma``), ANEES, the NEES averaged over
-the independent draws at each update against the 95 % band of such a mean
-(``run_averaged_nees``: % of instants inside, the band, draws), % NEES beyond χ²(4, 0.95) and
-% NIS beyond χ²(3, 0.95) (``nees_percent_beyond``, ``nis_percent_beyond``); ``updates`` (of
-one draw) and ``paper`` (5–10 cm, 0.075–0.1 rad);
-``odometry_noise``: the σ used by the team, the sweep (σ_v, σ_ω and the position/yaw RMSE of
-each robot per scale), the σ fitted for the replay (``replay_fit``, each with its
-``calibration_window``) and the calibration of the calibrated replay (``replay_calibration``:
-latency, time constant, scales, and ``noise_inflation``, the factor on σ fitted on the
-calibration window with what was tried) and of the truth-velocity replay
-(``replay_truth_velocity``: its window and noise inflation);
-``table1[case][filter][rule][state] = {mean, median, worst}`` for case2–4, PLKF/TEKF, rules
-``paper_rule`` (Eq. 32) and ``fixed`` (0.05 m, 0.1 rad), plus ``table1[case][filter]["paper"]``;
+``experiment``, ``seed``, ``runs``, ``replay_runs``, ``sweep_runs``, ``seeds`` (``team``,
+``replay``, ``sweep``: one per scale, ``replay_noise_inflation``; as above);
+``accuracy[robot]`` (``aerial1``, ``aerial2``, ``ground1``, ``ground2``): steady-state (t ≥ 10
+s) position RMSE (3-D, m), yaw RMSE (rad), RMSE per state ``x, y, z, phi`` (``position_rmse_m``,
+``yaw_rmse_rad``, ``rmse``); over every update, the fraction of
+updates with the error inside ±3σ per state (``inside_3sigma``, 0–1), ANEES (``anees``), the NEES
+averaged over the independent draws at each update against the 95 % band of such a mean
+(``run_averaged_nees``: :func:`relloc.metrics.run_average_band`'s keys, ``in_band_percent``
+the % of instants inside, ``band``, ``runs`` the draws; null with one draw), % NEES beyond
+χ²(4, 0.95) and % NIS beyond χ²(3, 0.95) (``nees_percent_beyond``, ``nis_percent_beyond``);
+``updates`` (of one draw) and ``paper`` (``position_rmse_m`` [0.05, 0.1] m, ``yaw_rmse_rad``
+[0.075, 0.1] rad);
+``odometry_noise``: the σ used by the team (``team``: robot → ``sigma_v``, ``sigma_vz`` (m/s),
+``sigma_w`` (rad/s), per 100 Hz step as ``team_note`` says), the sweep (``sweep``: one entry per
+scale, ``scale``, the observer's scaled ``sigma_v`` and ``sigma_w``, and ``position_rmse_m`` /
+``yaw_rmse_rad`` robot → RMSE after min(10 s, a third of the run) of the
+``sweep_duration_s`` (s) runs), the σ fitted for the replay (``replay_fit[odometry]`` with
+``observer`` and ``observed``, each a :class:`relloc.calibration.odometry.OdometryNoiseFit`:
+``sigma_v``, ``sigma_lateral``, ``sigma_w``, ``bias_v``, ``bias_w``, ``rate_hz``, ``window_s``,
+``n_windows`` and its ``calibration_window``; before the noise inflation, which multiplies the
+calibrated and truth-velocity σ by ``noise_inflation.k``) and the calibration of the
+calibrated replay (``replay_calibration``: ``calibration_window``, ``latency_s``,
+``time_constant_s``, ``scale_v`` and ``scale_w`` (robot of the pair → scale), and
+``noise_inflation``, the factor on σ fitted on the calibration window with what was tried:
+``k``, ``met``, ``target_percent``, ``tried`` (``k`` and ``yaw_percent_beyond`` per factor),
+``samples_per_factor``, the replayed ``stretches`` of ``stretches_in_window``,
+``draws_per_stretch``, ``seed``) and of the truth-velocity replay
+(``replay_truth_velocity``: its ``calibration_window`` and ``noise_inflation``);
+``table1[case][filter][rule][state] = {mean, median, worst}`` (updates to converge over the
+guesses) for case2–4, PLKF/TEKF, rules
+``paper_rule`` (Eq. 32) and ``fixed`` (0.05 m, 0.1 rad), plus ``table1[case][filter]["paper"]``
+(state → the paper's count);
 a guess that never converges counts as (updates + 1) and is counted in
-``table1_not_converged[case][filter][rule][state]``; ``table1_thresholds[filter][rule]``;
-``table1_best[case][rule][state]`` (the yaw bank; case 3 has a known yaw, where the bank is the
-PLKF; ``method`` says which, ``not_converged`` counts as in ``table1_not_converged``),
-``table1_best[case]["speedup_vs_plkf"][rule][state]`` and ``table1_best["acceptance"]``;
-``table1_readings[filter][reading]``: case 4, φ, the count under each reading of the paper's
-set-up (:data:`~relloc.experiments.wanasinghe2014_paper.TABLE1_READINGS`) beside the paper's;
+``table1_not_converged[case][filter][rule][state]``; ``table1_thresholds[filter][rule][state]``
+(m, rad); ``table1_best[case][rule][state]`` (the yaw bank; case 3 has a known yaw, where the
+bank is the PLKF; ``method`` says which, ``not_converged`` counts as in
+``table1_not_converged``, absent in case 3),
+``table1_best[case]["speedup_vs_plkf"][rule][state]`` (the PLKF's mean over the bank's) and
+``table1_best["acceptance"]`` (``case4_fixed_phi_worst`` with ``case4_fixed_phi_worst_le_12``,
+``case4_paper_rule_phi_mean``, ``case4_plkf_paper_rule_phi_mean``, ``case4_paper_rule_ok``:
+the bank's mean ≤ 12 or ≤ a third of the PLKF's);
+``table1_readings``: ``readings`` (reading → what it counts) and, per filter (``PLKF``,
+``TEKF``), case 4, φ, the count under each reading of the paper's set-up
+(:data:`~relloc.experiments.wanasinghe2014_paper.TABLE1_READINGS`: ``stays_below``,
+``first_below``, ``pooled_guesses``, ``yaw_within_half_pi``) with ``guesses_within_half_pi``
+of the ``guesses``, beside the paper's (``paper``);
 ``table3[odometry][case][state] = {rmse_mean, rmse_std, rmse_per_draw, paper_rmse, paper_std}``
-(PLKF, MRCLAM replay, steady state t ≥ 40 s of the window; ``rmse_per_draw``: each draw's RMSE
-over its steady state; ``odometry`` ``calibrated``, ``raw`` or
+(PLKF, MRCLAM replay, steady state t ≥ 40 s of the window; ``rmse_mean`` and ``rmse_std``: the
+mean and std over the steady-state updates of the RMSE over draws; ``rmse_per_draw``: each
+draw's RMSE over its steady state; ``odometry`` ``calibrated``, ``raw`` or
 ``truth_velocity`` — the last a diagnostic driven by the ground truth's own velocities, which no
-robot has, described in ``odometry_kinds``) and
+robot has, described in ``odometry_kinds``: odometry → text) and
 ``table3_best`` (the same for the yaw bank started from the same pose);
 ``replay_pcrlb[odometry][case][state]``: √PCRLB of the replay's own model, RMS over the steady
 state (:func:`relloc.experiments.wanasinghe2014_mrclam.replay_pcrlb`; ``replay_targets`` carries
 the calibrated φ bound as ``yaw_bound_rad``);
-``table4[odometry][case]``: % NEES beyond χ²(4, 0.95) with the paper's value
+``table4[odometry][case]``, steady state: % NEES beyond χ²(4, 0.95) with the paper's value
 (``nees_percent_beyond``, ``paper_nees_percent_beyond``; ``nees_beyond_interval`` its 95 %
 interval by cluster means over the draws and over time, with the verdict), % NIS beyond
-χ²(3, 0.95), ANEES, the run-averaged NEES against its band (``run_averaged_nees``), max log10
-conditioning of P, R, S (``max_conditioning``, the paper's bound
+χ²(3, 0.95) (``nis_percent_beyond``), ANEES (``anees``), the run-averaged NEES against its band
+(``run_averaged_nees``, null with one draw), max log10 conditioning of P, R, S over every
+update (``max_conditioning``: ``P``, ``R``, ``S``; the paper's bound
 ``paper_max_conditioning_below``), the NEES ``samples``, and the same for the yaw bank under
-``["yaw_bank"]``; ``table3``,
+``["yaw_bank"]`` (without the paper's values); ``table3``,
 ``table3_best`` and ``table4`` also carry ``windows`` (``calibration``: where the calibrated
-odometry was fitted, ``scored``: the replayed window, disjoint); ``replay_targets[case]``: the
-issue's targets (calibrated yaw RMSE ≤ 0.10 rad, NEES beyond ≤ 10 %, position no worse than
-raw) and whether each is met, with the calibrated √PCRLB of φ (``yaw_bound_rad``) and
+odometry was fitted, ``scored``: the replayed window, disjoint; ``start_s``, ``end_s``,
+``source``); ``replay_targets[case]``: the
+issue's targets and whether each is met: calibrated yaw RMSE ≤ 0.10 rad (``yaw_rmse_rad``,
+``yaw_ok``), NEES beyond ≤ 10 % (``nees_percent_beyond``, ``nees_ok``), position no worse than
+raw (``position_rmse_m`` and ``raw_position_rmse_m``, the mean of the x, y, z ``rmse_mean``;
+``position_ok``), with the calibrated √PCRLB of φ (``yaw_bound_rad``) and
 whether it is within the yaw target (``yaw_bound_ok``);
 ``turn_rate_residual``: the calibrated commands' turn-rate residual against the ground truth
-(:mod:`relloc.calibration.turn_rate`) per robot of the pair and for the relative yaw
-(``residual[who][window][model]``, windows ``calibration`` and ``scored``, models
+(:mod:`relloc.calibration.turn_rate`, rad/s) per robot of the pair (by id: ``"1"`` and ``"3"``
+for the default pair) and for the relative yaw (``relative``; the top-level ``relative`` says
+which difference)
+(``residual[who][window][model]``, windows ``calibration`` and ``scored`` (``windows``), models
 ``calibrated`` — the headline's response — and ``fir`` — the best linear filter of the commands
-fitted on the calibration window, summarised under ``fir``): mean, std, the std of its
-``block_s`` means and the yaw random walk ``σ_B √(B L)`` over the steady-state span
-``yaw_random_walk_span_s``;
-``bias_comparison[case][filter]``: radial bias (m), position and yaw RMSE and % NEES beyond
-χ²(4, 0.95) of PLKF, BC-PLKF (noisy cases) and TEKF on the calibrated replay; ``replay``:
-dataset, robots, window, the pair's horizontal range in the steady state
-(``steady_state_range_m``: mean, max), skipped epochs, loader report; ``pcrlb_ratio[robot][state]``:
+fitted on the calibration window, summarised per robot under ``fir``: ``turn_rate_taps``,
+``turn_rate_lags_s`` (first and last), ``speed_taps``, ``dc_gain``, ``centroid_lag_s``,
+``speed_gain_rad_per_m``, ``constant_rad_s``, ``samples``, ``calibration_window``): ``mean``,
+``std``, ``block_std`` the std of its ``block_s`` means (over ``blocks`` full blocks of
+``samples``) and the yaw random walk ``σ_B √(B L)`` (``yaw_random_walk_rad``, the
+``yaw_random_walk_formula``) over the steady-state span ``yaw_random_walk_span_s``;
+``bias_comparison[case][filter]``: steady-state radial bias (``radial_bias_m``),
+``position_rmse_m``, ``yaw_rmse_rad`` and % NEES beyond χ²(4, 0.95) (``nees_percent_beyond``)
+of PLKF, BC-PLKF (noisy cases 2 and 4), TEKF and the yaw bank on the calibrated replay;
+``replay``: ``source``, ``dataset``, ``observer``, ``observed``, ``observed_height_m``,
+``window_s`` (the scored window's ends, s), ``steady_state_after_s``, the pair's horizontal range
+in the steady state (``steady_state_range_m``: ``mean``, ``max``), skipped epochs
+(``epochs_skipped_in_groundtruth_gaps``: case → count), loader report (``loader``:
+``n_skipped``, ``skipped_by_reason``); ``pcrlb_ratio[robot][state]``:
 RMSE / √PCRLB (steady state) from :mod:`relloc.observability.pcrlb`. The run time is in
 report.md only (the summary is the same whatever the executor).
 """

@@ -34,24 +34,29 @@ draws to ``min(N, 5)``.
 
 summary.json keys
 -----------------
-``experiment``, ``seed``, ``runs`` (sensor-noise draws per pair), ``seeds``, ``dataset``,
-``targets`` (yaw RMSE ≤ 0.10 rad and % NEES beyond χ²(4, 0.95) ≤ 10 % per Table-2 case,
-position RMSE no worse than the raw replay's), ``paper[case]`` (seed 000's Table-3 φ RMSE and
-Table-4 % NEES beyond);
+``experiment``, ``seed``, ``runs`` (sensor-noise draws per pair), ``seeds`` (``replay``,
+``replay_noise_inflation``), ``dataset``,
+``targets`` (yaw RMSE ≤ 0.10 rad, ``yaw_rmse_rad``, and % NEES beyond χ²(4, 0.95) ≤ 10 %,
+``nees_percent_beyond``, per Table-2 case; ``position``: position RMSE no worse than the raw
+replay's), ``paper[case]`` (seed 000's Table-3 φ RMSE, ``yaw_rmse_rad``, and Table-4 % NEES
+beyond, ``nees_percent_beyond``);
 ``pairs``: one record per replayed pair with ``observer``, ``observed``, ``windows``
-(``calibration`` and ``scored``, disjoint), ``steady_state_range_m`` (mean horizontal range in
-the steady state), ``relative_yaw_random_walk_rad`` (below) and ``cases[case]``:
+(``calibration`` and ``scored``, disjoint: ``start_s``, ``end_s``, ``source``),
+``steady_state_range_m`` (mean horizontal range in the steady state, m),
+``relative_yaw_random_walk_rad`` (below) and ``cases[case]``:
 ``calibrated`` and ``raw`` (PLKF ``yaw_rmse_rad``, ``yaw_rmse_per_draw``,
 ``nees_percent_beyond`` with ``nees_beyond_interval``, its 95 % interval by cluster means over
-the draws and over time and the verdict, ``position_rmse_m``), ``yaw_bound_rad`` (√PCRLB of φ,
-calibrated model), ``truth_velocity_yaw_bound_rad``, ``yaw_ok``, ``nees_ok``, ``position_ok``
-and ``met`` (all three); a pair's ``relative_yaw_random_walk_rad``: the calibrated commands'
-relative-yaw random walk over the steady state, on the calibration and on the scored window
+the draws and over time and the verdict, ``position_rmse_m``: the mean of the x, y and z RMSE),
+``yaw_bound_rad`` (√PCRLB of φ, calibrated model), ``truth_velocity_yaw_bound_rad``, ``yaw_ok``,
+``nees_ok``, ``position_ok`` (the calibrated figures against the targets) and ``met`` (all
+three); a pair's ``relative_yaw_random_walk_rad``: ``calibration`` and ``scored`` → the
+calibrated commands' relative-yaw random walk over the scored window's steady-state span, on
+the calibration and on the scored window
 (:mod:`relloc.calibration.turn_rate`; a scored window with a smaller walk than its calibration
 window is kinder than the noise fitted there); ``skipped``: ``{observer, observed, reason}`` of
-each pair not replayed; ``tally``: cells (pair × case) replayed and
-meeting both the yaw and the NEES target, pairs meeting them in every case, and per case the
-pairs meeting both.
+each pair not replayed; ``tally``: ``cells`` (pair × case) replayed and
+``cells_meeting_yaw_and_nees`` (both the yaw and the NEES target), ``pairs`` replayed and
+``pairs_meeting_every_case``, and ``per_case`` (case → the pairs meeting both).
 """
 
 from __future__ import annotations
