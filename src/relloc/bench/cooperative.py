@@ -31,12 +31,14 @@ import os
 import subprocess
 import sys
 import time
+from dataclasses import asdict, dataclass
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from relloc.errors import ModelError
+from relloc.core.checks import count, sequence
+from relloc.errors import ConfigError, ModelError
 from relloc.estimators.cooperative import (
     CooperativeEstimator,
     CooperativeSettings,
@@ -53,6 +55,25 @@ SIZES = (5, 10, 25, 50, 100, 150, 200, 300, 400)
 STEPS = 30
 REPEATS = 2
 EQUIVALENCE_TOL = 1e-6
+
+
+@dataclass(frozen=True, kw_only=True)
+class BenchSize:
+    """How much work the benchmark does: the team ``sizes`` tried in order, ``steps`` of 0.1 s
+    simulated per size, best of ``repeats`` replays (defaults: :data:`SIZES`, :data:`STEPS`,
+    :data:`REPEATS`)."""
+
+    sizes: tuple[int, ...] = SIZES
+    steps: int = STEPS
+    repeats: int = REPEATS
+
+    def __post_init__(self) -> None:
+        sizes = tuple(sequence(self.sizes, "BenchSize.sizes", "team sizes"))
+        if not sizes:
+            raise ConfigError("BenchSize.sizes: expected at least one team size")
+        object.__setattr__(self, "sizes", tuple(count(n, "BenchSize.sizes", low=2) for n in sizes))
+        for name in ("steps", "repeats"):
+            count(getattr(self, name), f"BenchSize.{name}")
 
 
 def _time_run(
@@ -85,8 +106,10 @@ def _crossing(sizes: list[int], factors: list[float]) -> float | None:
     return None
 
 
-def measure() -> dict[str, Any]:
-    """Measure the sizes in :data:`SIZES` (stopping two sizes after real time is lost)."""
+def measure(size: BenchSize | None = None) -> dict[str, Any]:
+    """Measure the team sizes of ``size`` (default :class:`BenchSize`), stopping at the first
+    size below real time."""
+    size = BenchSize() if size is None else size
     pinned = hasattr(os, "sched_setaffinity")
     previous = os.sched_getaffinity(0) if pinned else None
     if pinned:
@@ -94,8 +117,8 @@ def measure() -> dict[str, Any]:
     rows: list[dict[str, Any]] = []
     try:
         ekf_active = True
-        for n in SIZES:
-            scenario = grid_team_scenario(n, duration=STEPS * 0.1)
+        for n in size.sizes:
+            scenario = grid_team_scenario(n, duration=size.steps * 0.1)
             sim = simulate(scenario, np.random.default_rng(n))
             odometry = OdometryModel.from_discrete(scenario.sigma_v, scenario.sigma_w, 0.1)
             sensor = SensorModel(sigma_bearing=scenario.sigma_bearing)
@@ -106,21 +129,21 @@ def measure() -> dict[str, Any]:
                 settings = CooperativeSettings(
                     odometry=odometry, sensor=sensor, anchors=(0, 1), filter=kind
                 )
-                timing[kind], means[kind], counts[kind] = _time_run(sim, settings, REPEATS)
+                timing[kind], means[kind], counts[kind] = _time_run(sim, settings, size.repeats)
             t0, t1 = sim.recording.span
             duration = t1 - t0
             row: dict[str, Any] = {
                 "n": n,
                 "state_dim": 3 * n,
                 "rows_per_step": counts["eif"].used / max(counts["eif"].epochs, 1),
-                "eif_ms_per_step": 1e3 * timing["eif"] / STEPS,
+                "eif_ms_per_step": 1e3 * timing["eif"] / size.steps,
                 "eif_realtime_factor": duration / timing["eif"],
                 "ekf_ms_per_step": None,
                 "ekf_realtime_factor": None,
                 "max_mean_diff_eif_ekf": None,
             }
             if "ekf" in means:
-                row["ekf_ms_per_step"] = 1e3 * timing["ekf"] / STEPS
+                row["ekf_ms_per_step"] = 1e3 * timing["ekf"] / size.steps
                 row["ekf_realtime_factor"] = duration / timing["ekf"]
                 diff = float(np.max(np.abs(means["eif"] - means["ekf"])))
                 if not diff < EQUIVALENCE_TOL:
@@ -138,7 +161,7 @@ def measure() -> dict[str, Any]:
     result = {
         "benchmark": "cooperative",
         "rate_hz": 10.0,
-        "steps": STEPS,
+        "steps": size.steps,
         "one_core": pinned,
         "load_average": list(os.getloadavg()) if hasattr(os, "getloadavg") else None,
         "sizes": rows,
@@ -155,12 +178,13 @@ def measure() -> dict[str, Any]:
     return result
 
 
-def run(quiet: bool = False) -> dict[str, Any]:
+def run(quiet: bool = False, *, size: BenchSize | None = None) -> dict[str, Any]:
     """Run :func:`measure` in a child process with single-threaded BLAS; print a table."""
+    size = BenchSize() if size is None else size
     env = dict(os.environ)
     env.update({"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"})
     proc = subprocess.run(
-        [sys.executable, "-m", "relloc.bench.cooperative"],
+        [sys.executable, "-m", "relloc.bench.cooperative", json.dumps(asdict(size))],
         env=env,
         capture_output=True,
         text=True,
@@ -194,4 +218,5 @@ def run(quiet: bool = False) -> dict[str, Any]:
 if __name__ == "__main__":
     from relloc.pipeline.output import to_jsonable
 
-    print(json.dumps(to_jsonable(measure())))
+    given = json.loads(sys.argv[1]) if len(sys.argv) > 1 else {}
+    print(json.dumps(to_jsonable(measure(BenchSize(**given)))))

@@ -35,6 +35,7 @@ from typing import Any
 import numpy as np
 
 from relloc.core.angles import wrap_angle
+from relloc.core.checks import count
 from relloc.core.gaussian import Gaussian
 from relloc.errors import ConfigError, ModelError, require
 from relloc.estimators.relative import (
@@ -63,9 +64,7 @@ class BenchSize:
 
     def __post_init__(self) -> None:
         for name in ("steps", "pairs", "batch_steps", "repeats"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-                raise ConfigError(f"BenchSize.{name}: must be an integer ≥ 1, got {value!r}")
+            count(getattr(self, name), f"BenchSize.{name}")
         if self.batch_steps >= self.steps:
             raise ConfigError("BenchSize.batch_steps: must be smaller than steps")
 

@@ -31,12 +31,18 @@ from typing import Any
 import numpy as np
 from sympy.core.cache import clear_cache
 
+from relloc.errors import ModelError
 from relloc.models import symbolic as S
 from relloc.models.motion import VelocityNoise, relative_step
 from relloc.observability.analysis import analyse
 from relloc.observability.lie import ObservabilityMatrix, lie_rows
 from relloc.observability.pcrlb import relative_pair_pcrlb, unicycle_team_pcrlb
-from relloc.observability.rpmg import SensorSettings, build_rpmg, team_observability
+from relloc.observability.rpmg import (
+    SensorSettings,
+    TeamObservability,
+    build_rpmg,
+    team_observability,
+)
 
 SYMBOLIC_MODELS = {
     "relative-pseudo-linear case 1": lambda: S.relative_pseudo_linear(),
@@ -71,6 +77,15 @@ def _connected_team(rng: np.random.Generator, n: int) -> tuple[np.ndarray, np.nd
 LARGE_TEAM = 200
 
 
+def _check_rank(team: TeamObservability, what: str) -> None:
+    """The numerical rank of the team matrix must be the graph formula's (module docstring)."""
+    if team.rank != team.expected_rank:
+        raise ModelError(
+            f"team observability of {what}: rank {team.rank} but the graph formula gives "
+            f"{team.expected_rank}"
+        )
+
+
 def _large_team() -> dict[str, Any]:
     """:data:`LARGE_TEAM` robots that all see each other and two landmarks: time (best of 2),
     ``peak_mb`` the largest memory traced during one call (:mod:`tracemalloc`, which sees
@@ -90,6 +105,7 @@ def _large_team() -> dict[str, Any]:
         peak = tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()
+    _check_rank(team, f"{n} robots that all see each other")
     seconds = _best(lambda: team_observability(P, speeds, marks, everyone), repeats=2)
     pairs = n * (n - 1) // 2
     return {
@@ -129,6 +145,7 @@ def run(quiet: bool = False) -> dict[str, Any]:
         P, marks = _connected_team(rng, n)
         speeds = np.column_stack([np.full(n, 5.0), rng.uniform(-0.3, 0.3, n)])
         team = team_observability(P, speeds, marks, sensor)
+        _check_rank(team, f"a random connected team of {n} robots")
         teams[str(n)] = {
             "team_matrix_s": _best(
                 lambda P=P, s=speeds, m=marks: team_observability(P, s, m, sensor)

@@ -25,7 +25,11 @@ EXTRA_MODULES: dict[str, tuple[str, ...]] = {
 }
 
 #: ``relloc bench NAME`` → the extras that benchmark needs.
-BENCH_EXTRAS: dict[str, tuple[str, ...]] = {"filters": ("bench",), "runtime": ("runtime",)}
+BENCH_EXTRAS: dict[str, tuple[str, ...]] = {
+    "filters": ("bench",),
+    "runtime": ("runtime",),
+    "secure": ("runtime",),
+}
 
 
 def missing_modules(extra: str) -> list[str]:
