@@ -176,8 +176,6 @@ def test_secure_tiny(monkeypatch: pytest.MonkeyPatch) -> None:
         assert set(result["median"][mode]) == set(secure.METRICS)
         for key, value in result["median"][mode].items():
             assert _positive(value), (mode, key)
-        # start-up from the launcher's start: every process spawned, imported and connected
-        assert result["median"][mode]["startup_wall_s"] > 0.2, mode
     assert set(result["secure_over_plain"]) == set(secure.METRICS)
     for key, ratio in result["secure_over_plain"].items():
         assert _positive(ratio), key

@@ -1,15 +1,16 @@
 """Fuzzing of the key parsers of :mod:`relloc.runtime.keys` with the keys a peer could publish
 on: any text, keys of the layout with a part changed, dropped or repeated, and values that are
 not text. A robot or clock key parses to the parts it is made of or to None; a presence key to
-``(alive|ready, member)`` or a DataError naming the key — never another exception."""
+``(alive|ready, member)`` or None — never an exception."""
 
 from __future__ import annotations
 
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from relloc.errors import DataError
 from relloc.runtime import keys
+from relloc.runtime.transport import Incoming, Roll
 
 _part = st.one_of(
     st.sampled_from(
@@ -70,12 +71,11 @@ def _check(key: object) -> None:
     if clock is not None:
         assert isinstance(key, str) and clock in keys.CLOCK_KINDS
         assert key == keys.clock_key(key.split("/")[1], clock)
-    try:
-        token, member = keys.parse_presence_key(key)  # type: ignore[arg-type]
-    except DataError as exc:
-        assert str(exc).startswith("presence key "), str(exc)
+    presence = keys.parse_presence_key(key)  # type: ignore[arg-type]
+    if presence is None:
         return
-    assert isinstance(key, str) and token in ("alive", "ready") and member
+    token, member = presence
+    assert isinstance(key, str) and token in ("alive", "ready") and member and "*" not in key
     team = key.split("/")[1]
     assert team and key == f"relloc/{team}/{token}/{member}"
 
@@ -92,6 +92,17 @@ def test_a_key_that_is_not_text_is_no_stream_and_no_presence(key):
     assert keys.parse_robot_key(key) is None  # type: ignore[arg-type]
     assert keys.parse_clock_key(key) is None  # type: ignore[arg-type]
     _check(key)
+
+
+@pytest.mark.parametrize("key", ["relloc/t/**", "relloc/t/alive/**", "relloc/t/*/a", "x", "/"])
+def test_a_wildcard_or_foreign_token_is_no_member(key):
+    """A liveliness subscriber hears every token overlapping its wildcard, a peer's wildcard
+    token too: it raised a DataError (and ``"x"`` an IndexError) in every process's presence
+    handling; ``relloc/t/*/a`` counted as robot ``a`` joining."""
+    assert keys.parse_presence_key(key) is None
+    roll = Roll(["a", "b"])
+    assert roll.update(Incoming(key, b"", "joined")) is None
+    assert roll.present == set() and roll.ready == set()
 
 
 def test_the_keys_of_the_layout_parse_back():

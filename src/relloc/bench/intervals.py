@@ -54,7 +54,7 @@ from typing import Any
 import numpy as np
 from scipy.signal import lfilter
 
-from relloc.core.checks import number
+from relloc.core.checks import count, number
 from relloc.errors import ConfigError
 from relloc.metrics.consistency import (
     INTERVAL_BATCHES,
@@ -87,11 +87,7 @@ class IntervalBenchSize:
 
     def __post_init__(self) -> None:
         for name in ("draws", "samples", "runs", "run_samples", "shared_runs", "subjects"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int) or value < 2:
-                raise ConfigError(
-                    f"IntervalBenchSize.{name}: must be an integer ≥ 2, got {value!r}"
-                )
+            count(getattr(self, name), f"IntervalBenchSize.{name}", low=2)
         rhos = {
             "rhos": self.rhos,
             "runs_rho": (self.runs_rho,),

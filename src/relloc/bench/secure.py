@@ -4,9 +4,9 @@ The same team (one observer and ``n − 1`` teammates, :func:`relloc.bench.runti
 runs as separate processes over loopback, plain and secure in alternation (plain, secure,
 plain, secure, … so that drifting machine load hits both alike), as fast as the team can go
 (the clock's barrier: throughput is bounded by message round trips). Per run: the clock's tick
-loop wall time (start-up excluded), the start-up time (from the launcher's start until the
-last robot's liveliness token reaches it: processes spawned, imports, the TLS handshakes —
-:func:`startup_wall_s`), message latency p50/p99 (publisher wall clock to subscriber
+loop wall time (start-up excluded), the start-up time (from the launcher's start until every
+robot is ready: processes spawned, imports, the TLS handshakes — :func:`startup_wall_s`),
+message latency p50/p99 (publisher wall clock to subscriber
 inbox) and CPU seconds of all robot processes. Reported: the median of each over the
 repetitions and the ratio secure / plain of the medians, and whether the secure runs'
 estimates are the plain runs' (same seed: they must be).
@@ -23,6 +23,7 @@ from typing import Any
 
 from relloc.bench.runtime import team_toml
 from relloc.errors import RellocError
+from relloc.runtime.admission import CLOCK_SENDER
 
 ROBOTS = 6
 DURATION_S = 20.0
@@ -47,7 +48,7 @@ def run_once(work: Path, name: str, *, secure: bool) -> tuple[dict[str, float], 
     p99 = [m["latency_us"]["p99"] for m in per_robot.values() if m["latency_us"]["p99"]]
     metrics = {
         "loop_wall_s": float(clock["wall_s"]),
-        "startup_wall_s": startup_wall_s(collected.presence, roster),
+        "startup_wall_s": startup_wall_s(collected.presence, float(clock["startup_wall_s"])),
         "latency_us_p50": float(median(p50)),
         "latency_us_p99": float(max(p99)),
         "robot_cpu_s": float(sum(m["cpu_s"] for m in per_robot.values())),
@@ -55,20 +56,20 @@ def run_once(work: Path, name: str, *, secure: bool) -> tuple[dict[str, float], 
     return metrics, assemble_estimates(collected, roster, "plkf")
 
 
-def startup_wall_s(presence: list[dict[str, Any]], roster: tuple[str, ...]) -> float:
-    """Seconds from the launcher's start until every robot of ``roster`` had joined (its first
-    ``alive`` token, from the launcher's presence records). The clock's own ``startup_wall_s``
-    counts from its session's opening, which the robots, spawned beside it, may already have
-    passed: it left the handshakes of the secure runs out (0.002 s secure against 0.12 s plain,
-    measured)."""
-    joined: dict[str, float] = {}
-    for p in presence:
-        if p["token"] == "alive" and p["event"] == "joined" and p["member"] in roster:
-            joined.setdefault(p["member"], float(p["wall_s"]))
-    missing = sorted(set(roster) - set(joined))
-    if missing:
-        raise RellocError(f"bench secure: no liveliness token of {missing} reached the launcher")
-    return max(joined.values())
+def startup_wall_s(presence: list[dict[str, Any]], clock_wait_s: float) -> float:
+    """Seconds from the launcher's start until every robot is ready: when the clock's first
+    ``alive`` token reached the launcher (its ``presence`` records, s after its start) plus
+    the clock's wait from then until every robot was ready (``clock_wait_s``, its report's
+    ``startup_wall_s``). The wait alone starts after the clock's own session is up, which
+    robots spawned beside the clock may already have passed with their handshakes."""
+    joined = [
+        float(p["wall_s"])
+        for p in presence
+        if p["member"] == CLOCK_SENDER and p["token"] == "alive" and p["event"] == "joined"
+    ]
+    if not joined:
+        raise RellocError("bench secure: the clock's liveliness token never reached the launcher")
+    return joined[0] + clock_wait_s
 
 
 def run(quiet: bool = False) -> dict[str, Any]:

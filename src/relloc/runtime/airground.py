@@ -375,7 +375,11 @@ def load_world(path: Path, sc: AirGroundScenario) -> tuple[Recording, np.ndarray
             data = {k: f[k] for k in f.files}
     except (OSError, ValueError, EOFError, BadZipFile, zlib.error, lzma.LZMAError) as exc:
         raise DataError(f"{path}: not a world file ({exc})") from exc
-    except (NotImplementedError, RuntimeError) as exc:  # zipfile: a feature, or encryption
+    except NotImplementedError as exc:  # zipfile: a compression method or feature
+        raise DataError(f"{path}: not a world file (unsupported zip: {exc})") from exc
+    except RuntimeError as exc:  # zipfile: an encrypted member
+        if "encrypted" not in str(exc):
+            raise
         raise DataError(f"{path}: not a world file (unsupported zip: {exc})") from exc
     missing = {"truth", "commands", "formation_error", *(f"m_{n}" for n in MEASUREMENT_FIELDS)}
     missing -= set(data)
@@ -708,7 +712,8 @@ class RobotProcess:
 
     def _handle(self, item: Any) -> None:
         if item.presence != "data":
-            _, member = keys.parse_presence_key(item.key)
+            parsed = keys.parse_presence_key(item.key)
+            member = None if parsed is None else parsed[1]  # None: a token of another layout
             if member == CLOCK_SENDER:
                 if item.presence == "joined" and not self._clock_seen:
                     self._clock_seen, self._clock_wall = True, time.monotonic()

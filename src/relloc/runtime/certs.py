@@ -63,18 +63,29 @@ class TeamCerts:
         return member
 
 
+def check_roster(team: str, robots: Sequence[str], flag: str = "") -> tuple[str, ...]:
+    """``robots`` as a tuple, after checking the team's and every robot's id
+    (:func:`relloc.runtime.keys.check_id`, so that every file named after one lies in the
+    folder): at least one robot, none twice, none the launcher's id. A ConfigError names
+    ``{flag}team`` or ``{flag}robots``."""
+    keys.check_id(team, f"{flag}team")
+    robots = tuple(robots)
+    if not robots:
+        raise ConfigError(f"{flag}robots: no robot ids")
+    for r in robots:
+        keys.check_id(r, f"{flag}robots")
+    if LAUNCHER_ID in robots or len(set(robots)) != len(robots):
+        raise ConfigError(
+            f"{flag}robots: duplicate ids or the reserved id {LAUNCHER_ID!r}: {robots!r:.60}"
+        )
+    return robots
+
+
 def make_team_certs(
     folder: Path, team: str, robots: Sequence[str], hosts: Sequence[str] = ()
 ) -> TeamCerts:
     """Write a CA and one key/certificate per robot plus the launcher's into ``folder``."""
-    keys.check_id(team, "--team")
-    robots = tuple(robots)
-    if not robots:
-        raise ConfigError("--robots: no robot ids")
-    for r in robots:
-        keys.check_id(r, "--robots")
-    if LAUNCHER_ID in robots or len(set(robots)) != len(robots):
-        raise ConfigError(f"--robots: duplicate ids or the reserved id {LAUNCHER_ID!r}: {robots}")
+    robots = check_roster(team, robots, "--")
     folder = prepare_out_dir(folder, "certs")
     ca_key, ca_cert = _certificate_authority(team)
     _write_key(folder / "ca.key", ca_key)
@@ -92,9 +103,7 @@ def load_team_certs(folder: Path) -> TeamCerts:
     """The certificate folder written by :func:`make_team_certs`, checked to be complete and
     to belong together (:func:`check_member`): a mismatch found only by the TLS handshake
     left every process waiting for links that never came up. The manifest's team and robots
-    must be ids as :func:`make_team_certs` takes them (:func:`relloc.runtime.keys.check_id`;
-    robots distinct, at least one, none the launcher's), so every file it names lies in
-    ``folder``."""
+    must pass :func:`check_roster`, as :func:`make_team_certs`'s do."""
     folder = Path(folder)
     manifest_path = folder / "team.json"
     try:
@@ -103,14 +112,7 @@ def load_team_certs(folder: Path) -> TeamCerts:
         if not isinstance(robots, list) or not all(isinstance(r, str) for r in robots):
             raise TypeError(f"robots must be a list of ids, got {robots!r:.60}")
         team = manifest["team"]
-        keys.check_id(team, "team")
-        for r in robots:
-            keys.check_id(r, "robots")
-        if not robots or LAUNCHER_ID in robots or len(set(robots)) != len(robots):
-            raise ValueError(
-                f"robots: none, duplicate ids or the reserved id {LAUNCHER_ID!r}: {robots!r:.60}"
-            )
-        certs = TeamCerts(folder, team, tuple(robots))
+        certs = TeamCerts(folder, team, check_roster(team, robots))
     except (OSError, ValueError, KeyError, TypeError, RecursionError, ConfigError) as exc:
         raise DataError(f"{manifest_path}: not a relloc certificate folder ({exc})") from None
     missing = [

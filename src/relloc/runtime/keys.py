@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import re
 
-from relloc.errors import ConfigError, DataError
+from relloc.errors import ConfigError
 
 ROBOT_KINDS = ("odom", "meas", "rows", "eqm", "mail", "est", "evt", "stats", "ack", "cmd", "sync")
 CLOCK_KINDS = ("tick", "ctl", "sense")
@@ -111,14 +111,14 @@ def parse_clock_key(key: str) -> str | None:
     return None
 
 
-def parse_presence_key(key: str) -> tuple[str, str]:
-    """``(token kind, member)`` of a liveliness key ``relloc/<team>/<kind>/<member>``: kind
-    is ``alive`` or ``ready``. Any other key is a DataError naming it (a liveliness
-    subscriber of :func:`alive_wildcard` or :func:`ready_wildcard` hears no other)."""
+def parse_presence_key(key: str) -> tuple[str, str] | None:
+    """``(token kind, member)`` of a liveliness key ``relloc/<team>/<kind>/<member>`` (kind
+    ``alive`` or ``ready``), or None for any other key: a liveliness subscriber of
+    :func:`alive_wildcard` hears every token whose key overlaps it, so a peer's wildcard token
+    (``relloc/<team>/**``) reaches it too, and is ignored like a member off the roster."""
     parts = key.split("/") if isinstance(key, str) else []
-    if len(parts) != 4 or parts[0] != "relloc" or parts[2] not in PRESENCE_TOKENS or "" in parts:
-        raise DataError(
-            f"presence key {key!r:.80}: not relloc/<team>/alive/<member> or "
-            "relloc/<team>/ready/<member>"
-        )
+    if len(parts) != 4 or parts[0] != "relloc" or parts[2] not in PRESENCE_TOKENS:
+        return None
+    if any(not part or "*" in part for part in parts):
+        return None
     return parts[2], parts[3]

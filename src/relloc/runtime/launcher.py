@@ -438,7 +438,10 @@ class TeamLauncher:
     def _on_item(self, item: Any) -> None:
         """File one record (a message that fails admission is counted by reason)."""
         if item.presence != "data":
-            token, member = keys.parse_presence_key(item.key)
+            parsed = keys.parse_presence_key(item.key)
+            if parsed is None:  # a token of another layout (keys.parse_presence_key)
+                return
+            token, member = parsed
             self.collected.presence.append(
                 {
                     "member": member,

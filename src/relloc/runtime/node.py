@@ -330,8 +330,9 @@ class RobotNode:
 
     def _receive(self, item: Incoming) -> None:
         if item.presence != "data":
-            _, member = keys.parse_presence_key(item.key)
-            self._on_presence(member, item.presence == "joined")
+            parsed = keys.parse_presence_key(item.key)
+            if parsed is not None:  # None: a token of another layout
+                self._on_presence(parsed[1], item.presence == "joined")
             return
         parsed = keys.parse_robot_key(item.key)
         if parsed is not None and parsed[0] == self.s.robot:

@@ -297,9 +297,10 @@ class Roll:
     def update(self, item: Incoming) -> tuple[str, str, bool] | None:
         """Apply one presence record: ``(token kind, member, joined)``, or None for a member
         off the roster (ignored)."""
-        token, member = keys.parse_presence_key(item.key)
-        if member not in self.roster:
+        parsed = keys.parse_presence_key(item.key)
+        if parsed is None or parsed[1] not in self.roster:
             return None
+        token, member = parsed
         joined = item.presence == "joined"
         if joined:
             self.present.add(member)
