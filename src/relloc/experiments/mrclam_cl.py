@@ -63,8 +63,8 @@ so beside the targets). Run 6's two 450 s halves, each written as a run of its o
 ``relloc mrclam cut`` (``--end 450`` and ``--start 450``) and calibrated on its first half,
 show it: held-out range+bearing 0.0956 / 0.1054 m, 0.081 / 0.081 rad, NEES beyond 0.6 / 6.5 %,
 all met, but 14.6× / 19.2× dead reckoning (1.39 / 2.03 m); bearing-only 0.119 / 0.125 m,
-0.084 / 0.083 rad, 0.8 / 6.5 %, 11.7× / 16.3×. On the whole run (900 s) the same code gives
-29.5× and 23.2×. The other way round (``--calibration-window second-half``: fitted on
+0.084 / 0.083 rad, 0.8 / 6.5 %, 11.7× / 16.3×. On the whole run (900 s, the default split:
+scored on its held-out second half) the same code gives 29.5× and 23.2×. The other way round (``--calibration-window second-half``: fitted on
 450–900 s, scored on 0–450 s) range+bearing gives 0.0878 m, 0.0754 rad and 0.02 % NEES beyond,
 bearing-only 0.1075 m, 0.0786 rad and 0.02 %, all met, but 14.4× and 11.8× dead reckoning
 (1.26 m): the scored window ends 450 s after the start. The 0.02 % says the odometry noise
