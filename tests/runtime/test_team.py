@@ -44,7 +44,9 @@ pytestmark = pytest.mark.slow
 
 def _inject_bad_messages(team: str, endpoint: str, roster: tuple[str, ...]) -> None:
     """Join the hub, wait until every robot is alive (so its subscriptions are known here),
-    then publish one message of each bad kind on teammates' odometry keys."""
+    then declare liveliness tokens of no member's layout (a wildcard token reaches every
+    presence subscriber whose wildcard it overlaps; ``*/observer`` once counted as a join of
+    the observer) and publish one message of each bad kind on teammates' odometry keys."""
     deadline = time.monotonic() + 60
     # the hub listens only once the launcher runs; Zenoh retries the endpoint until then
     session = open_session(TransportSettings(connect=(endpoint,)))
@@ -54,8 +56,14 @@ def _inject_bad_messages(team: str, endpoint: str, roster: tuple[str, ...]) -> N
         alive: set[str] = set()
         while not set(roster) <= alive and time.monotonic() < deadline:
             item = inbox.get(timeout=0.5)
-            if item is not None and item.presence == "joined":
-                alive.add(keys.parse_presence_key(item.key)[1])
+            parsed = None if item is None else keys.parse_presence_key(item.key)
+            if parsed is not None and item is not None and item.presence == "joined":
+                alive.add(parsed[1])
+        liveliness = session.liveliness()
+        stray = [
+            liveliness.declare_token(f"relloc/{team}/{suffix}")
+            for suffix in ("**", "alive/**", "*/observer")
+        ]
         good = encode("odom", "flyer", 10_000, 0.0, {"stamps": [0.0], "u": np.zeros((1, 4))})
         bad = {
             keys.robot_key(team, "flyer", "odom"): [
@@ -74,6 +82,9 @@ def _inject_bad_messages(team: str, endpoint: str, roster: tuple[str, ...]) -> N
                 publisher.put(payload)
             publisher.undeclare()
         time.sleep(0.5)
+        for token in stray:
+            token.undeclare()
+        time.sleep(0.2)
     finally:
         inbox.close()
         session.close()
@@ -166,13 +177,16 @@ def test_killed_robot_is_noticed_and_its_restart_rejoins(trio_scenario, tmp_path
     assert flyer.t.size and (flyer.t > 4.0).any()  # estimates after the restart
 
 
-def test_team_up_with_a_gate_gates_as_the_in_process_run(trio_scenario, tmp_path):
+def test_team_up_with_a_gate_gates_as_the_in_process_run(trio_scenario, tmp_path, capsys):
     # --gate reaches every robot's track manager and the in-process reference alike: a tight
     # gate (P = 0.5, so about half the readings are rejected) and still the same estimates
     out = tmp_path / "out"
-    argv = ["team", "up", str(trio_scenario(4.0)), "--out", str(out), "--seed", "3", "--quiet",
+    argv = ["team", "up", str(trio_scenario(4.0)), "--out", str(out), "--seed", "3",
             "--port", str(free_loopback_port()), "--gate", "0.5"]  # fmt: skip
     assert main(argv) == 0
+    printed = capsys.readouterr().out  # the terminal summary (runtime.team.print_summary)
+    assert "team up — " in printed and "position RMSE" in printed and "in-process" in printed
+    assert all(robot in printed for robot in ("observer", "flyer", "rover"))
     summary = json.loads((out / "summary.json").read_text())
     assert summary["gate_probability"] == 0.5
     assert summary["messages"]["per_robot"]["observer"]["tracks"]["rows_gated"] > 0
