@@ -56,20 +56,20 @@ before); summary.json states both,
   plays no part; the factor, every factor tried and both halves are in
   ``fit.odometry_inflation``.
 
-The ratio to dead reckoning (``improvement_over_dead_reckoning``) divides dead reckoning's
-held-out error, which grows with the time since the run's start, by the filter's, which does
-not; so it depends on the run's length where the other three targets do not (the report says
-so beside the targets). Run 6's two 450 s halves, each written as a run of its own with
-``relloc mrclam cut`` (``--end 450`` and ``--start 450``) and calibrated on its first half,
-show it: held-out range+bearing 0.0956 / 0.1054 m, 0.081 / 0.081 rad, NEES beyond 0.6 / 6.5 %,
-all met, but 14.6× / 19.2× dead reckoning (1.39 / 2.03 m); bearing-only 0.119 / 0.125 m,
-0.084 / 0.083 rad, 0.8 / 6.5 %, 11.7× / 16.3×. On the whole run (900 s, the default split:
-scored on its held-out second half) the same code gives 29.5× and 23.2×. The other way round (``--calibration-window second-half``: fitted on
-450–900 s, scored on 0–450 s) range+bearing gives 0.0878 m, 0.0754 rad and 0.02 % NEES beyond,
-bearing-only 0.1075 m, 0.0786 rad and 0.02 %, all met, but 14.4× and 11.8× dead reckoning
-(1.26 m): the scored window ends 450 s after the start. The 0.02 % says the odometry noise
-fitted on the later half (inflated ×1.5, which left 4.9 % beyond on its own check quarter,
-675–900 s) over-states the earlier half's odometry error: conservative, not over-confident.
+The ratio to dead reckoning (``improvement_over_dead_reckoning``) divides dead reckoning's held-out
+error, which grows with the time since the run's start, by the filter's, which does not; so it
+depends on the run's length where the other three targets do not (the report says so beside the
+targets). Run 6's two 450 s halves, each written as a run of its own with ``relloc mrclam cut``
+(``--end 450`` and ``--start 450``) and calibrated on its first half, show it: held-out
+range+bearing 0.0956 / 0.1054 m, 0.081 / 0.081 rad, NEES beyond 0.6 / 6.5 %, all met, but 14.6× /
+19.2× dead reckoning (1.39 / 2.03 m); bearing-only 0.119 / 0.125 m, 0.084 / 0.083 rad, 0.8 / 6.5 %,
+11.7× / 16.3×. On the whole run (900 s, the default split: scored on its held-out second half) the
+same code gives 29.5× and 23.2×. The other way round (``--calibration-window second-half``: fitted
+on 450–900 s, scored on 0–450 s) range+bearing gives 0.0878 m, 0.0754 rad and 0.02 % NEES beyond,
+bearing-only 0.1075 m, 0.0786 rad and 0.02 %, all met, but 14.4× and 11.8× dead reckoning (1.26 m):
+the scored window ends 450 s after the start. The 0.02 % says the odometry noise fitted on the later
+half (inflated ×1.5, which left 4.9 % beyond on its own check quarter, 675–900 s) over-states the
+earlier half's odometry error: conservative, not over-confident.
 
 How sure one run makes the NEES figure (``nees_beyond_interval``: 95 % interval by batch means,
 ten 45 s blocks of the held-out window, widened when a block lasts less than ten correlation
