@@ -50,7 +50,7 @@ READ_BY = {
     "reproduce": lambda name, words: (registry.READ_BY, name),
     "up": lambda name, words: (
         team.READ_BY,
-        team.target_kind(
+        team.up_target_kind(
             argparse.Namespace(
                 scenario=name, estimator="cooperative" if "cooperative" in words else None
             )

@@ -27,6 +27,7 @@ import argparse
 import json
 import math
 import sys
+from collections.abc import Collection
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
@@ -395,16 +396,19 @@ NODE_DEFAULTS: dict[str, object] = {
 does not pass."""
 
 
-def target_kind(args: argparse.Namespace) -> str:
-    """The kind of team source of ``relloc node`` (:data:`READ_BY`): a reproduction, a dataset
-    folder's team EIF, or the track manager of a scenario, ``default`` or a dataset folder."""
-    from relloc.experiments.team_sources import KIDNAPPED, team_names
+def target_kind(name: str | None, estimator: str | None, reproductions: Collection[str]) -> str:
+    """The kind of a team target (:data:`READ_BY` here and in ``relloc team up``): desilva2015
+    for both of its teams, a reproduction of ``reproductions`` by its ``name``, a dataset
+    folder's team EIF with ``--estimator cooperative``, else seed 000's track managers (of a
+    scenario, ``default`` or a dataset folder). ``name`` is None for ``relloc node --dataset``,
+    which names no reproduction."""
+    from relloc.experiments.team_sources import KIDNAPPED
 
-    if args.dataset is None and args.scenario in KIDNAPPED:
+    if name in KIDNAPPED:
         return "desilva2015"
-    if args.dataset is None and args.scenario in team_names():
-        return str(args.scenario)
-    return COOPERATIVE if args.dataset is not None and args.estimator == "cooperative" else TRACKS
+    if name is not None and name in reproductions:
+        return name
+    return COOPERATIVE if estimator == "cooperative" else TRACKS
 
 
 def refuse_node_unread(args: argparse.Namespace) -> None:
@@ -418,7 +422,11 @@ def refuse_node_unread(args: argparse.Namespace) -> None:
             f"--estimator: {args.scenario} does not read it; read with --dataset only (a "
             "scenario runs seed 000's track manager, a reproduction its own estimators)"
         )
-    kind = target_kind(args)
+    from relloc.experiments.team_sources import team_names
+
+    kind = target_kind(
+        args.scenario if args.dataset is None else None, args.estimator, team_names()
+    )
     given = [name for name in READ_BY if getattr(args, name) is not None]
     if args.realtime:  # every source on wall time reads --duration (the seconds to run)
         given = [name for name in given if name != "duration"]

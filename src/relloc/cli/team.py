@@ -48,6 +48,7 @@ from relloc.cli.node import (
     add_transport_arguments,
     network_faults_from_args,
     refuse_desilva_only,
+    target_kind,
     transport_from_args,
 )
 from relloc.runtime import CLOCK_TICK_S
@@ -182,21 +183,16 @@ READ_BY: dict[str, tuple[str, ...]] = {
     "mcap": (TRACKS,),
     "tum": (TRACKS,),
 }
-"""The kinds of target (:func:`target_kind`) that read each of these flags; another is refused,
+"""The kinds of target (:func:`up_target_kind`) that read each of these flags; another is refused,
 never ignored (:func:`relloc.core.checks.refuse_unread`)."""
 
 
-def target_kind(args: argparse.Namespace) -> str:
-    """The kind of ``team up`` target (:data:`READ_BY`): a reproduction, a dataset folder's team
-    EIF or the track managers of a scenario, ``default`` or a dataset."""
-    from relloc.experiments.team_sources import KIDNAPPED
+def up_target_kind(args: argparse.Namespace) -> str:
+    """The kind of ``team up``'s target (:data:`READ_BY`, :func:`relloc.cli.node.target_kind`):
+    its reproductions include guler2023, whose robots are not ``relloc node`` processes."""
     from relloc.runtime.scenario import REPRODUCTIONS
 
-    if args.scenario in KIDNAPPED:
-        return "desilva2015"
-    if args.scenario in (*REPRODUCTIONS, "guler2023"):
-        return str(args.scenario)
-    return COOPERATIVE if args.estimator == "cooperative" else TRACKS
+    return target_kind(args.scenario, args.estimator, (*REPRODUCTIONS, "guler2023"))
 
 
 def run_up(args: argparse.Namespace) -> int:
@@ -205,7 +201,7 @@ def run_up(args: argparse.Namespace) -> int:
 
     refuse_desilva_only(args)
     given = [name for name in READ_BY if getattr(args, name) is not None]
-    refuse_unread(target_kind(args), given, READ_BY, label=args.scenario)
+    refuse_unread(up_target_kind(args), given, READ_BY, label=args.scenario)
     if args.runs is None:  # the defaults of the targets that read them
         args.runs = 1
     if args.tick is None:
