@@ -203,11 +203,15 @@ def test_node_and_team_help_are_plain_text(capsys):
     assert plain_text("See :mod:`relloc.x` and ``y``::") == "See relloc.x and y:"
 
 
-def test_data_not_found_names_the_option_and_the_variable(tmp_path, capsys, monkeypatch):
+@pytest.mark.parametrize("experiment", ["mrclam-cl", "tiers-uwb"])
+def test_data_not_found_names_the_option_and_the_variable(
+    tmp_path, capsys, monkeypatch, experiment
+):
     # --data-dir sets RELLOC_SHARED_DATA for the process; monkeypatch restores it afterwards
+    # (tiers-uwb's message named only the variable)
     monkeypatch.setenv("RELLOC_SHARED_DATA", os.environ.get("RELLOC_SHARED_DATA", ""))
     missing = str(tmp_path / "nowhere")
-    argv = ["reproduce", "mrclam-cl", "--out", str(tmp_path / "o"), "--data-dir", missing]
+    argv = ["reproduce", experiment, "--out", str(tmp_path / "o"), "--data-dir", missing]
     assert main([*argv, "--quiet"]) == 3
     err = capsys.readouterr().err
     assert missing in err and "--data-dir DIR" in err and "RELLOC_SHARED_DATA" in err

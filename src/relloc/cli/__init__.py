@@ -66,7 +66,7 @@ def build_parser() -> argparse.ArgumentParser:
             type=Path,
             default=None,
             metavar="DIR",
-            help="the data folder holding mrclam/ and uwb/ (sets RELLOC_SHARED_DATA)",
+            help="the data folder holding mrclam/, uwb/ and tiers/ (sets RELLOC_SHARED_DATA)",
         )
     return parser
 

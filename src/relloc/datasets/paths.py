@@ -1,6 +1,7 @@
 """Where the shared recorded data lives.
 
-One way to point relloc at it: the data folder (the one holding ``mrclam/`` and ``uwb/``) is
+One way to point relloc at it: the data folder (the one holding ``mrclam/``, ``uwb/`` and
+``tiers/``) is
 the ``RELLOC_SHARED_DATA`` environment variable, which every subcommand's ``--data-dir DIR``
 sets. Without it: ``../shared/data`` beside the repository checkout, then ``../shared/data``
 from the current folder. Every "not found" message of the default data ends with
@@ -14,13 +15,14 @@ from pathlib import Path
 
 DATA_ENV = "RELLOC_SHARED_DATA"
 DATA_HINT = (
-    "point relloc at the data folder (the one holding mrclam/ and uwb/) with --data-dir DIR "
-    f"or the {DATA_ENV} environment variable"
+    "point relloc at the data folder (the one holding mrclam/, uwb/ and tiers/) with "
+    f"--data-dir DIR or the {DATA_ENV} environment variable"
 )
 
 
 def shared_data_dir() -> Path:
-    """The folder holding ``mrclam/`` and ``uwb/`` (may not exist outside the workspace)."""
+    """The folder holding ``mrclam/``, ``uwb/`` and ``tiers/`` (may not exist outside the
+    workspace)."""
     env = os.environ.get(DATA_ENV)
     if env:
         return Path(env)

@@ -95,7 +95,7 @@ from typing import Any
 from relloc.calibration.uwb_bag import calibrate, corrected, heldout_errors
 from relloc.calibration.window import leading_fraction, spanning
 from relloc.datasets.bag_mapping import BagMapping, load_mapping
-from relloc.datasets.paths import shared_data_dir
+from relloc.datasets.paths import DATA_HINT, shared_data_dir
 from relloc.datasets.rosbag import BagRecording, load_bag
 from relloc.errors import ConfigError, DataError
 from relloc.estimators.uwb_range import RangeTeamSettings
@@ -177,8 +177,7 @@ def _bags(args: ReproduceArgs) -> list[tuple[Path, BagMapping]]:
     folder = shared_data_dir() / "tiers"
     if not folder.is_dir():
         raise DataError(
-            f"{folder}: the TIERS bags are not there; pass --bag BAG --map MAP or point "
-            "RELLOC_SHARED_DATA at the shared data folder"
+            f"{folder}: the TIERS bags are not there; pass --bag BAG --map MAP or {DATA_HINT}"
         )
     return [(folder / name, load_mapping(mapping)) for name, mapping in SHIPPED]
 
