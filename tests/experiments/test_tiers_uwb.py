@@ -130,7 +130,11 @@ def test_relloc_run_on_a_bag(tmp_path, capsys):
     assert rmse == pytest.approx(exported, rel=1e-9)
     # /cali/turtle05 has unset header stamps: placed by their receive time, and said so
     assert set(summary["loader"]["stamps_from_receive"]) == {"/cali/turtle05/odom"}
-    assert "turtlebot1->turtlebot3" in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert "turtlebot1->turtlebot3" in printed
+    # every file written is listed, the figures too (only summary.json and report.md were)
+    figures = sorted(p.name for p in out.glob("*.png"))
+    assert figures and all(name in printed for name in figures)
     # --no-plots is honoured; flags a single replay cannot use are refused, not ignored
     plain = tmp_path / "plain"
     assert main([*argv[:5], str(plain), "--no-plots", "--quiet"]) == 0

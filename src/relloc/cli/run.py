@@ -309,7 +309,7 @@ def _run_bag(args: argparse.Namespace) -> int:
         label="a bag (its UWB ranges go to the range-only filter)",
     )
     settle_s = number(args.settle, "--settle", low=0.0)
-    summary, _ = run_bag(
+    summary, files = run_bag(
         args.scenario,
         load_mapping(args.map),
         args.out,
@@ -332,6 +332,6 @@ def _run_bag(args: argparse.Namespace) -> int:
         )
     if not args.quiet:
         print(console.team_summary_table(summary, width=console.terminal_width()))
-        print(f"wrote {args.out / 'summary.json'} and {args.out / 'report.md'}")
+        print(console.wrote_line(files, console.terminal_width()))
         print_export(summary.get("export"))
     return 0

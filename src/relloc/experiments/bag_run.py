@@ -46,7 +46,6 @@ from relloc.pipeline.replay import replay
 from relloc.pipeline.team_report import (
     RECORD_RATE_HZ,
     SETTLE_S,
-    RunResult,
     score_run,
     summarise,
     write_team_report,
@@ -108,11 +107,12 @@ def run_bag(
     record_rate_hz: float = RECORD_RATE_HZ,
     export: ExportRequest | None = None,
     plots: bool = True,
-) -> tuple[dict[str, Any], list[RunResult]]:
+) -> tuple[dict[str, Any], list[Path]]:
     """Read, track, score and (with ``out_dir``) write one bag (module docstring), its figures
     unless ``plots`` is false; ``settle_s`` and ``record_rate_hz`` as for a scenario
     (:class:`~relloc.experiments.team_run.TeamRunSettings`); write its estimates as MCAP/TUM
-    files if ``export`` asks (:func:`relloc.pipeline.export.export_estimates`)."""
+    files if ``export`` asks (:func:`relloc.pipeline.export.export_estimates`). Returns the
+    summary and the files written (none without ``out_dir``)."""
     settle_s = number(settle_s, "settle_s", low=0.0)
     record_rate_hz = positive(record_rate_hz, "record_rate_hz")
     bag = load_bag(path, mapping)
@@ -178,13 +178,14 @@ def run_bag(
         summary["export"] = export_estimates(
             export, estimates, rec, run=f"the bag {path.name}", settle_s=settle_s
         )
-    if out_dir is not None:
-        write_team_report(
-            Path(out_dir),
-            summary,
-            [result],
-            title=f"relloc run — {path.name}",
-            notes=notes,
-            plots=plots,
-        )
-    return summary, [result]
+    if out_dir is None:
+        return summary, []
+    files = write_team_report(
+        Path(out_dir),
+        summary,
+        [result],
+        title=f"relloc run — {path.name}",
+        notes=notes,
+        plots=plots,
+    )
+    return summary, files
