@@ -5,6 +5,7 @@ file (and, for a value, its key)."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import tempfile
 from pathlib import Path
@@ -12,46 +13,20 @@ from typing import Any
 
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from test_estimator_nodes import _handmade_fit
 
-from relloc.calibration.camera import CameraFit
-from relloc.calibration.odometry import OdometryModelFit
 from relloc.calibration.window import CalibrationWindow
 from relloc.errors import DataError
 from relloc.experiments.fit_file import load_fit, save_fit
 from relloc.experiments.mrclam_cl import FittedModels, OdometryInflation
 
-WINDOW = CalibrationWindow(start_s=1.0, end_s=400.0, source="run")
 HALVES = CalibrationWindow(1.0, 200.0, "run"), CalibrationWindow(200.0, 400.0, "run")
-FIT = FittedModels(
-    odometry=OdometryModelFit(
-        calibration_window=WINDOW,
-        latency_s=0.1,
-        time_constant_s=0.0,
-        scale_v=(0.9,) * 3,
-        scale_w=(0.8,) * 3,
-        q_v0=1e-6,
-        k_v=0.01,
-        q_w0=1e-6,
-        k_w=0.04,
-        k_wv=0.0,
-        odometry_window_s=5.0,
-        unfitted_robots=(2,),
-    ),
-    camera=CameraFit(
-        calibration_window=WINDOW,
-        bearing_offset=(0.0,) * 3,
-        sigma_bearing_raw=0.007,
-        bearing_inflation=25.0,
-        sigma_bearing=0.035,
-        range_bias_coeffs=(0.06, 0.0),
-        sigma_range_raw=0.04,
-        range_inflation=15.0,
-        sigma_range=0.17,
-        range_interval_s=1.0,
-        correlation={"range": {"1s": 0.8}},
-        n_residuals=100,
-        bearing_bias_coeffs=(0.0,) * 9,
-        bearing_bias_limits=(-0.5, 0.5) * 3,
+_BASE = _handmade_fit("run")  # five robots; here with every optional field filled in
+FIT = dataclasses.replace(
+    _BASE,
+    odometry=dataclasses.replace(_BASE.odometry, unfitted_robots=(2,)),
+    camera=dataclasses.replace(
+        _BASE.camera, bearing_bias_coeffs=(0.0,) * 15, bearing_bias_limits=(-0.5, 0.5) * 5
     ),
     odometry_inflation=OdometryInflation(1.5, True, 5.0, ((1.0, 9.5), (1.5, 4.25)), *HALVES),
 )
