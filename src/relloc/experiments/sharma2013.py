@@ -118,8 +118,7 @@ against the 95 % ``band`` of a mean of that many χ²(d) values and the ``verdic
 ``observability_rank`` (:func:`observability_ranks`: ``rank`` of ``state_dim`` at run 0's
 mid-run RPMG, ``full_rank``, ``paper_rank`` the paper's predicted rank (Theorems 2–4),
 ``robot_edges`` (the edges of the spanning tree used), ``landmark_edges`` (one per anchor
-landmark seen then), ``available``; only ``available`` false and the ``reason`` where the
-symbolic tool cannot be imported).
+landmark seen then)).
 ``observability_aware``: the headline observability-aware filter (``block``, ``filter``),
 whether it meets the target (``target_met``, ``target``: NEES beyond ≤ 10 % in
 ``no_landmark`` and ``one_landmark`` with position RMSE not above the plain EIF's), each
@@ -480,11 +479,9 @@ def observability_ranks(first: dict[str, Any], n: int) -> dict[str, dict[str, An
     Robot edges are reduced to a spanning tree of the observed RPMG (Theorem 2: any connected
     proper RPMG has the same rank); each landmark contributes one robot→landmark edge.
     """
-    try:
-        from relloc.models.symbolic import unicycle_team
-        from relloc.observability.analysis import rank_at
-    except ImportError as exc:
-        return {case: {"available": False, "reason": str(exc)} for case in CASES}
+    from relloc.models.symbolic import unicycle_team
+    from relloc.observability.analysis import rank_at
+
     edges = first["mid_edges"]
     tree = [(i + 1, j + 1) for i, j in _spanning_edges(edges["robots"], n)]
     seen_lm: dict[int, int] = {}
@@ -513,7 +510,6 @@ def observability_ranks(first: dict[str, Any], n: int) -> dict[str, dict[str, An
         params = [float(c) for k in anchors for c in lm_xy[k]] or None
         rank = rank_at(model, state, inputs, params=params, order=2)
         out[case] = {
-            "available": True,
             "rank": int(rank),
             "state_dim": 3 * n,
             "full_rank": bool(rank == 3 * n),
@@ -902,8 +898,8 @@ def _report(summary: dict[str, Any], figures: list[tuple[str, str]]) -> str:
                 c["growth"]["sigma_ratio"],
                 c["bounded"],
                 c["paper_bounded"],
-                rank.get("rank"),
-                rank.get("paper_rank"),
+                rank["rank"],
+                rank["paper_rank"],
                 c["nees_pct_beyond"],
             ]
         )
