@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 from relloc.core.recording import measurement_rows
 from relloc.errors import DataError
 from relloc.runtime import keys
-from relloc.runtime.admission import CLOCK_SENDER, admit
+from relloc.runtime.admission import admit
 from relloc.runtime.airground import (
     LeaderRole,
     Received,
@@ -53,7 +53,7 @@ def _admit(kind: str, sender: str, body: dict, key: str, t: float = 0.15):
 def test_sense_and_cmd_round_trip_on_their_own_keys_only():
     world = _world()
     body = _sense(world, 3)
-    msg = _admit("sense", CLOCK_SENDER, body, keys.clock_key(TEAM, "sense"))
+    msg = _admit("sense", keys.CLOCK_ID, body, keys.clock_key(TEAM, "sense"))
     assert msg.body["target"] == "D_1" and msg.body["position"].shape == (3,)
     np.testing.assert_array_equal(msg.body["position"], world.drone_position(0))
     cmd = {"k": 3, "u": np.array([0.1, 0.0, 0.0, 0.02])}
@@ -62,33 +62,33 @@ def test_sense_and_cmd_round_trip_on_their_own_keys_only():
         # a robot claiming the world's readings, on the world's key
         ("sense", "R_1", body, keys.clock_key(TEAM, "sense"), "spoofed"),
         # a command from the infrastructure sender, or under another robot's key
-        ("cmd", CLOCK_SENDER, cmd, keys.clock_key(TEAM, "ctl"), "wrong_kind"),
+        ("cmd", keys.CLOCK_ID, cmd, keys.clock_key(TEAM, "ctl"), "wrong_kind"),
         ("cmd", "R_2", cmd, keys.robot_key(TEAM, "R_1", "cmd"), "spoofed"),
         (
             "sense",
-            CLOCK_SENDER,
+            keys.CLOCK_ID,
             body | {"target": "nobody"},
             keys.clock_key(TEAM, "sense"),
             "unknown_target",
         ),
         (
             "sense",
-            CLOCK_SENDER,
+            keys.CLOCK_ID,
             body | {"fix_subject": "nobody", "fix": np.zeros(2)},
             keys.clock_key(TEAM, "sense"),
             "unknown_target",
         ),
         (
             "sense",
-            CLOCK_SENDER,
+            keys.CLOCK_ID,
             body | {"fix_subject": "R_0", "fix": np.zeros(1)},
             keys.clock_key(TEAM, "sense"),
             "shape",
         ),
-        ("sense", CLOCK_SENDER, body | {"k": 99}, keys.clock_key(TEAM, "sense"), "malformed"),
+        ("sense", keys.CLOCK_ID, body | {"k": 99}, keys.clock_key(TEAM, "sense"), "malformed"),
         (
             "sense",
-            CLOCK_SENDER,
+            keys.CLOCK_ID,
             body | {"position": np.zeros(2)},
             keys.clock_key(TEAM, "sense"),
             "shape",
@@ -117,7 +117,7 @@ def test_any_sense_body_is_accepted_or_rejected_with_a_reason(k, dt, fix, subjec
     raw = {
         "v": SCHEMA_VERSION,
         "type": "sense",
-        "sender": CLOCK_SENDER,
+        "sender": keys.CLOCK_ID,
         "seq": 0,
         "t": 0.1,
         "wall_ns": 1,
@@ -240,7 +240,7 @@ def test_a_robot_renews_its_ready_token_when_a_teammate_appears_after_it_was_rea
         return changes
 
     try:
-        for member in (CLOCK_SENDER, "R_1", "R_2"):
+        for member in (keys.CLOCK_ID, "R_1", "R_2"):
             presence(member, "joined")
         assert proc._ready_token is None and heard() == []
         presence("D_1", "joined")
@@ -298,10 +298,10 @@ def test_a_robot_rejects_a_sense_out_of_step_and_ignores_another_robots():
     t = float(world.times[world.k])
     for robot, changes in ((1, {}), (0, {"n": 99}), (0, {"dt": 0.1})):
         body = _sense(world, robot, **changes)
-        proc._handle(Incoming(key, encode("sense", CLOCK_SENDER, 0, t, body)))
+        proc._handle(Incoming(key, encode("sense", keys.CLOCK_ID, 0, t, body)))
     assert proc.counters["rejected.bad_tick"] == 2 and proc._tick is None
     # an end that overtakes the last readings is noted, not obeyed before the last tick
-    end = encode("ctl", CLOCK_SENDER, 0, t, {"action": "end", "robot": ""})
+    end = encode("ctl", keys.CLOCK_ID, 0, t, {"action": "end", "robot": ""})
     proc._handle(Incoming(keys.clock_key(TEAM, "ctl"), end))
     assert proc._ending and not proc._done
 
@@ -372,10 +372,10 @@ def test_a_sense_that_does_not_fit_the_robot_is_refused_and_does_not_use_up_its_
         {"fix_subject": "R_1", "fix": np.array([1.0, 2.0, 0.3])},  # a follower's has none
     ]
     for changes in hostile:
-        drone._handle(Incoming(key, encode("sense", CLOCK_SENDER, 0, 0.0, genuine | changes)))
+        drone._handle(Incoming(key, encode("sense", keys.CLOCK_ID, 0, 0.0, genuine | changes)))
     assert drone.counters["rejected.shape"] == len(hostile) and drone._last_k is None
     follower_fix = {"fix_subject": "R_1", "fix": np.array([1.0, 2.0])}
-    drone._handle(Incoming(key, encode("sense", CLOCK_SENDER, 0, 0.0, genuine | follower_fix)))
+    drone._handle(Incoming(key, encode("sense", keys.CLOCK_ID, 0, 0.0, genuine | follower_fix)))
     drone._progress()
     assert drone.counters["ticks"] == 1 and drone._tick is None  # acted on tick 0
 
@@ -384,7 +384,7 @@ def test_a_sense_that_does_not_fit_the_robot_is_refused_and_does_not_use_up_its_
     bad_rows = {"stamps": [0.0], "kinds": ["bogus"], "subjects": [""], "landmarks": [-1.0]}
     bad_rows |= {"sensors": [0.0], "values": [1.0], "sigmas": [0.1]}
     for changes in (bad_rows, {"position": np.zeros(3)}):  # a UGV has no position sent
-        leader._handle(Incoming(key, encode("sense", CLOCK_SENDER, 0, 0.0, good | changes)))
+        leader._handle(Incoming(key, encode("sense", keys.CLOCK_ID, 0, 0.0, good | changes)))
     assert leader.counters["rejected"] == 2 and leader._last_k is None
-    leader._handle(Incoming(key, encode("sense", CLOCK_SENDER, 0, 0.0, good)))
+    leader._handle(Incoming(key, encode("sense", keys.CLOCK_ID, 0, 0.0, good)))
     assert leader.counters["ticks"] == 1 and leader.counters["sent.cmd"] == 1

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from relloc.cli import main
-from relloc.core.recording import Measurements
+from relloc.core.recording import Measurements, empty_measurements
 from relloc.errors import DataError
 from relloc.experiments.desilva2015 import RunConfig, leader_estimates
 from relloc.experiments.sharma2013_team import in_process
@@ -142,6 +142,21 @@ def test_mail_round_trip_and_split_keeps_the_progress_of_the_earliest_message():
         assert (a.sender, a.subject, a.time) == (b.sender, b.subject, b.time)
         for name in ("means", "covs", "prior_means", "prior_covs", "weights"):
             np.testing.assert_allclose(getattr(a, name), getattr(b, name), rtol=0, atol=1e-15)
+
+
+def test_mail_of_its_sender_itself_is_rejected_and_only_equivalent_measurements_are_mailed():
+    """A ``mail`` whose message is of its own sender decodes (the wire check knows no
+    subjects' meaning) and is then refused as ``malformed``, naming why."""
+    from relloc.runtime.messages import MessageRejected
+
+    body = mail_body(1.0, [(1.0, _eqm(1, 2, 1.0))], ROSTER, 65_536)[0]
+    msg = decode(encode("mail", "L2", 0, 1.0, body), roster=ROSTER, key_sender="L2")
+    with pytest.raises(MessageRejected) as info:
+        mail_items(msg.body, ROSTER, "L2")
+    assert info.value.reason == "malformed"
+    assert "mail:" in str(info.value) and "sender and subject must differ" in str(info.value)
+    with pytest.raises(DataError, match="mail: cannot send a Measurements"):
+        mail_body(1.0, [(1.0, empty_measurements())], ROSTER, 65_536)
 
 
 def test_a_window_is_overdue_max_lag_ticks_after_its_end():

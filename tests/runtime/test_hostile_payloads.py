@@ -19,10 +19,12 @@ appears, and counted as not delivered if it never does.
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 import msgpack
 import numpy as np
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from node_harness import DT, DURATION_S, TEAM, TICKS, hand_node, odom, tick
@@ -130,6 +132,48 @@ def test_hostile_rows_are_counted_or_fused_and_never_crash_an_agent(session, dat
         )
     )
     _run(node, "2", "rows", drawn)
+
+
+_ROWS = {
+    "stamps": [0.1, 0.2],
+    "kinds": ["range", "bearing"],
+    "subjects": ["2", ""],
+    "landmarks": [-1.0, 0.0],
+    "sensors": [0.0, 0.0],
+    "values": [3.0, 0.5],
+    "sigmas": [0.1, -1.0],
+}
+
+
+@pytest.mark.parametrize(
+    ("change", "reason", "what"),
+    [
+        ({"subjects": ["9", ""]}, "unknown_target", "rows: subjects ['9'] are not on the roster"),
+        ({"landmarks": [-1.0, 0.5]}, "malformed", "landmarks and sensors must be integers"),
+        ({"landmarks": [-2.0, 0.0]}, "malformed", "landmarks and sensors must be integers"),
+        ({"sensors": [0.0, 2.0**40]}, "malformed", "landmarks and sensors must be integers"),
+        ({"sigmas": [0.1, 0.0]}, "malformed", "rows: sigma must be > 0"),
+        ({"sigmas": [-0.5, -1.0]}, "malformed", "rows: sigma must be > 0"),
+    ],
+)
+def test_a_hostile_rows_table_is_refused_naming_the_rule(change, reason, what):
+    """Tables that pass the wire check but no robot writes: a subject off the roster, a
+    fractional, negative or huge landmark or sensor index, a σ ≤ 0 other than −1 (not
+    stated)."""
+    from relloc.runtime.messages import MessageRejected, decode
+    from relloc.runtime.shared_rows import rows_from_body
+
+    roster = ("1", "2", "3")
+    assert (
+        rows_from_body(
+            decode(_raw("rows", "1", 0, 0.2, _ROWS), roster=roster).body, roster, "1"
+        ).size
+        == 2
+    )
+    body = decode(_raw("rows", "1", 0, 0.2, _ROWS | change), roster=roster).body
+    with pytest.raises(MessageRejected) as info:
+        rows_from_body(body, roster, "1")
+    assert info.value.reason == reason and what in str(info.value)
 
 
 def _matrix(kind: str, scale: float) -> list[list[float]]:
@@ -307,3 +351,43 @@ def test_what_is_held_for_an_absent_teammate_is_bounded(session):
     assert len(node.teammates["3"].held) == HELD_FROM_ABSENT
     assert node.counters["held_from_absent.odom"] == HELD_FROM_ABSENT
     assert node.counters["from_absent.odom"] == sent - HELD_FROM_ABSENT
+
+
+def test_a_token_of_a_stranger_is_counted_and_changes_nobodys_presence(session):
+    parts = sharma_node_parts("1", 5, 0, DURATION_S, "two_landmarks")
+    node = hand_node(parts, "1", session)
+    present = {r: m.present for r, m in node.teammates.items()}
+    for member, change in (("mallory", "joined"), ("1", "joined"), ("mallory", "left")):
+        node._on_incoming(Incoming(keys.alive_key(TEAM, member), b"", presence=change))
+    assert node.counters["presence.unknown_member"] == 2  # its own token is no stranger's
+    assert {r: m.present for r, m in node.teammates.items()} == present
+
+
+def test_mail_stamped_before_a_restarted_leader_started_is_counted_not_fused(session):
+    """A leader that joins at tick 5 has no state before ``t_4``: a teammate's messages of an
+    earlier event cannot reach its estimator; they are counted ``mail_before_start``."""
+    from relloc.fusion.messages import EquivalentMeasurement
+    from relloc.runtime.mail import mail_body
+    from relloc.runtime.messages import encode
+
+    parts = named_node_parts("desilva2015", "L1", 5, 0, DURATION_S)
+    node = hand_node(parts, "L1", session, talkers=parts.talkers)
+    tick(node, 5)
+    roster = parts.roster
+    em = EquivalentMeasurement(
+        sender=roster.index("L2"),
+        subject=roster.index("P1"),
+        time=0.2,
+        means=np.zeros((1, 4)),
+        covs=np.eye(4)[None],
+        prior_means=np.zeros((1, 4)),
+        prior_covs=2 * np.eye(4)[None],
+        weights=np.ones(1),
+    )
+    sent = [(0.2, em), (0.5, dataclasses.replace(em, time=0.5))]
+    for seq, body in enumerate(mail_body(0.5, sent, roster, 65_536)):
+        payload = encode("mail", "L2", seq, 0.5, body)
+        node._on_incoming(Incoming(keys.robot_key(TEAM, "L2", "mail"), payload))
+    assert node.counters["delivered.mail"] == 1 and node.counters["mail_before_start"] == 1
+    assert node.teammates["L2"].progress == 0.5
+    assert [stamp for stamp, *_ in node.estimator._inbox] == [0.5]  # the later one only

@@ -269,3 +269,100 @@ def test_readings_and_beliefs_no_robot_makes_are_refused(kind, sender, body, rea
     assert info.value.reason == reason and what in str(info.value)
     held = {"target": "air1", "mean": [0.0] * 4, "cov": np.diag([0.1, 0.1, 0.0, 0.01])}
     assert decode(encode("eqm", "obs", 0, 0.0, held), roster=ROSTER).body["cov"][2, 2] == 0.0
+
+
+def _payload(kind: str, sender: str = "obs", **fields):
+    header = {"v": SCHEMA_VERSION, "type": kind, "sender": sender, "seq": 0, "t": 0.5, "wall_ns": 1}
+    return msgpack.packb(header | fields, use_bin_type=True)
+
+
+_MAIL = {
+    "progress": 1.0,
+    "stamps": [1.0],
+    "subjects": ["gnd1"],
+    "sizes": [2],
+    "means": [[0.0] * 4] * 2,
+    "covs": [np.eye(4).tolist()] * 2,
+    "prior_means": [[0.0] * 4] * 2,
+    "prior_covs": [np.eye(4).tolist()] * 2,
+    "weights": [0.5, 0.5],
+}
+_EST = {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in _est().items()}
+
+
+@pytest.mark.parametrize(
+    ("data", "reason", "what"),
+    [
+        (
+            _payload("meas", **_MEAS | {"targets": ["air1", "ghost"]}, stamps=[0.1, 0.2]),
+            "unknown_target",
+            "targets ['ghost']",
+        ),
+        (_payload("odom", stamps=[0.0]), "malformed", "odom: field 'u' missing"),
+        (
+            _payload("evt", stamps=[0.1], targets="air1", kinds=["created"]),
+            "malformed",
+            "evt.targets",
+        ),
+        (_payload("stats", counters={"sent.odom": -1}), "malformed", "stats.counters"),
+        (_payload("stats", counters={"sent.odom": True}), "malformed", "stats.counters"),
+        (_payload("odom", stamps=[0.0, [1.0]], u=[[0.0] * 4]), "malformed", "odom.stamps"),
+        (_payload("meas", **_MEAS, stamps=[0.1]), "shape", "meas: batch lengths differ"),
+        (
+            _payload("meas", **_MEAS | {"sigma": [[0.01] * 3, [0.0] * 3]}, stamps=[0.1, 0.2]),
+            "malformed",
+            "sigma and range must be > 0",
+        ),
+        (
+            _payload(
+                "meas", **_MEAS | {"z": [[2.0, 0.1, 0.5], [-1.0, 0.1, 0.5]]}, stamps=[0.1, 0.2]
+            ),
+            "malformed",
+            "sigma and range must be > 0",
+        ),
+        (_payload("est", **_EST | {"info": [0.9]}), "shape", "est: info is not one value"),
+        (_payload("mail", **_MAIL | {"subjects": []}), "shape", "mail: per-message lengths"),
+        (_payload("mail", **_MAIL | {"sizes": [1]}), "shape", "mail: sizes must be integers"),
+        (_payload("mail", **_MAIL | {"sizes": [1.5]}), "shape", "mail: sizes must be integers"),
+        (_payload("mail", **_MAIL | {"weights": [1.0]}), "shape", "mail: track arrays"),
+        (
+            _payload("mail", **_MAIL | {"prior_means": [[0.0] * 4]}),
+            "shape",
+            "mail: track arrays",
+        ),
+        (_payload("mail", **_MAIL | {"weights": [0.5, -0.5]}), "malformed", "negative weights"),
+        (
+            _payload("evt", stamps=[0.1, 0.2], targets=["air1"], kinds=["created"]),
+            "shape",
+            "evt: batch lengths differ",
+        ),
+        (_payload("ctl", "clock", action="pause", robot="air1"), "malformed", "unknown action"),
+        (_payload("tick", "clock", k=0, n=40, dt=0.1), "malformed", "tick: need 1 ≤ k ≤ n"),
+        (_payload("tick", "clock", k=41, n=40, dt=0.1), "malformed", "tick: need 1 ≤ k ≤ n"),
+        (_payload("tick", "clock", k=1, n=40, dt=0.0), "malformed", "tick: need 1 ≤ k ≤ n"),
+    ],
+)
+def test_a_hostile_body_is_rejected_naming_the_field_or_rule(data, reason, what):
+    """Bodies a well-behaved sender never writes (``encode`` refuses most of them), packed by
+    hand: each is refused with its counter reason and a message that names where it fails."""
+    with pytest.raises(MessageRejected) as info:
+        decode(data, roster=ROSTER)
+    assert info.value.reason == reason
+    assert what in str(info.value)
+
+
+def test_encode_refuses_what_it_cannot_send_and_packs_numpy_scalars():
+    with pytest.raises(DataError, match="unknown message kind 'teleport'"):
+        encode("teleport", "obs", 0, 0.0, {})
+    with pytest.raises(DataError, match="encode ack: missing field 'k'"):
+        encode("ack", "obs", 0, 0.0, {})
+    msg = decode(encode("ack", "obs", 0, 0.0, {"k": np.int64(5)}), roster=ROSTER)
+    assert msg.body["k"] == 5 and type(msg.body["k"]) is int
+
+
+def test_no_estimate_reports_make_empty_estimates():
+    """A team whose collector heard no ``est`` (every robot gone before its first report)."""
+    from relloc.runtime.messages import estimates_from_bodies
+
+    none = estimates_from_bodies("plkf", [])
+    assert none.estimator == "plkf" and none.labels == () and none.beliefs == ()

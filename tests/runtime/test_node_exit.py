@@ -56,3 +56,29 @@ def test_a_node_whose_clock_is_killed_exits_non_zero_and_says_so():
     counters = json.loads(out.strip().splitlines()[-1])["counters"]
     assert counters["exit.clock_left"] == 1, counters
     assert "robot 'observer' stopped before the run's end: the clock left" in err
+
+
+def test_a_node_whose_clock_leaves_mid_run_filters_up_to_its_last_instant(session):
+    """The clock's token goes after tick 5 of 20: the node counts ``exit.clock_left``, does not
+    claim the run's end, and its last window ends the run there, holding the readings taken at
+    its last instant (every reading of ``[0, t_5]`` is used)."""
+    from node_harness import DT, TEAM, hand_node, tick
+
+    from relloc.experiments.team_sources import named_node_parts
+    from relloc.runtime import keys
+    from relloc.runtime.node import TIME_TOL
+    from relloc.runtime.transport import Incoming
+
+    parts = named_node_parts("desilva2015", "L1", 5, 0, 20 * DT)
+    node = hand_node(parts, "L1", session, talkers=parts.talkers)
+    for k in range(1, 6):
+        tick(node, k)
+    assert node._pending  # the teammates sent nothing: every window waits for them
+    node._on_incoming(Incoming(keys.alive_key(TEAM, "clock"), b"", presence="left"))
+    assert node.counters["exit.clock_left"] == 1 and node.counters["final"] == 1
+    assert node._done and not node.reached_end and not node._pending
+    readings = parts.source.rows(0.0, 5 * DT, inclusive=True)
+    assert readings.t.max() >= 5 * DT - TIME_TOL  # some are taken at the last instant
+    node.estimator.take_new()  # the estimator's counts are brought up to date with it
+    used = sum(v for k, v in node.estimator.counters().items() if k.startswith("rows_used:"))
+    assert used == readings.size

@@ -191,3 +191,29 @@ def test_a_lost_robot_gets_the_variance_of_a_robot_driving_at_the_platform_speed
     np.testing.assert_allclose(lost[1].mean, still[1].mean, rtol=0, atol=0)  # still: mean zero
     off = run(replace(still_model, lost_speed=0.0, lost_turn_rate=turn))
     assert all(np.array_equal(o.cov, s.cov) for o, s in zip(off, still, strict=True))
+
+
+def test_a_reply_the_wire_check_lets_through_but_the_filter_cannot_take_is_counted():
+    """The wire check allows an asymmetry of 1e-9 of the covariance's scale (at least 1); a
+    team belief of small variances with such an asymmetry decodes, and then the Gaussian it
+    would become refuses it (asymmetry beyond 1e-6 of its largest variance): counted
+    ``rejected.bad_covariance``, not a crash."""
+    from collections import Counter
+
+    import msgpack
+
+    from relloc.runtime.handoff import Handoff
+
+    roster = ("1", "2", "3")
+    cov = 1e-6 * np.eye(9)
+    cov[0, 1] = 5e-10  # the lower triangle, which the eigenvalue check reads, is diagonal
+    payload = {"v": SCHEMA_VERSION, "type": "sync", "sender": "1", "seq": 0, "t": 5.2}
+    payload |= {"wall_ns": 0, "target": "3", "stamp": 5.2}
+    payload |= {"mean": np.zeros(9).tolist(), "cov": cov.tolist()}
+    body = decode(msgpack.packb(payload), roster=roster, key_sender="1").body
+    counters: Counter[str] = Counter()
+    h = Handoff("3", roster, counters)
+    h.begin(after=5.0)
+    assert h.request(["1", "2"])["target"] == "1"
+    assert h.accept("1", body, 5.2, 0.1) is None
+    assert counters["rejected.bad_covariance"] == 1 and h.waiting

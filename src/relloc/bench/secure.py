@@ -23,7 +23,7 @@ from typing import Any
 
 from relloc.bench.runtime import team_toml
 from relloc.errors import RellocError
-from relloc.runtime.admission import CLOCK_SENDER
+from relloc.runtime.keys import CLOCK_ID
 
 ROBOTS = 6
 DURATION_S = 20.0
@@ -65,7 +65,7 @@ def startup_wall_s(presence: list[dict[str, Any]], clock_wait_s: float) -> float
     joined = [
         float(p["wall_s"])
         for p in presence
-        if p["member"] == CLOCK_SENDER and p["token"] == "alive" and p["event"] == "joined"
+        if p["member"] == CLOCK_ID and p["token"] == "alive" and p["event"] == "joined"
     ]
     if not joined:
         raise RellocError("bench secure: the clock's liveliness token never reached the launcher")

@@ -90,7 +90,7 @@ def access_control(certs: TeamCerts) -> dict[str, Any]:
         {"id": "members", "cert_common_names": [*certs.robots, LAUNCHER_ID]}
     ]
     policies: list[dict[str, Any]] = [{"rules": ["egress", "subscribe"], "subjects": ["members"]}]
-    publishers = {r: r for r in certs.robots} | {LAUNCHER_ID: "clock"}
+    publishers = {r: r for r in certs.robots} | {LAUNCHER_ID: keys.CLOCK_ID}
     for member, token_owner in publishers.items():
         if member == LAUNCHER_ID:
             prefix = [f"relloc/{team}/clock/**"]

@@ -51,8 +51,6 @@ from relloc.runtime.messages import (
     decode,
 )
 
-CLOCK_SENDER = "clock"
-"""The infrastructure sender of ``tick`` and ``ctl`` (the launcher's clock process)."""
 CLOCK_KINDS = frozenset(keys.CLOCK_KINDS)
 """Kinds only the infrastructure sender may send (``sense``: the air-ground world process)."""
 MAX_TICK_S = 10.0
@@ -76,7 +74,7 @@ def admit(
         if key_sender not in roster:
             raise MessageRejected("unknown_sender", f"key {key!r}: {key_sender!r} is not a robot")
     elif keys.parse_clock_key(key) is not None:
-        key_sender, key_kind = CLOCK_SENDER, keys.parse_clock_key(key) or ""
+        key_sender, key_kind = keys.CLOCK_ID, keys.parse_clock_key(key) or ""
     else:
         raise MessageRejected("unknown_key", f"key {key!r} is not a team stream")
     msg = decode(payload, roster=roster, key_sender=key_sender, max_bytes=max_bytes)

@@ -92,7 +92,7 @@ from relloc.errors import ConfigError, DataError, RellocError
 from relloc.estimators.switching_ekf import FRAME
 from relloc.pipeline.output import replace_file, write_json_file
 from relloc.runtime import keys
-from relloc.runtime.admission import CLOCK_SENDER, SenderBudget, admit, check_stamps
+from relloc.runtime.admission import SenderBudget, admit, check_stamps
 from relloc.runtime.faults import FaultSettings, LinkEmulator, RobotEvent
 from relloc.runtime.messages import (
     DEFAULT_MAX_BYTES,
@@ -217,7 +217,7 @@ class WorldProcess:
         self._pubs: dict[str, Any] = {}
 
     def _publish(self, kind: str, body: Mapping[str, Any], t: float) -> None:
-        self._pubs[kind].put(encode(kind, CLOCK_SENDER, self._seq[kind], t, body))
+        self._pubs[kind].put(encode(kind, keys.CLOCK_ID, self._seq[kind], t, body))
         self._seq[kind] += 1
         self.report.sent[kind] = self.report.sent.get(kind, 0) + 1
 
@@ -252,7 +252,7 @@ class WorldProcess:
             inbox.subscribe(session, keys.robot_wildcard(s.team, "cmd"))
             for kind in ("sense", "ctl"):
                 self._pubs[kind] = declare_publisher(session, keys.clock_key(s.team, kind))
-            token = session.liveliness().declare_token(keys.alive_key(s.team, CLOCK_SENDER))
+            token = session.liveliness().declare_token(keys.alive_key(s.team, keys.CLOCK_ID))
             start = time.monotonic()
             everyone = set(self.roster)
             if not self._wait(inbox, lambda: everyone <= self.roll.ready, s.startup_timeout_s):
@@ -714,7 +714,7 @@ class RobotProcess:
         if item.presence != "data":
             parsed = keys.parse_presence_key(item.key)
             member = None if parsed is None else parsed[1]  # None: a token of another layout
-            if member == CLOCK_SENDER:
+            if member == keys.CLOCK_ID:
                 if item.presence == "joined" and not self._clock_seen:
                     self._clock_seen, self._clock_wall = True, time.monotonic()
                 elif item.presence == "left":

@@ -36,7 +36,7 @@ from relloc.core.checks import number, positive
 from relloc.errors import ConfigError, RellocError
 from relloc.pipeline.output import write_json_file
 from relloc.runtime import keys
-from relloc.runtime.admission import CLOCK_SENDER, admit
+from relloc.runtime.admission import admit
 from relloc.runtime.faults import FaultSettings, RobotEvent
 from relloc.runtime.messages import DEFAULT_MAX_BYTES, MessageRejected, encode
 from relloc.runtime.transport import (
@@ -69,7 +69,7 @@ class ClockSettings:
         if not self.roster:
             raise ConfigError("clock.roster: no robots")
         for r in self.roster:
-            keys.check_id(r, "clock.roster")
+            keys.check_robot_id(r, "clock.roster")
         if len(set(self.roster)) != len(self.roster):
             raise ConfigError(f"clock.roster: a robot named twice in {','.join(self.roster)}")
         # a kill of a robot off the roster would keep the clock waiting for it forever
@@ -118,7 +118,7 @@ class Clock:
         self._t = 0.0
 
     def _publish(self, pub: Any, kind: str, body: dict[str, Any]) -> None:
-        pub.put(encode(kind, CLOCK_SENDER, self._seq, self._t, body))
+        pub.put(encode(kind, keys.CLOCK_ID, self._seq, self._t, body))
         self._seq += 1
 
     def _handle(self, item: Any, waiting_k: int | None) -> None:
@@ -152,7 +152,7 @@ class Clock:
             inbox.subscribe(session, keys.robot_wildcard(s.team, "ack"))
             tick_pub = declare_publisher(session, keys.clock_key(s.team, "tick"))
             ctl_pub = declare_publisher(session, keys.clock_key(s.team, "ctl"))
-            token = session.liveliness().declare_token(keys.alive_key(s.team, "clock"))
+            token = session.liveliness().declare_token(keys.alive_key(s.team, keys.CLOCK_ID))
             start = time.monotonic()
             everyone = set(s.roster)
             if not self._wait(

@@ -20,7 +20,7 @@
 | ``relloc/<team>/ready/<id>`` (liveliness) | held once the robot has seen every teammate |
 
 Robot and team ids are restricted to ``[A-Za-z0-9_-]`` so they can never inject the wildcard or
-separator characters of a key expression.
+separator characters of a key expression; no robot may be named ``clock`` (:data:`CLOCK_ID`).
 """
 
 from __future__ import annotations
@@ -32,6 +32,9 @@ from relloc.errors import ConfigError
 ROBOT_KINDS = ("odom", "meas", "rows", "eqm", "mail", "est", "evt", "stats", "ack", "cmd", "sync")
 CLOCK_KINDS = ("tick", "ctl", "sense")
 PRESENCE_TOKENS = ("alive", "ready")
+CLOCK_ID = "clock"
+"""The id of the clock (or world) process: its ``alive`` token and the sender of its messages.
+No robot may take it."""
 _ID = re.compile(r"[A-Za-z0-9_-]{1,64}")
 
 
@@ -39,6 +42,15 @@ def check_id(value: str, field: str) -> str:
     """Return ``value`` if it is a valid team/robot id, else raise ConfigError naming ``field``."""
     if not isinstance(value, str) or not _ID.fullmatch(value):
         raise ConfigError(f"{field}: {value!r} is not a valid id (letters, digits, '_', '-')")
+    return value
+
+
+def check_robot_id(value: str, field: str) -> str:
+    """:func:`check_id`, and not :data:`CLOCK_ID`: a robot of that id would be taken for the
+    clock process (its token, its messages)."""
+    check_id(value, field)
+    if value == CLOCK_ID:
+        raise ConfigError(f"{field}: {value!r} is reserved for the clock process")
     return value
 
 

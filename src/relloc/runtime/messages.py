@@ -78,6 +78,7 @@ from relloc.core.estimates import BeliefSeries, Estimates, SeriesKey, UpdateSeri
 from relloc.core.limits import MAX_SPEED_M_S, MAX_YAW_RATE_RAD_S
 from relloc.errors import DataError
 from relloc.pipeline.frames import FRAMES
+from relloc.runtime import keys
 
 SCHEMA_VERSION = 4
 """The wire layout's version (what each one introduced: :data:`VERSION_CHANGES`). A message of
@@ -199,7 +200,7 @@ _S = TypeVar("_S", BeliefSeries, UpdateSeries)
 
 CTL_ACTIONS = frozenset({"kill", "restart", "end"})
 EVENT_KINDS = frozenset({"created", "deleted", "recreated"})
-INFRASTRUCTURE_SENDERS = frozenset({"clock"})
+INFRASTRUCTURE_SENDERS = frozenset({keys.CLOCK_ID})
 """Senders that are not robots but are allowed on the team's keys."""
 
 

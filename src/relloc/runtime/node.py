@@ -157,9 +157,9 @@ class NodeSettings:
 
     def __post_init__(self) -> None:
         keys.check_id(self.team, "node.team")
-        keys.check_id(self.robot, "node.robot")
+        keys.check_robot_id(self.robot, "node.robot")
         for r in self.roster:
-            keys.check_id(r, "node.roster")
+            keys.check_robot_id(r, "node.roster")
         if self.robot not in self.roster:
             raise ConfigError(f"node.robot: {self.robot!r} is not on the roster {self.roster}")
         if len(set(self.roster)) != len(self.roster):
@@ -371,7 +371,7 @@ class RobotNode:
             self.counters[f"ignored.{msg.kind}"] += 1
 
     def _on_presence(self, member: str, joined: bool) -> None:
-        if member == "clock":
+        if member == keys.CLOCK_ID:
             self._clock_seen = joined
             if not joined:
                 self.counters["exit.clock_left"] += 1

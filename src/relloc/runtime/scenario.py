@@ -24,7 +24,7 @@ import numpy as np
 from relloc.core.recording import Recording
 from relloc.errors import ConfigError
 from relloc.pipeline.montecarlo import spawn_seeds
-from relloc.runtime.keys import check_id
+from relloc.runtime.keys import check_robot_id
 from relloc.sim.scenario import Scenario, default_scenario, load_scenario
 from relloc.sim.simulate import simulate
 
@@ -63,10 +63,10 @@ def run_seeds(seed: int) -> tuple[np.random.SeedSequence, np.random.SeedSequence
 
 def load_team_scenario(spec: str) -> Scenario:
     """``"default"`` → the built-in team; anything else is a TOML path. Robot names must be
-    valid runtime ids (they become key-expression segments)."""
+    valid runtime ids (they become key-expression segments) other than the clock's."""
     scenario = default_scenario() if spec == "default" else load_scenario(check_source(spec))
     for name in scenario.robot_names:
-        check_id(name, f"scenario robot name {name!r}")
+        check_robot_id(name, f"scenario robot name {name!r}")
     return scenario
 
 
