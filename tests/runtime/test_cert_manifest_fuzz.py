@@ -18,6 +18,7 @@ from hypothesis import strategies as st
 
 from relloc.errors import DataError
 from relloc.runtime.certs import LAUNCHER_ID, TeamCerts, load_team_certs, make_team_certs
+from relloc.runtime.keys import CLOCK_ID
 
 pytest.importorskip("cryptography")
 
@@ -54,6 +55,7 @@ _hostile_ids = st.sampled_from(
         "x" * 65,
         "A",
         LAUNCHER_ID,
+        CLOCK_ID,
     ]
 )
 _json = st.recursive(
@@ -94,7 +96,8 @@ def _manifests(draw: st.DrawFn) -> Any:
 
 
 def _well_formed(doc: Any) -> bool:
-    """A manifest of a valid team id and distinct, valid robot ids other than the launcher's."""
+    """A manifest of a valid team id and distinct, valid robot ids other than the launcher's
+    and the clock's."""
     if not isinstance(doc, dict) or not isinstance(doc.get("team"), str):
         return False
     robots = doc.get("robots")
@@ -105,6 +108,7 @@ def _well_formed(doc: Any) -> bool:
         and all(isinstance(r, str) and _ID.fullmatch(r) for r in robots)
         and len(set(robots)) == len(robots)
         and LAUNCHER_ID not in robots
+        and CLOCK_ID not in robots
     )
 
 

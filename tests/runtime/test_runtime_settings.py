@@ -10,6 +10,8 @@ import pytest
 
 from relloc.errors import ConfigError
 from relloc.runtime import keys
+from relloc.runtime.airground import RobotSettings
+from relloc.runtime.certs import check_roster
 from relloc.runtime.clock import ClockSettings
 from relloc.runtime.node import NodeSettings
 from relloc.runtime.scenario import load_team_scenario
@@ -63,6 +65,10 @@ def test_no_robot_may_take_the_clock_process_id(trio_scenario):
             duration_s=1.0,
             transport=TransportSettings(),
         )
+    with pytest.raises(ConfigError, match=r"--robot: 'clock' is reserved"):
+        RobotSettings(team="t", robot="clock", transport=TransportSettings())
+    with pytest.raises(ConfigError, match=r"robots: 'clock' is reserved"):
+        check_roster("t", ("a", "clock"))
 
 
 @pytest.mark.parametrize(

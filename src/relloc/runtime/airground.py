@@ -431,7 +431,7 @@ class RobotSettings:
 
     def __post_init__(self) -> None:
         keys.check_id(self.team, "robot.team")
-        keys.check_id(self.robot, "--robot")
+        keys.check_robot_id(self.robot, "--robot")
         count(self.fault_seed, "robot.fault_seed", low=0)
         positive(self.input_timeout_s, "robot.input_timeout_s")
         count(self.max_bytes, "robot.max_bytes", low=MIN_MESSAGE_BYTES, high=MAX_MESSAGE_BYTES)

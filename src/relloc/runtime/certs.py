@@ -66,14 +66,15 @@ class TeamCerts:
 def check_roster(team: str, robots: Sequence[str], flag: str = "") -> tuple[str, ...]:
     """``robots`` as a tuple, after checking the team's and every robot's id
     (:func:`relloc.runtime.keys.check_id`, so that every file named after one lies in the
-    folder): at least one robot, none twice, none the launcher's id. A ConfigError names
+    folder; a robot's through :func:`~relloc.runtime.keys.check_robot_id`, so none is the
+    clock's): at least one robot, none twice, none the launcher's id. A ConfigError names
     ``{flag}team`` or ``{flag}robots``."""
     keys.check_id(team, f"{flag}team")
     robots = tuple(robots)
     if not robots:
         raise ConfigError(f"{flag}robots: no robot ids")
     for r in robots:
-        keys.check_id(r, f"{flag}robots")
+        keys.check_robot_id(r, f"{flag}robots")
     if LAUNCHER_ID in robots or len(set(robots)) != len(robots):
         raise ConfigError(
             f"{flag}robots: duplicate ids or the reserved id {LAUNCHER_ID!r}: {robots!r:.60}"
