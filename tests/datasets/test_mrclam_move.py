@@ -267,6 +267,40 @@ def test_rows_that_cannot_be_moved_are_counted_and_left_out(tmp_path: Path) -> N
         assert moved.report.files[name].rows_kept == file_report.rows_kept, name
 
 
+def test_rows_of_every_file_kind_that_cannot_be_moved_are_counted(tmp_path: Path) -> None:
+    """Not the file's number of columns, a position or heading beyond the loader's bounds:
+    left out and counted in every file kind; a coordinate whose exponent is beyond
+    :mod:`decimal`'s range (``0e-99999999999999999999``) is moved as the 0 the loader reads."""
+    src = _folder(tmp_path / "run")
+
+    def append(name: str, rows: bytes) -> None:
+        (src / name).write_bytes((src / name).read_bytes() + rows)
+
+    append("Barcodes.dat", b"7 \t 90 \t 1\n")  # three columns
+    append("Landmark_Groundtruth.dat", b"8 abc 1.0 0.1 0.1\n9 1.0 2.0 0.1\n")
+    append(
+        "Robot1_Groundtruth.dat",
+        f"{T0 + 10:.3f} 1.0 2.0\n{T0 + 10.5:.3f} 1.0 2.0 99\n{T0 + 11:.3f} 1e9 2.0 0.5\n".encode()
+        + f"{T0 + 11.5:.3f} 0e-99999999999999999999 2.0 0.5\n".encode(),
+    )
+    append("Robot1_Odometry.dat", f"{T0 + 10.5:.3f} 0.1\n".encode())
+    report = move_mrclam(src, tmp_path / "moved", rotation_rad=math.pi / 2, shift_m=(1.0, 0.0))
+    counts = {name: (c.moved, c.unreadable) for name, c in report.files.items()}
+    assert counts["Barcodes.dat"] == (5, 1)
+    assert counts["Landmark_Groundtruth.dat"] == (2, 2)
+    assert counts["Robot1_Groundtruth.dat"] == (21, 3)
+    assert counts["Robot1_Odometry.dat"] == (40, 1)
+    assert _rows(tmp_path / "moved" / "Robot1_Groundtruth.dat")[-1] == [
+        b"1000000011.500",
+        b"-1.00000000",
+        b"0.00000000",
+        b"2.07079633",
+    ]
+    here, moved = load_mrclam(src), load_mrclam(tmp_path / "moved")
+    for name, file_report in here.report.files.items():
+        assert moved.report.files[name].rows_kept == file_report.rows_kept, name
+
+
 #: Columns of appended rows: times in and out of bounds, barcodes known, fresh (11, given to
 #: robot 1 below) and unknown (50), and what the loader does not read.
 ROW_TOKENS = ["1000000005", "1000000005.5", "5e9", "-1", "nan", "inf", "1e-400", "5", "5.0",

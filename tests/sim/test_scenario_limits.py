@@ -1,6 +1,7 @@
 """Scenario files that used to crash the parser or the simulator: each is now a ConfigError
 naming the file and the field (or, where documented, a valid scenario that measures less)."""
 
+import dataclasses
 from importlib import resources
 
 import numpy as np
@@ -209,6 +210,42 @@ STEP_LIMIT = "the limit is 1e+07 (MAX_SIMULATED_STEPS)"
             "[robots.motion]\npoints",
             ["robots[1].motion.type: must be 'waypoints' or 'velocity', got None"],
         ),
+        (
+            AERIAL1_POINTS,
+            "[[3.0, 9.0], [6.5, 8.5]]",
+            ["robots[1].motion.points: a closed path needs at least three points"],
+        ),
+        (
+            'name = "aerial1"\n',
+            'name = "aerial1"\ninitial_pose = [1.0, 1.0, 0.0]\n',
+            ["robots[1].initial_pose: not used with way-points"],
+        ),
+        (
+            "[0.8, 12.0]]",
+            '[0.8, 12.0]]\nheading = "fixed"',
+            ["robots[3].motion.heading: a ground robot follows its path's tangent; must be"],
+        ),
+        (
+            OBSERVER,
+            OBSERVER + 'observes = "aerial1"\n',
+            ["robots[0].observes: expected a list of robot names, got 'aerial1'"],
+        ),
+        (
+            OBSERVER,
+            OBSERVER + "observes = [" + ", ".join(f'"r{i}"' for i in range(65)) + "]\n",
+            ["robots[0].observes: 65 names; the limit is 64 (MAX_ROBOTS)"],
+        ),
+        (OBSERVER, OBSERVER + "observes = [1]\n", ["robots[0].observes[0]: expected a robot name"]),
+        (
+            OBSERVER,
+            OBSERVER + 'observes = ["observer"]\n',
+            ["robots[0].observes[0]: a robot cannot observe itself"],
+        ),
+        (
+            "[robots.motion]            # slow",
+            "motion = 5\n[robots.unused]            # slow",
+            ["robots[0].motion: expected a table with type = 'waypoints' or 'velocity'"],
+        ),
     ],
 )
 def test_bad_value_is_a_config_error_naming_the_field(tmp_path, old, new, expected):
@@ -339,3 +376,16 @@ def test_dataclasses_check_their_parts_without_toml():
             initial_pose=(0, 0, 0),
             observes=("a",),
         )
+
+
+def test_dataclass_parts_of_the_wrong_type_or_too_many_robots_are_named():
+    default = scn.default_scenario()
+    observer = default.robots[0]
+    with pytest.raises(ConfigError, match="odometry: expected an odometry noise table"):
+        dataclasses.replace(observer, odometry="quiet")
+    with pytest.raises(ConfigError, match="sensor: expected a sensor table"):
+        dataclasses.replace(observer, sensor="camera")
+    with pytest.raises(ConfigError, match="arena: expected an arena table"):
+        dataclasses.replace(default, arena="field")
+    with pytest.raises(ConfigError, match=r"robots: 65 robots; the limit is 64 \(MAX_ROBOTS\)"):
+        dataclasses.replace(default, robots=default.robots * 13)

@@ -55,6 +55,11 @@ def test_a_document_that_is_not_a_table_is_a_config_error():
         ({"landmarks_xy": "ab"}, "landmarks_xy"),
         ({"speed": 1e308}, "speed"),
         ({"duration": 1e12}, "MAX_SIMULATED_STEPS"),
+        ({"waypoints": (np.zeros((0, 2)),) * 5}, r"waypoints\[0\] must have shape \(k, 2\)"),
+        ({"waypoints": (np.zeros((2, 3)),) * 5}, r"waypoints\[0\] must have shape \(k, 2\)"),
+        ({"duration": 0.001}, "duration must be ≥ dt"),
+        ({"gps_robots": (7,)}, r"gps_robots\[0\]: robot index 7 out of range 0\.\.4"),
+        ({"landmarks_xy": np.array([[1e9, 0.0]])}, "landmarks_xy: a position beyond 100000 m"),
     ],
 )
 def test_bad_cooperative_scenario_names_the_field(change, where):
@@ -118,6 +123,9 @@ def test_a_one_robot_team_simulates():
         ({"sensing": (1.5,)}, r"sensing\[0\]"),
         ({"sensing": (True,)}, r"sensing\[0\]"),
         ({"sensing": "01"}, "sensing"),
+        ({"direct_rate": 3.0}, r"direct_rate must divide filter_rate \(3\.0 vs 20\.0\)"),
+        ({"direct_rate": 40.0}, r"direct_rate must divide filter_rate \(40\.0 vs 20\.0\)"),
+        ({"kidnap": (9, 0.5, 0.0, 0.0, 0.0)}, r"kidnap\[0\] \(robot\): no robot 9 \(0 to 4\)"),
     ],
 )
 def test_bad_desilva_scenario_names_the_field(change, where):

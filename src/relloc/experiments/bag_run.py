@@ -86,8 +86,7 @@ def landmark_range_rows(recording: Recording) -> int:
     """The ``range`` rows to a static radio of known position (a landmark), which no filter of
     ``relloc run`` uses (the range-only filter is a robot pair's)."""
     m = recording.measurements
-    if m.landmark is None:
-        return 0
+    assert m.landmark is not None  # filled in by Measurements
     return int(np.count_nonzero((m.kind == _RANGE) & (m.landmark >= 0)))
 
 
