@@ -58,9 +58,6 @@ class TeamInformation:
         info = belief.to_information()
         return TeamInformation(info=info, mean=belief.mean.copy(), cov=belief.cov.copy())
 
-    def to_gaussian(self) -> Gaussian:
-        return Gaussian(mean=self.mean, cov=self.cov)
-
 
 def _inverse_spd(A: Array, where: str) -> Array:
     """``A⁻¹`` (symmetrised) of an exactly symmetric positive definite ``A``: LAPACK ``potrs``

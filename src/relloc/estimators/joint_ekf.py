@@ -112,10 +112,6 @@ class TeamMoments:
 
     belief: _Moments
 
-    @property
-    def n_robots(self) -> int:
-        return self.belief.dim // 3
-
     def mean(self) -> Array:
         """Team mean as ``(n, 3)``."""
         return self.belief.mean.reshape(-1, 3)
