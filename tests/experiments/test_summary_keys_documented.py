@@ -12,7 +12,6 @@ import importlib
 import importlib.util
 import json
 import re
-import sys
 from pathlib import Path
 
 import pytest
@@ -54,7 +53,6 @@ def test_sharma2013(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     from relloc.experiments import sharma2013
 
     monkeypatch.setattr(sharma2013, "DURATION_S", 5.0)
-    monkeypatch.setitem(sys.modules, "relloc.observability.analysis", None)
     out = tmp_path / "s"
     argv = ["reproduce", "sharma2013", "--out", str(out), "--runs", "1", "--executor", "serial",
             "--quiet"]  # fmt: skip
