@@ -63,3 +63,9 @@ def test_too_short_recording_is_a_clear_error(tmp_path):
     folder = _three_robot_folder(tmp_path / "short", seconds=12.0)
     with pytest.raises(DataError, match="share only"):
         mrclam_team_recording(folder, np.random.default_rng(0))
+
+
+def test_an_observer_not_in_the_folder_is_a_clear_error(tmp_path):
+    folder = _three_robot_folder(tmp_path / "team", seconds=20.0)
+    with pytest.raises(DataError, match=r"team: observer robot 9 not in the dataset \(robots"):
+        mrclam_team_recording(folder, np.random.default_rng(0), observer=9)
