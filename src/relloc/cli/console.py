@@ -9,7 +9,6 @@ full tables are in ``report.md``; the console shows the key figures only.
 from __future__ import annotations
 
 import math
-import os
 import re
 import shutil
 import textwrap
@@ -24,10 +23,8 @@ NBSP = "\u00a0"
 
 
 def terminal_width(default: int = 80) -> int:
-    """``$COLUMNS`` if set, else the terminal's width, else ``default``."""
-    columns = os.environ.get("COLUMNS", "")
-    if columns.isdigit() and int(columns) > 0:
-        return int(columns)
+    """``$COLUMNS`` if set, else the terminal's width, else ``default``
+    (:func:`shutil.get_terminal_size` reads them in that order)."""
     return shutil.get_terminal_size((default, 24)).columns
 
 
