@@ -98,6 +98,8 @@ def a_file(tmp_path: Path) -> Path:
             "--filter: sharma2013 does not read it; read by --estimator track",
         ),
         (["team", "up", "desilva2015", "--case", "x"], "--case: desilva2015 does not read it"),
+        (["team", "up", "desilva2015", "--runs", "0"], "--runs: 0 must be ≥ 1"),
+        (["team", "up", "sharma2013", "--runs", "-2"], "--runs: -2 must be ≥ 1"),
         (
             ["team", "up", "guler2023", "--estimator", "track"],
             "--estimator: guler2023 does not read it",

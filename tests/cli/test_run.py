@@ -97,6 +97,8 @@ def test_run_user_scenario_with_tekf_and_a_gate(tmp_path):
             "tekf",
             "--gate",
             "0.999",
+            "--yaw-bank",
+            "0",
             "--executor",
             "serial",
             "--quiet",
@@ -105,6 +107,7 @@ def test_run_user_scenario_with_tekf_and_a_gate(tmp_path):
     assert code == 0
     summary = json.loads((out / "summary.json").read_text())
     assert summary["scenario"] == "pair" and summary["filter"] == "tekf"
+    assert summary["yaw_bank_components"] == 0  # --yaw-bank 0: a single filter per track
     assert summary["gate_probability"] == 0.999
     assert "- **gate_probability**: 0.999" in (out / "report.md").read_text()
     assert list(summary["pairs"]) == ["leader->drone"]

@@ -5,10 +5,12 @@ from __future__ import annotations
 
 import dataclasses
 import json
+from collections import defaultdict
 from pathlib import Path
 
 import numpy as np
 import pytest
+from export_files import check_mcap, check_tum
 
 from relloc.cli import main
 from relloc.experiments import registry
@@ -129,3 +131,72 @@ def test_guler2023_exports_the_followers_common_frame_beliefs(tmp_path):  # type
         assert s["position_rmse_m"] == pytest.approx(float(np.hypot(*scored.rmse[k])), rel=1e-12)
     topics = section["mcap"]["topics"]
     assert all(f"/{f}/estimates/R_0/observer_heading" in topics for f in followers)
+
+
+def test_desilva2015_cli_writes_the_files_its_summary_states(tmp_path, monkeypatch):  # type: ignore[no-untyped-def]
+    """``relloc reproduce desilva2015 --tum DIR --mcap FILE`` (3 s runs, one per setting, the
+    sweeps cut to the point the report names): the leaders' dominant tracks of run 0 in both
+    formats, row for row the records its summary counts and scores."""
+    from relloc.experiments import desilva2015
+
+    for name, value in (("DURATION_S", 3.0), ("STEADY_FROM_S", 1.0), ("FINAL_WINDOW_S", 1.0)):
+        monkeypatch.setattr(desilva2015, name, value)
+    monkeypatch.setattr(desilva2015, "KIDNAP", (3, 1.5, 3.0, -2.0, 2.0))
+    monkeypatch.setattr(desilva2015, "CLUTTER_FACTORS", (1, 100))  # the report's λ × 100
+    monkeypatch.setattr(desilva2015, "PD_VALUES", (0.95,))
+    # no figures (half the time; test_cli_multihypothesis draws them)
+    monkeypatch.setattr(desilva2015, "_figures", lambda *args: defaultdict(lambda: "none.png"))
+    out, tum, mcap = tmp_path / "d", tmp_path / "tum", tmp_path / "d.mcap"
+    code = main(
+        ["reproduce", "desilva2015", "--out", str(out), "--runs", "1", "--seed", "3",
+         "--executor", "serial", "--quiet", "--tum", str(tum), "--mcap", str(mcap)]
+    )  # fmt: skip
+    assert code == 0
+    export = json.loads((out / "summary.json").read_text())["export"]
+    assert export["run"] == f"run 0 of 1 (seed 3): {desilva2015.EXPORTED_RUN}"
+    robots = {"L1", "L2", "P1", "P2", "P3"}
+    for label, s in export["series"].items():
+        owner, subject = label.split("#")[0].split("->")
+        assert owner in {"L1", "L2"} and subject in robots - {owner}, label
+        assert s["frame_id"] == f"{owner}/base_link"
+    assert len(export["series"]) >= 4
+    check_tum(export, tum)
+    check_mcap(export, mcap)
+
+
+def test_guler2023_cli_writes_the_files_its_summary_states(tmp_path, monkeypatch):  # type: ignore[no-untyped-def]
+    """``relloc reproduce guler2023 --tum DIR --mcap FILE`` on a short plan (5 % durations, one
+    run per block): every follower's common-frame belief of the leader in run 0 of
+    ``two_drones``, as TUM pairs and MCAP poses (and its own heading, MCAP only)."""
+    from relloc.datasets.paths import default_uwb_csv
+    from relloc.experiments import guler2023
+
+    if not default_uwb_csv().is_file():
+        pytest.skip(f"shared UWB data not found at {default_uwb_csv()}")
+    plan = guler2023.Plan(
+        one_drone_runs=1,
+        two_drones_runs=1,
+        formation_runs=1,
+        sweep_runs=1,
+        dwell_times=(4.0,),
+        drone_counts=(2,),
+        duration_scale=0.05,
+    )
+    monkeypatch.setattr(guler2023, "default_plan", lambda runs: plan)
+    # no figures (half the time; test_sim_and_cli draws them)
+    monkeypatch.setattr(guler2023, "_figures", lambda *args: defaultdict(lambda: "none.png"))
+    out, tum, mcap = tmp_path / "g", tmp_path / "tum", tmp_path / "g.mcap"
+    code = main(
+        ["reproduce", "guler2023", "--out", str(out), "--seed", "7", "--executor", "serial",
+         "--quiet", "--tum", str(tum), "--mcap", str(mcap)]
+    )  # fmt: skip
+    assert code == 0
+    export = json.loads((out / "summary.json").read_text())["export"]
+    assert export["run"] == (f"run 0 of 1 of two_drones (master seed 7): {guler2023.EXPORTED_RUN}")
+    followers = ("R_1", "R_2", "R_3", "R_4")
+    assert set(export["series"]) == {f"{f}->R_0" for f in followers}
+    for f in followers:
+        assert export["series"][f"{f}->R_0"]["frame_id"] == f"{f}/common"
+        assert f"/{f}/estimates/R_0/observer_heading" in export["mcap"]["topics"]
+    check_tum(export, tum)
+    check_mcap(export, mcap)

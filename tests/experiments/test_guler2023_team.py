@@ -4,6 +4,7 @@ closed loop, against the in-process reproduction on the same seeds."""
 from __future__ import annotations
 
 import json
+import re
 
 import pytest
 
@@ -19,12 +20,34 @@ def _summary(out):
     return json.loads((out / "summary.json").read_text())
 
 
+def _shown(text, value):
+    """``text`` is ``value`` as the terminal shows it: four significant digits, ``—`` for none."""
+    if value is None:
+        return text == "—"
+    return float(text) == pytest.approx(value, rel=5.001e-4, abs=0.0)
+
+
 @pytest.mark.slow
-def test_air_ground_processes_in_closed_loop_equal_the_in_process_run(tmp_path):
+def test_air_ground_processes_in_closed_loop_equal_the_in_process_run(tmp_path, capsys):
     out = tmp_path / "out"
     argv = ["team", "up", "guler2023", "--out", str(out), "--duration", "1.5", "--seed", "3"]
-    assert main([*argv, "--quiet"]) == 0
+    assert main(argv) == 0  # not --quiet (the other runs here are): the terminal summary
     s = _summary(out)
+    # the line the terminal shows: this run's figures, the same as its summary.json's
+    printed = capsys.readouterr().out
+    line = re.search(
+        r"^guler2023 (\S+): RMSE mean (\S+) m \(in-process (\S+) m\), worst (\S+) m "
+        r"\(in-process (\S+) m\); max \|Δ belief\| (\S+)$",
+        printed,
+        flags=re.M,
+    )
+    assert line is not None, printed
+    d, r = s["distributed"], s["in_process"]
+    assert line[1] == s["case"] == "two_drones"
+    figures = [d["rmse_m_mean"], r["rmse_m_mean"], d["rmse_m_worst"], r["rmse_m_worst"]]
+    shown = zip(line.groups()[1:], [*figures, s["agreement"]["max_abs_diff"]], strict=True)
+    assert all(_shown(text, value) for text, value in shown), (printed, d, r)
+    assert d["rmse_m_mean"] > 0.0 and line[6] == "0"
     assert s["case"] == "two_drones" and s["agreement"]["perfect_network"]
     # the same functions on the same float64 numbers, no command delay: exactly equal
     assert s["agreement"]["max_abs_diff"] == 0.0, s["agreement"]

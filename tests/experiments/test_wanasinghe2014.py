@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from export_files import check_mcap, check_tum
 from wanasinghe_small import small_config
 
 from relloc.calibration.odometry import ground_truth_velocities
@@ -43,6 +44,7 @@ from relloc.experiments.wanasinghe2014_paper import PAPER_TABLE1, RULES, STATES
 from relloc.experiments.wanasinghe2014_report import _bias_nees_text
 from relloc.experiments.wanasinghe2014_sim import SimSettings, team_task
 from relloc.models.measurement import range_bearing
+from relloc.pipeline.export import ExportRequest
 from relloc.sim.scenario import default_scenario
 
 
@@ -60,10 +62,20 @@ def medium_dataset(tmp_path_factory: pytest.TempPathFactory, mrclam_run6_cut) ->
 
 def test_small_reproduction_on_another_mrclam_folder(small_dataset: Path, tmp_path: Path) -> None:
     out = tmp_path / "out"
+    export = ExportRequest(tum=tmp_path / "tum", mcap=tmp_path / "w.mcap")  # --tum, --mcap
     summary = run_reproduction(
-        small_config(small_dataset), out, seed=11, executor="serial", quiet=True
+        small_config(small_dataset), out, seed=11, executor="serial", quiet=True, export=export
     )
     on_disk = json.loads((out / "summary.json").read_text())
+    # the exported run: the accuracy filters of team draw 0, every observed robot's series
+    exported = on_disk["export"]
+    assert exported["run"].startswith("team draw 0 of 2 (seed 11): ")
+    assert set(exported["series"]) == {f"observer->{r}#accuracy" for r in summary["accuracy"]}
+    assert {s["settle_s"] for s in exported["series"].values()} == {
+        small_config(small_dataset).steady_state_s
+    }
+    check_tum(exported, tmp_path / "tum")
+    check_mcap(exported, tmp_path / "w.mcap")
     assert on_disk["seed"] == 11 and on_disk["runs"] == 2
     for key in ("accuracy", "table1", "table1_best", "table3", "table4", "pcrlb_ratio"):
         assert key in on_disk

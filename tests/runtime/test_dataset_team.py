@@ -2,14 +2,19 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from relloc.errors import DataError
+from relloc.estimators.track_manager import TrackManagerSettings
 from relloc.runtime.dataset import mrclam_team_recording
+from relloc.runtime.launcher import TeamSettings
 from relloc.runtime.scenario import load_team
+from relloc.runtime.team import team_meta
+from relloc.sim.scenario import SensorSpec
 
 T0 = 1_000_000_000.0
 
@@ -54,9 +59,29 @@ def test_recorded_team_becomes_a_recording_with_raised_planes(tmp_path):
     # synthesised from the truth with the sensor's noise: residuals are a few sigma at most
     truth = np.stack([rec.relative_truth(0, j, t)[0] for t, j in zip(m.t, m.target, strict=True)])
     assert np.abs(m.value[:, 0] - np.linalg.norm(truth[:, :3], axis=1)).max() < 5 * m.sigma[0, 0]
-    same = load_team(str(folder), 4).recording
+    team = load_team(str(folder), 4)
+    same = team.recording
     again = load_team(str(folder), 4).recording
     np.testing.assert_array_equal(same.measurements.value, again.measurements.value)
+    # the settings summary.json states for a recorded team (no scenario file to name them):
+    # the folder, the seed, the tracks' settings, every robot's odometry noise fitted from the
+    # recording and the observer's sensor noise, as JSON numbers
+    meta = team_meta(
+        team,
+        TeamSettings(scenario=str(folder), out_dir=tmp_path / "out", seed=4, filter_kind="tekf"),
+        TrackManagerSettings(filter="tekf", gate_probability=0.9),
+    )
+    assert json.loads(json.dumps(meta)) == meta
+    assert meta["experiment"] == "team_up" and meta["scenario"] == "replay of team"
+    assert meta["source"] == same.source and str(folder) in meta["source"] and meta["seed"] == 4
+    assert meta["filter"] == "tekf" and meta["gate_probability"] == 0.9
+    assert list(meta["odometry_sigma"]) == ["robot1", "robot2", "robot3"]
+    for i, sigma in enumerate(meta["odometry_sigma"].values()):
+        assert len(sigma) == 4 and sigma == same.odometry[i].sigma.tolist()
+    spec = SensorSpec()
+    assert meta["sensor_sigma"] == {
+        "robot1": [spec.sigma_range, spec.sigma_azimuth, spec.sigma_elevation]
+    }
 
 
 def test_too_short_recording_is_a_clear_error(tmp_path):

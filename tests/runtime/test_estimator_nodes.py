@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import re
 
 import numpy as np
 import pytest
@@ -37,6 +38,26 @@ from relloc.runtime.summary import latest_of_each_time
 from relloc.runtime.teammates import ReceivedOdometry
 
 ROSTER = ("L1", "L2", "P1", "P2", "P3")
+
+
+def _shown(text, value):
+    """``text`` is ``value`` as the terminal shows it: four significant digits, ``—`` for none."""
+    if value is None:
+        return text == "—"
+    return float(text) == pytest.approx(value, rel=5.001e-4, abs=0.0)
+
+
+def _agent_lines(printed, prefix):
+    """``{robot: (position RMSE, in-process RMSE, max |Δ|)}`` as ``team up`` prints them for a
+    team EIF's agents (lines starting ``{prefix}agent ROBOT:``)."""
+    found = re.findall(
+        rf"^{re.escape(prefix)}agent (\S+): position RMSE (\S+) m \(in-process (\S+) m\), "
+        r"max \|Δ\| (\S+)$",
+        printed,
+        flags=re.M,
+    )
+    assert len({robot for robot, *_ in found}) == len(found), printed
+    return {robot: tuple(figures) for robot, *figures in found}
 
 
 def _leader_drivers(duration_s: float, policy: str = "all"):
@@ -263,15 +284,29 @@ def test_a_sharing_policy_reaches_the_leader_processes(tmp_path):
 
 
 @pytest.mark.slow
-def test_the_sensing_robots_reach_every_robot_process(tmp_path):
+def test_the_sensing_robots_reach_every_robot_process(tmp_path, capsys):
     """``--sensing L1,P2``: every process simulates those robots sensing, so P2 runs a fuser
     (beliefs of its teammates, mail to L1) and L2 only shares its odometry; the distributed
     beliefs and figures of both fusers agree with the in-process run of the same sensing robots,
     and the summary and report name them."""
     out = tmp_path / "out"
     argv = ["team", "up", "desilva2015", "--out", str(out), "--duration", "6", "--seed", "3"]
-    assert main([*argv, "--sensing", "L1,P2", "--quiet"]) == 0
+    assert main([*argv, "--sensing", "L1,P2"]) == 0  # not --quiet: the terminal summary too
     summary = json.loads((out / "summary.json").read_text())
+    printed = capsys.readouterr().out
+    line = re.search(
+        r"^(\S+): success rate (\S+) \(in-process (\S+)\), position RMSE (\S+) m "
+        r"\(in-process (\S+) m\); max \|Δ belief\| (\S+)$",
+        printed,
+        flags=re.M,
+    )
+    assert line is not None, printed
+    d, r = summary["distributed"], summary["in_process"]
+    assert line[1] == summary["experiment"] == "desilva2015"
+    assert d["pos_rmse_m"] is not None and d["success_rate"] is not None, d
+    figures = [d["success_rate"], r["success_rate"], d["pos_rmse_m"], r["pos_rmse_m"]]
+    shown = zip(line.groups()[1:], [*figures, summary["agreement"]["max_abs_diff"]], strict=True)
+    assert all(_shown(text, value) for text, value in shown), (printed, d, r)
     assert summary["sensing"] == ["L1", "P2"] and summary["paper_sensing"] == ["L1", "L2"]
     assert summary["processes_per_run"]["fusers"] == 2
     agree = summary["agreement"]
@@ -345,14 +380,21 @@ def test_an_agent_refilters_late_readings_from_a_checkpoint_and_matches_the_in_p
 
 @pytest.mark.slow
 @pytest.mark.parametrize("stall", [None, "2,1@1:0.5"])
-def test_sharma_agents_as_processes_each_equal_the_in_process_eif(tmp_path, stall):
+def test_sharma_agents_as_processes_each_equal_the_in_process_eif(tmp_path, capsys, stall):
     """Also when agent 1 hears nothing from agent 2 for half a second of wall time from 1 s on
     (``--stall``): agent 1 holds its ack until agent 2's odometry and readings come, so the
-    clock never forces its window through without them."""
+    clock never forces its window through without them. Not ``--quiet`` (the runs of
+    ``test_sharma_team_faults`` are): every agent's row of the terminal summary."""
     out = tmp_path / "out"
-    argv = ["team", "up", "sharma2013", "--out", str(out), "--duration", "3", "--quiet"]
+    argv = ["team", "up", "sharma2013", "--out", str(out), "--duration", "3"]
     assert main(argv + (["--stall", stall] if stall else [])) == 0
     summary = json.loads((out / "summary.json").read_text())
+    printed = _agent_lines(capsys.readouterr().out, "run 0 ")
+    assert set(printed) == set(summary["per_run"][0]["agents"]) == {"1", "2", "3", "4", "5"}
+    ref = summary["per_run"][0]["in_process"]["pos_rmse_m"]
+    for robot, a in summary["per_run"][0]["agents"].items():
+        figures = (a["pos_rmse_m"], ref, a["max_abs_mean_diff"])
+        assert all(map(_shown, printed[robot], figures)), (robot, printed[robot], figures)
     agree = summary["agreement"]
     assert agree["perfect_network"] and agree["within_tolerance"], agree
     run = summary["per_run"][0]
@@ -470,7 +512,7 @@ def test_a_fit_of_another_team_or_span_is_refused():
 
 
 @pytest.mark.slow
-def test_mrclam_agents_as_processes_each_equal_the_in_process_eif(tmp_path):
+def test_mrclam_agents_as_processes_each_equal_the_in_process_eif(tmp_path, capsys):
     from relloc.datasets.paths import default_mrclam_dataset
     from relloc.experiments.fit_file import save_fit
 
@@ -480,8 +522,16 @@ def test_mrclam_agents_as_processes_each_equal_the_in_process_eif(tmp_path):
     save_fit(_handmade_fit(str(folder)), tmp_path / "fit.json")
     out = tmp_path / "out"
     argv = ["team", "up", str(folder), "--estimator", "cooperative", "--out", str(out)]
-    assert main([*argv, "--fit", str(tmp_path / "fit.json"), "--duration", "2", "--quiet"]) == 0
+    assert main([*argv, "--fit", str(tmp_path / "fit.json"), "--duration", "2"]) == 0
     summary = json.loads((out / "summary.json").read_text())
+    # the terminal summary (not --quiet): every agent's row, the figures of summary.json
+    printed = _agent_lines(capsys.readouterr().out, "")
+    run = summary["per_run"][0]
+    assert set(printed) == set(run["agents"]) == {"1", "2", "3", "4", "5"}
+    for robot, a in run["agents"].items():
+        figures = (a["pos_rmse_m"], run["in_process"]["pos_rmse_m"], a["max_abs_mean_diff"])
+        assert a["pos_rmse_m"] is not None, robot
+        assert all(map(_shown, printed[robot], figures)), (robot, printed[robot], figures)
     assert summary["agreement"]["within_tolerance"], summary["agreement"]
     run = summary["per_run"][0]
     assert set(run["agents"]) == {"1", "2", "3", "4", "5"}

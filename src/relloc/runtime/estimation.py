@@ -393,12 +393,18 @@ class WindowDriver:
         each time). Returns the readings that could not be fused (older than every
         checkpoint, or the estimator talks to teammates: what it sent is out); they are
         counted (``rows_late_lost``, samples ``odometry_late_lost``), the fused ones too
-        (``rows_refiltered``, ``odometry_refiltered``)."""
+        (``rows_refiltered``, ``odometry_refiltered``). Readings before :attr:`start` or in
+        the belief handed over (:meth:`resume`) are not fused, as in :meth:`start_window`, and
+        counted (``rows_before_start``, ``rows_before_handoff``)."""
         samples = np.zeros(0) if odometry is None else np.asarray(odometry, dtype=float)
         handed = late.t <= self._handed_at + TIME_TOL  # in the belief handed over already
         if handed.any():
             self._counts["rows_before_handoff"] += int(handed.sum())
             late = late.select(~handed)
+        early = late.t < self.start - TIME_TOL  # nothing before the start is filtered
+        if early.any():
+            self._counts["rows_before_start"] += int(early.sum())
+            late = late.select(~early)
         if late.size == 0 and samples.size == 0:
             return 0
         earliest = float(np.min(np.concatenate([late.t, samples])))

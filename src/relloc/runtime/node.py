@@ -468,6 +468,12 @@ class RobotNode:
             # the clock left before its last tick: the last instant we have ends the run
             last.final = True
             last.rows.append(self._own_rows(last.end, last.end, inclusive=True))
+        elif self._window_start is not None and not self._last_tick_seen:
+            # ... and its last window is filtered already (or under way): the instant is a
+            # window of its own, so that what was read then is fused whatever the timing
+            t = self._window_start
+            rows = self._own_rows(t, t, inclusive=True)
+            self._pending.append(_Window(t, t, [rows], final=True))
         self._filter_ready(force=True)
         for mate in self.teammates.values():  # never heard appearing: not delivered
             for msg in mate.held:
@@ -663,10 +669,11 @@ class RobotNode:
                     inclusive=w.final,
                 )
                 w.started = True
-            until = None if force or overdue else self._talk_progress()
-            if not self.estimator.run(until):
-                if overdue:
-                    self.counters["overdue_windows.waiting_for_mail"] += 1
+            done = self.estimator.run(None if force else self._talk_progress())
+            if not done and overdue:  # a talking teammate's progress is late: go on, counted
+                self.counters["overdue_windows.waiting_for_mail"] += 1
+                done = self.estimator.run()
+            if not done:
                 break
             self._pending.popleft()
             self._window_done(w)
