@@ -341,3 +341,29 @@ def test_a_prediction_error_names_the_pair(bank):
     velocity[1, 0] = np.nan
     with pytest.raises(DataError, match=r"l->c predict at t=0\.200"):
         manager.advance(0.2, HeldOdometry(velocity=velocity, stamp=np.zeros(2)))
+
+
+def test_a_new_banked_track_reports_its_heaviest_hypothesis_whatever_the_step_after_it():
+    """A track spread into a yaw bank reports the bank's heaviest hypothesis from the instant it
+    is created, as after every prediction: a 2e-16 s step (one clock's k·dt against another's
+    t) changes nothing. It reported the initial belief (yaw variance π²/3) until the first
+    prediction, so a team whose node ticks at 3.4000000000000004 disagreed with its in-process
+    reference at 3.4 by 3.2 in the yaw variance."""
+    rec = _two_robot_recording([(0.1, 0.1)], yaw=3.0)
+    settings = TrackManagerSettings(yaw_bank=YawBankSettings(n_components=12))
+    (at_once,) = managers_for(rec, settings)
+    (stepped,) = managers_for(rec, settings)
+    for manager in (at_once, stepped):
+        manager.advance(0.1, HeldOdometry.still(2))
+        manager.measure(rec.measurements)
+    stepped.advance(0.1 + 2e-16, HeldOdometry.still(2))
+    (now,) = at_once.beliefs()
+    (later,) = stepped.beliefs()
+    np.testing.assert_allclose(now.mean, later.mean, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(now.cov, later.cov, rtol=0, atol=1e-12)
+    bank = at_once._tracks[1].bank
+    assert bank is not None and bank.size == 12
+    heaviest_mean, heaviest_cov = bank.heaviest()
+    np.testing.assert_array_equal(now.mean, heaviest_mean)
+    np.testing.assert_array_equal(now.cov, heaviest_cov)
+    assert now.cov[3, 3] < (2 * np.pi / 12) ** 2  # one hypothesis' width, not the circle's

@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from relloc.estimators.track_manager import TrackManagerSettings
+from relloc.estimators.track_manager import default_tracker
 from relloc.pipeline.team_report import track_team
 from relloc.runtime import keys
 from relloc.runtime.access import member_config
@@ -140,9 +140,7 @@ def _run_team(settings: TeamSettings, intruders: list[tuple[Intruder, Any, float
 def _assert_estimates_match_in_process(collected: Collected, scenario: str) -> None:
     rec = load_team(scenario, SEED).recording
     distributed = assemble_estimates(collected, rec.robots, "plkf")
-    reference = track_team(
-        rec, TrackManagerSettings(), rng=np.random.default_rng(run_seeds(SEED)[1])
-    )
+    reference = track_team(rec, default_tracker(), rng=np.random.default_rng(run_seeds(SEED)[1]))
     agree = agreement(distributed, reference)
     assert agree["max_abs_mean_diff"] < AGREEMENT_TOL, agree
     assert agree["max_abs_cov_diff"] < AGREEMENT_TOL, agree

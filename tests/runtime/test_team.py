@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 
 from relloc.cli import main
-from relloc.estimators.track_manager import TrackManagerSettings
+from relloc.estimators.track_manager import default_tracker
 from relloc.pipeline.team_report import track_team
 from relloc.runtime import keys
 from relloc.runtime.faults import FaultSettings, parse_robot_event
@@ -139,7 +139,7 @@ def test_three_robot_team_finds_itself_agrees_and_rejects_bad_messages(trio_scen
         }, reasons
     distributed = assemble_estimates(collected, rec.robots, "plkf")
     assert set(distributed.labels) == {"observer->flyer", "observer->rover"}
-    reference = track_team(rec, TrackManagerSettings(), rng=np.random.default_rng(run_seeds(3)[1]))
+    reference = track_team(rec, default_tracker(), rng=np.random.default_rng(run_seeds(3)[1]))
     agree = agreement(distributed, reference)
     diagnostics = (agree, collected.stats["observer"], collected.presence)
     assert agree["max_abs_mean_diff"] < 1e-9 and agree["max_abs_cov_diff"] < 1e-9, diagnostics
@@ -179,8 +179,7 @@ def test_killed_robot_is_noticed_and_its_restart_rejoins(trio_scenario, tmp_path
 
 def test_team_up_with_a_gate_gates_as_the_in_process_run(trio_scenario, tmp_path, capsys):
     # --gate reaches every robot's track manager and the in-process reference alike: a tight
-    # gate (P = 0.5; with one filter per track from an unknown yaw it rejects 76 of the 80
-    # readings of this run) and still the same estimates
+    # gate (P = 0.5: it rejects 49 of the 80 readings of this run) and still the same estimates
     out = tmp_path / "out"
     argv = ["team", "up", str(trio_scenario(4.0)), "--out", str(out), "--seed", "3",
             "--port", str(free_loopback_port()), "--gate", "0.5"]  # fmt: skip
@@ -190,6 +189,7 @@ def test_team_up_with_a_gate_gates_as_the_in_process_run(trio_scenario, tmp_path
     assert all(robot in printed for robot in ("observer", "flyer", "rover"))
     summary = json.loads((out / "summary.json").read_text())
     assert summary["gate_probability"] == 0.5
+    assert summary["yaw_bank_components"] == 12  # relloc run's track manager, yaw bank included
     assert summary["messages"]["per_robot"]["observer"]["tracks"]["rows_gated"] > 0
     agree = summary["agreement"]
     assert agree["within_tolerance"], agree

@@ -24,6 +24,7 @@ ticks or ``--realtime``) does not read is refused, not ignored.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import sys
@@ -443,7 +444,7 @@ def track_manager_parts(args: argparse.Namespace) -> NodeParts:
 
     from relloc.errors import ConfigError
     from relloc.estimators.initialisation import InitPolicy
-    from relloc.estimators.track_manager import TrackManagerSettings, track_manager_of
+    from relloc.estimators.track_manager import default_tracker, track_manager_of
     from relloc.pipeline.team_report import RECORD_RATE_HZ
     from relloc.runtime.estimation import WindowDriver, grid_record_times
     from relloc.runtime.node import NodeParts
@@ -457,8 +458,11 @@ def track_manager_parts(args: argparse.Namespace) -> NodeParts:
     manager = track_manager_of(
         recording,
         args.robot,
-        TrackManagerSettings(
-            filter=args.filter, init=InitPolicy(name=args.init), gate_probability=args.gate
+        dataclasses.replace(
+            default_tracker(),
+            filter=args.filter,
+            init=InitPolicy(name=args.init),
+            gate_probability=args.gate,
         ),
         rng=np.random.default_rng(np.random.SeedSequence([args.seed, index])),
     )

@@ -6,7 +6,7 @@ initial yaw), ``--keep-window`` (seconds a track survives without measurements),
 (track age from which samples count as steady state), ``--duration`` (shorten the scenario),
 ``--executor``, ``--no-plots`` and ``--mcap FILE`` / ``--tum DIR`` (run 0's estimates for ROS
 tools and evo). The defaults are the library's
-(:func:`relloc.experiments.team_run.default_tracker`, :class:`TeamRunSettings`).
+(:func:`relloc.estimators.track_manager.default_tracker`, :class:`TeamRunSettings`).
 
 Runs a team scenario (default: the built-in seed-000 air-ground team), prints the key figures
 per pair in a table that fits the terminal (:mod:`relloc.cli.console`; the full table is in
@@ -38,7 +38,8 @@ DEFAULT_OUT = Path("out/run")
 def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     from relloc.estimators.initialisation import POLICY_NAMES
     from relloc.estimators.relative import UPDATE_KINDS
-    from relloc.experiments.team_run import DEFAULT_YAW_BANK, TeamRunSettings
+    from relloc.estimators.track_manager import DEFAULT_YAW_BANK
+    from relloc.experiments.team_run import TeamRunSettings
 
     defaults = TeamRunSettings()
     tracker = defaults.tracker
@@ -234,7 +235,8 @@ used."""
 def _tracker_defaults(args: argparse.Namespace) -> None:
     """Set the options of :data:`TRACKER_OPTIONS` not given to the library's defaults
     (:class:`TeamRunSettings`, :data:`DEFAULT_YAW_BANK`; ``--gate``: off)."""
-    from relloc.experiments.team_run import DEFAULT_YAW_BANK, TeamRunSettings
+    from relloc.estimators.track_manager import DEFAULT_YAW_BANK
+    from relloc.experiments.team_run import TeamRunSettings
 
     defaults = TeamRunSettings()
     tracker = defaults.tracker

@@ -15,7 +15,10 @@ deletion gets a new track. :class:`TrackManager` does exactly that for one obser
 - optionally, a track whose initial yaw is unknown starts as a bank of yaw hypotheses (a
   Gaussian sum over φ, :mod:`relloc.estimators.yaw_bank`) that is reweighted by every
   measurement and collapses to a single filter once one hypothesis dominates — this avoids the
-  long stalls of a single filter started near the wrong yaw (seed 000 Table 1, case 4);
+  long stalls of a single filter started near the wrong yaw (seed 000 Table 1, case 4); while
+  the bank lives, the track's belief is its heaviest hypothesis, from the instant it is created
+  (so a prediction over a zero or 1e-16 s step, which one clock may take and another not,
+  changes nothing);
 - optionally (``gate_probability``), a measurement whose NIS exceeds ``χ²(3, p)`` under every
   live hypothesis of its track is **rejected** as an outlier, not fused, and counted
   (``rows_gated``); seed 000 fuses every measurement, so the gate is off by default. A rejected
@@ -135,7 +138,8 @@ class TrackManagerSettings:
 
 @dataclass
 class _Track:
-    """A live track: its best estimate and, while several yaw hypotheses live, the bank."""
+    """A live track: its best estimate (the bank's heaviest hypothesis while the bank lives)
+    and the bank."""
 
     mean: Array
     cov: Array
@@ -339,9 +343,10 @@ class TrackManager(ObserverClock):
         bank = None
         if bank_settings is not None and math.sqrt(belief.cov[3, 3]) >= bank_settings.spread_above:
             bank = spread_yaw_bank(belief.mean, belief.cov, bank_settings)
+        mean, cov = (belief.mean, belief.cov) if bank is None else bank.heaviest()
         tr = _Track(
-            mean=belief.mean.copy(),
-            cov=belief.cov.copy(),
+            mean=mean.copy(),
+            cov=cov.copy(),
             created_t=now,
             last_update_t=now,
             settings=settings,
@@ -362,6 +367,19 @@ class TrackManager(ObserverClock):
             self._events.append(
                 TrackEvent(t=now, owner=self.owner, subject=self.robots[j], kind="deleted")
             )
+
+
+DEFAULT_YAW_BANK = 12
+"""Yaw hypotheses a track with unknown initial yaw starts with in ``relloc run``, ``team up``
+and ``relloc node`` (0 = one filter, as in seed 000). :class:`TrackManagerSettings` alone
+defaults to one filter."""
+
+
+def default_tracker() -> TrackManagerSettings:
+    """The tracker of ``relloc run`` (``TeamRunSettings()``), ``team up`` and ``relloc node``:
+    the PLKF from the first measurement with :data:`DEFAULT_YAW_BANK` yaw hypotheses, keep
+    window 2 s."""
+    return TrackManagerSettings(yaw_bank=YawBankSettings(n_components=DEFAULT_YAW_BANK))
 
 
 def managers_for(

@@ -23,8 +23,7 @@ from relloc.core.checks import number, positive
 from relloc.core.estimates import Estimates
 from relloc.core.recording import Recording
 from relloc.errors import ConfigError
-from relloc.estimators.track_manager import TrackManagerSettings
-from relloc.estimators.yaw_bank import YawBankSettings
+from relloc.estimators.track_manager import TrackManagerSettings, default_tracker
 from relloc.pipeline.export import ExportRequest, export_estimates
 from relloc.pipeline.montecarlo import MAX_RUNS, run_monte_carlo, spawn_seeds
 from relloc.pipeline.team_report import (
@@ -39,16 +38,6 @@ from relloc.pipeline.team_report import (
 )
 from relloc.sim.scenario import Scenario
 from relloc.sim.simulate import simulate
-
-DEFAULT_YAW_BANK = 12
-"""Yaw hypotheses a track with unknown initial yaw starts with in ``relloc run`` (0 = one
-filter, as in seed 000). :class:`TrackManagerSettings` alone defaults to one filter."""
-
-
-def default_tracker() -> TrackManagerSettings:
-    """The tracker of ``relloc run`` and of ``TeamRunSettings()``: the PLKF from the first
-    measurement with :data:`DEFAULT_YAW_BANK` yaw hypotheses, keep window 2 s."""
-    return TrackManagerSettings(yaw_bank=YawBankSettings(n_components=DEFAULT_YAW_BANK))
 
 
 @dataclass(frozen=True, kw_only=True)

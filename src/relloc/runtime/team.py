@@ -29,6 +29,7 @@ rates, :func:`team_meta`). Added keys:
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from collections import Counter
 from typing import Any
@@ -36,9 +37,8 @@ from typing import Any
 import numpy as np
 
 from relloc.core.estimates import Estimates
-from relloc.estimators.initialisation import InitPolicy
 from relloc.estimators.relative import FRAME
-from relloc.estimators.track_manager import TrackManagerSettings
+from relloc.estimators.track_manager import TrackManagerSettings, default_tracker
 from relloc.pipeline.export import ExportRequest, export_estimates
 from relloc.pipeline.output import fmt, markdown_table, prepare_out_dir, write_report
 from relloc.pipeline.team_report import (
@@ -74,8 +74,8 @@ def run_team(settings: TeamSettings, *, export: ExportRequest | None = None) -> 
     team = load_team(settings.scenario, settings.seed)
     recording = team.recording
     t0, t1 = recording.span
-    tracker = TrackManagerSettings(
-        filter=settings.filter_kind, init=InitPolicy(), gate_probability=settings.gate_probability
+    tracker = dataclasses.replace(
+        default_tracker(), filter=settings.filter_kind, gate_probability=settings.gate_probability
     )
     launcher = TeamLauncher(settings, recording.robots, t1 - t0, est_frame=FRAME)
     # the in-process reference runs in a process of its own while the team runs; leaving the
