@@ -53,3 +53,17 @@ def mrclam_run6_moved() -> Callable[[Path, Path], Path]:
         ).destination
 
     return moved
+
+
+def _shown_as_printed(text: str, value: float | None) -> bool:
+    """``text`` is ``value`` as a terminal summary shows it: four significant digits, ``—`` for
+    none."""
+    if value is None:
+        return text == "—"
+    return float(text) == pytest.approx(value, rel=5.001e-4, abs=0.0)
+
+
+@pytest.fixture
+def printed_as() -> Callable[[str, float | None], bool]:
+    """The check of a printed figure against its summary.json value (:func:`_shown_as_printed`)."""
+    return _shown_as_printed

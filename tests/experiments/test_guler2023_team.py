@@ -20,15 +20,8 @@ def _summary(out):
     return json.loads((out / "summary.json").read_text())
 
 
-def _shown(text, value):
-    """``text`` is ``value`` as the terminal shows it: four significant digits, ``—`` for none."""
-    if value is None:
-        return text == "—"
-    return float(text) == pytest.approx(value, rel=5.001e-4, abs=0.0)
-
-
 @pytest.mark.slow
-def test_air_ground_processes_in_closed_loop_equal_the_in_process_run(tmp_path, capsys):
+def test_air_ground_processes_in_closed_loop_equal_the_in_process_run(tmp_path, capsys, printed_as):
     out = tmp_path / "out"
     argv = ["team", "up", "guler2023", "--out", str(out), "--duration", "1.5", "--seed", "3"]
     assert main(argv) == 0  # not --quiet (the other runs here are): the terminal summary
@@ -46,7 +39,7 @@ def test_air_ground_processes_in_closed_loop_equal_the_in_process_run(tmp_path, 
     assert line[1] == s["case"] == "two_drones"
     figures = [d["rmse_m_mean"], r["rmse_m_mean"], d["rmse_m_worst"], r["rmse_m_worst"]]
     shown = zip(line.groups()[1:], [*figures, s["agreement"]["max_abs_diff"]], strict=True)
-    assert all(_shown(text, value) for text, value in shown), (printed, d, r)
+    assert all(printed_as(text, value) for text, value in shown), (printed, d, r)
     assert d["rmse_m_mean"] > 0.0 and line[6] == "0"
     assert s["case"] == "two_drones" and s["agreement"]["perfect_network"]
     # the same functions on the same float64 numbers, no command delay: exactly equal

@@ -40,13 +40,6 @@ from relloc.runtime.teammates import ReceivedOdometry
 ROSTER = ("L1", "L2", "P1", "P2", "P3")
 
 
-def _shown(text, value):
-    """``text`` is ``value`` as the terminal shows it: four significant digits, ``—`` for none."""
-    if value is None:
-        return text == "—"
-    return float(text) == pytest.approx(value, rel=5.001e-4, abs=0.0)
-
-
 def _agent_lines(printed, prefix):
     """``{robot: (position RMSE, in-process RMSE, max |Δ|)}`` as ``team up`` prints them for a
     team EIF's agents (lines starting ``{prefix}agent ROBOT:``)."""
@@ -284,7 +277,7 @@ def test_a_sharing_policy_reaches_the_leader_processes(tmp_path):
 
 
 @pytest.mark.slow
-def test_the_sensing_robots_reach_every_robot_process(tmp_path, capsys):
+def test_the_sensing_robots_reach_every_robot_process(tmp_path, capsys, printed_as):
     """``--sensing L1,P2``: every process simulates those robots sensing, so P2 runs a fuser
     (beliefs of its teammates, mail to L1) and L2 only shares its odometry; the distributed
     beliefs and figures of both fusers agree with the in-process run of the same sensing robots,
@@ -306,7 +299,7 @@ def test_the_sensing_robots_reach_every_robot_process(tmp_path, capsys):
     assert d["pos_rmse_m"] is not None and d["success_rate"] is not None, d
     figures = [d["success_rate"], r["success_rate"], d["pos_rmse_m"], r["pos_rmse_m"]]
     shown = zip(line.groups()[1:], [*figures, summary["agreement"]["max_abs_diff"]], strict=True)
-    assert all(_shown(text, value) for text, value in shown), (printed, d, r)
+    assert all(printed_as(text, value) for text, value in shown), (printed, d, r)
     assert summary["sensing"] == ["L1", "P2"] and summary["paper_sensing"] == ["L1", "L2"]
     assert summary["processes_per_run"]["fusers"] == 2
     agree = summary["agreement"]
@@ -380,7 +373,9 @@ def test_an_agent_refilters_late_readings_from_a_checkpoint_and_matches_the_in_p
 
 @pytest.mark.slow
 @pytest.mark.parametrize("stall", [None, "2,1@1:0.5"])
-def test_sharma_agents_as_processes_each_equal_the_in_process_eif(tmp_path, capsys, stall):
+def test_sharma_agents_as_processes_each_equal_the_in_process_eif(
+    tmp_path, capsys, stall, printed_as
+):
     """Also when agent 1 hears nothing from agent 2 for half a second of wall time from 1 s on
     (``--stall``): agent 1 holds its ack until agent 2's odometry and readings come, so the
     clock never forces its window through without them. Not ``--quiet`` (the runs of
@@ -394,7 +389,7 @@ def test_sharma_agents_as_processes_each_equal_the_in_process_eif(tmp_path, caps
     ref = summary["per_run"][0]["in_process"]["pos_rmse_m"]
     for robot, a in summary["per_run"][0]["agents"].items():
         figures = (a["pos_rmse_m"], ref, a["max_abs_mean_diff"])
-        assert all(map(_shown, printed[robot], figures)), (robot, printed[robot], figures)
+        assert all(map(printed_as, printed[robot], figures)), (robot, printed[robot], figures)
     agree = summary["agreement"]
     assert agree["perfect_network"] and agree["within_tolerance"], agree
     run = summary["per_run"][0]
@@ -512,7 +507,7 @@ def test_a_fit_of_another_team_or_span_is_refused():
 
 
 @pytest.mark.slow
-def test_mrclam_agents_as_processes_each_equal_the_in_process_eif(tmp_path, capsys):
+def test_mrclam_agents_as_processes_each_equal_the_in_process_eif(tmp_path, capsys, printed_as):
     from relloc.datasets.paths import default_mrclam_dataset
     from relloc.experiments.fit_file import save_fit
 
@@ -531,7 +526,7 @@ def test_mrclam_agents_as_processes_each_equal_the_in_process_eif(tmp_path, caps
     for robot, a in run["agents"].items():
         figures = (a["pos_rmse_m"], run["in_process"]["pos_rmse_m"], a["max_abs_mean_diff"])
         assert a["pos_rmse_m"] is not None, robot
-        assert all(map(_shown, printed[robot], figures)), (robot, printed[robot], figures)
+        assert all(map(printed_as, printed[robot], figures)), (robot, printed[robot], figures)
     assert summary["agreement"]["within_tolerance"], summary["agreement"]
     run = summary["per_run"][0]
     assert set(run["agents"]) == {"1", "2", "3", "4", "5"}

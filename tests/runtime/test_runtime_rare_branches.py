@@ -10,6 +10,7 @@ import zipfile
 
 import numpy as np
 import pytest
+from test_airground_protocol import ROSTER, SC, TEAM
 
 from relloc.core.estimates import BeliefSeries, Estimates
 from relloc.errors import ConfigError, DataError
@@ -26,11 +27,7 @@ from relloc.runtime.airground import (
 )
 from relloc.runtime.messages import encode
 from relloc.runtime.transport import Inbox, Incoming, TransportSettings, declare_publisher
-from relloc.sim.airground import AirGroundScenario, AirGroundWorld, robot_names
-
-TEAM = "t"
-SC = AirGroundScenario(offsets=((0.5, 0.5), (-0.5, 0.5)), offset_frame="global", duration=0.5)
-ROSTER = robot_names(SC)  # R_0, R_1, R_2, D_1
+from relloc.sim.airground import AirGroundWorld
 
 
 # ------------------------------------------------------------------ inbox, certificates, faults

@@ -8,44 +8,12 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from test_estimator_nodes import _handmade_fit
 
-from relloc.calibration.camera import CameraFit
-from relloc.calibration.odometry import OdometryModelFit
-from relloc.calibration.window import CalibrationWindow
 from relloc.errors import DataError
 from relloc.experiments.fit_file import MAX_FIT_BYTES, load_fit, save_fit
-from relloc.experiments.mrclam_cl import FittedModels
 
-WINDOW = CalibrationWindow(start_s=1.0, end_s=400.0, source="run")
-FIT = FittedModels(
-    odometry=OdometryModelFit(
-        calibration_window=WINDOW,
-        latency_s=0.1,
-        time_constant_s=0.0,
-        scale_v=(0.9,) * 2,
-        scale_w=(0.8,) * 2,
-        q_v0=1e-6,
-        k_v=0.01,
-        q_w0=1e-6,
-        k_w=0.04,
-        k_wv=0.0,
-        odometry_window_s=5.0,
-    ),
-    camera=CameraFit(
-        calibration_window=WINDOW,
-        bearing_offset=(0.0,) * 2,
-        sigma_bearing_raw=0.007,
-        bearing_inflation=25.0,
-        sigma_bearing=0.035,
-        range_bias_coeffs=(0.06, 0.0, 0.0, 0.0, 0.0),
-        sigma_range_raw=0.04,
-        range_inflation=15.0,
-        sigma_range=0.17,
-        range_interval_s=1.0,
-        correlation={"range": {"1s": 0.8}},
-        n_residuals=100,
-    ),
-)
+FIT = _handmade_fit("run")
 
 
 def _document(tmp_path: Path) -> dict[str, Any]:
