@@ -27,7 +27,8 @@ every robot process simulates the same sensing robots and each of them runs a fu
 figures and the agreement are those of every sensing robot's filters) and ``paper_sensing``
 (the paper's, L1, L2); ``secure``
 (mutual TLS and access control: ``--secure``); ``messages`` per robot and per run
-(sent, received, rejected by reason, windows filtered overdue, acks held for a waiting
+(sent, received, rejected by reason, windows filtered overdue for a teammate's inputs or a
+leader's progress, acks held for a waiting
 window and how many of those ran out of time) and what the collector
 rejected (``collector_rejected_by_reason``); per run the acks the clock stopped waiting for
 (``clock_ack_timeouts``); per run ``fault_outcomes`` (accuracy before / during /
@@ -284,7 +285,7 @@ def report_markdown(summary: Mapping[str, Any]) -> str:
                     m["sent"].get("mail", 0),
                     sum(m["received_delivered"].values()),
                     m["rejected"],
-                    m["overdue_windows"],
+                    m["overdue_windows"] + m["overdue_windows_waiting_for_mail"],
                     f"{m['acks_held']} ({m['acks_held_expired']})",
                     run["clock_ack_timeouts"].get(robot, 0),
                     m["estimates"],

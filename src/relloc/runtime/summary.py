@@ -78,11 +78,12 @@ def _sum_counters(incarnations: Sequence[Mapping[str, int]]) -> dict[str, int]:
 def robot_messages(collected: Collected, roster: Sequence[str]) -> dict[str, dict[str, Any]]:
     """Per robot: messages sent / received (on the wire, delivered after faults) / rejected,
     those of a teammate not present (held until it appeared, or never delivered), odometry
-    samples late or at a time stamp already filed (a second sample of one time is dropped), windows
-    filtered overdue, acks held for a window that would have been overdue at the next tick
-    (and of those, held until the wall-time bound ran out: :meth:`RobotNode._send_due_acks`
-    in :mod:`relloc.runtime.node`), estimates, track events, latency percentiles (of its last
-    incarnation)."""
+    samples late or at a time stamp already filed (a second sample of one time is dropped),
+    windows filtered overdue (``overdue_windows``: a teammate's inputs missing;
+    ``overdue_windows_waiting_for_mail``: a talking teammate's progress missing), acks held for
+    a window that would have been overdue at the next tick (and of those, held until the
+    wall-time bound ran out: :meth:`RobotNode._send_due_acks` in :mod:`relloc.runtime.node`),
+    estimates, track events, latency percentiles (of its last incarnation)."""
     out: dict[str, dict[str, Any]] = {}
     for robot in roster:
         lives = collected.stats.get(robot, [])
@@ -109,6 +110,7 @@ def robot_messages(collected: Collected, roster: Sequence[str]) -> dict[str, dic
             "tracks": {k.split(".", 1)[1]: v for k, v in c.items() if k.startswith("tracks.")},
             "ticks": c.get("ticks", 0),
             "overdue_windows": c.get("overdue_windows", 0),
+            "overdue_windows_waiting_for_mail": c.get("overdue_windows.waiting_for_mail", 0),
             "acks_held": c.get("acks_held", 0),
             "acks_held_expired": c.get("acks_held_expired", 0),
             "listens": bool(last.get("listens", 1)),
