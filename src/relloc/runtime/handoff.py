@@ -130,7 +130,8 @@ class Handoff:
 
     def replies(self, driver: WindowDriver) -> list[dict[str, Any]]:
         """Replies due now: to every teammate whose time the estimator has reached (none
-        while this node waits for a belief itself)."""
+        while this node waits for a belief itself); counted ``sync.replies_due`` (those sent
+        are the node's ``sent.sync``; one too large for a message, its ``sync.too_large``)."""
         t = driver.time
         if self.waiting or t is None or driver.busy or not driver.hands_off:
             return []
@@ -140,7 +141,7 @@ class Handoff:
         stamp, belief = driver.team_belief()
         for r in due:
             del self._requests[r]
-        self.counters["sync.replies_sent"] += len(due)
+        self.counters["sync.replies_due"] += len(due)
         return [{"target": r, "stamp": stamp, "mean": belief.mean, "cov": belief.cov} for r in due]
 
 
