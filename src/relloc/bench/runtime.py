@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from relloc.estimators.track_manager import TrackManagerSettings
+from relloc.estimators.track_manager import default_tracker
 from relloc.experiments.team_run import team_task
 from relloc.pipeline.montecarlo import executor_from_spec, run_monte_carlo
 from relloc.sim.scenario import default_scenario
@@ -133,7 +133,7 @@ def run_team_size(
 def monte_carlo_speedup(runs: int = 4, duration_s: float = 10.0) -> dict[str, Any]:
     """Wall time of ``runs`` team-task runs with 1 and with 2 process workers."""
     scenario = replace(default_scenario(), duration_s=duration_s)
-    args = (scenario, TrackManagerSettings(), 10.0)
+    args = (scenario, default_tracker(), 10.0)
     timings: dict[int, float] = {}
     results: dict[int, list[Any]] = {}
     for workers in (1, 2):
