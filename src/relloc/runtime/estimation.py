@@ -299,6 +299,20 @@ class WindowDriver:
             done = max(done, min(float(quiet()), done + QUIET_HORIZON_S))
         return done
 
+    def _filterable(self, rows: Measurements) -> Measurements:
+        """``rows`` without those no window filters: before :attr:`start` (counted
+        ``rows_before_start``) or in the belief handed over (:meth:`resume`; counted
+        ``rows_before_handoff``)."""
+        early = rows.t < self.start - TIME_TOL
+        if early.any():
+            self._counts["rows_before_start"] += int(early.sum())
+            rows = rows.select(~early)
+        handed = rows.t <= self._handed_at + TIME_TOL
+        if handed.any():
+            self._counts["rows_before_handoff"] += int(handed.sum())
+            rows = rows.select(~handed)
+        return rows
+
     def start_window(
         self,
         t0: float,
@@ -314,15 +328,7 @@ class WindowDriver:
         rows of a teammate that is not ``present`` are dropped and counted."""
         assert not self.busy, "start_window: the previous window is not finished"
         self._streams = list(streams)
-        live = self._live_rows(rows, present)
-        early = live.t < self.start - TIME_TOL
-        if early.any():
-            self._counts["rows_before_start"] += int(early.sum())
-            live = live.select(~early)
-        handed = live.t <= self._handed_at + TIME_TOL
-        if handed.any():
-            self._counts["rows_before_handoff"] += int(handed.sum())
-            live = live.select(~handed)
+        live = self._filterable(self._live_rows(rows, present))
         self._plan = self._make_plan(t0, t1, live, inclusive)
         self._checkpoint(t0)
         if not self._plan.times.size:
@@ -397,14 +403,7 @@ class WindowDriver:
         the belief handed over (:meth:`resume`) are not fused, as in :meth:`start_window`, and
         counted (``rows_before_start``, ``rows_before_handoff``)."""
         samples = np.zeros(0) if odometry is None else np.asarray(odometry, dtype=float)
-        handed = late.t <= self._handed_at + TIME_TOL  # in the belief handed over already
-        if handed.any():
-            self._counts["rows_before_handoff"] += int(handed.sum())
-            late = late.select(~handed)
-        early = late.t < self.start - TIME_TOL  # nothing before the start is filtered
-        if early.any():
-            self._counts["rows_before_start"] += int(early.sum())
-            late = late.select(~early)
+        late = self._filterable(late)
         if late.size == 0 and samples.size == 0:
             return 0
         earliest = float(np.min(np.concatenate([late.t, samples])))
