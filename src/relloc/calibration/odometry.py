@@ -596,7 +596,8 @@ class OdometryNoiseFit:
     ``sigma_v`` (forward speed), ``sigma_lateral`` (sideways speed a unicycle reports as 0) in
     m/s and ``sigma_w`` (yaw rate) in rad/s, for noise drawn independently at every step of a
     ``rate_hz`` propagation; ``bias_v``, ``bias_w`` are the mean errors (true − reported);
-    ``window_s`` is the integration-window length and ``n_windows`` how many were used.
+    ``window_s`` is the integration-window length (the one asked for, rounded to whole steps of
+    ``1/rate_hz``: the σ and the biases divide by it) and ``n_windows`` how many were used.
     """
 
     sigma_v: float
@@ -634,7 +635,7 @@ def fit_odometry_noise(
 
     ConfigError naming the parameter unless ``rate_hz``, ``window_s`` and the scales are finite
     and > 0, the grid holds at most :data:`MAX_GRID_SAMPLES` samples, ``window_s`` holds at
-    least one step ``1/rate_hz`` (the σ divides by ``window_s``) and is no longer than
+    least one step ``1/rate_hz`` and is no longer than
     ``window``, and ``latency_s``, ``time_constant_s`` lie in ``[0, MAX_LATENCY_S]``, ``[0,
     MAX_TIME_CONSTANT_S]`` (what :func:`fit_odometry_model` can fit; the commands lead the
     motion, so neither is negative). DataError naming the window when it holds fewer than two
@@ -668,7 +669,8 @@ def fit_odometry_noise(
             )
     dt = 1.0 / rate_hz
     steps = max(round(window_s * rate_hz), 1)
-    n_windows = int((window.end_s - window.start_s) // (steps * dt))
+    length = steps * dt  # the windows' real length: window_s on the grid
+    n_windows = int((window.end_s - window.start_s) // length)
     if n_windows < 2:
         raise window.too_little(
             f"robot {robot.subject}: fewer than two {window_s:g} s windows for the odometry fit"
@@ -687,8 +689,8 @@ def fit_odometry_noise(
     if ok.sum() < 2:
         raise window.too_little(f"robot {robot.subject}: ground truth has gaps in every window")
     D = err[ok].sum(axis=1)
-    sigma = np.sqrt(np.mean(D * D, axis=0) / (dt * window_s))
-    bias = D.mean(axis=0) / window_s
+    sigma = np.sqrt(np.mean(D * D, axis=0) / (dt * length))
+    bias = D.mean(axis=0) / length
     return OdometryNoiseFit(
         sigma_v=float(sigma[0]),
         sigma_lateral=float(sigma[1]),
@@ -696,7 +698,7 @@ def fit_odometry_noise(
         bias_v=float(bias[0]),
         bias_w=float(bias[2]),
         rate_hz=float(rate_hz),
-        window_s=float(window_s),
+        window_s=float(length),
         n_windows=int(ok.sum()),
         calibration_window=window,
     )
