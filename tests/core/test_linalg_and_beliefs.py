@@ -21,6 +21,16 @@ def test_wrap_angle_range_and_scalars():
     assert isinstance(wrap_angle(3 * np.pi), float)
 
 
+def test_wrap_angle_stays_below_pi_where_the_modulo_rounds_up():
+    """Just below −π, ``a + π`` is a tiny negative number whose modulo 2π rounds to 2π: the
+    result must still be the same angle inside [-π, π), i.e. −π."""
+    just_below = np.nextafter(-np.pi, -4.0)
+    assert wrap_angle(just_below) == -np.pi
+    w = wrap_angle(np.array([just_below, -np.pi, np.pi, 3.0 * np.pi]))
+    assert np.all(w >= -np.pi) and np.all(w < np.pi)
+    assert np.isnan(wrap_angle(np.nan))
+
+
 def test_information_round_trip_and_mahalanobis():
     g = Gaussian(mean=np.array([1.0, -2.0]), cov=np.array([[2.0, 0.3], [0.3, 1.0]]))
     back = g.to_information().to_gaussian()

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -12,12 +14,15 @@ from relloc.errors import DataError
 def wrap_angle(angle: ArrayLike) -> NDArray[np.float64] | float:
     """Wrap angles to [-π, π).
 
-    Uses ``(a + π) mod 2π − π``, exact for all finite inputs. Scalars stay scalars.
+    Uses ``(a + π) mod 2π − π``. Where ``a + π`` rounds to a tiny negative number (``a`` just
+    below −π) the modulo rounds up to 2π and the result to π: that one case is set to −π, the
+    same angle, so the result stays inside [-π, π). Scalars stay scalars.
     """
     a = np.asarray(angle, dtype=float)
     wrapped = np.mod(a + np.pi, 2.0 * np.pi) - np.pi
     if wrapped.ndim == 0:
-        return float(wrapped)
+        return -math.pi if wrapped >= math.pi else float(wrapped)
+    wrapped[wrapped >= np.pi] = -np.pi
     return wrapped
 
 

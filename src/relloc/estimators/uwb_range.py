@@ -9,8 +9,9 @@ Both implement the estimator contract (:mod:`relloc.core.contract`), so
 (both robots' body velocities), measured by the range ``h(x) = √(x² + y² + z²)`` only. From an
 unknown start a single range fixes neither the bearing nor the relative yaw, so the track starts,
 at the first range ``r₀``, as a Gaussian sum of ``n_bearing × n_yaw`` EKFs placed on the circle
-of radius ``r₀`` in the owner's plane (bearings ``2πk/n_bearing``, yaws ``2πm/n_yaw``, each with
-a tangential σ of half the spacing, ``r₀·π/n_bearing``, and a yaw σ of ``π/n_yaw``). Each
+of radius ``r₀`` in the owner's plane (bearings ``2πk/n_bearing``, yaws ``2πm/n_yaw − π``, each
+with a radial σ of the range's, a tangential σ of half the spacing, ``r₀·π/n_bearing``, but no
+less than the range's, and a yaw σ of ``π/n_yaw``). Each
 range updates every component (EKF, ``H = xᵀ/‖x‖`` on the position) and reweights it by its
 likelihood ``N(ν; 0, S)``; the belief is the moment-matched mixture (yaws aligned before
 averaging). Whether the pair is observable at all from range and these motions is a property of
