@@ -163,3 +163,18 @@ def test_the_camera_block_weights_bearing_and_headings_by_their_own_sigma():
     assert f.belief.mean[2] == pytest.approx(0.2 + gain * 0.1, abs=1e-12)
     assert f.belief.mean[3] == pytest.approx(gain * -0.1, abs=1e-12)
     assert f.belief.cov[2, 2] == pytest.approx(0.01 * (1.0 - gain), rel=1e-9)
+
+
+def test_a_second_range_of_a_pair_in_one_tick_is_counted_and_the_first_used():
+    # the leader–follower pair ranged both ways in one tick: R_0→R_1 first (its true distance),
+    # then R_1→R_0 1 m long; the filter uses the first and counts the second
+    first = _filter()
+    first.advance(0.0, HeldOdometry.still(len(ROBOTS)))
+    first.measure(_ranges([(0, 1)]))
+    both = _filter()
+    both.advance(0.0, HeldOdometry.still(len(ROBOTS)))
+    long_back = measurement_rows("range", t=[0.0], observer=1, target=0, value=[_dist(0, 1) + 1])
+    both.measure(Measurements.concatenate([_ranges([(0, 1)]), long_back]))
+    assert both.take_counts().get("rows_ignored") == 1
+    np.testing.assert_array_equal(both.belief.mean, first.belief.mean)
+    np.testing.assert_array_equal(both.belief.cov, first.belief.cov)

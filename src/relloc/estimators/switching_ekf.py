@@ -322,7 +322,8 @@ class SwitchingEkf(Silent):
 
     def _tick_inputs(self, batch: Measurements) -> TickInputs:
         """The tick's inputs from the rows of the batch (each sighting also refreshes its pair
-        in the held set S); rows it cannot use are counted."""
+        in the held set S); rows it cannot use are counted ``rows_ignored``, among them every
+        range of a pair after the first of the tick (either direction: the pair is unordered)."""
         me, leader = self._me, self._leader
         ranges: dict[tuple[int, int], float] = {}
         sightings = []
