@@ -6,6 +6,7 @@ their task pipe, so they never see their parent go (found with ``kill -TERM`` on
 
 from __future__ import annotations
 
+import os
 import signal
 import subprocess
 import sys
@@ -63,9 +64,12 @@ def _wait_for(predicate, timeout: float) -> bool:
     return False
 
 
-def _stop_and_check(argv: list[str], at_least: int, signum: int, code: int) -> str:
+def _stop_and_check(
+    argv: list[str], at_least: int, signum: int, code: int, to_group: bool = False
+) -> str:
     """Start ``relloc ARGV``, wait until it has ``at_least`` processes below it, send
-    ``signum``; it must exit with ``code`` and leave none of them alive."""
+    ``signum`` (``to_group``: to its whole process group, as ``timeout`` or a closed terminal
+    do); it must exit with ``code`` and leave none of them alive."""
     proc = subprocess.Popen(
         [sys.executable, "-m", "relloc.cli", *argv],
         stdout=subprocess.PIPE,
@@ -74,6 +78,7 @@ def _stop_and_check(argv: list[str], at_least: int, signum: int, code: int) -> s
         # a shell's default SIGINT: a test runner's worker may ignore it, and an ignored SIGINT
         # is inherited (Python then installs no KeyboardInterrupt handler)
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+        start_new_session=to_group,
     )
     try:
         assert _wait_for(lambda: len(_descendants(proc.pid)) >= at_least, 120), (
@@ -81,7 +86,10 @@ def _stop_and_check(argv: list[str], at_least: int, signum: int, code: int) -> s
         )
         time.sleep(1.0)  # let them get busy
         started = _descendants(proc.pid)
-        proc.send_signal(signum)
+        if to_group:
+            os.killpg(proc.pid, signum)
+        else:
+            proc.send_signal(signum)
         out, _ = proc.communicate(timeout=60)
     finally:
         if proc.poll() is None:
@@ -102,6 +110,20 @@ def test_sigterm_stops_a_monte_carlo_run_and_its_workers(tmp_path):
     )
     assert "relloc: stopped by SIGTERM" in out
     assert not (tmp_path / "o" / "summary.json").exists()
+
+
+@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGHUP])
+def test_a_signal_to_the_process_group_stops_the_run_and_its_workers_quietly(tmp_path, signum):
+    # the workers get the signal too: they stop at once, with no traceback, and the command
+    # does not hang on a result queue a dying worker held (it did with the CLI's handler)
+    out = _stop_and_check(
+        ["run", "--out", str(tmp_path / "o"), "--runs", "400", "--quiet", "--no-plots"],
+        at_least=2,
+        signum=signum,
+        code=128 + signum,
+        to_group=True,
+    )
+    assert out.strip() == f"relloc: stopped by {signal.Signals(signum).name}"
 
 
 def test_sigterm_stops_a_team_and_its_reference(tmp_path):

@@ -13,9 +13,11 @@ the subcommand it was given to.
 Stopping: Ctrl-C (SIGINT) exits 130 and SIGTERM or SIGHUP exits 128 + the signal's number
 (143, 129), each after the command's ``finally`` blocks have run — so a command that started
 processes (Monte-Carlo workers, a team) stops them before it exits instead of leaving them
-behind. The team's own processes (``relloc node``, ``team clock``, ``airground world|robot``,
-which set ``team_process``) keep the default SIGTERM: their launcher stops them that way and
-escalates to SIGKILL.
+behind. A Monte-Carlo pool's workers keep the default SIGTERM and SIGHUP
+(:mod:`relloc.pipeline.montecarlo`), so a signal to the whole process group stops them at
+once, without a traceback. The team's own processes (``relloc node``, ``team clock``,
+``airground world|robot``, which set ``team_process``) keep the default SIGTERM: their launcher
+stops them that way and escalates to SIGKILL.
 """
 
 from __future__ import annotations

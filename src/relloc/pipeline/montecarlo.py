@@ -12,6 +12,7 @@ order in which runs finish. Executors:
 from __future__ import annotations
 
 import os
+import signal
 import sys
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import Executor, Future, ProcessPoolExecutor
@@ -53,7 +54,9 @@ def executor_from_spec(
         yield spec
         return
     if spec in (None, "", "process"):
-        pool = ProcessPoolExecutor(max_workers=max_workers or os.cpu_count() or 1)
+        pool = ProcessPoolExecutor(
+            max_workers=max_workers or os.cpu_count() or 1, initializer=_stop_at_once
+        )
         try:
             yield pool
         except BaseException:  # interrupted or failed: drop the runs not started yet
@@ -84,6 +87,18 @@ def executor_from_spec(
     raise ConfigError(
         f"--executor: unknown executor {spec!r}; use 'process', 'serial' or 'dask://HOST:PORT'"
     )
+
+
+def _stop_at_once() -> None:
+    """A pool worker's start: SIGTERM and SIGHUP stop it at once (the default action).
+
+    A forked worker inherits the handler :mod:`relloc.cli` sets, which raises an exception: a
+    signal sent to the whole process group (``timeout``, a closed terminal, a job scheduler)
+    then raised it inside every worker, which printed a traceback and could die holding the
+    lock of the result queue, so that the command hung. The command itself still stops on the
+    signal as the CLI says (its pool's runs are cancelled, the workers left are gone)."""
+    for stop in (signal.SIGTERM, signal.SIGHUP):
+        signal.signal(stop, signal.SIG_DFL)
 
 
 MAX_RUNS = 1_000_000
