@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from relloc.cli import main
 from relloc.errors import DataError
 from relloc.estimators.track_manager import TrackManagerSettings
 from relloc.runtime.dataset import mrclam_team_recording
@@ -23,13 +24,16 @@ def _write(folder: Path, name: str, rows: list[str]) -> None:
     (folder / name).write_text("# test\n# test\n# test\n# test\n" + "\n".join(rows) + "\n")
 
 
-def _three_robot_folder(folder: Path, seconds: float = 40.0) -> Path:
-    """Three robots driving circles (Vicon at 20 Hz, odometry commands at 5 Hz)."""
+def _three_robot_folder(
+    folder: Path, seconds: float = 40.0, odometry_after_s: float = 0.0, vicon_from_s: float = 0.0
+) -> Path:
+    """Three robots driving circles (Vicon at 20 Hz from ``vicon_from_s``, odometry commands at
+    5 Hz, for ``odometry_after_s`` more than the Vicon)."""
     folder.mkdir(parents=True)
     _write(folder, "Barcodes.dat", ["1 5", "2 14", "3 41", "4 63"])
     _write(folder, "Landmark_Groundtruth.dat", ["4 1.0 2.0 0.001 0.002"])
     for n in (1, 2, 3):
-        t = np.arange(0.0, seconds, 0.05)
+        t = np.arange(vicon_from_s, seconds, 0.05)
         v, w = 0.2, 0.05 * n
         theta = w * t
         x = 2.0 * n + v / w * np.sin(theta)
@@ -39,7 +43,7 @@ def _three_robot_folder(folder: Path, seconds: float = 40.0) -> Path:
             for ti, xi, yi, th in zip(t, x, y, theta, strict=True)
         ]
         _write(folder, f"Robot{n}_Groundtruth.dat", gt)
-        odo = [f"{T0 + ti:.3f} {v} {w}" for ti in np.arange(0.0, seconds, 0.2)]
+        odo = [f"{T0 + ti:.3f} {v} {w}" for ti in np.arange(0.0, seconds + odometry_after_s, 0.2)]
         _write(folder, f"Robot{n}_Odometry.dat", odo)
         _write(folder, f"Robot{n}_Measurement.dat", [f"{T0 + 1.0:.3f} 63 2.5 -0.2"])
     return folder
@@ -94,3 +98,17 @@ def test_an_observer_not_in_the_folder_is_a_clear_error(tmp_path):
     folder = _three_robot_folder(tmp_path / "team", seconds=20.0)
     with pytest.raises(DataError, match=r"team: observer robot 9 not in the dataset \(robots"):
         mrclam_team_recording(folder, np.random.default_rng(0), observer=9)
+
+
+def test_a_team_whose_span_is_no_whole_number_of_ticks_runs_as_processes(tmp_path):
+    # the Vicon ends at 19.96 s, the odometry later: the team shares 14.96 s from 5 s after the
+    # first odometry, and the clock's last 0.1 s tick (15.0 s) lies beyond it. The nodes
+    # recorded a belief there, which no truth could score, and the run ended in a DataError
+    folder = _three_robot_folder(
+        tmp_path / "team", seconds=20.0, odometry_after_s=1.0, vicon_from_s=0.01
+    )
+    assert mrclam_team_recording(folder, np.random.default_rng(0)).span[1] == pytest.approx(14.96)
+    out = tmp_path / "out"
+    assert main(["team", "up", str(folder), "--out", str(out), "--quiet"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["agreement"]["within_tolerance"], summary["agreement"]

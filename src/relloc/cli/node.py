@@ -470,7 +470,7 @@ def track_manager_parts(args: argparse.Namespace) -> NodeParts:
         manager,
         recording.robots,
         args.robot,
-        record_times=grid_record_times(RECORD_RATE_HZ, recording.span[0]),
+        record_times=grid_record_times(RECORD_RATE_HZ, *recording.span),
     )
     return NodeParts(
         recording.robots, RecordingSource(recording, args.robot), driver, recording=recording

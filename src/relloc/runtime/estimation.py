@@ -72,14 +72,16 @@ RecordTimes = Callable[[float, float, bool, Measurements], Array]
 """``(t0, t1, inclusive, rows) -> record times`` of a window (``rows``: the window's rows)."""
 
 
-def grid_record_times(rate_hz: float, origin: float = 0.0) -> RecordTimes:
-    """Record on the grid ``origin + i / rate_hz`` (seed 000's 10 Hz recording grid)."""
+def grid_record_times(rate_hz: float, origin: float = 0.0, end: float = np.inf) -> RecordTimes:
+    """Record on the grid ``origin + i / rate_hz`` (seed 000's 10 Hz recording grid), up to
+    ``end`` (the recording's last instant: the clock's last tick may lie up to a tick beyond
+    it, where there is no truth to score a record by)."""
     period = 1.0 / rate_hz
 
     def times(t0: float, t1: float, inclusive: bool, rows: Measurements) -> Array:
         del rows
         first = np.ceil((t0 - origin) / period - TIME_TOL)
-        last = np.floor((t1 - origin) / period + TIME_TOL)
+        last = np.floor((min(t1, end) - origin) / period + TIME_TOL)
         grid = origin + np.arange(first, last + 1) * period
         upper = grid <= t1 + TIME_TOL if inclusive else grid < t1 - TIME_TOL
         return np.asarray(grid[(grid >= t0 - TIME_TOL) & upper], dtype=float)
