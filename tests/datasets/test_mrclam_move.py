@@ -552,3 +552,31 @@ def test_the_shift_parser_parses_or_names_its_flag(text: str) -> None:
         assert str(exc).startswith("--shift: ")
         return
     assert pair is not None and len(pair) == 2 and all(isinstance(v, float) for v in pair)
+
+
+def test_mrclam_cl_gps_fixes_are_the_same_relative_to_the_robot_in_a_moved_run(
+    tmp_path: Path,
+) -> None:
+    """mrclam-cl's GPS-like fixes of one seed, on a run and on the run moved to another frame
+    and clock: the same times, and each fix moved with the world (``R p + shift``, ``θ + α``),
+    so every figure of the GPS cases is frame-free (the noise was drawn in the world frame)."""
+    from relloc.experiments.mrclam_cl import GPS_SIGMA, gps_fixes
+
+    rotation, shift = 0.7, (-3.0, 2.5)
+    src = _folder(tmp_path / "run")
+    there = move_mrclam(
+        src, tmp_path / "there", rotation_rad=rotation, shift_m=shift, clock_s=1000.0, barcodes={}
+    )
+    here, moved = load_mrclam(src), load_mrclam(there.destination)
+    a = gps_fixes(here, 0.0, 9.5, np.random.default_rng(5))
+    b = gps_fixes(moved, 0.0, 9.5, np.random.default_rng(5))
+    assert a.size == b.size == 9
+    np.testing.assert_allclose(b.t, a.t, atol=1e-9)
+    c, s = math.cos(rotation), math.sin(rotation)
+    turned = a.value[:, :2] @ np.array([[c, s], [-s, c]]) + np.asarray(shift)
+    np.testing.assert_allclose(b.value[:, :2], turned, atol=1e-7)
+    gap = np.remainder(b.value[:, 2] - a.value[:, 2] - rotation + np.pi, 2 * np.pi) - np.pi
+    assert np.abs(gap).max() < 1e-7
+    # the noise is still N(0, σ²) per axis: the fixes are off the truth by a few σ at most
+    truth = here.robot(here.robot_ids[0]).groundtruth.at(a.t).pose
+    assert np.all(np.abs(a.value[:, :2] - truth[:, :2]) < 5 * GPS_SIGMA[0])

@@ -407,13 +407,18 @@ def build_recording(ds: Any, fit: FittedModels, rng: np.random.Generator) -> Pre
 
 def gps_fixes(ds: Any, t_start: float, t_end: float, rng: np.random.Generator) -> Measurements:
     """Robot 1's GPS-like fixes: ground truth + ``N(0, diag(GPS_SIGMA)²)`` at 1 Hz while its
-    ground truth is valid."""
+    ground truth is valid. The position noise is drawn in the robot's body frame and turned
+    into the world frame by its true heading, ``e_w = R(θ) e_b``: the same distribution (the
+    position σ are equal), and the same fixes relative to the robot in any world frame, so a
+    run moved to another frame (``relloc mrclam move``) gives the same figures."""
     gt1 = ds.robot(ds.robot_ids[0]).groundtruth
     tg = np.arange(t_start + GPS_PERIOD_S, t_end, GPS_PERIOD_S)
     q = gt1.at(tg)
     tg, pose = tg[q.valid], q.pose[q.valid]
-    pose = pose + rng.normal(size=pose.shape) * np.asarray(GPS_SIGMA)
-    return measurement_rows("pose", t=tg, observer=0, value=pose, sigma=np.asarray(GPS_SIGMA))
+    e = rng.normal(size=pose.shape) * np.asarray(GPS_SIGMA)
+    c, s = np.cos(pose[:, 2]), np.sin(pose[:, 2])
+    e[:, 0], e[:, 1] = c * e[:, 0] - s * e[:, 1], s * e[:, 0] + c * e[:, 1]
+    return measurement_rows("pose", t=tg, observer=0, value=pose + e, sigma=np.asarray(GPS_SIGMA))
 
 
 def _two_landmarks(m: Measurements, ds: Any) -> tuple[int, int]:
