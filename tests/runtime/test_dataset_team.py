@@ -76,7 +76,9 @@ def test_recorded_team_becomes_a_recording_with_raised_planes(tmp_path):
         TrackManagerSettings(filter="tekf", gate_probability=0.9),
     )
     assert json.loads(json.dumps(meta)) == meta
-    assert meta["experiment"] == "team_up" and meta["scenario"] == "replay of team"
+    assert meta["experiment"] == "team_up" and meta["scenario"] == (
+        "recorded trajectories of team, readings synthesised (seed 000 §6)"
+    )
     assert meta["source"] == same.source and str(folder) in meta["source"] and meta["seed"] == 4
     assert meta["filter"] == "tekf" and meta["gate_probability"] == 0.9
     assert list(meta["odometry_sigma"]) == ["robot1", "robot2", "robot3"]

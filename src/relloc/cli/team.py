@@ -93,7 +93,12 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         "--duration", type=float, default=None, help="a reproduction's simulated seconds per run"
     )
     up.add_argument("--out", type=Path, required=True, help="output folder")
-    up.add_argument("--seed", type=int, default=0, help="simulation and fault seed")
+    up.add_argument(
+        "--seed",
+        type=int,
+        default=0,
+        help="simulation and fault seed (default 0; the team is run 0 of `relloc run --seed SEED`)",
+    )
     up.add_argument("--team", default="team", help="team id (key-expression prefix)")
     up.add_argument(
         "--filter", default=None, help="a scenario's or a dataset's tracks: plkf | tekf | bcplkf"

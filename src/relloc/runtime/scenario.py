@@ -77,7 +77,7 @@ def load_team(spec: str, seed: int) -> Team:
         from relloc.runtime.dataset import mrclam_team_recording
 
         recording = mrclam_team_recording(spec, rng)
-        name = f"replay of {Path(spec).name}"
+        name = f"recorded trajectories of {Path(spec).name}, readings synthesised (seed 000 §6)"
         return Team(name=name, description=recording.source, recording=recording, scenario=None)
     scenario = load_team_scenario(spec)
     return Team(
