@@ -52,7 +52,16 @@ What the loader guarantees
   ``MrclamOptions(on_bad_row="raise")``, raises :class:`~relloc.errors.DataError` naming the
   file and line.
   Measurement rows legitimately share time stamps (one camera frame sees several subjects);
-  only a time going backwards is a fault there: a row earlier than the latest kept before it.
+  only a time going backwards is a fault there.
+- **Time order: the most rows in order are kept.** Of a file's ``n`` usable rows with stamps
+  ``t₁ … tₙ`` (in file order), the loader keeps a longest non-decreasing subsequence — rows
+  ``i₁ < … < iₖ`` with ``t_{i₁} ≤ … ≤ t_{iₖ}`` and ``k`` as large as possible (patience sorting,
+  ``O(n log n)``) — and skips the other ``n − k`` as "time goes backwards"; among equally long
+  ones it keeps the one whose row numbers come first in lexicographic order (the earliest rows,
+  so a file in which skipping each row earlier than the latest kept before it already leaves
+  ``k`` rows keeps exactly those). A row out of place thus costs itself, not the rows after it:
+  two swapped rows cost 2, one far-future stamp costs 1. Equal stamps are in order here; the
+  duplicate rules below then apply to the rows kept.
 - **Duplicate odometry stamps**: the later row is kept (it is the command in force from then on)
   and the earlier one is counted as superseded. Duplicate ground-truth stamps keep the first.
 - **Always an error** (``DataError`` naming the file, and the line where there is one): a missing
@@ -61,7 +70,10 @@ What the loader guarantees
   2 in each ground-truth file); a subject or barcode listed twice in ``Barcodes.dat``; a robot
   without a barcode; a landmark listed twice in ``Landmark_Groundtruth.dat`` (a surveyed table
   giving one landmark two positions contradicts itself, and no rule can say which one is true,
-  so the loader refuses the file rather than pick one); a row stamped more than a day
+  so the loader refuses the file rather than pick one); a subject that is both a robot loaded
+  (``RobotN_*`` files) and a landmark in ``Landmark_Groundtruth.dat`` (one subject carries one
+  barcode, so a camera reading of it could not say whether it saw the moving robot or the
+  surveyed landmark; the layout numbers robots and landmarks apart); a row stamped more than a day
   (:data:`MAX_RUN_S`) after the run's first stamp (a clock jump, which would make every use
   that samples the run on a grid allocate without bound).
 - **Ground truth at query times** (:meth:`GroundTruth.at`): x, y linearly interpolated, θ on the
@@ -74,6 +86,7 @@ What the loader guarantees
 
 from __future__ import annotations
 
+import bisect
 import math
 import numbers
 import re
@@ -493,14 +506,13 @@ def _monotonic_mask(
 ) -> BoolArray:
     """Rows to keep so that time never goes backwards (and, unless allowed, never repeats).
 
-    A row whose time is earlier than the latest time kept so far is skipped ("time goes
-    backwards"). Equal times are kept ("allow"), or all but the first / last of a run are skipped.
+    The rows of :func:`_longest_ordered` are kept and the others skipped ("time goes
+    backwards"). Of the rows kept, equal times are all kept ("allow"), or all but the first /
+    last of a run are skipped.
     """
     if len(t) == 0:
         return np.ones(0, dtype=bool)
-    running_max = np.maximum.accumulate(t)
-    prev_max = np.concatenate(([-np.inf], running_max[:-1]))
-    keep = t >= prev_max
+    keep = _longest_ordered(t)
     if not keep.all():
         sink.skip_many(line_no[~keep], "time goes backwards")
     if duplicates == "allow":
@@ -517,6 +529,45 @@ def _monotonic_mask(
         sink.skip_many(line_no[idx[repeat]], reason)
         keep[idx[repeat]] = False
     return np.asarray(keep)
+
+
+def _longest_ordered(t: FloatArray) -> BoolArray:
+    """Mask of a longest non-decreasing subsequence of ``t``: among the longest, the one whose
+    indices come first in lexicographic order (module docstring, "Time order").
+
+    Patience sorting over the stamps read from the last row back, each negated (a run that is
+    non-decreasing in file order is non-decreasing in ``−t`` read backwards): row ``i`` goes on
+    pile ``L(i) − 1``, where ``L(i)`` is the length of the longest ordered run starting at ``i``,
+    and links to the row last put on the pile below, the earliest row after ``i`` that starts a
+    run of length ``L(i) − 1`` (its stamp is ``≥ t[i]``). Following the links from the row last
+    put on the top pile — the earliest row starting a longest run — picks at each step the
+    earliest row that can still complete a longest run: the lexicographically first one.
+    ``O(n log n)``; a sorted ``t`` keeps every row without the loop.
+    """
+    n = len(t)
+    keep = np.zeros(n, dtype=bool)
+    if n == 0 or bool(np.all(t[1:] >= t[:-1])):
+        keep[:] = True
+        return keep
+    tails: list[float] = []  # tails[k]: −(stamp) of the row last put on pile k
+    tail_row: list[int] = []  # that row
+    link = [-1] * n  # the next row of the run that row i starts
+    stamps = t.tolist()
+    for i in range(n - 1, -1, -1):
+        x = -stamps[i]
+        k = bisect.bisect_right(tails, x)
+        if k == len(tails):
+            tails.append(x)
+            tail_row.append(i)
+        else:
+            tails[k] = x
+            tail_row[k] = i
+        link[i] = tail_row[k - 1] if k else -1
+    i = tail_row[-1]
+    while i >= 0:
+        keep[i] = True
+        i = link[i]
+    return keep
 
 
 # ----------------------------------------------------------------------------------------------
@@ -756,11 +807,23 @@ def _load_barcodes(folder: Path, report: LoadReport, options: MrclamOptions) -> 
     return {barcode: subject for subject, barcode in ids}
 
 
-def _load_landmarks(folder: Path, report: LoadReport, options: MrclamOptions) -> Landmarks:
-    """The landmark table; a subject listed twice is an error (module docstring)."""
+def _load_landmarks(
+    folder: Path, report: LoadReport, options: MrclamOptions, robots: Sequence[int] = ()
+) -> Landmarks:
+    """The landmark table; a subject listed twice, or one of the ``robots`` loaded, is an error
+    (module docstring)."""
     path = folder / LANDMARKS_FILE
     values, line_no, sink = _read_table(path, _LANDMARK_COLUMNS, report, options)
     _reject_repeats(path, "landmark subject", values[:, 0], line_no)
+    robot_set = {int(r) for r in robots}
+    for subject, ln in zip(values[:, 0].astype(np.int64).tolist(), line_no.tolist(), strict=True):
+        if subject in robot_set:
+            others = " and ".join(f"Robot{subject}_{kind}.dat" for kind in ROBOT_KINDS[1:])
+            raise DataError(
+                f"{folder / f'Robot{subject}_Groundtruth.dat'} (and {others}) make subject "
+                f"{subject} a robot, but {path}:{ln} lists subject {subject} as a landmark; a "
+                f"subject is one or the other (its barcode could not tell a camera which it saw)"
+            )
     sink.report.rows_kept = len(values)
     return Landmarks(
         subject=values[:, 0].astype(np.int64), xy=values[:, 1:3].copy(), std=values[:, 3:5].copy()
@@ -807,7 +870,7 @@ def load_mrclam(folder: Path | str, options: MrclamOptions | None = None) -> Mrc
     robot_ids = _discover_robots(folder, opts)
     report = LoadReport(str(folder))
     barcode_to_subject = _load_barcodes(folder, report, opts)
-    landmarks = _load_landmarks(folder, report, opts)
+    landmarks = _load_landmarks(folder, report, opts, robot_ids)
     subject_to_barcode = {s: b for b, s in barcode_to_subject.items()}
     for n in robot_ids:
         if n not in subject_to_barcode:
