@@ -26,8 +26,10 @@ Array = NDArray[np.float64]
 
 
 def fill_by_shortest_paths(D: Array) -> Array:
-    """``D`` with NaN entries replaced by shortest-path lengths (Floyd–Warshall); DataError if
-    some points are not connected."""
+    """``D`` with NaN entries replaced by shortest-path lengths (Floyd–Warshall) and zeros on the
+    diagonal; every measured distance stays as measured, even one longer than a path through
+    other points (noisy ranges break the triangle inequality; MDS fits them all in least
+    squares). DataError if some points are not connected."""
     D = np.array(D, dtype=float)
     n = D.shape[0]
     G = np.where(np.isnan(D), np.inf, D)
@@ -37,7 +39,9 @@ def fill_by_shortest_paths(D: Array) -> Array:
     if not np.isfinite(G).all():
         i = int(np.argwhere(~np.isfinite(G))[0][0])
         raise DataError(f"classical_mds: point {i} has no chain of distances to the others")
-    return G
+    out = np.where(np.isnan(D), G, D)
+    np.fill_diagonal(out, 0.0)
+    return out
 
 
 def classical_mds(D: Array, dim: int = 2) -> Array:

@@ -56,7 +56,8 @@ class TriangleBearing:
 
 
 def side_of(p0: tuple[float, float], pj: tuple[float, float], pi: tuple[float, float]) -> int:
-    """``sign((p_j − p_0) × (p_i − p_0))``: +1 if R_i is left of the ray R_0→R_j, else −1."""
+    """``sign((p_j − p_0) × (p_i − p_0))``: +1 if R_i is left of the ray R_0→R_j or on its line
+    (a collinear triangle is refused by :func:`triangle_bearing` anyway), else −1."""
     cross = (pj[0] - p0[0]) * (pi[1] - p0[1]) - (pj[1] - p0[1]) * (pi[0] - p0[0])
     return 1 if cross >= 0.0 else -1
 
