@@ -73,12 +73,14 @@ covariance (:func:`relloc.metrics.projected_nees`). It is χ²(d) for a consiste
 independent across runs, so it is a run-level test with exact bands, aimed where a linearised
 filter gains spurious information. The default 30 runs (seed 2026): OC EIF mean 3.10 (95 %
 band of a mean of 30 χ²₃ values 2.19–3.94) with no landmark and 0.78 (0.56–1.57) with one, one
-run in 30 beyond χ²_d(0.95) in each, consistent; FEJ EIF the same to two digits; plain EIF
-33.8 and 12.2, 50 % and 30 % of the runs beyond, over-confident. Run 7 of seed 2026 (83.4 % of
-its NEES samples beyond) has the OC EIF's largest, 11.1 (p 0.011 for χ²₃); over the 30 runs
-the frame NEES ranks with a run's share beyond (Spearman 0.79): the tail runs are the runs
-whose error along the unobservable directions is large, as a consistent filter's are in a few
-runs. Along the run (every 30 s, ``frame_nees.along_the_run``, the joint beliefs kept by
+run in 30 beyond χ²_d(0.95) in each, consistent by the band of the mean (the share's
+interval, 0.1–17.6 % for one in 30, holds 5 % but reaches above 10 %: inconclusive); FEJ
+EIF the same to two digits; plain EIF 33.8 and 12.2, 50 % and 30 % of the runs beyond,
+over-confident. Run 7 of seed 2026 (83.4 % of its NEES samples beyond) has the OC EIF's
+largest, 11.1 (p 0.011 for χ²₃); over the 30 runs the frame NEES ranks with a run's share
+beyond (Spearman 0.79): the tail runs are the runs whose error along the unobservable
+directions is large, as a consistent filter's are in a few runs. Along the run (every 30 s,
+``frame_nees.along_the_run``, the joint beliefs kept by
 ``CooperativeEstimator(joint_times=…)``) the OC EIF's mean over the runs stays at 2.86–3.10
 with no landmark and 0.76–1.09 with one, inside the band at every one of the ten times; the
 plain EIF's at 28.1–36.8 and 11.0–21.7, above it at every one: the plain filter is already
@@ -102,8 +104,10 @@ below: ``error_ratio`` of ``e``, ``sigma_ratio`` of ``s``, last quarter over sec
 ``final_pos_err_m`` (RMS over runs and robots of the planar position error at the last output
 instant, m); ``nees_pct_beyond`` (share of per-robot NEES samples beyond χ²₃(0.95),
 about 5 % for a consistent filter; ``nees_beyond_interval`` its 95 % interval by cluster
-means, each independent run one cluster, with the verdict: :class:`relloc.metrics.BeyondShare`'s
-keys), ``nees_pct_beyond_per_run`` (each run's own share, %) and ``anees`` (mean NEES / 3);
+means, each independent run one cluster, with the verdict — over-confident, conservative,
+consistent or inconclusive, :func:`relloc.metrics.consistency.share_verdict` —:
+:class:`relloc.metrics.BeyondShare`'s keys), ``nees_pct_beyond_per_run`` (each run's own
+share, %) and ``anees`` (mean NEES / 3);
 ``nees_run_average``: the NEES averaged over the independent runs at each output instant, per
 robot, against the two-sided 95 % band of such a mean (:func:`relloc.metrics.run_average_band`:
 ``in_band_percent``, about 95 % when consistent, ``below_band_percent``,
@@ -1010,7 +1014,11 @@ def _report(summary: dict[str, Any], figures: list[tuple[str, str]]) -> str:
         _headline_text(summary["observability_aware"]),
         f"NEES on: {summary['nees_on']}. *NEES > χ²₃(.95)*: share of all (run, instant, robot) "
         "samples beyond the single-sample bound (about 5 % when consistent; each sample's "
-        "exceedance probability, no independence needed). *Run-avg NEES in band*: at each "
+        "exceedance probability, no independence needed); its 95 % interval's verdict is "
+        "*over-confident* when the interval lies wholly above 5 %, *conservative* wholly "
+        "below, *consistent* when it holds 5 % and reaches no higher than 10 % (twice it), "
+        "*inconclusive* when it holds 5 % but reaches above 10 % (not rejected, not shown "
+        "consistent either). *Run-avg NEES in band*: at each "
         "instant and for each robot, the NEES averaged over the independent runs against the "
         f"two-sided 95 % band of such a mean, {band_text} (about 95 % when consistent; verdict "
         "*over-confident* when the share above is significantly more than 2.5 % — its 95 % "
@@ -1041,7 +1049,7 @@ def _report(summary: dict[str, Any], figures: list[tuple[str, str]]) -> str:
         "tests the filters exactly where a linearised filter gains spurious information. "
         f"*Along the run*: the same NEES every {FRAME_EVERY_S:g} s, averaged over the runs at "
         "each of those times against the same band (`relloc.metrics.run_average_band`, with "
-        "its verdict).",
+        "its verdict, as for the run-averaged NEES above).",
         "## Per-robot RMSE, plain EIF (position m / heading rad)",
         per_robot,
         "## How this compares with the paper",

@@ -66,7 +66,9 @@ record times at 10 Hz at which every scored robot has an estimate; ``nees_pct_be
 of the scored robots' 2-DOF NEES values at those times that exceed χ²₂(0.95), with
 ``nees_beyond_interval`` its 95 % interval by batch means over time (widened on short blocks,
 :func:`relloc.metrics.percent_beyond_interval`; :class:`relloc.metrics.BeyondShare`'s keys)
-and the verdict — one run, whose records are correlated in time —, ``converged_after_s`` (s
+and the verdict — one run, whose records are correlated in time; over-confident,
+conservative, consistent or inconclusive, :func:`relloc.metrics.consistency.share_verdict` —,
+``converged_after_s`` (s
 from the first record until every scored robot's error stays below 0.3 m for good; null if it
 never does), ``per_robot`` (anchored only: robot → ``pos_rmse_m``),
 ``baselines.uncalibrated`` / ``baselines.multilateration`` ``pos_rmse_m`` (the latter at
@@ -330,7 +332,9 @@ def report(summary: dict[str, Any]) -> str:
         "when a block lasts less than ten correlation times of the NEES to hold "
         "Clopper–Pearson's interval for the effective sample size that time leaves "
         "(`relloc.metrics.consistency.percent_beyond_interval`); the verdict says whether it "
-        "holds the 5 % of a consistent filter, lies above (over-confident) or below "
-        "(conservative).",
+        "lies wholly above the 5 % of a consistent filter (over-confident), wholly below "
+        "(conservative), holds 5 % and reaches no higher than 10 %, twice it, the share seed "
+        "000 calls acceptable (consistent), or holds 5 % but reaches above 10 % "
+        "(inconclusive: not rejected, not shown consistent either).",
     ]
     return "\n".join(lines) + "\n"

@@ -93,7 +93,9 @@ state (:func:`relloc.experiments.wanasinghe2014_mrclam.replay_pcrlb`; ``replay_t
 the calibrated φ bound as ``yaw_bound_rad``);
 ``table4[odometry][case]``, steady state: % NEES beyond χ²(4, 0.95) with the paper's value
 (``nees_percent_beyond``, ``paper_nees_percent_beyond``; ``nees_beyond_interval`` its 95 %
-interval by cluster means over the draws and over time, with the verdict), % NIS beyond
+interval by cluster means over the draws and over time, with the verdict: over-confident,
+conservative, consistent or inconclusive, :func:`relloc.metrics.consistency.share_verdict`), %
+NIS beyond
 χ²(3, 0.95) (``nis_percent_beyond``), ANEES (``anees``), the run-averaged NEES against its band
 (``run_averaged_nees``, null with one draw), max log10 conditioning of P, R, S over every
 update (``max_conditioning``: ``P``, ``R``, ``S``; the paper's bound

@@ -46,7 +46,9 @@ beyond, ``nees_percent_beyond``);
 ``relative_yaw_random_walk_rad`` (below) and ``cases[case]``:
 ``calibrated`` and ``raw`` (PLKF ``yaw_rmse_rad``, ``yaw_rmse_per_draw``,
 ``nees_percent_beyond`` with ``nees_beyond_interval``, its 95 % interval by cluster means over
-the draws and over time and the verdict, ``position_rmse_m``: the mean of the x, y and z RMSE),
+the draws and over time and the verdict — ``over-confident``, ``conservative``, ``consistent``
+or ``inconclusive``, :func:`relloc.metrics.consistency.share_verdict` —,
+``position_rmse_m``: the mean of the x, y and z RMSE),
 ``yaw_bound_rad`` (√PCRLB of φ, calibrated model), ``truth_velocity_yaw_bound_rad``, ``yaw_ok``,
 ``nees_ok``, ``position_ok`` (the calibrated figures against the targets) and ``met`` (all
 three); a pair's ``relative_yaw_random_walk_rad``: ``calibration`` and ``scored`` → the
@@ -347,8 +349,10 @@ def build_report(summary: dict[str, Any], figures: dict[str, str], *, elapsed_s:
         "",
         "↑: the NEES share's 95 % interval (cluster means two ways, over the draws and over "
         "time, widened on blocks shorter than ten correlation times) lies wholly above the "
-        "5 % of a consistent filter (over-confident); ↓: wholly below (conservative); ✓: the "
-        "yaw and NEES targets both met.",
+        "5 % of a consistent filter (over-confident); ↓: wholly below (conservative); ?: it "
+        "holds 5 % but reaches above 10 %, twice it (inconclusive: not rejected, not shown "
+        "consistent either); unmarked: it holds 5 % and reaches no higher than 10 % "
+        "(consistent); ✓: the yaw and NEES targets both met.",
         "",
     ]
     lines += _pair_table(rows, "calibrated")
@@ -428,7 +432,7 @@ def build_report(summary: dict[str, Any], figures: dict[str, str], *, elapsed_s:
 
 
 #: Report marks of the NEES share's verdict (:func:`relloc.metrics.percent_beyond_interval`).
-VERDICT_MARKS = {"over-confident": "↑", "conservative": "↓"}
+VERDICT_MARKS = {"over-confident": "↑", "conservative": "↓", "inconclusive": "?"}
 
 
 def _pair_table(rows: list[dict[str, Any]], kind: str) -> list[str]:

@@ -605,8 +605,11 @@ def _replay_tables(s: dict[str, Any], kind: str) -> list[str]:
         "steady state cut into 10 blocks), so it counts the errors the draws share at one "
         "time and those that persist through a draw, and widened, when a block lasts less "
         "than ten correlation times of the NEES, to Clopper–Pearson's interval for the "
-        "effective sample size that time leaves; its verdict says whether it holds the "
-        "5 % of a consistent filter, lies above (over-confident) or below (conservative).",
+        "effective sample size that time leaves; its verdict says whether it lies wholly "
+        "above the 5 % of a consistent filter (over-confident), wholly below (conservative), "
+        "holds 5 % and reaches no higher than 10 %, twice it, the share seed 000 calls "
+        "acceptable (consistent), or holds 5 % but reaches above 10 % (inconclusive: not "
+        "rejected, not shown consistent either).",
     ]
 
 

@@ -165,7 +165,7 @@ def interval_text(share: Mapping[str, Any] | None) -> str:
     :meth:`relloc.metrics.consistency.BeyondShare.to_dict`: ``"3.1–7.4 consistent"``
     (``—`` without one); when its time blocks are short against the values' correlation time
     (``blocks_short``, so the interval is the batch means' one widened to the correlation-time
-    interval) it adds both and that interval's effective sample size, ``"1.2–19.0 consistent
+    interval) it adds both and that interval's effective sample size, ``"1.2–19.0 inconclusive
     (45 s blocks, errors correlated over 29 s: widened to 78 effective samples)"``."""
     if not share or share.get("interval") is None:
         return "—"

@@ -26,15 +26,21 @@ computed over all runs on the *steady-state* samples (track age ≥ ``settle_s``
   (``nees_bound``)
   (seed 000 Table 4; about 5 % for a consistent filter), ``nees_beyond_interval`` its 95 %
   interval by cluster means (the independent runs; one run's record times in blocks), with
-  the verdict (:func:`relloc.metrics.consistency.percent_beyond_interval`);
+  the verdict (:func:`relloc.metrics.consistency.percent_beyond_interval`): ``over-confident``
+  (interval wholly above 5 %), ``conservative`` (wholly below), ``consistent`` (holds 5 % and
+  reaches no higher than 10 %, twice it: :data:`relloc.metrics.consistency.EQUIVALENCE_FACTOR`)
+  or ``inconclusive`` (holds 5 % but reaches above 10 %: not rejected, not shown either);
 - ``nees_run_average_in_band_percent``: share of recording times at which the NEES averaged
   over the ``N`` runs lies in the two-sided 95 % band of such an average
   (``nees_run_average_band``; needs ``N ≥ 2``; about 95 % for a consistent filter), and
   ``nees_run_average_verdict``, whether the shares below and above the band exceed the 2.5 %
-  each side leaves by more than their intervals allow — :func:`relloc.pipeline.evaluation.
-  nees_band_check` — with ``nees_run_average_blocks_short``, whether those intervals' blocks of
-  times last less than ten correlation times (:attr:`relloc.metrics.BeyondShare.blocks_short`;
-  the intervals are then widened to the correlation-time interval);
+  each side leaves by more than their intervals allow (``conservative``, ``over-confident``),
+  else ``consistent`` (a significance test, without the equivalence margin: see
+  :func:`relloc.metrics.consistency.run_average_band`) —
+  :func:`relloc.pipeline.evaluation.nees_band_check` — with
+  ``nees_run_average_blocks_short``, whether those intervals' blocks of times last less than
+  ten correlation times (:attr:`relloc.metrics.BeyondShare.blocks_short`; the intervals are
+  then widened to the correlation-time interval);
 - ``anis`` (NIS/3, ideal 1) and ``nis_percent_beyond`` ``χ²(3, 0.95)`` (``nis_bound``);
 - ``max_condition_log10`` of ``P``, ``R`` and ``S`` (seed 000 §7.3; > 6 is ill-conditioned);
 - ``track_events``: created / deleted / re-created counts over all runs;
@@ -679,11 +685,17 @@ def report_markdown(
         "in time, so these shares fluctuate more than independent draws would: the NEES "
         "share's 95 % interval is by cluster means (each independent run one cluster; one "
         "run's steady-state span cut into 10 blocks, each a cluster), and its verdict says "
-        "whether it holds the 5 % of a consistent filter, lies above (over-confident) or "
-        "below (conservative). The run-averaged NEES's verdict is over-confident (conservative) "
-        "when the share of times above (below) the band is more than the 2.5 % a consistent "
-        "filter leaves there by more than its 95 % interval allows (batch means over the "
-        "times); it needs two runs or more. *Blocks short*: the blocks of times last less "
+        "whether it lies wholly above the 5 % of a consistent filter (over-confident), wholly "
+        "below (conservative), holds 5 % and reaches no higher than 10 %, twice it, the share "
+        "seed 000 calls acceptable (consistent), or holds 5 % but reaches above 10 % "
+        "(inconclusive: too wide to tell a consistent filter from one that leaves more than "
+        "10 % beyond; not rejected, not shown consistent either). The run-averaged NEES's "
+        "verdict is over-confident (conservative) when the share of times above (below) the "
+        "band is more than the 2.5 % a consistent filter leaves there by more than its 95 % "
+        "interval allows (batch means over the times), else consistent (not rejected: the "
+        "10 % margin is not applied here, since ten blocks of times would leave most "
+        "consistent filters inconclusive); it needs two runs or more. "
+        "*Blocks short*: the blocks of times last less "
         "than ten correlation times of the values they hold, where batch means alone would "
         "give too narrow an interval; it is then widened to hold Clopper–Pearson's interval "
         "for the effective sample size that correlation time leaves "
