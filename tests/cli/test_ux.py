@@ -83,7 +83,7 @@ def test_run_console_fits_80_columns_lists_every_file_and_renders_every_figure(
         "conditioning.png",
         "convergence.png",
         "trajectories.png",
-    } | {f"error_bounds_{s['observed']}.png" for s in summary["pairs"].values()}
+    } | {f"error_bounds_{s['observer']}_{s['observed']}.png" for s in summary["pairs"].values()}
     assert set(figures) == expected
     report = (out / "report.md").read_text()
     for name in ["summary.json", "report.md", *figures]:

@@ -48,14 +48,14 @@ def run(args: argparse.Namespace) -> int:
 
 
 def topic_table(infos: Sequence[TopicInfo]) -> str:
-    """One aligned line per topic."""
+    """One aligned line per topic; the span of a topic without messages is ``—``."""
     width = max((len(i.topic) for i in infos), default=5)
     kinds = max((len(i.msgtype) for i in infos), default=4)
     lines = [f"{'topic':<{width}}  {'type':<{kinds}}  {'count':>6}  {'rate_hz':>8}  span_s"]
     for i in infos:
+        span = f"{i.first_s:.2f}–{i.last_s:.2f}" if i.count else "—"  # no message: no span
         lines.append(
-            f"{i.topic:<{width}}  {i.msgtype:<{kinds}}  {i.count:>6}  {i.rate_hz:>8.2f}  "
-            f"{i.first_s:.2f}–{i.last_s:.2f}"
+            f"{i.topic:<{width}}  {i.msgtype:<{kinds}}  {i.count:>6}  {i.rate_hz:>8.2f}  {span}"
         )
     return "\n".join(lines)
 

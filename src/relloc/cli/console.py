@@ -43,15 +43,31 @@ def compact_table(
         lines += [_join(r, widths) for r in cells]
         return "\n".join(lines)
     lines = []
+    indent = "  "
     for r in cells:
-        lines += textwrap.wrap(r[0], width) or [""]  # a label wider than the line wraps
-        # a header and its value stay on one line: join them with no-break spaces
+        lines += _wrap_words(r[0], width) or [""]  # a label wider than the line wraps
+        # a header and its value stay on one line (joined with no-break spaces) when they fit
+        # on one; a longer pair wraps at its spaces like any text
         pairs = ", ".join(
-            f"{h} {v}".replace(" ", NBSP) for h, v in zip(headers[1:], r[1:], strict=True)
+            _bind(f"{h} {v}", width - len(indent)) for h, v in zip(headers[1:], r[1:], strict=True)
         )
-        wrapped = textwrap.wrap(pairs, width, initial_indent="  ", subsequent_indent="  ")
+        wrapped = _wrap_words(pairs, width, indent)
         lines += [w.replace(NBSP, " ") for w in wrapped]
     return "\n".join(lines)
+
+
+def _bind(text: str, width: int) -> str:
+    """``text`` with no-break spaces when it fits in ``width`` columns (a 1-column allowance
+    for the ``,`` that follows it), else as it is."""
+    return text.replace(" ", NBSP) if len(text) < width else text
+
+
+def _wrap_words(text: str, width: int, indent: str = "") -> list[str]:
+    """``text`` wrapped at spaces only, every line after ``indent``: a word (hyphenated ones
+    too) is broken only when it alone is longer than the line."""
+    return textwrap.wrap(
+        text, width, initial_indent=indent, subsequent_indent=indent, break_on_hyphens=False
+    )
 
 
 def _join(cells: Sequence[str], widths: Sequence[int]) -> str:

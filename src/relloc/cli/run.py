@@ -161,6 +161,8 @@ def run(args: argparse.Namespace) -> int:
     if args.map is not None:
         return _run_bag(args)
     _tracker_defaults(args)
+    if args.scenario is not None:
+        _refuse_bag_without_map(args.scenario)
     scenario = default_scenario() if args.scenario is None else load_scenario(args.scenario)
     if args.duration is not None:
         try:
@@ -286,6 +288,24 @@ def _yaw_bank(n_components: int) -> YawBankSettings | None:
     except ConfigError as exc:
         reason = str(exc).partition(":")[2].strip()
         raise ConfigError(f"--yaw-bank: 0 (off) or {reason}") from None
+
+
+def _refuse_bag_without_map(path: Path) -> None:
+    """ConfigError when SCENARIO is a bag (a folder, ``.db3`` or ``.mcap``) given without
+    ``--map``: it is not a scenario file, and a bag is run through its topic mapping."""
+    from relloc.datasets.bag_mapping import shipped_mappings
+    from relloc.errors import ConfigError
+
+    if path.is_dir():
+        what, bag = "a folder", "a bag folder"
+    elif path.suffix.lower() in (".db3", ".mcap"):
+        what, bag = "a bag", "a bag"
+    else:
+        return
+    raise ConfigError(
+        f"{path}: {what}, not a scenario TOML file; {bag} needs --map MAP, its topic mapping "
+        f"(a file, or shipped: {', '.join(shipped_mappings())})"
+    )
 
 
 def _run_bag(args: argparse.Namespace) -> int:

@@ -509,9 +509,9 @@ def _load_pair_dataset(settings: ReplaySettings) -> MrclamDataset:
     missing = [r for r in (settings.observer, settings.observed) if r not in ds.robot_ids]
     if missing:
         raise ConfigError(
-            f"ReplaySettings: robot(s) {missing} of the pair {settings.observer} → "
-            f"{settings.observed} are not in {settings.dataset} (robots: {list(ds.robot_ids)}); "
-            "choose the pair with --pair OBSERVER,OBSERVED"
+            f"--pair {settings.observer},{settings.observed}: robot(s) {missing} of the pair "
+            f"{settings.observer} → {settings.observed} are not in {settings.dataset} (robots: "
+            f"{list(ds.robot_ids)}); choose the pair with --pair OBSERVER,OBSERVED"
         )
     return ds
 

@@ -60,6 +60,7 @@ use, by reason.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -109,6 +110,7 @@ RECORD_RATE_HZ = 10.0
 """Default rate (Hz) at which beliefs are recorded."""
 CONVERGENCE_THRESHOLDS = (0.1, 0.1, 0.1, 0.1)
 """|error| bounds (x, y, z in m; φ in rad) a track must stay inside to count as converged."""
+_UNSAFE_IN_NAME = re.compile(r"[^A-Za-z0-9_-]")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -443,6 +445,29 @@ def write_figures(
     ]
 
 
+def pair_figure_stems(pairs: Sequence[SeriesEvaluation]) -> list[str]:
+    """One file-name stem per series: ``observer_observed`` (``__track`` appended when the
+    track has a name), so two observers of one robot get a figure each. Characters outside
+    ``[A-Za-z0-9_-]`` become ``_``; a stem another series already has gets ``_2``, ``_3``, …"""
+    stems: list[str] = []
+    for p in pairs:
+        stem = f"{p.owner}_{p.subject}" + (f"__{p.track}" if p.track else "")
+        stem = _UNSAFE_IN_NAME.sub("_", stem)
+        unique, k = stem, 1
+        while unique in stems:
+            k += 1
+            unique = f"{stem}_{k}"
+        stems.append(unique)
+    return stems
+
+
+def _legend_names(pairs: Sequence[SeriesEvaluation]) -> list[str]:
+    """A legend name per series: the observed robot, or the series' label (``observer->observed``)
+    where more than one series observe that robot — so none hides another."""
+    subjects = [p.subject for p in pairs]
+    return [p.subject if subjects.count(p.subject) == 1 else p.label for p in pairs]
+
+
 def _error_bound_figures(
     plt: Any, out_dir: Path, run0: RunResult, *, settle_s: float
 ) -> list[tuple[str, str]]:
@@ -451,7 +476,8 @@ def _error_bound_figures(
     from relloc.plotting.team import shade_gaps, track_gaps
 
     figures = []
-    for p in run0.evaluations:
+    stems = pair_figure_stems(run0.evaluations)
+    for p, stem in zip(run0.evaluations, stems, strict=True):
         fig, axes = plt.subplots(4, 1, figsize=(8, 7), sharex=True)
         plot_pose_errors_with_bounds(axes, p.t, p.error, p.sigma)
         gaps = track_gaps(run0.events, p.owner, p.subject, float(p.t[-1]) if p.t.size else 0.0)
@@ -465,7 +491,7 @@ def _error_bound_figures(
                 ax.set_ylim(-half, half)
         legend_outside(axes[0])
         axes[0].set_title(f"{p.label} ({p.platform}): error and ±3σ, run 0")
-        name = save_figure(fig, out_dir, f"error_bounds_{p.subject}")
+        name = save_figure(fig, out_dir, f"error_bounds_{stem}")
         figures.append(
             (
                 name,
@@ -487,7 +513,8 @@ def _rmse_figure(
 
     series = {}
     t_first = float("inf")
-    for p in results[0].evaluations:
+    pairs = results[0].evaluations
+    for p, name in zip(pairs, _legend_names(pairs), strict=True):
         runs = _runs_of(results, p.label)
         t0 = min(float(r.t[0]) for r in runs if r.t.size)
         t_first = min(t_first, t0)
@@ -495,7 +522,7 @@ def _rmse_figure(
         table = np.full((len(runs), n, 4), np.nan)
         for k, r in enumerate(runs):
             table[k, _grid_index(r.t, t0, rate)] = r.error
-        series[p.subject] = (t0 + np.arange(n) / rate, rmse(table, axis=0))
+        series[name] = (t0 + np.arange(n) / rate, rmse(table, axis=0))
     fig, axes = plt.subplots(4, 1, figsize=(8, 7), sharex=True)
     plot_robot_errors(axes, series)
     for i, ax in enumerate(axes):
@@ -522,7 +549,8 @@ def _nees_nis_figure(
 
     n_runs = len(results)
     fig, axes = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
-    for i, p in enumerate(results[0].evaluations):
+    pairs = results[0].evaluations
+    for i, (p, name) in enumerate(zip(pairs, _legend_names(pairs), strict=True)):
         runs = _runs_of(results, p.label)
         if n_runs >= 2:
             t, avg, n = run_averaged_nees(runs, rate_hz=rate, settle_s=settle_s)
@@ -530,7 +558,7 @@ def _nees_nis_figure(
             keep = runs[0].age >= settle_s
             t, avg, n = runs[0].t[keep], runs[0].nees[keep], 1
         plot_chi2_series(
-            axes[0], t, avg, NEES_DOF, n_runs=n, label=p.subject, show_bound=i == 0, normalise=True
+            axes[0], t, avg, NEES_DOF, n_runs=n, label=name, show_bound=i == 0, normalise=True
         )
         keep = p.update_age >= settle_s
         plot_chi2_series(
@@ -538,7 +566,7 @@ def _nees_nis_figure(
             p.update_t[keep],
             p.nis[keep],
             NIS_DOF,
-            label=p.subject,
+            label=name,
             show_bound=i == 0,
             normalise=True,
         )

@@ -239,7 +239,7 @@ def parse_robot_event(text: str, flag: str) -> RobotEvent:
     robot, sep, at = text.partition("@")
     try:
         if not sep:
-            raise ValueError
+            raise ValueError("missing '@'")
         return RobotEvent(robot=robot, at_s=float(at))
     except (ValueError, ConfigError) as exc:
         raise ConfigError(f"{flag}: expected ROBOT@SECONDS, got {text!r} ({exc})") from None
