@@ -251,3 +251,7 @@ def test_pairs_of_a_bag_with_odometry_are_tracked_and_judged(tmp_path):
             assert pair["observability"]["max_rank"] < 4, name
             assert pair["observability"]["verdict"].startswith("unobservable"), name
     assert pairs["turtlebot1->turtlebot3"]["observability"]["max_rank"] == 4
+    # the report says what the pair table's baselines and convergence column mean
+    report = (out / "report.md").read_text()
+    assert "*odometry alone* starts at the true relative pose" in report
+    assert "within 0.3 m and 0.5 rad to the end of the stretch (— : never)" in report

@@ -102,7 +102,7 @@ from relloc.datasets.rosbag import BagRecording, load_bag
 from relloc.errors import ConfigError, DataError
 from relloc.estimators.uwb_range import RangeTeamSettings
 from relloc.experiments.registry import ReproduceArgs
-from relloc.experiments.tiers_uwb_pairs import moving_pairs, pair_case
+from relloc.experiments.tiers_uwb_pairs import CONVERGED_M, CONVERGED_YAW, moving_pairs, pair_case
 from relloc.experiments.tiers_uwb_team import standing_robots, team_case
 from relloc.pipeline.output import (
     interval_text,
@@ -314,6 +314,15 @@ def report(summary: dict[str, Any]) -> str:
                     prow,
                     3,
                 ),
+                "",
+                "Each pair filter starts from an unknown relative pose, with ranges and both "
+                "odometries only; *odometry alone* starts at the true relative pose and "
+                "integrates the two odometries, so it is the reference for how much the ranges "
+                "must recover, not a competing estimate. *Converged after* is the time from "
+                "which the error stays within "
+                f"{CONVERGED_M:g} m and {CONVERGED_YAW:g} rad "
+                "to the end of the stretch (— : never); a pair the observability column calls "
+                "unobservable, or observable at few instants, cannot be expected to.",
                 "",
             ]
         else:
