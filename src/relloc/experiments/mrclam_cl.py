@@ -982,6 +982,8 @@ def _report(summary: dict[str, Any], figures: list[tuple[str, str]]) -> str:
             else ""
         )
     )
+    fitted_s = summary["fit"]["t_hi"] - summary["fit"]["t_lo"]
+    in_sample = fitted_s / (fitted_s + held["end_s"] - held["start_s"])
     parts = [
         "# MRCLAM cooperative localization (seed 001 EIF on real data)",
         f"Dataset `{summary['dataset']}`, robots {summary['robots']}, seed {summary['seed']} (only "
@@ -991,8 +993,8 @@ def _report(summary: dict[str, Any], figures: list[tuple[str, str]]) -> str:
         "## Targets (all landmarks), judged on the held-out window",
         f"Scored on [{held['start_s']:.0f}, {held['end_s']:.0f}] s, the part of the run outside "
         f"the calibration window [{summary['fit']['t_lo']:.0f}, {summary['fit']['t_hi']:.0f}] s "
-        "the error models were fitted on; the whole-run figures, half of them in-sample, are "
-        "shown beside for reference only.",
+        f"the error models were fitted on; the whole-run figures, {in_sample:.0%} of the run "
+        "in-sample, are shown beside for reference only.",
         ttable,
         verdict,
         _improvement_text(cases, held),
