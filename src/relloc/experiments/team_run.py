@@ -142,6 +142,7 @@ def run_scenario(
         record_rate_hz=settings.record_rate_hz,
         meta=scenario_meta(scenario, seed=settings.seed, tracker=settings.tracker),
     )
+    summary["pairs_never_read"] = pairs_never_read(scenario, summary)
     if export is not None and export.wanted:
         summary["export"] = export_run0(scenario, settings, export)
     if out_dir is not None:
@@ -165,10 +166,40 @@ def write_run_report(
         results,
         title=f"relloc run — {scenario.name}",
         arena=(scenario.arena.x, scenario.arena.y),
-        notes=[scenario.description] if scenario.description else (),
+        notes=[
+            *([scenario.description] if scenario.description else ()),
+            *never_read_note(summary.get("pairs_never_read", [])),
+        ],
         plots=plots,
         views=sensor_views(scenario),
     )
+
+
+def pairs_never_read(scenario: Scenario, summary: dict[str, Any]) -> list[str]:
+    """``"observer->observed"`` for every robot with a sensor and every robot it observes
+    (its ``observes`` list, or every other robot) that no run ever tracked (never inside the
+    sensor's field of view and range): such a pair has no row in the tables, and without this
+    list it would vanish from them unexplained."""
+    tracked = {(p["observer"], p["observed"]) for p in summary["pairs"].values()}
+    return [
+        f"{r.name}->{o.name}"
+        for r in scenario.robots
+        if r.sensor is not None
+        for o in scenario.robots
+        if o.name != r.name
+        and (r.observes is None or o.name in r.observes)
+        and (r.name, o.name) not in tracked
+    ]
+
+
+def never_read_note(pairs: list[str]) -> list[str]:
+    """report.md's line for :func:`pairs_never_read` (none when every pair was read)."""
+    if not pairs:
+        return []
+    return [
+        "Never read in any run, so not in the tables (the observed robot stayed outside the "
+        f"observer's field of view or range): {', '.join(pairs)}."
+    ]
 
 
 def sensor_views(scenario: Scenario) -> dict[str, tuple[float, float]]:

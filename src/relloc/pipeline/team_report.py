@@ -55,7 +55,9 @@ computed over all runs on the *steady-state* samples (track age ≥ ``settle_s``
 ``team`` holds the same accuracy and consistency numbers pooled over every pair
 (:func:`relloc.pipeline.evaluation.accuracy_and_consistency`) and their spread over runs;
 ``rows_not_used`` (present only when some were) counts the readings the trackers could not
-use, by reason.
+use, by reason. ``relloc run`` adds ``pairs_never_read``: every ``"observer->observed"`` of a
+robot with a sensor that no run tracked (:func:`relloc.experiments.team_run.pairs_never_read`),
+also named in report.md's notes.
 """
 
 from __future__ import annotations
