@@ -40,6 +40,7 @@ scan has no belief, so a decision made for it on the deleted tracks is not recor
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -198,12 +199,19 @@ class GaussianSumEstimator:
             self._scan(batch, rows[stamps == stamp], float(stamp))
 
     def outbox(self) -> list[Any]:
-        """Every filter's equivalent measurements, each ``fusion_period`` (Eq. 8)."""
+        """Every filter's equivalent measurements, each ``fusion_period`` (Eq. 8): at the first
+        event at or after each broadcast time ``t₀ + k·fusion_period``; after a gap between
+        events longer than the period, one broadcast, and the next at the first broadcast time
+        after it (not one per period missed, which sent a burst at every event until the
+        schedule caught up)."""
         if not self.sharing or self._t is None:
             return []
-        if self._t - self._t0 < self._next_fusion - 1e-9:
+        since_start = self._t - self._t0
+        if since_start < self._next_fusion - 1e-9:
             return []
-        self._next_fusion += self.fusion_period
+        self._next_fusion = (math.floor((since_start + 1e-9) / self.fusion_period) + 1) * (
+            self.fusion_period
+        )
         return list(self.fuser.broadcast())
 
     def quiet_until(self) -> float:
