@@ -111,7 +111,8 @@ class DeSilvaScenario:
     and σ_h, σ_r ≤ ``MAX_SENSOR_RANGE_M``, σ_α, σ_β ≤ π (a wider angle noise carries no
     information); ``0 ≤ group_speed ≤ MAX_SPEED_M_S`` and
     ``|group_turn_rate| ≤ MAX_YAW_RATE_RAD_S`` (0: a straight path); indices integers; the
-    kidnap's offsets finite (``|dx|, |dy| ≤ MAX_ABS_POSITION_M``, ``|dψ| ≤ 2π``). So that no
+    kidnap's time inside the run and at most its last filter step, its offsets finite
+    (``|dx|, |dy| ≤ MAX_ABS_POSITION_M``, ``|dψ| ≤ 2π``). So that no
     setting asks for unbounded work, the five robots' filter steps stay within
     :data:`~relloc.sim.scenario.MAX_SIMULATED_STEPS` and the expected clutter bearings of the
     whole run within :data:`~relloc.sim.scenario.MAX_MEASUREMENTS`.
@@ -194,7 +195,7 @@ class DeSilvaScenario:
             raise ConfigError(
                 f"{where}[0] (robot): no robot {kidnap[0]} (0 to {len(ROBOT_NAMES) - 1})"
             )
-        checks.number(
+        when = checks.number(
             kidnap[1],
             f"{where}[1] (time)",
             low=0.0,
@@ -202,6 +203,12 @@ class DeSilvaScenario:
             open_low=True,
             open_high=True,
         )
+        last = round(self.duration * self.filter_rate) / self.filter_rate
+        if when > last:
+            raise ConfigError(
+                f"{where}[1] (time): {when:g} s is after the last filter step, {last:g} s "
+                f"(round(duration · filter_rate) / filter_rate), so no pose would be moved"
+            )
         for k, (name, bound) in enumerate(
             (("dx", MAX_ABS_POSITION_M), ("dy", MAX_ABS_POSITION_M), ("dψ", 2.0 * math.pi)),
             start=2,
