@@ -7,23 +7,9 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from gaussian_sum_samples import gs_settings
 
-from relloc.estimators.gaussian_sum import GaussianSumFuser, GaussianSumSettings, Tracks
-from relloc.models.motion import VelocityNoise
-
-NOISE = VelocityNoise(observer=(0.2, 0.2, 0.2, 0.1), observed=(0.2, 0.2, 0.2, 0.1))
-
-
-def _settings(**changes: object) -> GaussianSumSettings:
-    base: dict[str, object] = dict(
-        velocity_noise=NOISE,
-        sigma_height=0.01,
-        sigma_range=0.02,
-        sigma_azimuth=0.05,
-        sigma_elevation=0.05,
-    )
-    base.update(changes)
-    return GaussianSumSettings(**base)  # type: ignore[arg-type]
+from relloc.estimators.gaussian_sum import GaussianSumFuser, Tracks
 
 
 def _tracks(means: np.ndarray, covs: np.ndarray, groups: list[int], depth: int) -> Tracks:
@@ -46,7 +32,7 @@ def test_an_outlying_known_reading_leaves_the_uniform_outlier_density(
 ) -> None:
     # ε = 0.01 spread over [−20, 20] m (height difference) or [0, 20] m (range); the reading
     # is 250σ away, so its valid density is 0 and the track is not moved
-    st = _settings()
+    st = gs_settings()
     fus = GaussianSumFuser(0, [1], st)
     mean = np.array([3.0, 0.0, 0.0, 0.0])
     fus.tracks = _tracks(mean[None], (np.eye(4) * 1e-4)[None], [0], st.nscan_depth)
@@ -57,7 +43,7 @@ def test_an_outlying_known_reading_leaves_the_uniform_outlier_density(
 
 def test_a_valid_height_reading_weighs_and_updates_the_track() -> None:
     # S = P_zz + σ_h² = 2·10⁻⁴; the reading 1 cm above: d² = 10⁻⁴ / S = 0.5, gain 1/2
-    st = _settings()
+    st = gs_settings()
     fus = GaussianSumFuser(0, [1], st)
     mean = np.array([3.0, 0.0, 0.0, 0.0])
     fus.tracks = _tracks(mean[None], (np.eye(4) * 1e-4)[None], [0], st.nscan_depth)
@@ -74,7 +60,7 @@ def test_a_scan_without_bearings_weighs_tracks_by_their_in_view_probability() ->
     # with probability 1/2) and 0.45; the predicted azimuth's σ² = σ_θ² + P_xy/ρ²
     from scipy.stats import norm
 
-    st = _settings(field_of_view=0.5)
+    st = gs_settings(field_of_view=0.5)
     fus = GaussianSumFuser(0, [1], st)
     az = np.array([0.0, 0.5, 0.45])
     means = np.stack([3 * np.cos(az), 3 * np.sin(az), np.zeros(3), np.zeros(3)], axis=1)
@@ -92,7 +78,7 @@ def test_detected_weight_of_a_uniform_yaw_track_uses_the_update_covariance() -> 
     # by the yaw disc); teammate 2: no track (uniform 1/V). One bearing at the prediction:
     #   w_fa = 1 − P_D P_G,  w_det = P_D N(0; 0, S) / κ,  κ = (10⁻³ + P_D) / V,
     # S = H P Hᵀ + R without the disc (the gate only decides which pairs exist)
-    st = _settings()
+    st = gs_settings()
     fus = GaussianSumFuser(0, [1, 2], st)
     cov = np.diag([1e-4, 1e-4, 1e-4, 4 * np.pi])
     fus.tracks = _tracks(np.array([[3.0, 0.0, 0.0, 0.0]]), cov[None], [0], st.nscan_depth)
@@ -111,7 +97,7 @@ def test_the_other_filters_bearing_density_is_their_normalised_mixture() -> None
     # teammates 1 and 2 each hold one track at the same place, with unnormalised weight 0.3
     # (as after a known-correspondence update); the bearing at their prediction is explained
     # by teammate 2's mixture, whose weights sum to 1: κ₁ = (10⁻³/V) + P_D N(0; 0, S)
-    st = _settings()
+    st = gs_settings()
     fus = GaussianSumFuser(0, [1, 2], st)
     cov = np.diag([1e-4, 1e-4, 1e-4, 0.01])
     means = np.array([[3.0, 0.0, 0.0, 0.0], [3.0, 0.0, 0.0, 0.0]])
@@ -130,7 +116,7 @@ def test_decide_weighs_a_detection_against_a_miss(clutter: float, decision: int)
     # a bearing at the prediction of a sharp track (each bearing's variance s): the detection
     # costs log(2π s) − log P_D + log κ with κ = max(λ, 10⁻³)/V, a miss −log(1 − P_D P_G)
     #   λ = 0: −4.15 + 0.05 − 9.89 = −13.99 < 2.33;  λ = 5322: 1.50 < 2.33;  λ = 20000: 2.82 > 2.33
-    st = _settings(expected_clutter=clutter)
+    st = gs_settings(expected_clutter=clutter)
     fus = GaussianSumFuser(0, [1], st)
     cov = np.diag([1e-4, 1e-4, 1e-4, 0.01])
     fus.tracks = _tracks(np.array([[3.0, 0.0, 0.0, 0.0]]), cov[None], [0], st.nscan_depth)
@@ -145,7 +131,7 @@ def test_decide_prefers_the_sharper_explanation_of_a_bearing() -> None:
     # teammates 1 and 2 predicted at the same place, 1 sharp (s₁ = 0.0025) and 2 broad
     # (s₂ = 0.0125); a bearing 0.03 rad off: d²₁ = 0.36, d²₂ = 0.072, and the cost difference
     # c₂ − c₁ = log(s₂/s₁) + (d²₂ − d²₁)/2 = 1.61 − 0.14 > 0 gives the bearing to teammate 1
-    st = _settings()
+    st = gs_settings()
     fus = GaussianSumFuser(0, [1, 2], st)
     sharp = np.diag([1e-12, 1e-12, 1e-12, 0.01])
     broad = np.diag([0.09, 0.09, 0.09, 0.01])
@@ -156,7 +142,7 @@ def test_decide_prefers_the_sharper_explanation_of_a_bearing() -> None:
 
 def test_reduce_deletes_tracks_too_far_or_too_uncertain_in_three_dimensions() -> None:
     # max_range 20 m on ‖(x, y, z)‖, max_position_sigma 5 m on √tr P_xyz
-    st = _settings(merge_threshold=0.0)
+    st = gs_settings(merge_threshold=0.0)
     fus = GaussianSumFuser(0, [1], st)
     means = np.array([[3.0, 0.0, 0.0, 0.0], [15.0, 0.0, 14.0, 0.0], [0.0, 6.0, 0.0, 0.0]])
     sharp = np.diag([0.01, 0.01, 0.01, 0.01])
@@ -176,7 +162,7 @@ def test_reduce_deletes_tracks_too_far_or_too_uncertain_in_three_dimensions() ->
     ],
 )
 def test_confirmation_thresholds(weight: float, cov: np.ndarray, confirmed: bool) -> None:
-    st = _settings()
+    st = gs_settings()
     fus = GaussianSumFuser(0, [1], st)
     means = np.array([[3.0, 0.0, 0.0, 0.0], [-3.0, 0.0, 0.0, 0.0]])
     fus.tracks = _tracks(means, np.stack([cov, cov]), [0, 0], st.nscan_depth)
@@ -189,7 +175,7 @@ def test_the_yaw_disc_uses_the_teammates_horizontal_speed() -> None:
     # teammate moving sideways at 2 m/s, τ = 0.1 s: disc radius 0.2 m adds 0.04/9 to the
     # azimuth variance of a track 3 m ahead; a bearing 0.2 rad off has d² = 0.04/0.0025 = 16
     # in the plain gate (outside χ²₂(0.95) = 5.99) and 0.04/(0.0025 + 0.0044) = 5.8 inside
-    st = _settings()
+    st = gs_settings()
     fus = GaussianSumFuser(0, [1], st)
     cov = np.diag([1e-8, 1e-8, 1e-8, 4 * np.pi])
     fus.tracks = _tracks(np.array([[3.0, 0.0, 0.0, 0.0]]), cov[None], [0], st.nscan_depth)
@@ -198,21 +184,33 @@ def test_the_yaw_disc_uses_the_teammates_horizontal_speed() -> None:
     assert sorted(fus.tracks.assoc.tolist()) == [-1, 0]
 
 
-def _message_about_receiver(means: np.ndarray, covs: np.ndarray, weights: np.ndarray):  # type: ignore[no-untyped-def]
-    """Teammate 1's message that inverts to ``N(means, covs)`` in robot 0's frame, with no
-    information since its previous broadcast."""
+def _message_about_receiver(  # type: ignore[no-untyped-def]
+    means: np.ndarray,
+    covs: np.ndarray,
+    weights: np.ndarray,
+    prior_means: np.ndarray | None = None,
+    prior_covs: np.ndarray | None = None,
+):
+    """Teammate 1's message that inverts to ``N(means, covs)`` in robot 0's frame, and to the
+    prior ``N(prior_means, prior_covs)`` at its previous broadcast (default: the same, no
+    information since then)."""
     from relloc.fusion.messages import EquivalentMeasurement
     from relloc.fusion.pose_beliefs import invert_beliefs
 
     m, P = invert_beliefs(means, covs)
+    pm, pP = (
+        (m.copy(), P.copy())
+        if prior_means is None or prior_covs is None
+        else invert_beliefs(prior_means, prior_covs)
+    )
     return EquivalentMeasurement(
         sender=1,
         subject=0,
         time=0.0,
         means=m,
         covs=P,
-        prior_means=m.copy(),
-        prior_covs=P.copy(),
+        prior_means=pm,
+        prior_covs=pP,
         weights=weights,
     )
 
@@ -226,7 +224,7 @@ def test_a_received_track_outside_every_gate_is_born_with_its_eq10_share() -> No
     # the filter ends with weights 1/(1 + β₂) and β₂/(1 + β₂)
     from scipy.stats import chi2
 
-    st = _settings()
+    st = gs_settings()
     fus = GaussianSumFuser(0, [1], st)
     P = np.eye(4) * 0.01
     fus.tracks = _tracks(np.array([[3.0, 0.0, 0.0, 0.0]]), P[None], [0], st.nscan_depth)
@@ -250,7 +248,7 @@ def test_a_received_track_outside_every_gate_is_born_with_its_eq10_share() -> No
 def test_tracks_are_merged_before_the_filter_is_capped() -> None:
     # max_components 2; A₁, A₂ and C₁, C₂ are close pairs, B stands alone. Merged, the pairs
     # weigh 0.55 (A) and 0.25 (C) against B's 0.2, so the cap keeps A and C
-    st = _settings(max_components=2)
+    st = gs_settings(max_components=2)
     fus = GaussianSumFuser(0, [1], st)
     x = np.array([3.0, 3.05, 0.0, -3.0, -3.05])
     means = np.stack([x, [0.0, 0.0, 3.0, 0.0, 0.0], np.zeros(5), np.zeros(5)], axis=1)
@@ -271,7 +269,7 @@ def test_indirect_tracks_carry_the_weight_of_their_registration() -> None:
     # gives two tracks of equal covariance, born with weights ∝ 0.6 w' and 0.4 w'
     from relloc.fusion.messages import EquivalentMeasurement
 
-    st = _settings()
+    st = gs_settings()
     fus = GaussianSumFuser(0, [1, 2], st)
     P = np.eye(4) * 0.01
     means = np.array([[3.0, 0.0, 0.0, 0.0], [-3.0, 0.0, 0.0, 0.0]])
@@ -296,35 +294,20 @@ def test_indirect_tracks_carry_the_weight_of_their_registration() -> None:
     np.testing.assert_allclose(mix.weights[order], [0.6, 0.4], rtol=1e-9)
 
 
-def _mutual(means, covs, prior_means, prior_covs):  # type: ignore[no-untyped-def]
-    """Teammate 1's one-track message that inverts to the given beliefs in robot 0's frame."""
-    from relloc.fusion.messages import EquivalentMeasurement
-    from relloc.fusion.pose_beliefs import invert_beliefs
-
-    m, P = invert_beliefs(means, covs)
-    pm, pP = invert_beliefs(prior_means, prior_covs)
-    return EquivalentMeasurement(
-        sender=1,
-        subject=0,
-        time=0.0,
-        means=m,
-        covs=P,
-        prior_means=pm,
-        prior_covs=pP,
-        weights=np.ones(1),
-    )
-
-
 def test_the_fused_increment_also_enters_the_tracks_broadcast_prior() -> None:
     # local track (and its prior) N(x_h, 0.02 I); the sender's track went from 0.02 I to
     # 0.01 I at x_h + 0.05 e_x: ΔY = 50 I, fused P = (50 + 50)⁻¹ I = 0.01 I and mean
     # x_h + 0.01 · 50 · 0.05 e_x, for the track and, alike, for its prior
-    st = _settings(merge_threshold=0.0)
+    st = gs_settings(merge_threshold=0.0)
     fus = GaussianSumFuser(0, [1], st)
     x_h = np.array([3.0, 0.0, 0.0, 0.0])
     fus.tracks = _tracks(x_h[None], (np.eye(4) * 0.02)[None], [0], st.nscan_depth)
     x_b = (x_h + np.array([0.05, 0.0, 0.0, 0.0]))[None]
-    fus.fuse(_mutual(x_b, (np.eye(4) * 0.01)[None], x_b, (np.eye(4) * 0.02)[None]))
+    fus.fuse(
+        _message_about_receiver(
+            x_b, (np.eye(4) * 0.01)[None], np.ones(1), x_b, (np.eye(4) * 0.02)[None]
+        )
+    )
     fused = np.flatnonzero(fus.tracks.means[:, 0] > 3.01)
     assert fused.size == 1
     k = int(fused[0])
@@ -339,20 +322,20 @@ def test_the_fused_increment_also_enters_the_tracks_broadcast_prior() -> None:
 def test_covariance_intersection_fusion_aligns_the_received_heading() -> None:
     # local heading 3.1, received −3.1 (0.083 rad apart across ±π): the fused heading stays
     # near ±π, not near 0
-    st = _settings(fusion="ci", merge_threshold=0.0)
+    st = gs_settings(fusion="ci", merge_threshold=0.0)
     fus = GaussianSumFuser(0, [1], st)
     x_h = np.array([3.0, 0.0, 0.0, 3.1])
     # the local track is better in position, the received one in heading: 0 < ω < 1
     P_h, P_b = np.diag([0.01, 0.01, 0.01, 0.04]), np.diag([0.04, 0.04, 0.04, 0.01])
     fus.tracks = _tracks(x_h[None], P_h[None], [0], st.nscan_depth)
     x_b = np.array([[3.0, 0.0, 0.0, -3.1]])
-    fus.fuse(_mutual(x_b, P_b[None], x_b, P_b[None]))
+    fus.fuse(_message_about_receiver(x_b, P_b[None], np.ones(1)))
     heading = np.cos(fus.tracks.means[:, 3])
     assert np.all(heading < -0.99), fus.tracks.means
 
 
 def test_merged_tracks_merge_their_broadcast_priors_with_the_same_weights() -> None:
-    st = _settings()
+    st = gs_settings()
     fus = GaussianSumFuser(0, [1], st)
     means = np.array([[3.0, 0.0, 0.0, 0.0], [3.05, 0.0, 0.0, 0.0]])
     P = np.eye(4) * 0.01
@@ -368,7 +351,7 @@ def test_merged_tracks_merge_their_broadcast_priors_with_the_same_weights() -> N
 
 
 def test_a_bearing_across_the_azimuth_wrap_is_gated() -> None:
-    st = _settings()
+    st = gs_settings()
     fus = GaussianSumFuser(0, [1], st)
     az = np.pi - 0.01
     mean = np.array([[3 * np.cos(az), 3 * np.sin(az), 0.0, 0.0]])
@@ -378,7 +361,7 @@ def test_a_bearing_across_the_azimuth_wrap_is_gated() -> None:
 
 
 def test_a_light_track_above_prune_weight_is_kept() -> None:
-    st = _settings()
+    st = gs_settings()
     fus = GaussianSumFuser(0, [1], st)
     means = np.array([[3.0, 0.0, 0.0, 0.0], [-3.0, 0.0, 0.0, 0.0]])
     P = np.eye(4) * 0.01
@@ -391,7 +374,7 @@ def test_a_light_track_above_prune_weight_is_kept() -> None:
 def test_with_ranges_marking_detections_an_unranged_teammate_gets_no_bearing() -> None:
     # one detector gives range and bearing: teammate 1 has no range in this scan, so none of
     # the bearings is its (P_D = 0), even one at its prediction; ranged, it gets that bearing
-    st = _settings(ranges_mark_detections=True)
+    st = gs_settings(ranges_mark_detections=True)
     for ranges, decision in (([np.nan], -1), ([3.0], 0)):
         fus = GaussianSumFuser(0, [1], st)
         cov = np.diag([1e-4, 1e-4, 1e-4, 0.01])
