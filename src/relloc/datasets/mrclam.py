@@ -86,7 +86,6 @@ What the loader guarantees
 
 from __future__ import annotations
 
-import bisect
 import math
 import numbers
 import re
@@ -103,6 +102,7 @@ from relloc.core.angles import circular_interp
 from relloc.core.limits import MAX_ABS_POSITION_M, MAX_SPEED_M_S, MAX_YAW_RATE_RAD_S
 from relloc.datasets.columns import check_columns
 from relloc.datasets.paths import DATA_HINT
+from relloc.datasets.time_order import longest_non_decreasing
 from relloc.errors import ConfigError, DataError
 
 FloatArray = NDArray[np.float64]
@@ -533,40 +533,14 @@ def _monotonic_mask(
 
 def _longest_ordered(t: FloatArray) -> BoolArray:
     """Mask of a longest non-decreasing subsequence of ``t``: among the longest, the one whose
-    indices come first in lexicographic order (module docstring, "Time order").
-
-    Patience sorting over the stamps read from the last row back, each negated (a run that is
-    non-decreasing in file order is non-decreasing in ``−t`` read backwards): row ``i`` goes on
-    pile ``L(i) − 1``, where ``L(i)`` is the length of the longest ordered run starting at ``i``,
-    and links to the row last put on the pile below, the earliest row after ``i`` that starts a
-    run of length ``L(i) − 1`` (its stamp is ``≥ t[i]``). Following the links from the row last
-    put on the top pile — the earliest row starting a longest run — picks at each step the
-    earliest row that can still complete a longest run: the lexicographically first one.
-    ``O(n log n)``; a sorted ``t`` keeps every row without the loop.
-    """
-    n = len(t)
-    keep = np.zeros(n, dtype=bool)
-    if n == 0 or bool(np.all(t[1:] >= t[:-1])):
+    indices come first in lexicographic order (module docstring, "Time order";
+    :func:`relloc.datasets.time_order.longest_non_decreasing` with ``prefer="earlier"``). A
+    sorted ``t`` keeps every row without the search."""
+    keep = np.zeros(len(t), dtype=bool)
+    if len(t) == 0 or bool(np.all(t[1:] >= t[:-1])):
         keep[:] = True
         return keep
-    tails: list[float] = []  # tails[k]: −(stamp) of the row last put on pile k
-    tail_row: list[int] = []  # that row
-    link = [-1] * n  # the next row of the run that row i starts
-    stamps = t.tolist()
-    for i in range(n - 1, -1, -1):
-        x = -stamps[i]
-        k = bisect.bisect_right(tails, x)
-        if k == len(tails):
-            tails.append(x)
-            tail_row.append(i)
-        else:
-            tails[k] = x
-            tail_row[k] = i
-        link[i] = tail_row[k - 1] if k else -1
-    i = tail_row[-1]
-    while i >= 0:
-        keep[i] = True
-        i = link[i]
+    keep[longest_non_decreasing(t.tolist(), prefer="earlier")] = True
     return keep
 
 

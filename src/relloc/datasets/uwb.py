@@ -52,7 +52,6 @@ row raises :class:`~relloc.errors.DataError` naming the file (and line 1 for a b
 
 from __future__ import annotations
 
-import bisect
 import csv
 import math
 from collections import Counter
@@ -66,6 +65,7 @@ from numpy.typing import NDArray
 from relloc.core.recording import FileSkips, SkippedRow
 from relloc.datasets.columns import check_columns
 from relloc.datasets.paths import DATA_HINT
+from relloc.datasets.time_order import longest_non_decreasing
 from relloc.errors import DataError
 
 REQUIRED_COLUMNS = ("timestamp", "node1", "node2", "uwb_range", "mocap_range")
@@ -300,33 +300,6 @@ def _parse_header(path: Path, raw: bytes) -> _Header:
 # ----------------------------------------------------------------------------------------------
 
 
-def _longest_non_decreasing(t: list[float]) -> list[int]:
-    """Indices of a longest non-decreasing subsequence of ``t`` (patience sorting, O(n log n)).
-
-    ``tails[k]`` is the smallest last value of a non-decreasing run of length ``k + 1`` seen so
-    far and ``ends[k]`` its index; ``back[i]`` is the index before ``i`` in the run ending at ``i``.
-    A later value replacing an equal-length tail is why, of a swapped pair, the earlier is dropped.
-    """
-    tails: list[float] = []
-    ends: list[int] = []
-    back: list[int] = []
-    for i, value in enumerate(t):
-        k = bisect.bisect_right(tails, value)
-        back.append(ends[k - 1] if k else -1)
-        if k == len(tails):
-            tails.append(value)
-            ends.append(i)
-        else:
-            tails[k] = value
-            ends[k] = i
-    keep: list[int] = []
-    i = ends[-1] if ends else -1
-    while i >= 0:
-        keep.append(i)
-        i = back[i]
-    return keep[::-1]
-
-
 def _implausible(t: NDArray[np.float64]) -> NDArray[np.bool_]:
     """Per row: more than :data:`MAX_TIME_GAP` from the median time of its nearest rows (rule 1).
 
@@ -381,7 +354,7 @@ def _in_time_order(rows: list[_Row], skips: _SkipLog) -> list[_Row]:
             )
         else:
             plausible.append(row)
-    keep = set(_longest_non_decreasing([r.t for r in plausible]))
+    keep = set(longest_non_decreasing([r.t for r in plausible]))
     kept: list[_Row] = []
     for i, row in enumerate(plausible):
         if i in keep:
