@@ -118,7 +118,16 @@ def test_mrclam_cl_on_a_cut_of_run6_states_its_windows(mrclam_run6_cut, tmp_path
     assert (held["start_s"] if split == "first-half" else held["end_s"]) == cut_at
     # either half fits the models: the report states half the run in-sample (it said "half"
     # whatever the window, also for a quarter)
-    assert "the whole-run figures, 50% of the run in-sample" in (out / "report.md").read_text()
+    report = (out / "report.md").read_text()
+    assert "the whole-run figures, 50% of the run in-sample" in report
+    # the rows the loader and the conversion skipped are in report.md too, not only in
+    # summary.json's load_report
+    skipped = summary["load_report"]["n_skipped"]
+    assert (
+        f"Rows of the dataset skipped (not used): {skipped} (" in report
+        if skipped
+        else "Every data row of the dataset was used." in report
+    )
     for case in summary["cases"].values():
         assert set(case["pos_rmse_m"]) == {"2", "4", "5", "mean"}
         held_share = case["heldout"].pop("nees_beyond_interval")

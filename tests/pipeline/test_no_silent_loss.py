@@ -147,12 +147,8 @@ def test_team_up_on_an_mrclam_folder_reports_the_rows_the_loader_skipped(tmp_pat
     synthetic folder's stray barcode 99) vanished without a trace."""
     import importlib.util
 
-    from relloc.experiments.mrclam_team import (
-        fit_dataset,
-        load_report,
-        load_report_line,
-        prepared_team,
-    )
+    from relloc.experiments.mrclam_cl import load_report_line
+    from relloc.experiments.mrclam_team import fit_dataset, load_report, prepared_team
 
     where = Path(__file__).parents[1] / "cooperative" / "conftest.py"
     spec = importlib.util.spec_from_file_location("cooperative_conftest", where)

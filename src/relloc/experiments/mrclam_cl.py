@@ -144,7 +144,8 @@ with ``nees_ok`` (≤ 10 %) and ``nees_beyond_interval``; the whole-run figures 
 ``nees_pct_beyond``), ``paper_reference`` (the run-6 figures behind the targets: a plain joint
 EKF's ``joint_ekf_pos_rmse_m`` and dead reckoning's ``dead_reckoning_pos_rmse_m``),
 ``load_report`` (rows the loader and :func:`relloc.datasets.mrclam.to_recording` skipped:
-``n_skipped`` and ``by_reason``, reason → count). The fitted latency, scales and bearing
+``n_skipped`` and ``by_reason``, reason → count; also a line in report.md,
+:func:`load_report_line`). The fitted latency, scales and bearing
 biases are applied to the recording before the replay (:func:`build_recording`).
 """
 
@@ -868,6 +869,15 @@ def _without_truth_text(case: dict[str, Any]) -> str:
     return text
 
 
+def load_report_line(report: dict[str, Any]) -> str:
+    """report.md's account of a ``load_report`` (``n_skipped``, ``by_reason``): the rows of the
+    dataset's files that the loader and the conversion to a recording skipped."""
+    if not report["n_skipped"]:
+        return "Every data row of the dataset was used."
+    reasons = ", ".join(f"{n} {why}" for why, n in sorted(report["by_reason"].items()))
+    return f"Rows of the dataset skipped (not used): {report['n_skipped']} ({reasons})."
+
+
 def _report(summary: dict[str, Any], figures: list[tuple[str, str]]) -> str:
     cases = summary["cases"]
     rows = []
@@ -1016,6 +1026,7 @@ def _report(summary: dict[str, Any], figures: list[tuple[str, str]]) -> str:
         "the run the models were not fitted on. "
         f"The two landmarks are subjects {summary['two_landmarks']}. "
         + _without_truth_text(cases["dead_reckoning/none"]),
+        load_report_line(summary["load_report"]),
         "## Error models",
         fit_text,
         "## Figures",

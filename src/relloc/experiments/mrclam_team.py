@@ -39,6 +39,7 @@ from relloc.experiments.mrclam_cl import (
     build_recording,
     case_settings,
     fit_models,
+    load_report_line,
 )
 from relloc.experiments.sharma2013_team import (
     accuracy,
@@ -104,14 +105,6 @@ def load_report(prepared: Prepared) -> dict[str, Any]:
     mrclam-cl's ``load_report``)."""
     skips = prepared.recording.skips
     return {"n_skipped": skips.n_skipped, "by_reason": skips.skipped_by_reason()}
-
-
-def load_report_line(report: dict[str, Any]) -> str:
-    """report.md's account of :func:`load_report`."""
-    if not report["n_skipped"]:
-        return "Every data row of the dataset was used."
-    reasons = ", ".join(f"{n} {why}" for why, n in sorted(report["by_reason"].items()))
-    return f"Rows of the dataset skipped (not used): {report['n_skipped']} ({reasons})."
 
 
 def window_end(prepared: Prepared, duration_s: float | None) -> float:
