@@ -10,7 +10,13 @@ from relloc.core.recording import Measurements, measurement_rows
 from relloc.errors import ConfigError
 from relloc.estimators.track_manager import TrackManagerSettings
 from relloc.pipeline.evaluation import accuracy_and_consistency
-from relloc.pipeline.team_report import build_summary, score_run, summarise, track_team
+from relloc.pipeline.team_report import (
+    build_summary,
+    report_markdown,
+    score_run,
+    summarise,
+    track_team,
+)
 from relloc.sim.scenario import default_scenario
 from relloc.sim.simulate import simulate
 
@@ -68,6 +74,9 @@ def test_rows_the_trackers_cannot_use_are_reported():
     assert run.rows_not_used == {"rows_of_kind_range": 1}
     summary = summarise([run], settle_s=2.0, record_rate_hz=10.0)
     assert summary["rows_not_used"] == {"rows_of_kind_range": 1}
+    # and report.md says so (it was only in summary.json)
+    report = report_markdown(summary, [], title="t")
+    assert "did not use, over all runs, by reason: 1 rows_of_kind_range." in report
 
 
 def test_bad_calls_are_config_errors():

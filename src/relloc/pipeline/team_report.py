@@ -55,9 +55,9 @@ computed over all runs on the *steady-state* samples (track age ≥ ``settle_s``
 ``team`` holds the same accuracy and consistency numbers pooled over every pair
 (:func:`relloc.pipeline.evaluation.accuracy_and_consistency`) and their spread over runs;
 ``rows_not_used`` (present only when some were) counts the readings the trackers could not
-use, by reason. ``relloc run`` adds ``pairs_never_read``: every ``"observer->observed"`` of a
-robot with a sensor that no run tracked (:func:`relloc.experiments.team_run.pairs_never_read`),
-also named in report.md's notes.
+use, by reason (also a note in report.md). ``relloc run`` adds ``pairs_never_read``: every
+``"observer->observed"`` of a robot with a sensor that no run tracked
+(:func:`relloc.experiments.team_run.pairs_never_read`), also named in report.md's notes.
 """
 
 from __future__ import annotations
@@ -754,12 +754,22 @@ def report_markdown(
         )
     else:
         lines.append("No track events.")
+    not_used = summary.get("rows_not_used") or {}
+    notes = [*notes, *not_used_note(not_used)]
     if notes:
         lines += ["", "## Notes", ""] + [f"- {n}" for n in notes]
     lines += ["", "## Figures", ""]
     for name, caption in figures:
         lines.append(figure_md(name, caption))
     return "\n".join(lines)
+
+
+def not_used_note(not_used: Mapping[str, int]) -> list[str]:
+    """report.md's line for ``rows_not_used`` (none when every reading was used)."""
+    if not any(not_used.values()):
+        return []
+    reasons = ", ".join(f"{n} {why}" for why, n in sorted(not_used.items()) if n)
+    return [f"Readings the trackers did not use, over all runs, by reason: {reasons}."]
 
 
 def write_team_report(
