@@ -228,7 +228,7 @@ def test_a_bag_of_the_layout_with_moving_robots(tmp_path):
         assert team["pos_rmse_m"] < 0.5
 
 
-def test_pairs_of_a_bag_with_odometry_are_tracked_and_judged(tmp_path):
+def test_pairs_of_a_bag_with_odometry_are_tracked_and_judged(tmp_path, capsys):
     """The pair part (range + both odometries from an unknown start, ``pair_case``) on 15 s of
     the cooperative bag, which until now ran in no test: every moving pair is tracked over the
     scored stretch and scored beside its baselines; the observability tool calls every pair with
@@ -239,8 +239,10 @@ def test_pairs_of_a_bag_with_odometry_are_tracked_and_judged(tmp_path):
     bag = cut(TIERS / "cooperative_shortbag", tmp_path / "c", 0.0, 15.0)
     out = tmp_path / "out"
     argv = ["reproduce", "tiers-uwb", "--out", str(out), "--bag", str(bag), "--map",
-            "tiers_cooperative", "--quiet"]  # fmt: skip
+            "tiers_cooperative"]  # fmt: skip
     assert main(argv) == 0
+    # tiers-uwb draws nothing at random: the console says so instead of "seed None"
+    assert "tiers-uwb: no seed (nothing drawn at random), runs 1" in capsys.readouterr().out
     pairs = json.loads((out / "summary.json").read_text())["bags"]["c"]["pairs"]
     assert "turtlebot1->turtlebot3" in pairs and len(pairs) >= 4
     for name, pair in pairs.items():

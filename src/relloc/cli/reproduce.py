@@ -106,7 +106,9 @@ def run(args: argparse.Namespace) -> int:
         from relloc.cli.comparison import comparison_text
         from relloc.cli.console import terminal_width
 
-        print(f"{args.name}: seed {summary.get('seed')}, runs {json.dumps(summary.get('runs'))}")
+        seed = summary.get("seed")
+        drawn = "no seed (nothing drawn at random)" if seed is None else f"seed {seed}"
+        print(f"{args.name}: {drawn}, runs {json.dumps(summary.get('runs'))}")
         print(comparison_text(args.name, args.out, width=terminal_width()))
         print_export(summary.get("export"))
     return 0
