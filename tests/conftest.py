@@ -1,5 +1,5 @@
-"""Fixtures shared across test folders: cuts of the real MRCLAM run 6, and the same moved to
-another world frame, clock and barcodes, in MRCLAM layout."""
+"""Fixtures shared across test folders: the real MRCLAM run 6, cuts of it, and the same moved to
+another world frame, clock and barcodes, in MRCLAM layout; a short guler2023 plan."""
 
 from __future__ import annotations
 
@@ -10,24 +10,49 @@ import pytest
 
 from relloc.datasets.mrclam_cut import cut_mrclam
 from relloc.datasets.mrclam_move import move_mrclam
-from relloc.datasets.paths import default_mrclam_dataset
+from relloc.datasets.paths import default_mrclam_dataset, default_uwb_csv
+from relloc.experiments.guler2023 import Plan
 
 MrclamCut = Callable[..., Path]
 
 
 @pytest.fixture(scope="session")
-def mrclam_run6_cut() -> MrclamCut:
-    """``cut(dst, robots=(1, 2, 3), keep_s=45.0) -> dst``: the first ``keep_s`` seconds of
-    ``robots`` of MRCLAM run 6 (:func:`relloc.datasets.mrclam_cut.cut_mrclam`), another run of
-    the same layout (the test is skipped where the shared data is absent)."""
+def mrclam_run6() -> Path:
+    """The folder of MRCLAM run 6 (the test is skipped where the shared data is absent)."""
     src = default_mrclam_dataset()
     if not (src / "Barcodes.dat").is_file():
         pytest.skip(f"MRCLAM run 6 not found at {src} (shared data absent)")
+    return src
+
+
+@pytest.fixture(scope="session")
+def mrclam_run6_cut(mrclam_run6: Path) -> MrclamCut:
+    """``cut(dst, robots=(1, 2, 3), keep_s=45.0) -> dst``: the first ``keep_s`` seconds of
+    ``robots`` of MRCLAM run 6 (:func:`relloc.datasets.mrclam_cut.cut_mrclam`), another run of
+    the same layout (the test is skipped where the shared data is absent)."""
 
     def cut(dst: Path, robots: tuple[int, ...] = (1, 2, 3), keep_s: float = 45.0) -> Path:
-        return cut_mrclam(src, dst, end_s=keep_s, robots=robots).destination
+        return cut_mrclam(mrclam_run6, dst, end_s=keep_s, robots=robots).destination
 
     return cut
+
+
+@pytest.fixture(scope="session")
+def guler2023_short_plan() -> Plan:
+    """A guler2023 plan of one run per block at 5 % of the durations, one dwell time (4 s) and
+    two drones (the test is skipped where the shared UWB data the experiment fits on is
+    absent)."""
+    if not default_uwb_csv().is_file():
+        pytest.skip(f"shared UWB data not found at {default_uwb_csv()}")
+    return Plan(
+        one_drone_runs=1,
+        two_drones_runs=1,
+        formation_runs=1,
+        sweep_runs=1,
+        dwell_times=(4.0,),
+        drone_counts=(2,),
+        duration_scale=0.05,
+    )
 
 
 #: Run 6's robot barcodes (5, 14, 41, 32, 23) renumbered to numbers no subject of run 6 carries.

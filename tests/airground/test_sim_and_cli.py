@@ -18,7 +18,6 @@ from relloc.errors import ConfigError
 from relloc.experiments import guler2023
 from relloc.experiments.guler2023 import (
     FilterFactory,
-    Plan,
     build_cases,
     run_scenario_once,
     simulate_case,
@@ -148,23 +147,9 @@ def test_the_controller_must_match_the_control_mode():
         simulate_airground(case.scenario, FilterFactory(case), None, np.random.default_rng(0))
 
 
-def _short_plan(runs):
-    return Plan(
-        one_drone_runs=1,
-        two_drones_runs=1,
-        formation_runs=1,
-        sweep_runs=1,
-        dwell_times=(4.0,),
-        drone_counts=(2,),
-        duration_scale=0.05,
-    )
-
-
-def test_cli_reproduce_smoke(tmp_path, monkeypatch):
-    if not default_uwb_csv().is_file():
-        pytest.skip(f"shared UWB data not found at {default_uwb_csv()}")
+def test_cli_reproduce_smoke(tmp_path, monkeypatch, guler2023_short_plan):
     # The real CLI path with a short plan (5 % durations, one run per block).
-    monkeypatch.setattr(guler2023, "default_plan", _short_plan)
+    monkeypatch.setattr(guler2023, "default_plan", lambda runs: guler2023_short_plan)
     out = tmp_path / "g"
     code = main(
         [

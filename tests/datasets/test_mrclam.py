@@ -8,7 +8,6 @@ import numpy as np
 import pytest
 
 from relloc.datasets.mrclam import MrclamOptions, load_mrclam
-from relloc.datasets.paths import default_mrclam_dataset
 from relloc.errors import ConfigError, DataError
 
 HEADER = "# MRCLAM-layout test file\n# written by the test\n# format line\n# columns\n"
@@ -414,11 +413,8 @@ def test_bad_options_are_config_errors(options: dict[str, object], field: str) -
 
 
 @pytest.fixture(scope="module")
-def run6():  # type: ignore[no-untyped-def]
-    folder = default_mrclam_dataset()
-    if not (folder / "Barcodes.dat").is_file():
-        pytest.skip(f"MRCLAM run 6 not found at {folder} (shared data absent)")
-    return load_mrclam(folder)
+def run6(mrclam_run6):  # type: ignore[no-untyped-def]
+    return load_mrclam(mrclam_run6)
 
 
 def test_real_run6_matches_its_documented_facts(run6) -> None:  # type: ignore[no-untyped-def]

@@ -14,7 +14,6 @@ from hypothesis import strategies as st
 from relloc.cli import main
 from relloc.datasets.mrclam import load_mrclam
 from relloc.datasets.mrclam_cut import cut_mrclam
-from relloc.datasets.paths import default_mrclam_dataset
 from relloc.errors import ConfigError, DataError
 
 T0 = 1_000_000_000.0
@@ -169,10 +168,10 @@ def test_the_cli_prints_every_file_and_maps_errors_to_exit_codes(
     assert main(["mrclam", "cut", str(src), str(tmp_path / "c"), "--start", "30"]) == 3
 
 
-def test_run6_from_450_s_is_the_same_recording_on_its_own_clock(tmp_path: Path) -> None:
-    src = default_mrclam_dataset()
-    if not (src / "Barcodes.dat").is_file():
-        pytest.skip(f"MRCLAM run 6 not found at {src} (shared data absent)")
+def test_run6_from_450_s_is_the_same_recording_on_its_own_clock(
+    tmp_path: Path, mrclam_run6: Path
+) -> None:
+    src = mrclam_run6
     whole = load_mrclam(src)
     part = load_mrclam(cut_mrclam(src, tmp_path / "late", start_s=450.0).destination)
     shift = part.t0_unix - whole.t0_unix

@@ -15,7 +15,6 @@ from pathlib import Path
 import pytest
 
 from relloc.datasets.mrclam import MrclamOptions, load_mrclam
-from relloc.datasets.paths import default_mrclam_dataset
 from relloc.errors import DataError
 
 HEADER = "# MRCLAM-layout test file\n# written by the test\n# format line\n# columns\n"
@@ -61,12 +60,12 @@ def test_the_robots_not_loaded_do_not_clash(tmp_path: Path) -> None:
     assert ds.landmarks.subject.tolist() == [3]
 
 
-def test_a_run6_robot_renamed_to_a_landmark_subject_is_refused(tmp_path: Path) -> None:
+def test_a_run6_robot_renamed_to_a_landmark_subject_is_refused(
+    tmp_path: Path, mrclam_run6: Path
+) -> None:
     """The audit's folder: run 6 with Robot5_* renamed Robot9_*; subject 9 is a landmark (line 8
     of Landmark_Groundtruth.dat, barcode 70)."""
-    src = default_mrclam_dataset()
-    if not (src / "Robot5_Groundtruth.dat").is_file():
-        pytest.skip(f"MRCLAM run 6 not found at {src} (shared data absent)")
+    src = mrclam_run6
     dst = tmp_path / "x"
     dst.mkdir()
     for name in ("Barcodes.dat", "Landmark_Groundtruth.dat"):

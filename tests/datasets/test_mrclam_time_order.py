@@ -23,7 +23,6 @@ from relloc.datasets.mrclam import (
     _RowSink,
     load_mrclam,
 )
-from relloc.datasets.paths import default_mrclam_dataset
 from relloc.errors import DataError
 
 BACKWARDS = "time goes backwards"
@@ -183,10 +182,7 @@ def test_duplicates_are_still_settled_among_the_rows_kept(tmp_path: Path) -> Non
 # ----------------------------------------------------------------------------------------------
 
 
-def _robot2_of_run6(dst: Path) -> Path:
-    src = default_mrclam_dataset()
-    if not (src / "Robot2_Measurement.dat").is_file():
-        pytest.skip(f"MRCLAM run 6 not found at {src} (shared data absent)")
+def _robot2_of_run6(src: Path, dst: Path) -> Path:
     dst.mkdir(parents=True)
     for name in (
         "Barcodes.dat",
@@ -200,21 +196,23 @@ def _robot2_of_run6(dst: Path) -> Path:
 
 
 @pytest.mark.parametrize("kind", ["Measurement", "Odometry", "Groundtruth"])
-def test_two_swapped_lines_of_run6_skip_exactly_those_two(tmp_path: Path, kind: str) -> None:
+def test_two_swapped_lines_of_run6_skip_exactly_those_two(
+    tmp_path: Path, kind: str, mrclam_run6: Path
+) -> None:
     """Lines 50 and 150 of run 6's Robot2 files are data rows with distinct stamps, those of
     lines 51…149 lie strictly between them. Swapped, keeping the row now on line 50 would cost
     lines 51…149 (all earlier than it), keeping the one now on line 150 the same 99 rows (all
     later): the longest ordered set drops just the two, 2 skips (the old rule skipped 100)."""
     name = f"Robot2_{kind}.dat"
-    clean = _robot2_of_run6(tmp_path / "clean")
+    clean = _robot2_of_run6(mrclam_run6, tmp_path / "clean")
     lines = (clean / name).read_bytes().split(b"\n")
     stamps = [float(line.split()[0]) for line in lines[49:150]]  # lines 50…150
     assert stamps[0] < min(stamps[1:-1]) and max(stamps[1:-1]) < stamps[-1]  # the premise
 
-    swapped = _robot2_of_run6(tmp_path / "swapped")
+    swapped = _robot2_of_run6(mrclam_run6, tmp_path / "swapped")
     lines[49], lines[149] = lines[149], lines[49]
     (swapped / name).write_bytes(b"\n".join(lines))
-    deleted = _robot2_of_run6(tmp_path / "deleted")
+    deleted = _robot2_of_run6(mrclam_run6, tmp_path / "deleted")
     (deleted / name).write_bytes(b"\n".join(lines[:49] + lines[50:149] + lines[150:]))
 
     before = load_mrclam(clean).report.files[name]

@@ -164,25 +164,15 @@ def test_desilva2015_cli_writes_the_files_its_summary_states(tmp_path, monkeypat
     check_mcap(export, mcap)
 
 
-def test_guler2023_cli_writes_the_files_its_summary_states(tmp_path, monkeypatch):  # type: ignore[no-untyped-def]
+def test_guler2023_cli_writes_the_files_its_summary_states(  # type: ignore[no-untyped-def]
+    tmp_path, monkeypatch, guler2023_short_plan
+):
     """``relloc reproduce guler2023 --tum DIR --mcap FILE`` on a short plan (5 % durations, one
     run per block): every follower's common-frame belief of the leader in run 0 of
     ``two_drones``, as TUM pairs and MCAP poses (and its own heading, MCAP only)."""
-    from relloc.datasets.paths import default_uwb_csv
     from relloc.experiments import guler2023
 
-    if not default_uwb_csv().is_file():
-        pytest.skip(f"shared UWB data not found at {default_uwb_csv()}")
-    plan = guler2023.Plan(
-        one_drone_runs=1,
-        two_drones_runs=1,
-        formation_runs=1,
-        sweep_runs=1,
-        dwell_times=(4.0,),
-        drone_counts=(2,),
-        duration_scale=0.05,
-    )
-    monkeypatch.setattr(guler2023, "default_plan", lambda runs: plan)
+    monkeypatch.setattr(guler2023, "default_plan", lambda runs: guler2023_short_plan)
     # no figures (half the time; test_sim_and_cli draws them)
     monkeypatch.setattr(guler2023, "_figures", lambda *args: defaultdict(lambda: "none.png"))
     out, tum, mcap = tmp_path / "g", tmp_path / "tum", tmp_path / "g.mcap"

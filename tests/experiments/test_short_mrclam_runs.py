@@ -8,7 +8,6 @@ from pathlib import Path
 import pytest
 
 from relloc.datasets.mrclam_cut import cut_mrclam
-from relloc.datasets.paths import default_mrclam_dataset
 from relloc.errors import ConfigError, DataError
 from relloc.experiments import mrclam_association
 from relloc.experiments.registry import ReproduceArgs
@@ -16,13 +15,10 @@ from relloc.experiments.wanasinghe2014_pairs import chosen_pairs
 
 
 @pytest.fixture(scope="module")
-def short_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
+def short_run(tmp_path_factory: pytest.TempPathFactory, mrclam_run6: Path) -> Path:
     """The first 75 s of run 6, every robot."""
-    src = default_mrclam_dataset()
-    if not (src / "Barcodes.dat").is_file():
-        pytest.skip(f"MRCLAM run 6 not found at {src} (shared data absent)")
     dst = tmp_path_factory.mktemp("mrclam") / "first75s"
-    cut_mrclam(src, dst, end_s=75.0)
+    cut_mrclam(mrclam_run6, dst, end_s=75.0)
     return dst
 
 

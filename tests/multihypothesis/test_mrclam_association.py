@@ -288,7 +288,7 @@ def test_fits_and_scans_do_not_depend_on_the_world_frame_clock_or_barcodes(
     np.testing.assert_allclose(bearings[0].value, bearings[1].value, atol=1e-6)
 
 
-def test_run6_camera_sees_teammates_only_inside_its_field_of_view() -> None:
+def test_run6_camera_sees_teammates_only_inside_its_field_of_view(mrclam_run6: Path) -> None:
     """On run 6's calibration window, the in-view P_D the unknown-correspondence model uses is
     well above the all-frames share, and the ground truth puts hardly any detection outside
     the fitted field of view (else a P_D of 0 outside it would be wrong)."""
@@ -298,11 +298,8 @@ def test_run6_camera_sees_teammates_only_inside_its_field_of_view() -> None:
         fit_field_of_view,
     )
     from relloc.datasets.mrclam import load_mrclam
-    from relloc.datasets.paths import default_mrclam_dataset
 
-    folder = default_mrclam_dataset()
-    if not (folder / "Barcodes.dat").is_file():
-        pytest.skip(f"MRCLAM run 6 not found at {folder} (shared data absent)")
+    folder = mrclam_run6
     ds = load_mrclam(folder)
     start = max(float(ds.robot(s).odometry.t[0]) for s in ds.robot_ids)
     window = mrclam_association.following(start, mrclam_association.CALIBRATION_S, str(folder))
