@@ -5,13 +5,16 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import pytest
+import sympy as sp
 
 from relloc.datasets.mrclam_cut import cut_mrclam
 from relloc.datasets.mrclam_move import move_mrclam
 from relloc.datasets.paths import default_mrclam_dataset, default_uwb_csv
 from relloc.experiments.guler2023 import Plan
+from relloc.models.symbolic import SymbolicModel
 
 MrclamCut = Callable[..., Path]
 
@@ -53,6 +56,29 @@ def guler2023_short_plan() -> Plan:
         drone_counts=(2,),
         duration_scale=0.05,
     )
+
+
+@pytest.fixture(scope="session")
+def toy_symbolic_model() -> Callable[..., SymbolicModel]:
+    """``model(**changes)``: the toy ``ẋ = u``, ``ẏ = 0``, ``h = x`` in the real SymPy symbols
+    ``x, y`` and input ``u``, with the :class:`~relloc.models.symbolic.SymbolicModel` fields
+    ``changes`` replaced."""
+    x, y, u = sp.symbols("x y u", real=True)
+
+    def model(**changes: Any) -> SymbolicModel:
+        fields: dict[str, Any] = dict(
+            name="toy",
+            description="toy",
+            states=(x, y),
+            drift=(0, 0),
+            inputs=(u,),
+            input_fields=((1, 0),),
+            outputs=(x,),
+            output_names=("h",),
+        )
+        return SymbolicModel(**{**fields, **changes})
+
+    return model
 
 
 #: Run 6's robot barcodes (5, 14, 41, 32, 23) renumbered to numbers no subject of run 6 carries.

@@ -59,21 +59,8 @@ def test_no_batches_concatenate_to_no_rows_and_a_foreign_robot_is_refused() -> N
         linearise_rows(X2, _rows(observer=np.array([-1])))
 
 
-def _model(**changes: Any) -> S.SymbolicModel:
-    """``ẋ = u``, ``ẏ = 0``, ``y = x + c``."""
-    fields: dict[str, Any] = dict(
-        name="toy",
-        description="toy",
-        states=(X, Y),
-        drift=(0, 0),
-        inputs=(U,),
-        input_fields=((1, 0),),
-        outputs=(X + C,),
-        output_names=("h",),
-        parameters=(C,),
-    )
-    fields.update(changes)
-    return S.SymbolicModel(**fields)
+#: The toy model's fields here: ``h = x + c`` with the free parameter ``c``.
+WITH_C: dict[str, Any] = {"outputs": (X + C,), "parameters": (C,)}
 
 
 @pytest.mark.parametrize(
@@ -92,18 +79,20 @@ def _model(**changes: Any) -> S.SymbolicModel:
         ({"input_groups": {"w": (C,)}}, "input_groups name unknown inputs"),
     ],
 )
-def test_malformed_symbolic_models_are_refused(changes: dict[str, Any], match: str) -> None:
+def test_malformed_symbolic_models_are_refused(
+    changes: dict[str, Any], match: str, toy_symbolic_model
+) -> None:
     with pytest.raises(ModelError, match=f"SymbolicModel 'toy': {match}"):
-        _model(**changes)
+        toy_symbolic_model(**{**WITH_C, **changes})
 
 
-def test_free_parameters_need_an_rng() -> None:
-    model = _model()
+def test_free_parameters_need_an_rng(toy_symbolic_model) -> None:
+    model = toy_symbolic_model(**WITH_C)
     with pytest.raises(ModelError, match="model 'toy': free parameters need an rng"):
         model.parameters_for(np.zeros(2))
     c = model.parameters_for(np.zeros(2), np.random.default_rng(0))
     assert c.shape == (1,) and -5.0 <= c[0] <= 5.0
-    assert _model(parameters=(), outputs=(X,)).parameters_for(np.zeros(2)).size == 0
+    assert toy_symbolic_model().parameters_for(np.zeros(2)).size == 0
 
 
 def test_landmark_ranges_are_the_distances_to_the_landmarks() -> None:

@@ -36,22 +36,6 @@ X, Y = sp.symbols("x y", real=True)
 U = sp.Symbol("u", real=True)
 
 
-def _model(**changes: Any) -> S.SymbolicModel:
-    """``ẋ = u``, ``ẏ = 0``, ``h = x``."""
-    fields: dict[str, Any] = dict(
-        name="toy",
-        description="toy",
-        states=(X, Y),
-        drift=(0, 0),
-        inputs=(U,),
-        input_fields=((1, 0),),
-        outputs=(X,),
-        output_names=("h",),
-    )
-    fields.update(changes)
-    return S.SymbolicModel(**fields)
-
-
 # ------------------------------------------------------------------------- built-in models
 
 
@@ -96,36 +80,38 @@ def test_condition_descriptions_of_unenumerated_and_unreachable_ranks() -> None:
     assert describe_conditions([]) == "the generic rank is never reached with any input"
 
 
-def test_analysis_refuses_bad_options_and_a_model_singular_everywhere() -> None:
+def test_analysis_refuses_bad_options_and_a_model_singular_everywhere(toy_symbolic_model) -> None:
     with pytest.raises(ModelError, match="analyse: samples must be ≥ 1, got 0"):
-        analyse(_model(), samples=0)
+        analyse(toy_symbolic_model(), samples=0)
     with pytest.raises(ModelError, match=r"analyse: directions must be auto\|numeric\|none"):
-        analyse(_model(), directions="symbolic")
-    nowhere = _model(outputs=(sp.sqrt(X),), state_box=((-2.0, -1.0), (-1.0, 1.0)))
+        analyse(toy_symbolic_model(), directions="symbolic")
+    nowhere = toy_symbolic_model(outputs=(sp.sqrt(X),), state_box=((-2.0, -1.0), (-1.0, 1.0)))
     with pytest.raises(ModelError, match="model 'toy': could not find finite evaluation points"):
         analyse(nowhere, samples=2)
 
 
-def test_conditions_are_not_enumerated_for_more_than_ten_input_groups() -> None:
+def test_conditions_are_not_enumerated_for_more_than_ten_input_groups(toy_symbolic_model) -> None:
     """``ẋ = Σ u_k`` over eleven inputs: ``x`` is observable with none of them, ``y`` never."""
     inputs = sp.symbols("u0:11", real=True)
-    model = _model(inputs=inputs, input_fields=tuple((1, 0) for _ in inputs))
+    model = toy_symbolic_model(inputs=inputs, input_fields=tuple((1, 0) for _ in inputs))
     result = analyse(model, order=1, samples=2)
     assert result.rank == 1 and result.conditions is None and result.input_conditions is None
     assert "11 input groups: condition enumeration skipped" in result.notes
 
 
-def test_a_large_null_vector_expression_falls_back_to_a_numeric_direction() -> None:
+def test_a_large_null_vector_expression_falls_back_to_a_numeric_direction(
+    toy_symbolic_model,
+) -> None:
     """``h`` a long polynomial of ``x`` alone: ``y`` is unobservable, ``(x, y) ∝ (0, 1)``; the
     gradient row is too large for Cramer's rule in closed form."""
     h = sum(sp.Integer(k) * X**k * sp.sin(k * X) for k in range(1, 80))
-    result = analyse(_model(outputs=(h,)), order=0, samples=1)
+    result = analyse(toy_symbolic_model(outputs=(h,)), order=0, samples=1)
     assert result.rank == 1
     assert result.unobservable_directions == ("(x, y) ∝ (0, 1) (numeric, at the witness)",)
 
 
-def test_rank_at_refuses_a_negative_order_and_wrong_sizes() -> None:
-    model = _model()
+def test_rank_at_refuses_a_negative_order_and_wrong_sizes(toy_symbolic_model) -> None:
+    model = toy_symbolic_model()
     with pytest.raises(ModelError, match="rank_at: order must be ≥ 0, got -1"):
         rank_at(model, [0.0, 0.0], [1.0], order=-1)
     with pytest.raises(ModelError, match=r"rank_at: state needs 2 values \('x', 'y'\)"):
@@ -134,15 +120,21 @@ def test_rank_at_refuses_a_negative_order_and_wrong_sizes() -> None:
         rank_at(model, [0.0, 0.0], [1.0, 2.0])
 
 
-def test_rows_that_cannot_be_judged_at_a_probe_point_are_kept() -> None:
+def test_rows_that_cannot_be_judged_at_a_probe_point_are_kept(toy_symbolic_model) -> None:
     """``√x`` and ``x`` have parallel gradients: where both are finite (x > 0) the second is
     pruned; where ``√x`` has none (x < 0) neither can be judged against it, and both stay."""
     outputs = (sp.sqrt(X), X)
-    positive = _model(outputs=outputs, output_names=("a", "b"), state_box=((1.0, 2.0), (0, 1)))
+    positive = toy_symbolic_model(
+        outputs=outputs, output_names=("a", "b"), state_box=((1.0, 2.0), (0, 1))
+    )
     assert [r.output for r in lie_rows(positive, 0)] == [0]
-    negative = _model(outputs=outputs, output_names=("a", "b"), state_box=((-2.0, -1.0), (0, 1)))
+    negative = toy_symbolic_model(
+        outputs=outputs, output_names=("a", "b"), state_box=((-2.0, -1.0), (0, 1))
+    )
     assert [r.output for r in lie_rows(negative, 0)] == [0, 1]
-    swapped = _model(outputs=outputs[::-1], output_names=("b", "a"), state_box=((-2, -1), (0, 1)))
+    swapped = toy_symbolic_model(
+        outputs=outputs[::-1], output_names=("b", "a"), state_box=((-2, -1), (0, 1))
+    )
     assert [r.output for r in lie_rows(swapped, 0)] == [0, 1]
     with pytest.raises(ModelError, match="Lie derivative order must be ≥ 0, got -1"):
         lie_rows(positive, -1)
