@@ -36,7 +36,11 @@ def a_file(tmp_path: Path) -> Path:
         ),
         (["certs", "c", "--team", "demo", "--robots", "a,,b"], "--robots: an empty id"),
         (["observability", "unicycle-landmarks", "--landmarks", "1000000"], "--landmarks"),  # hung
-        (["observability", "relative-nonlinear", "--samples", "100000000000"], "--samples in"),
+        (
+            ["observability", "relative-nonlinear", "--samples", "100000000000"],
+            "--samples: must be in 1…1000, got 100000000000",
+        ),
+        (["observability", "relative-nonlinear", "--order", "-1"], "--order: must be ≥ 0, got -1"),
         # options a model does not read were ignored silently, and 0 landmarks became 1
         (
             ["observability", "airground", "--landmarks", "3"],

@@ -35,6 +35,15 @@ def test_airground_mode3_reports_rank_direction_and_json(
     assert result["unobservable_directions"] == ["(r_x, r_y, theta_i, theta_0) ∝ (-r_y, r_x, 1, 1)"]
 
 
+def test_relative_models_say_who_observes_whom(capsys: pytest.CaptureFixture[str]) -> None:
+    """The conditions read "needs v_c ≠ 0": the model line says that c is the observed robot,
+    l the observer, and the state c's pose in l's frame."""
+    assert main(["observability", "relative-nonlinear", "--measurements", "range"]) == 0
+    model_line = capsys.readouterr().out.splitlines()[0]
+    assert "robot l observes robot c" in model_line
+    assert "c's position and heading in l's frame" in model_line
+
+
 def test_rank_at_given_state_and_inputs(capsys: pytest.CaptureFixture[str]) -> None:
     code = main(
         [

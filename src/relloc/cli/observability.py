@@ -122,8 +122,10 @@ def run(args: argparse.Namespace) -> int:
     from relloc.observability.builtin import READ_BY, ModelOptions, resolve_models
     from relloc.pipeline.output import write_json_file
 
-    if args.order < 0 or not 1 <= args.samples <= MAX_SAMPLES:
-        raise ConfigError(f"--order must be ≥ 0 and --samples in 1…{MAX_SAMPLES}")
+    if args.order < 0:
+        raise ConfigError(f"--order: must be ≥ 0, got {args.order}")
+    if not 1 <= args.samples <= MAX_SAMPLES:
+        raise ConfigError(f"--samples: must be in 1…{MAX_SAMPLES}, got {args.samples}")
     if args.seed < 0:
         raise ConfigError(f"--seed: must be ≥ 0, got {args.seed}")
     given = {

@@ -251,6 +251,10 @@ _RELATIVE_GROUPS = {
     "omega_c": RELATIVE_OBSERVED_INPUTS[3:],
 }
 RELATIVE_MEASUREMENTS: tuple[str, ...] = ("range", "azimuth", "elevation")
+_RELATIVE_PAIR = (
+    "seed-000 4-DOF relative pair (robot l observes robot c; x, y, z, phi: c's position and "
+    "heading in l's frame; inputs _l are l's, _c are c's)"
+)
 
 
 def _check_measured(measured: Sequence[str]) -> tuple[str, ...]:
@@ -273,7 +277,7 @@ def relative_nonlinear(measured: Sequence[str] = RELATIVE_MEASUREMENTS) -> Symbo
     }
     return SymbolicModel(
         name="relative-nonlinear",
-        description=f"seed-000 4-DOF relative pair, nonlinear {'+'.join(measured)}",
+        description=f"{_RELATIVE_PAIR}, nonlinear {'+'.join(measured)}",
         states=RELATIVE_STATES,
         drift=(0, 0, 0, 0),
         inputs=RELATIVE_OBSERVER_INPUTS + RELATIVE_OBSERVED_INPUTS,
@@ -327,7 +331,7 @@ def relative_pseudo_linear(measured: Sequence[str] = RELATIVE_MEASUREMENTS) -> S
     X = sp.Matrix(RELATIVE_STATES)
     return SymbolicModel(
         name="relative-pseudo-linear",
-        description=f"seed-000 4-DOF relative pair, pseudo-linear rows {'+'.join(measured)}",
+        description=f"{_RELATIVE_PAIR}, pseudo-linear rows {'+'.join(measured)}",
         states=RELATIVE_STATES,
         drift=(0, 0, 0, 0),
         inputs=RELATIVE_OBSERVER_INPUTS + RELATIVE_OBSERVED_INPUTS,
