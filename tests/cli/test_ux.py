@@ -191,8 +191,8 @@ def test_an_unwritable_json_path_names_the_flag(tmp_path, capsys):
     assert f"--json: {blocker} exists and is not a folder" in capsys.readouterr().err
 
 
-def test_node_and_team_help_are_plain_text(capsys):
-    for argv in (["node", "--help"], ["team", "--help"]):
+def test_node_team_and_certs_help_are_plain_text(capsys):
+    for argv in (["node", "--help"], ["team", "--help"], ["certs", "--help"]):
         with pytest.raises(SystemExit):
             main(argv)
         text = capsys.readouterr().out
@@ -200,6 +200,9 @@ def test_node_and_team_help_are_plain_text(capsys):
     with pytest.raises(SystemExit):
         main(["node", "--help"])
     assert "--duration 20 \\\n" in capsys.readouterr().out  # the continuation line kept
+    with pytest.raises(SystemExit):
+        main(["certs", "--help"])
+    assert "ground1,ground2 \\\n        --duration 60" in capsys.readouterr().out
     assert plain_text("See :mod:`relloc.x` and ``y``::") == "See relloc.x and y:"
 
 

@@ -1,4 +1,4 @@
-"""``relloc certs DIR --team NAME --robots a,b,c`` — the certificates of a secure team.
+r"""``relloc certs DIR --team NAME --robots a,b,c`` — the certificates of a secure team.
 
 Writes a certificate authority, one EC key and certificate per robot (subject CN = the robot
 id) and one for the launcher/clock (CN ``launcher``) into ``DIR`` (keys with permissions 0600;
@@ -23,12 +23,14 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from relloc.cli.console import plain_text
+
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p = subparsers.add_parser(
         "certs",
         help="make a team CA, per-robot certificates and Zenoh TLS/ACL configurations",
-        description=__doc__,
+        description=plain_text(__doc__),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument("folder", type=Path, help="output folder")
