@@ -30,7 +30,8 @@ def test_air_ground_processes_in_closed_loop_equal_the_in_process_run(tmp_path, 
     printed = capsys.readouterr().out
     line = re.search(
         r"^guler2023 (\S+): RMSE mean (\S+) m \(in-process (\S+) m\), worst (\S+) m "
-        r"\(in-process (\S+) m\); max \|Δ belief\| (\S+)$",
+        r"\(in-process (\S+) m\); largest \|Δ\| of a belief entry (\S+) "
+        r"\(tolerance \S+; within tolerance\)$",
         printed,
         flags=re.M,
     )

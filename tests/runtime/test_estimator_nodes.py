@@ -291,7 +291,8 @@ def test_the_sensing_robots_reach_every_robot_process(tmp_path, capsys, printed_
     printed = capsys.readouterr().out
     line = re.search(
         r"^(\S+): success rate (\S+) \(in-process (\S+)\), position RMSE (\S+) m "
-        r"\(in-process (\S+) m\); max \|Δ belief\| (\S+)$",
+        r"\(in-process (\S+) m\); largest \|Δ\| of a belief entry (\S+) "
+        r"\(tolerance 1e-06; within tolerance\)$",
         printed,
         flags=re.M,
     )

@@ -113,6 +113,7 @@ def run_team_up(args: argparse.Namespace, team_args: dict[str, object]) -> int:
     """``relloc team up guler2023``: the runs, scored beside the in-process reproduction."""
     from relloc.experiments.guler2023_team import DEFAULT_CASE, GulerTeamSettings, run_guler_team
     from relloc.pipeline.output import fmt
+    from relloc.runtime.outcomes import agreement_text
 
     summary = run_guler_team(
         GulerTeamSettings(
@@ -129,7 +130,6 @@ def run_team_up(args: argparse.Namespace, team_args: dict[str, object]) -> int:
         print(
             f"guler2023 {summary['case']}: RMSE mean {fmt(d['rmse_m_mean'])} m (in-process "
             f"{fmt(r['rmse_m_mean'])} m), worst {fmt(d['rmse_m_worst'])} m (in-process "
-            f"{fmt(r['rmse_m_worst'])} m); max |Δ belief| "
-            f"{fmt(summary['agreement']['max_abs_diff'])}"
+            f"{fmt(r['rmse_m_worst'])} m); {agreement_text(summary)}"
         )
     return 0

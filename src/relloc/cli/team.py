@@ -286,6 +286,7 @@ def run_reproduction(args: argparse.Namespace) -> int:
     from relloc.experiments.desilva2015 import sensing_robots
     from relloc.experiments.desilva2015_team import DeSilvaTeamSettings, run_desilva_team
     from relloc.pipeline.output import fmt
+    from relloc.runtime.outcomes import agreement_text
 
     if args.runs < 1:
         raise ConfigError(f"--runs: {args.runs} must be ≥ 1")
@@ -308,7 +309,7 @@ def run_reproduction(args: argparse.Namespace) -> int:
         print(
             f"{summary['experiment']}: success rate {fmt(d['success_rate'])} (in-process "
             f"{fmt(r['success_rate'])}), position RMSE {fmt(d['pos_rmse_m'])} m (in-process "
-            f"{fmt(r['pos_rmse_m'])} m); max |Δ belief| {fmt(summary['agreement']['max_abs_diff'])}"
+            f"{fmt(r['pos_rmse_m'])} m); {agreement_text(summary)}"
         )
     return 0
 

@@ -29,6 +29,7 @@ import numpy as np
 from relloc.core.estimates import Estimates
 from relloc.core.recording import Recording
 from relloc.pipeline.frames import FRAMES
+from relloc.pipeline.output import fmt
 from relloc.pipeline.team_report import RunResult
 from relloc.runtime.faults import FaultSettings
 
@@ -192,3 +193,14 @@ def figure_agreement(
             "within_tolerance": bool(worst <= belief_tolerance and figures_ok),
         },
     }
+
+
+def agreement_text(summary: Mapping[str, Any]) -> str:
+    """The console's agreement with the in-process run, from :func:`figure_agreement`'s
+    blocks: the largest belief-entry difference against its tolerance, met or not."""
+    agree, tolerance = summary["agreement"], summary["tolerance"]["belief_entry"]
+    verdict = "within tolerance" if agree["within_tolerance"] else "NOT within tolerance"
+    return (
+        f"largest |Δ| of a belief entry {fmt(agree['max_abs_diff'])} "
+        f"(tolerance {tolerance:g}; {verdict})"
+    )

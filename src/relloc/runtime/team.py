@@ -32,6 +32,7 @@ from __future__ import annotations
 import dataclasses
 import json
 from collections import Counter
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -277,7 +278,7 @@ def runtime_markdown(summary: dict[str, Any]) -> str:
         frows = [
             [
                 o["fault"],
-                o.get("window_s"),
+                _window_text(o),
                 o.get("position_rmse_before_m"),
                 o.get("position_rmse_during_m"),
                 o.get("position_rmse_after_m"),
@@ -316,6 +317,43 @@ def runtime_markdown(summary: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
+def _window_text(outcome: Mapping[str, Any]) -> str:
+    """A fault's window ``T1–T2`` (s)."""
+    t1, t2 = outcome["window_s"]
+    return f"{fmt(t1)}–{fmt(t2)}"
+
+
+def fault_outcome_text(outcome: Mapping[str, Any]) -> str:
+    """One console line of a fault's outcome (:mod:`relloc.runtime.outcomes`): its window,
+    the RMSEs of the affected pairs before → during → after it (only during, for a network
+    fault, which spans the run) and its track counts."""
+
+    def phases(stem: str, unit: str) -> str:
+        keys = [f"{stem}_{phase}_{unit}" for phase in ("before", "during", "after")]
+        if keys[0] in outcome:
+            return " → ".join(fmt(outcome.get(k)) for k in keys) + f" {unit}"
+        return f"{fmt(outcome.get(keys[1]))} {unit}"
+
+    tracks = ", ".join(
+        f"{label} {outcome[key]}"
+        for key, label in (
+            ("tracks_created", "created"),
+            ("tracks_kept", "kept"),
+            ("tracks_deleted", "deleted"),
+            ("tracks_lost_with_process", "lost with process"),
+            ("tracks_refound", "re-found"),
+        )
+        if key in outcome
+    )
+    order = " (before → during → after)" if "position_rmse_before_m" in outcome else ""
+    line = (
+        f"fault {outcome['fault']} ({_window_text(outcome)} s): position RMSE "
+        f"{phases('position_rmse', 'm')}, yaw RMSE {phases('yaw_rmse', 'rad')}{order}; "
+        f"tracks {tracks}"
+    )
+    return line + (f"; {outcome['note']}" if outcome.get("note") else "")
+
+
 def print_summary(summary: dict[str, Any]) -> None:
     """A short terminal summary of a team run."""
     from rich.console import Console
@@ -337,13 +375,15 @@ def print_summary(summary: dict[str, Any]) -> None:
         )
     console = Console()
     console.print(table)
-    team, ref = summary["team"], summary["in_process"]["team"]
+    team, ref, agree = summary["team"], summary["in_process"]["team"], summary["agreement"]
+    verdict = "within tolerance" if agree["within_tolerance"] else "NOT within tolerance"
+    if summary["fault_outcomes"] and not agree["within_tolerance"]:
+        verdict += ", as faults change the beliefs on purpose"
     console.print(
         f"position RMSE {fmt(team.get('position_rmse_m'))} m (in-process "
-        f"{fmt(ref.get('position_rmse_m'))} m); max |Δ belief| vs in-process "
-        f"{fmt(summary['agreement']['max_abs_mean_diff'])}; wall {fmt(summary['wall_s'])} s"
+        f"{fmt(ref.get('position_rmse_m'))} m); largest |Δ| of a belief mean entry "
+        f"{fmt(agree['max_abs_mean_diff'])} (tolerance {agree['tolerance']:g}; {verdict}); "
+        f"wall {fmt(summary['wall_s'])} s"
     )
     for o in summary["fault_outcomes"]:
-        console.print(
-            f"fault {o['fault']}: {json.dumps({k: v for k, v in o.items() if k != 'fault'})}"
-        )
+        console.print(fault_outcome_text(o))
