@@ -119,8 +119,11 @@ def test_a_destination_under_a_file_is_a_data_error_naming_it(tmp_path: Path) ->
 def test_a_part_that_is_not_a_usable_run_names_the_file_and_leaves_nothing(tmp_path: Path) -> None:
     src = _folder(tmp_path / "run")
     # [9.6, 20) s holds no ground-truth row (they end at 9.5 s): no robot can be scored
-    with pytest.raises(DataError, match=r"\[9\.6, 20\) s .* not a usable run: .*Groundtruth"):
+    with pytest.raises(DataError, match=r"\[9\.6, 20\) s .* not a usable run: .*Groundtruth") as e:
         cut_mrclam(src, tmp_path / "part", start_s=9.6, end_s=20.0)
+    # named as the file it would have written, not the staging folder's
+    assert f"{tmp_path / 'part' / 'Robot1_Groundtruth.dat'}: 0 usable rows" in str(e.value)
+    assert ".partial" not in str(e.value)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]
 
 
@@ -165,7 +168,10 @@ def test_the_cli_prints_every_file_and_maps_errors_to_exit_codes(
     assert "Robot2_Odometry.dat" in out and "Robot1_Odometry.dat" not in out
     assert main(["mrclam", "cut", str(src), str(tmp_path / "b"), "--robots", "1,x"]) == 2
     assert "--robots: '1,x' is not a comma-separated list" in capsys.readouterr().err
-    assert main(["mrclam", "cut", str(src), str(tmp_path / "c"), "--start", "30"]) == 3
+    assert main(["mrclam", "cut", str(src), str(tmp_path / "c"), "--start", "30"]) == 2
+    err = capsys.readouterr().err
+    assert "start 30 s is at or past the end of" in err
+    assert "whose last row is stamped 9.750 s after its first" in err  # commands to 9.75 s
 
 
 def test_run6_from_450_s_is_the_same_recording_on_its_own_clock(

@@ -88,6 +88,11 @@ def cut_mrclam(
     if unknown or not chosen:
         what = f"robots {unknown} are not in {src}" if unknown else "no robot chosen"
         raise ConfigError(f"mrclam cut: {what} (robots: {list(whole.robot_ids)})")
+    if start_s >= whole.duration:
+        raise ConfigError(
+            f"mrclam cut: start {start_s:g} s is at or past the end of {src}, whose last row is "
+            f"stamped {whole.duration:.3f} s after its first"
+        )
     lo, hi = whole.t0_unix + start_s, whole.t0_unix + end_s
     kept_robots = tuple(sorted(set(chosen)))
     files: dict[str, FileCut] = {}
@@ -112,8 +117,8 @@ def cut_mrclam(
 def staged_write(destination: Path, write: Callable[[Path], None], failure: str) -> None:
     """``write(staging)`` into a fresh folder beside ``destination``, which becomes
     ``destination`` only once it loads as an MRCLAM run; one that does not (DataError) is
-    removed and reported as ``failure: <the loader's error>``, so a failed cut or move leaves
-    nothing behind."""
+    removed and reported as ``failure: <the loader's error>`` (its paths named as in
+    ``destination``), so a failed cut or move leaves nothing behind."""
     staging = destination.with_name(f".{destination.name}.partial")
     shutil.rmtree(staging, ignore_errors=True)
     try:
@@ -125,8 +130,8 @@ def staged_write(destination: Path, write: Callable[[Path], None], failure: str)
         write(staging)
         load_mrclam(staging)
         written = True
-    except DataError as exc:
-        raise DataError(f"{failure}: {exc}") from exc
+    except DataError as exc:  # named as the files it would have written, not the staging's
+        raise DataError(f"{failure}: {str(exc).replace(str(staging), str(destination))}") from exc
     finally:
         if not written:
             shutil.rmtree(staging, ignore_errors=True)
