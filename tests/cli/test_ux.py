@@ -235,6 +235,27 @@ def test_reproduce_prints_the_ours_vs_paper_tables(tmp_path):
     assert "summary.json, report.md, fig.png" in text
 
 
+def test_without_paper_numbers_each_part_of_the_report_shows_its_headline(tmp_path):
+    """A report with one section per bag (tiers-uwb) and no paper column: the console shows
+    each bag's first table (the same headers), not the first bag's only, and no other table."""
+    case = "| case | pos RMSE (m) |\n|---|---|\n| team aligned | {} |\n"
+    pairs = "| pair | pos RMSE (m) | odometry alone |\n|---|---|---|\n| a->b | 9.9 | 1 |\n"
+    (tmp_path / "report.md").write_text(
+        "# tiers-uwb\n\n## bag_one\n\n"
+        + case.format("0.0929")
+        + "\n"
+        + pairs
+        + "\n## bag_two\n\n"
+        + case.format("0.0161")
+        + "\n"
+        + pairs
+    )
+    text = comparison_text("tiers-uwb", tmp_path)
+    assert "bag_one: headline (no paper numbers to compare with)" in text
+    assert "bag_two: headline (no paper numbers to compare with)" in text
+    assert "0.0929" in text and "0.0161" in text and "a->b" not in text
+
+
 def test_the_extras_of_a_parsed_command():
     import argparse
 

@@ -2,8 +2,9 @@
 
 Every reproduction writes ``report.md`` with its headline comparisons as markdown tables that
 have a ``paper`` column (:func:`relloc.pipeline.output.markdown_table`); those tables are the
-ones each experiment chose to set beside the paper (a report without one shows its first
-table, its headline, instead). :func:`paper_tables` reads them back and
+ones each experiment chose to set beside the paper (a report without one shows its headline
+instead: its first table and the later ones of the same headers, one per part of a report that
+repeats a layout, such as ``tiers-uwb``'s bags). :func:`paper_tables` reads them back and
 :func:`comparison_text` lays them out for the terminal (:func:`relloc.cli.console.compact_table`),
 followed by the list of files written (``summary.json``, ``report.md`` and every figure the
 report shows).
@@ -67,6 +68,13 @@ def paper_tables(markdown: str) -> list[Table]:
     return [t for t in tables(markdown) if any("paper" in h.lower() for h in t.headers)]
 
 
+def headline_tables(markdown: str) -> list[Table]:
+    """A report's first table and every later one of the same headers: the headline of each of
+    its parts where a report repeats one layout per part (``tiers-uwb``: one per bag)."""
+    every = tables(markdown)
+    return [t for t in every if t.headers == every[0].headers] if every else []
+
+
 def figures(markdown: str) -> list[str]:
     """The figure files a report shows, in order, without repeats."""
     return list(dict.fromkeys(_FIGURE.findall(markdown)))
@@ -81,8 +89,8 @@ def comparison_text(name: str, out_dir: Path, *, width: int = 80) -> str:
         raise DataError(f"{report}: cannot read the report ({exc.strerror or exc})") from None
     parts = []
     found, what = paper_tables(markdown), "ours vs paper"
-    if not found:  # the paper gives no numbers to set beside: show the report's first table
-        found, what = tables(markdown)[:1], "headline (no paper numbers to compare with)"
+    if not found:  # the paper gives no numbers to set beside: show the report's headline
+        found, what = headline_tables(markdown), "headline (no paper numbers to compare with)"
     for t in found:
         rows = [r + [""] * (len(t.headers) - len(r)) for r in t.rows]
         parts.append(wrap_line(f"{name} — {t.section}: {what}", width))
