@@ -338,6 +338,19 @@ def test_a_robot_that_observes_nothing_is_valid_but_a_team_must_measure_somethin
     assert "robots[0].observes[1]: 'aerial1' is already listed" in _error(tmp_path, twice)
 
 
+def test_a_range_noise_that_draws_readings_past_the_sensor_limit_names_the_sensor(tmp_path):
+    """σ_r = 5000 m is accepted by the scenario (σ_r ≤ 10⁶ m; max_range may be infinite), but
+    about 2.3 % of the readings (ν > 2σ) then land more than 10⁴ m out, some in the first
+    run's hundreds: the simulator names the sensor and both fields, not a recording row."""
+    _, sc = _load(tmp_path, _edit("sigma_range = 0.0068", "sigma_range = 5000"))
+    with pytest.raises(ConfigError) as e:
+        simulate(sc, np.random.default_rng(0))
+    message = str(e.value)
+    assert message.startswith("robots[0].sensor (observer): a simulated range to ")
+    assert "beyond the 10000 m a reading may have" in message
+    assert "lower sigma_range (5000 m) or max_range (15 m)" in message
+
+
 def test_a_path_that_doubles_back_onto_a_cusp_is_named_by_the_simulator():
     """At a cusp the spline's tangent vanishes and the ground robot's yaw rate is 0/0; this
     speed puts a propagation step's midpoint exactly on it."""

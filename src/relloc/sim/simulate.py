@@ -10,7 +10,8 @@
    from the ground truth with additive noise; targets outside the field of view or range are
    not reported, so robots leave and re-enter view. The readings are rows of kind
    ``range_bearing_elevation`` of :class:`relloc.core.recording.Measurements`, sorted by
-   (time, observer, target).
+   (time, observer, target). A reported range beyond ``MAX_SENSOR_RANGE_M`` (σ_r or
+   ``max_range`` set too large) is a :class:`ConfigError` naming the robot's sensor.
 
 The random stream is consumed in a fixed order (odometry in robot order, then measurements in
 (observer, observed) pair order, noise drawn whether or not the target is visible), so a given
@@ -21,6 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from relloc.core.limits import MAX_SENSOR_RANGE_M
 from relloc.core.recording import GroundTruth, Odometry, Recording, measurement_rows
 from relloc.errors import ConfigError
 from relloc.sim.scenario import Scenario
@@ -92,6 +94,14 @@ def simulate(scenario: Scenario, rng: np.random.Generator) -> Recording:
             raise ConfigError(f"robots[{i}].sensor: required to observe {tgt_name!r}")
         tm = measurement_times(sensor.rate_hz, float(t[-1]))  # within the simulated span
         z, seen = sense(truth[i].at(tm), truth[j].at(tm), sensor, rng)
+        far = seen & (z[:, 0] > MAX_SENSOR_RANGE_M)
+        if far.any():  # the recording would refuse it as a logging fault, naming no field
+            raise ConfigError(
+                f"robots[{i}].sensor ({obs_name}): a simulated range to {tgt_name!r} of "
+                f"{z[np.argmax(far), 0]:g} m is beyond the {MAX_SENSOR_RANGE_M:g} m a reading "
+                f"may have; lower sigma_range ({sensor.sigma_range:g} m) or max_range "
+                f"({sensor.max_range:g} m)"
+            )
         rows_t.append(tm[seen])
         rows_obs.append(np.full(int(seen.sum()), i, dtype=np.int64))
         rows_tgt.append(np.full(int(seen.sum()), j, dtype=np.int64))
