@@ -90,6 +90,21 @@ def test_the_fit_file_states_unfitted_robots_and_reads_files_without_the_key(syn
             load_fit(path)
 
 
+def test_a_window_shorter_than_three_integration_windows_says_so(synthetic):
+    """A 60 s robot on a 20 s window with 7 s integration windows: its overlap [1, 20) s is
+    not longer than 1 s margins and three windows (23 s): the error gives that length rather
+    than claiming the odometry does not overlap the ground truth."""
+    ds = synthetic.dataset([_moving(synthetic)])
+    with pytest.raises(DataError) as e:
+        fit_odometry_model(ds, CalibrationWindow(0.0, 20.0, "calib"), 7.0)
+    assert str(e.value) == (
+        "calibration window [0.00, 20.00] s of calib: no robot has odometry overlapping its "
+        "ground truth for more than 23 s (1 s margins and three 7 s integration windows) to "
+        "fit the odometry on"
+    )
+    assert fit_odometry_model(ds, CalibrationWindow(0.0, 24.0, "calib"), 7.0).scale_v[0] > 0
+
+
 def test_rates_without_a_whole_integration_window_are_refused(synthetic):
     """Ground truth in 0.4 s bursts every 1.2 s: samples to fit the scales on, but no whole
     1 s window to fit the variance rates on (they were the floor, passed on as a fit)."""

@@ -385,7 +385,12 @@ def fit_odometry_model(
         raise ConfigError(f"fit_odometry_model: integration_s must be > 0, got {integration_s}")
     samples = [_robot_samples(ds.robot(rid), window, integration_s) for rid in ds.robot_ids]
     if not any(s.t.size for s in samples):
-        raise window.too_little("no odometry overlapping ground truth to fit the odometry on")
+        need = 2.0 + 3.0 * integration_s  # 1 s margins and three integration windows
+        raise window.too_little(
+            f"no robot has odometry overlapping its ground truth for more than {need:.3g} s "
+            f"(1 s margins and three {integration_s:.3g} s integration windows) to fit the "
+            "odometry on"
+        )
     tau, lag = _latency_and_lag(samples)
     scale_v, scale_w, rows, unfitted = [], [], [], []
     for s in samples:
