@@ -91,18 +91,20 @@ def test_the_fit_file_states_unfitted_robots_and_reads_files_without_the_key(syn
 
 
 def test_a_window_shorter_than_three_integration_windows_says_so(synthetic):
-    """A 60 s robot on a 20 s window with 7 s integration windows: its overlap [1, 20) s is
-    not longer than 1 s margins and three windows (23 s): the error gives that length rather
-    than claiming the odometry does not overlap the ground truth."""
+    """A robot commanded from 0 s on a 20 s window with 7 s integration windows: from 1 s after
+    its first command to the window's end is 19 s, not more than three windows (21 s). The
+    error gives both lengths rather than claiming the odometry does not overlap the ground
+    truth; on a 23 s window (22 s) the fit goes through."""
     ds = synthetic.dataset([_moving(synthetic)])
+    assert ds.robot(1).odometry.t[0] == 0.0 and ds.robot(1).groundtruth.t[-1] > 25.0
     with pytest.raises(DataError) as e:
         fit_odometry_model(ds, CalibrationWindow(0.0, 20.0, "calib"), 7.0)
     assert str(e.value) == (
-        "calibration window [0.00, 20.00] s of calib: no robot has odometry overlapping its "
-        "ground truth for more than 23 s (1 s margins and three 7 s integration windows) to "
-        "fit the odometry on"
+        "calibration window [0.00, 20.00] s of calib: to fit the odometry on, a robot needs "
+        "more than three integration windows (21 s) from 1 s after its first command to 1 s "
+        "before its last ground truth; the longest is robot 1's, 19 s"
     )
-    assert fit_odometry_model(ds, CalibrationWindow(0.0, 24.0, "calib"), 7.0).scale_v[0] > 0
+    assert fit_odometry_model(ds, CalibrationWindow(0.0, 23.0, "calib"), 7.0).scale_v[0] > 0
 
 
 def test_rates_without_a_whole_integration_window_are_refused(synthetic):

@@ -212,18 +212,22 @@ def truth_velocity_dataset(ds: MrclamDataset, dt: float = GRID_DT_S) -> MrclamDa
 def _robot_samples(
     robot: RobotData, window: CalibrationWindow, integration_s: float
 ) -> _RobotSamples:
-    """The ``GRID_DT_S`` grid from 1 s after the first command (or the window start) to 1 s
-    before the last ground truth (or the window end); empty when shorter than three
-    integration windows or when the robot has no odometry or no ground truth."""
-    odo, gt = robot.odometry.t, robot.groundtruth.t
-    t = np.zeros(0)
-    if len(odo) and len(gt):
-        lo = max(window.start_s, float(odo[0]) + 1.0)
-        hi = min(window.end_s, float(gt[-1]) - 1.0)
-        if hi > lo + 3 * integration_s:
-            t = np.arange(lo, hi, GRID_DT_S)
+    """The ``GRID_DT_S`` grid over :func:`_fit_span`; empty when that is not longer than three
+    integration windows (or the robot has no odometry or no ground truth)."""
+    lo, hi = _fit_span(robot, window)
+    t = np.arange(lo, hi, GRID_DT_S) if hi > lo + 3 * integration_s else np.zeros(0)
     v, w, ok = ground_truth_velocities(robot.groundtruth, t)
     return _RobotSamples(robot, t[ok], v[ok], w[ok])
+
+
+def _fit_span(robot: RobotData, window: CalibrationWindow) -> tuple[float, float]:
+    """``(lo, hi)``: from 1 s after the robot's first command (or the window start) to 1 s
+    before its last ground truth (or the window end); ``(0, 0)`` without odometry or ground
+    truth."""
+    odo, gt = robot.odometry.t, robot.groundtruth.t
+    if not (len(odo) and len(gt)):
+        return 0.0, 0.0
+    return max(window.start_s, float(odo[0]) + 1.0), min(window.end_s, float(gt[-1]) - 1.0)
 
 
 def _command_energy(
@@ -385,11 +389,14 @@ def fit_odometry_model(
         raise ConfigError(f"fit_odometry_model: integration_s must be > 0, got {integration_s}")
     samples = [_robot_samples(ds.robot(rid), window, integration_s) for rid in ds.robot_ids]
     if not any(s.t.size for s in samples):
-        need = 2.0 + 3.0 * integration_s  # 1 s margins and three integration windows
+        spans = {rid: _fit_span(ds.robot(rid), window) for rid in ds.robot_ids}
+        lengths = {rid: hi - lo for rid, (lo, hi) in spans.items()}
+        longest = max(lengths, key=lambda rid: lengths[rid])
         raise window.too_little(
-            f"no robot has odometry overlapping its ground truth for more than {need:.3g} s "
-            f"(1 s margins and three {integration_s:.3g} s integration windows) to fit the "
-            "odometry on"
+            "to fit the odometry on, a robot needs more than three integration windows "
+            f"({3.0 * integration_s:.3g} s) from 1 s after its first command to 1 s before its "
+            f"last ground truth; the longest is robot {longest}'s, "
+            f"{max(lengths[longest], 0.0):.3g} s"
         )
     tau, lag = _latency_and_lag(samples)
     scale_v, scale_w, rows, unfitted = [], [], [], []
