@@ -118,3 +118,18 @@ def _shown_as_printed(text: str, value: float | None) -> bool:
 def printed_as() -> Callable[[str, float | None], bool]:
     """The check of a printed figure against its summary.json value (:func:`_shown_as_printed`)."""
     return _shown_as_printed
+
+
+def _states_skipped_rows(report: str, n_skipped: int, source: str = "the dataset") -> bool:
+    """Whether ``report`` states ``n_skipped`` input rows of ``source`` skipped, or none
+    (:func:`relloc.pipeline.output.skipped_rows_line`)."""
+    if n_skipped:
+        return f"Input rows of {source} skipped (not used): {n_skipped} (" in report
+    return f"Input rows: every data row of {source} was used." in report
+
+
+@pytest.fixture
+def states_skipped_rows() -> Callable[..., bool]:
+    """The check that a report states the input rows its loader skipped
+    (:func:`_states_skipped_rows`)."""
+    return _states_skipped_rows

@@ -256,6 +256,27 @@ def test_without_paper_numbers_each_part_of_the_report_shows_its_headline(tmp_pa
     assert "0.0929" in text and "0.0161" in text and "a->b" not in text
 
 
+def test_the_console_states_the_input_rows_each_part_skipped(tmp_path):
+    """The report's lines on the loaders' skipped rows reach the console, each with its
+    section where the report has several (one per bag)."""
+    from relloc.pipeline.output import skipped_rows_line
+
+    table = "| figure | ours | paper |\n|---|---|---|\n| rmse (m) | 0.1 | 0.2 |\n"
+    one = skipped_rows_line(8004, {"folded: other direction": 8004}, "the bag")
+    (tmp_path / "report.md").write_text(
+        f"# X\n\n## bag_one\n\n{table}\n{skipped_rows_line(0, {}, 'the bag')}\n"
+        f"\n## bag_two\n\n{one}\n"
+    )
+    text = " ".join(comparison_text("x", tmp_path, width=200).split())
+    assert "bag_one: Input rows: every data row of the bag was used." in text
+    assert (
+        "bag_two: Input rows of the bag skipped (not used): 8004 (8004 folded: other direction)."
+        in text
+    )
+    (tmp_path / "report.md").write_text(f"# X\n\n## run\n\n{table}\n{one}\n")
+    assert "\nInput rows of the bag skipped" in comparison_text("x", tmp_path, width=200)
+
+
 def test_the_extras_of_a_parsed_command():
     import argparse
 

@@ -124,9 +124,9 @@ def test_mrclam_cl_on_a_cut_of_run6_states_its_windows(mrclam_run6_cut, tmp_path
     # summary.json's load_report
     skipped = summary["load_report"]["n_skipped"]
     assert (
-        f"Rows of the dataset skipped (not used): {skipped} (" in report
+        f"Input rows of the dataset skipped (not used): {skipped} (" in report
         if skipped
-        else "Every data row of the dataset was used." in report
+        else "Input rows: every data row of the dataset was used." in report
     )
     for case in summary["cases"].values():
         assert set(case["pos_rmse_m"]) == {"2", "4", "5", "mean"}

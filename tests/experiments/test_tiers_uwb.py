@@ -40,7 +40,7 @@ def cut(src: Path, dst: Path, start_s: float, end_s: float) -> Path:
     return dst
 
 
-def test_calibrated_on_one_stretch_scored_on_another(tmp_path):
+def test_calibrated_on_one_stretch_scored_on_another(tmp_path, states_skipped_rows):
     from relloc.cli import main
 
     src = TIERS / "relative_case4_test1"
@@ -87,6 +87,7 @@ def test_calibrated_on_one_stretch_scored_on_another(tmp_path):
     assert b["pairs"] == {}  # no odometry in this layout
     report = (out / "report.md").read_text()
     assert "| team aligned" in report and "its 95 % interval" in report
+    assert states_skipped_rows(report, b["loader"]["skips"]["rows_skipped"], "the bag")
     assert b["calibration"]["mapping_sigma_replaced_m"] == 0.25
     assert "(it replaces the mapping's stated 0.25 m)" in report
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -60,7 +61,9 @@ def medium_dataset(tmp_path_factory: pytest.TempPathFactory, mrclam_run6_cut) ->
     return mrclam_run6_cut(tmp_path_factory.mktemp("mrclam") / "MRCLAM_200s", keep_s=200.0)
 
 
-def test_small_reproduction_on_another_mrclam_folder(small_dataset: Path, tmp_path: Path) -> None:
+def test_small_reproduction_on_another_mrclam_folder(
+    small_dataset: Path, tmp_path: Path, states_skipped_rows: Callable[..., bool]
+) -> None:
     out = tmp_path / "out"
     export = ExportRequest(tum=tmp_path / "tum", mcap=tmp_path / "w.mcap")  # --tum, --mcap
     summary = run_reproduction(
@@ -110,6 +113,9 @@ def test_small_reproduction_on_another_mrclam_folder(small_dataset: Path, tmp_pa
     assert spread["mean"] == pytest.approx(float(np.mean(apart)), rel=1e-2)
     assert spread["max"] == pytest.approx(float(np.max(apart)), rel=1e-2)
     assert f"{spread['mean']:.2f} m apart on average" in (out / "report.md").read_text()
+    # the rows the loader skipped are stated in report.md too, not only in summary.json
+    skipped = summary["replay"]["loader"]["n_skipped"]
+    assert states_skipped_rows((out / "report.md").read_text(), skipped)
     # the replay's own bound, beside Table 3 and the yaw target
     assert set(summary["replay_pcrlb"]) == {"calibrated", "raw", "truth_velocity"}
     for case, target in summary["replay_targets"].items():

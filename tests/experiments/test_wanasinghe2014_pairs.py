@@ -8,6 +8,7 @@ import dataclasses
 import json
 import re
 import shutil
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -44,7 +45,9 @@ def test_a_pair_naming_a_missing_robot_is_refused(short_dataset: Path) -> None:
         chosen_pairs(short_dataset, [(1, 2), (1, 5)])
 
 
-def test_a_row_is_the_one_pair_reproduction(short_dataset: Path, tmp_path: Path) -> None:
+def test_a_row_is_the_one_pair_reproduction(
+    short_dataset: Path, tmp_path: Path, states_skipped_rows: Callable[..., bool]
+) -> None:
     """The 2 → 1 row carries what ``wanasinghe2014 --pair 2,1`` at the same seed reports."""
     config = small_config(short_dataset)
     summary = run_pairs(
@@ -86,6 +89,8 @@ def test_a_row_is_the_one_pair_reproduction(short_dataset: Path, tmp_path: Path)
         assert cell["met"] == all(targets[k] for k in ("yaw_ok", "nees_ok", "position_ok"))
     # the report's cells mark the share's verdict: ↑ over-confident, ↓ conservative
     report = (tmp_path / "pairs" / "report.md").read_text()
+    assert set(summary["loader"]) == {"n_skipped", "skipped_by_reason"}
+    assert states_skipped_rows(report, summary["loader"]["n_skipped"])
     for kind in ("calibrated", "raw"):
         c = row["cases"]["case1"][kind]
         mark = VERDICT_MARKS.get(c["nees_beyond_interval"]["verdict"], "")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -78,7 +79,7 @@ def short_windows(monkeypatch: pytest.MonkeyPatch) -> None:
 
 @pytest.mark.slow
 def test_mrclam_association_on_any_mrclam_folder(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, states_skipped_rows: Callable[..., bool]
 ) -> None:
     folder = _synthetic_folder(tmp_path / "data", np.random.default_rng(0))
     short_windows(monkeypatch)
@@ -137,6 +138,7 @@ def test_mrclam_association_on_any_mrclam_folder(
     ref = s["tracking_reference"]
     assert ref["records"] > 0 and ref["tracked_fraction"] >= 0.95 and ref["median_age_s"] < 1.0
     assert "sighting_reset_reference" in (out / "report.md").read_text()
+    assert states_skipped_rows((out / "report.md").read_text(), s["load_report"]["n_skipped"])
     # a sighting every 0.2 s: every record, the filter's and the reference's, is under 1 s old
     for bins in (s["tracked_by_age"], ref["by_age"]):
         assert bins[0]["from_s"] == 0.0 and bins[0]["to_s"] == 1.0

@@ -161,6 +161,10 @@ def test_team_up_on_an_mrclam_folder_reports_the_rows_the_loader_skipped(tmp_pat
     report = load_report(prepared)
     assert report == {"n_skipped": 1, "by_reason": {"unknown barcode": 1}}
     assert (
-        load_report_line(report) == "Rows of the dataset skipped (not used): 1 (1 unknown barcode)."
+        load_report_line(report)
+        == "Input rows of the dataset skipped (not used): 1 (1 unknown barcode)."
     )
-    assert load_report_line({"n_skipped": 0, "by_reason": {}}).startswith("Every data row")
+    assert (
+        load_report_line({"n_skipped": 0, "by_reason": {}})
+        == "Input rows: every data row of the dataset was used."
+    )

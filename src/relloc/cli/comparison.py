@@ -6,8 +6,8 @@ ones each experiment chose to set beside the paper (a report without one shows i
 instead: its first table and the later ones of the same headers, one per part of a report that
 repeats a layout, such as ``tiers-uwb``'s bags). :func:`paper_tables` reads them back and
 :func:`comparison_text` lays them out for the terminal (:func:`relloc.cli.console.compact_table`),
-followed by the list of files written (``summary.json``, ``report.md`` and every figure the
-report shows).
+followed by the report's lines on the input rows the loaders skipped and the list of files
+written (``summary.json``, ``report.md`` and every figure the report shows).
 """
 
 from __future__ import annotations
@@ -18,6 +18,7 @@ from pathlib import Path
 
 from relloc.cli.console import compact_table, wrap_line, wrote_line
 from relloc.errors import DataError
+from relloc.pipeline.output import SKIPPED_ROWS_START
 
 _FIGURE = re.compile(r"!\[[^\]]*\]\(([^)\s]+)\)")
 
@@ -75,6 +76,18 @@ def headline_tables(markdown: str) -> list[Table]:
     return [t for t in every if t.headers == every[0].headers] if every else []
 
 
+def skipped_rows_lines(markdown: str) -> list[tuple[str, str]]:
+    """``(section, line)`` of every report line on the input rows the loaders skipped
+    (:func:`relloc.pipeline.output.skipped_rows_line`), with the heading it is under."""
+    found, section = [], ""
+    for line in markdown.splitlines():
+        if line.startswith("#"):
+            section = line.lstrip("#").strip()
+        elif line.startswith(SKIPPED_ROWS_START):
+            found.append((section, line))
+    return found
+
+
 def figures(markdown: str) -> list[str]:
     """The figure files a report shows, in order, without repeats."""
     return list(dict.fromkeys(_FIGURE.findall(markdown)))
@@ -96,6 +109,9 @@ def comparison_text(name: str, out_dir: Path, *, width: int = 80) -> str:
         parts.append(wrap_line(f"{name} — {t.section}: {what}", width))
         parts.append(compact_table(t.headers, [r[: len(t.headers)] for r in rows], width=width))
         parts.append("")
+    skips = skipped_rows_lines(markdown)
+    for section, line in skips:
+        parts.append(wrap_line(f"{section}: {line}" if len(skips) > 1 else line, width))
     files = [out_dir / "summary.json", report] + [out_dir / f for f in figures(markdown)]
     parts.append(wrote_line([f for f in files if f.exists()], width))
     return "\n".join(parts)

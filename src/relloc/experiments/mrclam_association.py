@@ -318,6 +318,7 @@ from relloc.pipeline.output import (
     markdown_table,
     prepare_out_dir,
     save_figure,
+    skipped_rows_line,
     write_report,
     write_summary,
 )
@@ -849,6 +850,7 @@ of robots lose their barcodes and are mixed with {c["injected"]} injected false 
 uniform over the camera's field of view ±{fov:.2f} rad ({s["clutter_per_scan"]} per scan on
 average); ranges keep their barcodes; {c["landmark_skipped"]} landmark rows are not used.
 {c["scans_with_several_robots"]} of {s["scans"]} scans hold bearings of two or more robots.
+{skipped_rows_line(s["load_report"]["n_skipped"], s["load_report"]["skipped_by_reason"])}
 
 {_models_text(s)}
 

@@ -190,6 +190,7 @@ from relloc.pipeline.output import (
     markdown_table,
     prepare_out_dir,
     save_figure,
+    skipped_rows_line,
     write_report,
     write_summary,
 )
@@ -872,10 +873,7 @@ def _without_truth_text(case: dict[str, Any]) -> str:
 def load_report_line(report: dict[str, Any]) -> str:
     """report.md's account of a ``load_report`` (``n_skipped``, ``by_reason``): the rows of the
     dataset's files that the loader and the conversion to a recording skipped."""
-    if not report["n_skipped"]:
-        return "Every data row of the dataset was used."
-    reasons = ", ".join(f"{n} {why}" for why, n in sorted(report["by_reason"].items()))
-    return f"Rows of the dataset skipped (not used): {report['n_skipped']} ({reasons})."
+    return skipped_rows_line(report["n_skipped"], report["by_reason"])
 
 
 def _report(summary: dict[str, Any], figures: list[tuple[str, str]]) -> str:

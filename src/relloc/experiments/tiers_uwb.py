@@ -108,6 +108,7 @@ from relloc.pipeline.output import (
     interval_text,
     markdown_table,
     prepare_out_dir,
+    skipped_rows_line,
     write_report,
     write_summary,
 )
@@ -327,11 +328,12 @@ def report(summary: dict[str, Any]) -> str:
             ]
         else:
             lines += ["No pair with odometry on both robots and one of them moving.", ""]
-        skipped = b["loader"]["skips"]["by_reason"]
+        skips = b["loader"]["skips"]
         lines += [
             f"Loader: header → bag time offset {b['loader']['stamp_offset_s']['bag']:.3f} s; "
-            f"unknown topics: {len(b['loader']['unknown_topics'])}; skipped/folded messages by "
-            f"reason: {skipped or 'none'}.",
+            f"unknown topics: {len(b['loader']['unknown_topics'])}.",
+            "",
+            skipped_rows_line(skips["rows_skipped"], skips["by_reason"], "the bag"),
             "",
         ]
     lines += [

@@ -56,7 +56,9 @@ calibrated commands' relative-yaw random walk over the scored window's steady-st
 the calibration and on the scored window
 (:mod:`relloc.calibration.turn_rate`; a scored window with a smaller walk than its calibration
 window is kinder than the noise fitted there); ``skipped``: ``{observer, observed, reason}`` of
-each pair not replayed; ``tally``: ``cells`` (pair × case) replayed and
+each pair not replayed; ``loader``: the dataset's rows the loader skipped (``n_skipped``,
+``skipped_by_reason``, reason → count; null when no pair was replayed); ``tally``: ``cells``
+(pair × case) replayed and
 ``cells_meeting_yaw_and_nees`` (both the yaw and the NEES target), ``pairs`` replayed and
 ``pairs_meeting_every_case``, and ``per_case`` (case → the pairs meeting both).
 """
@@ -92,6 +94,7 @@ from relloc.pipeline.output import (
     markdown_table,
     prepare_out_dir,
     save_figure,
+    skipped_rows_line,
     write_report,
     write_summary,
 )
@@ -159,6 +162,7 @@ def run_pairs(
     out = prepare_out_dir(out_dir)
     rows: list[dict[str, Any]] = []
     skipped: list[dict[str, Any]] = []
+    loader: dict[str, Any] | None = None  # the same dataset's for every pair
     for observer, observed in replayed:
         pair_config = dataclasses.replace(
             config,
@@ -175,6 +179,8 @@ def run_pairs(
         except DataError as err:
             skipped.append({"observer": observer, "observed": observed, "reason": str(err)})
             continue
+        report = data["calibrated"].load_report  # one load of the dataset for every odometry
+        loader = {k: report[k] for k in ("n_skipped", "skipped_by_reason")}
         replay = run_replays(pair_config, data, seed, executor=executor, quiet=quiet)
         part, _ = replay_results(pair_config, data, replay)
         rows.append(pair_row(observer, observed, part))
@@ -198,6 +204,7 @@ def run_pairs(
         },
         "pairs": rows,
         "skipped": skipped,
+        "loader": loader,
         "tally": tally(rows),
     }
     figures = {"targets": plot_pairs(out, summary)} if rows else {}
@@ -306,6 +313,11 @@ def build_report(summary: dict[str, Any], figures: dict[str, str], *, elapsed_s:
         "calibrated on the pair's calibration window, scored on its disjoint scored window "
         "(table below).",
         "",
+        *(
+            [skipped_rows_line(loader["n_skipped"], loader["skipped_by_reason"]), ""]
+            if (loader := summary["loader"])
+            else []
+        ),
         f"Targets: calibrated PLKF yaw RMSE ≤ {TARGET_YAW_RMSE_RAD} rad and % NEES beyond "
         f"χ²(4, 0.95) ≤ {TARGET_NEES_PERCENT:g} % in every Table-2 case. Met in "
         f"**{t['cells_meeting_yaw_and_nees']} of {t['cells']}** pair-cases; "

@@ -22,7 +22,14 @@ from relloc.experiments.wanasinghe2014_paper import (
     TABLE1_READINGS,
 )
 from relloc.metrics.errors import rmse
-from relloc.pipeline.output import figure_md, fmt, interval_text, markdown_table, save_figure
+from relloc.pipeline.output import (
+    figure_md,
+    fmt,
+    interval_text,
+    markdown_table,
+    save_figure,
+    skipped_rows_line,
+)
 
 if TYPE_CHECKING:
     from relloc.experiments.wanasinghe2014 import Wanasinghe2014Config
@@ -397,6 +404,10 @@ def replay_section(s: dict[str, Any]) -> list[str]:
         "horizontally); "
         "measurements synthesised from the ground truth; the same draws (sensor noise, initial "
         "pose) for every odometry.",
+        "",
+        skipped_rows_line(
+            s["replay"]["loader"]["n_skipped"], s["replay"]["loader"]["skipped_by_reason"]
+        ),
         "",
         "The reading of seed 000 §6 followed: the observer's range, azimuth and elevation of "
         "the observed robot only (no observation of the observer by the observed robot, no "

@@ -36,6 +36,23 @@ def to_jsonable(value: Any) -> Any:
     return value
 
 
+SKIPPED_ROWS_START = "Input rows"
+"""How the report line of :func:`skipped_rows_line` starts; ``relloc reproduce`` prints the
+report's lines that start so on the console (:mod:`relloc.cli.comparison`)."""
+
+
+def skipped_rows_line(
+    n_skipped: int, by_reason: Mapping[str, int], source: str = "the dataset"
+) -> str:
+    """report.md's account of the data rows of ``source`` that the loaders (and the
+    conversion to a recording) skipped: their count and the count of each reason, or that
+    every row was used."""
+    if not n_skipped:
+        return f"{SKIPPED_ROWS_START}: every data row of {source} was used."
+    reasons = ", ".join(f"{n} {why}" for why, n in sorted(by_reason.items()))
+    return f"{SKIPPED_ROWS_START} of {source} skipped (not used): {n_skipped} ({reasons})."
+
+
 def prepare_out_dir(out_dir: Path | str, flag: str = "--out") -> Path:
     """Create the output folder (and parents); raise ConfigError naming ``flag`` if a file is
     in the way or the folder cannot be created."""
