@@ -111,7 +111,7 @@ def test_pairs_with_odometry_get_an_observability_verdict(tmp_path):
     assert "v_l ≠ 0 and v_c ≠ 0" in verdict["generic_conditions"]
 
 
-def test_relloc_run_on_a_bag(tmp_path, capsys):
+def test_relloc_run_on_a_bag(tmp_path, capsys, states_skipped_rows):
     from relloc.cli import main
 
     bag = cut(TIERS / "cooperative_shortbag", tmp_path / "c", 0.0, 6.0)
@@ -133,6 +133,10 @@ def test_relloc_run_on_a_bag(tmp_path, capsys):
     assert set(summary["loader"]["stamps_from_receive"]) == {"/cali/turtle05/odom"}
     printed = capsys.readouterr().out
     assert "turtlebot1->turtlebot3" in printed
+    # the rows the bag's loader skipped: in summary.json, report.md and on the console
+    skipped = summary["loader"]["skips"]["rows_skipped"]
+    assert states_skipped_rows((out / "report.md").read_text(), skipped, "the bag")
+    assert states_skipped_rows(" ".join(printed.split()), skipped, "the bag")
     # every file written is listed, the figures too (only summary.json and report.md were)
     figures = sorted(p.name for p in out.glob("*.png"))
     assert figures and all(name in printed for name in figures)

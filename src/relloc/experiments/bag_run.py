@@ -42,6 +42,7 @@ from relloc.errors import DataError
 from relloc.estimators.uwb_range import RangePairBank, RangePairSettings
 from relloc.models.motion import VelocityNoise
 from relloc.pipeline.export import ExportRequest, export_estimates
+from relloc.pipeline.output import skipped_rows_line
 from relloc.pipeline.replay import replay
 from relloc.pipeline.team_report import (
     RECORD_RATE_HZ,
@@ -155,6 +156,8 @@ def run_bag(
             f"Not in the recording: {sum(radio_only.values())} of the bag's "
             f"{bag.ranges.t.size} UWB readings ({counts}), which no filter can use."
         )
+    skips = bag.recording.skips
+    notes.append(skipped_rows_line(skips.n_skipped, skips.skipped_by_reason(), "the bag"))
     estimates = replay(rec, estimators, record_rate_hz=record_rate_hz)
     result = score_run(estimates, rec, keep_paths=True)
     summary = summarise(
