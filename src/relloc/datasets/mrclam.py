@@ -605,7 +605,9 @@ class GroundTruth:
         """Pose at ``t_query`` (x, y linear; θ on the circle), with validity flags.
 
         A query is ``in_gap`` when the two samples around it are more than ``gap_threshold``
-        (default: the dataset's) apart, and not ``inside`` outside ``[t[0], t[-1]]``.
+        (default: the dataset's) apart — a query at a sample is measured, never in a gap, at
+        either end of one (as :meth:`relloc.core.recording.GroundTruth.valid_at` rules) — and
+        not ``inside`` outside ``[t[0], t[-1]]``.
         """
         tq = np.atleast_1d(np.asarray(t_query, dtype=float))
         if not np.isfinite(tq).all():
@@ -618,8 +620,12 @@ class GroundTruth:
         inside = (tq >= self.t[0]) & (tq <= self.t[-1])
         hi = np.clip(np.searchsorted(self.t, tq, side="left"), 1, max(len(self.t) - 1, 1))
         lo = hi - 1
-        span = self.t[hi] - self.t[lo] if len(self.t) > 1 else np.zeros(tq.shape)
-        in_gap = inside & (span > limit)
+        if len(self.t) > 1:
+            span = self.t[hi] - self.t[lo]
+            at_sample = (tq == self.t[lo]) | (tq == self.t[hi])
+            in_gap = inside & (span > limit) & ~at_sample
+        else:
+            in_gap = np.zeros(tq.shape, dtype=bool)
         x = np.interp(tq, self.t, self.x)
         y = np.interp(tq, self.t, self.y)
         theta = circular_interp(tq, self.t, self.theta)
