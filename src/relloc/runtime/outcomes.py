@@ -12,7 +12,7 @@ Over those pairs:
   ``T2 + keep window`` and did not die with a killed observer's process
   (``tracks_lost_with_process``); ``tracks_deleted``: deletions of affected pairs in that interval;
   ``tracks_refound``: tracks of affected pairs (re-)created after a deletion or a restart
-  in ``[T1, end]``.
+  in ``(T1, end]`` (none can be re-found at the instant the fault starts).
 
 Network faults without a window (loss, delay, jitter, duplicates, reordering) are reported once
 for the whole run against the fault-free in-process run on the same seed.
