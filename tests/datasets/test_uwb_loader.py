@@ -10,15 +10,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from uwb_samples import HEADER, check_recording, tiers_lines, tiers_text
+from uwb_samples import HEADER, Row, check_recording, recording_rows, tiers_lines, tiers_text
 
 from relloc.calibration.uwb import fit_uwb_noise
 from relloc.calibration.window import spanning
 from relloc.datasets.paths import shared_data_dir
 from relloc.datasets.uwb import MAX_TIME_GAP, UwbRecording, load_uwb_csv
 from relloc.errors import DataError
-
-Row = tuple[float, int, int, float, float]
 
 
 def _write(tmp_path: Path, data: bytes, name: str = "uwb.csv") -> Path:
@@ -33,21 +31,8 @@ def _load(tmp_path: Path, data: bytes) -> UwbRecording:
     return rec
 
 
-def _rows(rec: UwbRecording) -> list[Row]:
-    return list(
-        zip(
-            rec.t.tolist(),
-            rec.node1.tolist(),
-            rec.node2.tolist(),
-            rec.uwb_range.tolist(),
-            rec.mocap_range.tolist(),
-            strict=True,
-        )
-    )
-
-
 def _clean_rows(tmp_path: Path, lines: list[bytes]) -> list[Row]:
-    return _rows(load_uwb_csv(_write(tmp_path, b"\n".join(lines) + b"\n", "clean.csv")))
+    return recording_rows(load_uwb_csv(_write(tmp_path, b"\n".join(lines) + b"\n", "clean.csv")))
 
 
 def _with_line(lines: list[bytes], k: int, new: bytes) -> bytes:
@@ -62,7 +47,7 @@ def _assert_only_line_lost(
 ) -> UwbRecording:
     rec = _load(tmp_path, _with_line(lines, k, new))
     clean = _clean_rows(tmp_path, lines)
-    assert _rows(rec) == clean[: k - 2] + clean[k - 1 :]
+    assert recording_rows(rec) == clean[: k - 2] + clean[k - 1 :]
     assert dict(rec.skipped.skipped) == {reason: 1}
     assert rec.skipped.examples[0].line == k
     return rec
@@ -92,7 +77,7 @@ def test_one_stray_quote_costs_its_line_only(tmp_path, where):
     bad = {"start": b'"' + line, "middle": line[:30] + b'"' + line[30:], "end": line + b',"'}
     rec = _load(tmp_path, _with_line(lines, 20, bad[where]))
     clean = _clean_rows(tmp_path, lines)
-    assert _rows(rec) == clean[:18] + clean[19:]
+    assert recording_rows(rec) == clean[:18] + clean[19:]
     assert rec.skipped.n_skipped == 1 and rec.skipped.examples[0].line == 20
 
 
@@ -113,7 +98,7 @@ def test_stray_quote_in_the_shared_test_recording_is_reported_as_one_row(tmp_pat
 def test_a_leading_bom_is_accepted_and_stripped(tmp_path):
     data = tiers_text(4)
     rec = _load(tmp_path, b"\xef\xbb\xbf" + data)
-    assert _rows(rec) == _rows(_load(tmp_path, data))
+    assert recording_rows(rec) == recording_rows(_load(tmp_path, data))
     assert rec.skipped.n_skipped == 0
 
 
@@ -195,7 +180,7 @@ def test_a_few_bad_times_together_do_not_cost_good_rows(tmp_path):
         lines[k - 1] = _with_time(lines, k, "0.0")
     rec = _load(tmp_path, b"\n".join(lines) + b"\n")
     clean = _clean_rows(tmp_path, tiers_lines(40))
-    assert _rows(rec) == clean[:48] + clean[50:]
+    assert recording_rows(rec) == clean[:48] + clean[50:]
     assert dict(rec.skipped.skipped) == {"implausible timestamp": 2}
 
 
@@ -256,7 +241,7 @@ def test_extra_and_reordered_columns_in_the_header_are_read_by_name(tmp_path):
         b"1.6,2.1,4,1,10.0,-81\n"
     )
     rec = _load(tmp_path, text)
-    assert _rows(rec) == [(10.0, 1, 3, 2.0, 1.5), (10.0, 1, 4, 2.1, 1.6)]
+    assert recording_rows(rec) == [(10.0, 1, 3, 2.0, 1.5), (10.0, 1, 4, 2.1, 1.6)]
 
 
 def test_quoted_fields_crlf_and_no_final_newline_are_fine(tmp_path):
@@ -264,7 +249,7 @@ def test_quoted_fields_crlf_and_no_final_newline_are_fine(tmp_path):
     quoted = b",".join(b'"' + f + b'"' for f in lines[3].split(b","))
     data = b"\r\n".join([*lines[:3], quoted, *lines[4:]])  # no final newline
     rec = _load(tmp_path, data)
-    assert _rows(rec) == _clean_rows(tmp_path, lines)
+    assert recording_rows(rec) == _clean_rows(tmp_path, lines)
 
 
 def test_blank_lines_are_counted_apart_from_data_rows(tmp_path):
@@ -272,7 +257,7 @@ def test_blank_lines_are_counted_apart_from_data_rows(tmp_path):
     data = b"\n".join([*lines[:5], b"", b"  \t", b"\r", *lines[5:]]) + b"\n\n"
     rec = _load(tmp_path, data)
     assert (rec.data_rows, rec.blank_lines, rec.skipped.n_skipped) == (18, 4, 0)
-    assert _rows(rec) == _clean_rows(tmp_path, lines)
+    assert recording_rows(rec) == _clean_rows(tmp_path, lines)
 
 
 def test_many_bad_rows_report_counts_by_reason_and_the_first_lines(tmp_path):

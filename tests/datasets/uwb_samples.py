@@ -63,3 +63,20 @@ def check_recording(rec: UwbRecording, data: bytes) -> None:
     for r in (rec.uwb_range, rec.mocap_range):
         assert np.all((r > 0.0) & (r <= MAX_RANGE))
     assert len(rec.skipped.examples) == min(rec.skipped.n_skipped, 5)
+
+
+Row = tuple[float, int, int, float, float]
+
+
+def recording_rows(rec: UwbRecording) -> list[Row]:
+    """The kept rows of ``rec`` as ``(t, node1, node2, uwb_range, mocap_range)``."""
+    return list(
+        zip(
+            rec.t.tolist(),
+            rec.node1.tolist(),
+            rec.node2.tolist(),
+            rec.uwb_range.tolist(),
+            rec.mocap_range.tolist(),
+            strict=True,
+        )
+    )
