@@ -176,9 +176,11 @@ def test_the_nees_figure_of_two_runs_draws_their_average_against_its_band(
 
     calls: list[tuple[np.ndarray, np.ndarray, int, int]] = []
 
+    draw = consistency.plot_chi2_series
+
     def record(ax: Any, t: Any, values: Any, dof: int, **kw: Any) -> None:
         calls.append((np.asarray(t), np.asarray(values), dof, kw.get("n_runs", 1)))
-        ax.plot(t, values)  # something positive on the log axes, as the real one draws
+        draw(ax, t, values, dof, **kw)  # and draws it
 
     monkeypatch.setattr(consistency, "plot_chi2_series", record)
     plt = pyplot()
@@ -274,10 +276,12 @@ def test_a_pair_tracked_in_one_of_two_runs_is_drawn_against_the_single_run_bound
 
     drawn: dict[str, tuple[np.ndarray, int]] = {}
 
+    draw = consistency.plot_chi2_series
+
     def record(ax: Any, t: Any, values: Any, dof: int, **kw: Any) -> None:
         if dof == 4:
             drawn[kw["label"]] = (np.asarray(values), kw.get("n_runs", 1))
-        ax.plot(t, values)
+        draw(ax, t, values, dof, **kw)  # and draws it
 
     monkeypatch.setattr(consistency, "plot_chi2_series", record)
     b = _evaluation([0.1, 0.0, 0.0, 0.0], nees=2.0)
