@@ -570,7 +570,9 @@ def heading_error_by_landmark_gap(
     result: dict[str, Any], ds: Any, prepared: Prepared
 ) -> dict[str, dict[str, float]]:
     """Heading RMSE, share of time and share of squared heading error, binned by the time since
-    the robot last detected a landmark (where does the heading error come from?)."""
+    the robot last detected a landmark (where does the heading error come from?). A record
+    before the robot's first detection has waited without bound: it falls in the last bin, so
+    the shares of the bins add up to 1."""
     from relloc.metrics import state_errors
 
     rows = prepared.recording.measurements
@@ -587,7 +589,7 @@ def heading_error_by_landmark_gap(
     total = float(np.sum(e**2))
     out: dict[str, dict[str, float]] = {}
     for lo, hi in GAP_BINS_S:
-        m = (g >= lo) & (g < hi)
+        m = (g >= lo) & (g < hi) if np.isfinite(hi) else g >= lo  # the last bin takes ∞
         out[f"{lo:g}-{hi:g}s"] = {
             "time_share": float(m.mean()),
             "heading_rmse_rad": float(np.sqrt(np.mean(e[m] ** 2))) if m.any() else float("nan"),
