@@ -64,9 +64,18 @@ def _bind(text: str, width: int) -> str:
 
 def _wrap_words(text: str, width: int, indent: str = "") -> list[str]:
     """``text`` wrapped at spaces only, every line after ``indent``: a word (hyphenated ones
-    too) is broken only when it alone is longer than the line."""
+    too) is broken only when it alone is longer than the line, and then starts a line of its
+    own (textwrap would put its first piece after the word before it, where ``value 123…``
+    reads as a shorter value)."""
+    room = max(width - len(indent), 1)
+    pieces = [w[i : i + room] for w in text.split(" ") if w for i in range(0, len(w), room)]
     return textwrap.wrap(
-        text, width, initial_indent=indent, subsequent_indent=indent, break_on_hyphens=False
+        " ".join(pieces),
+        width,
+        initial_indent=indent,
+        subsequent_indent=indent,
+        break_long_words=False,
+        break_on_hyphens=False,
     )
 
 
