@@ -4,41 +4,21 @@ from the geometry by hand."""
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 from numpy.typing import NDArray
+from test_association_bound import _settings
 
 from relloc.core.recording import CLUTTER, GroundTruth, Odometry, Recording, measurement_rows
-from relloc.estimators.gaussian_sum import GaussianSumSettings
-from relloc.experiments import mrclam_association
 from relloc.experiments.association_bound import (
     AssociationBound,
     association_bound,
     last_sightings,
     sighting_reset_reference,
 )
-from relloc.models.motion import VelocityNoise
 
 Array = NDArray[np.float64]
 RECORDS = {"A": np.arange(0.0, 60.0, 1.0)}
 STILL_B = np.array([2.0, 0.0, 0.0, 0.0])
-
-
-def _settings() -> GaussianSumSettings:
-    sig = (0.05, 0.05, 1e-3, 0.05)
-    formation = replace(mrclam_association.planar_formation(0.01), p_detect=0.9)
-    return GaussianSumSettings(
-        velocity_noise=VelocityNoise(observer=sig, observed=sig),
-        sigma_height=0.01,
-        sigma_range=0.1,
-        sigma_azimuth=0.03,
-        sigma_elevation=0.03,
-        use_elevation=False,
-        field_of_view=np.pi,
-        expected_clutter=0.0,
-        formation=formation,
-    )
 
 
 def _still(pose: Array, t: Array | None = None, gap_s: float | None = None) -> GroundTruth:
@@ -78,7 +58,7 @@ def test_a_record_exactly_at_the_tolerance_counts_as_tracked() -> None:
     with zero tolerances every one of the 55 records from the first sighting on is within
     them (the tolerances are inclusive)."""
     rec = _pair(_still(STILL_B), np.zeros(4), np.array([5.0, 30.0]))
-    ref = sighting_reset_reference(rec, _settings(), RECORDS, pos_tol=0.0, yaw_tol=0.0)
+    ref = sighting_reset_reference(rec, _settings(0.0), RECORDS, pos_tol=0.0, yaw_tol=0.0)
     assert (ref.records, ref.tracked) == (55, 55)
 
 
@@ -87,7 +67,7 @@ def test_a_sideways_drift_counts_in_the_position_error() -> None:
     position error is 0.01 m/s × the age, all of it across B's heading. With a 0.055-m
     tolerance the records up to 5 s after each sighting (5 s and 30 s) are tracked: 12 of 55."""
     rec = _pair(_still(STILL_B), np.array([0.0, 0.01, 0.0, 0.0]), np.array([5.0, 30.0]))
-    ref = sighting_reset_reference(rec, _settings(), RECORDS, pos_tol=0.055, yaw_tol=0.5)
+    ref = sighting_reset_reference(rec, _settings(0.0), RECORDS, pos_tol=0.055, yaw_tol=0.5)
     assert (ref.records, ref.tracked) == (55, 12)
     assert ref.by_age.tracked == (2, 8, 2, 0, 0)
 
@@ -98,7 +78,7 @@ def test_dead_reckoning_starts_at_a_sighting_older_than_the_first_record() -> No
     sighting is within 0.055 m, and the 30-35 s records of the second: 7 of 50."""
     rec = _pair(_still(STILL_B), np.array([0.0, 0.01, 0.0, 0.0]), np.array([5.0, 30.0]))
     records = {"A": np.arange(10.0, 60.0, 1.0)}
-    ref = sighting_reset_reference(rec, _settings(), records, pos_tol=0.055, yaw_tol=0.5)
+    ref = sighting_reset_reference(rec, _settings(0.0), records, pos_tol=0.055, yaw_tol=0.5)
     assert (ref.records, ref.tracked) == (50, 7)
 
 
@@ -111,7 +91,7 @@ def test_a_heading_error_across_pi_is_wrapped() -> None:
         np.array([0.0, 0.0, 0.0, 0.01]),
         np.array([5.0, 30.0]),
     )
-    ref = sighting_reset_reference(rec, _settings(), RECORDS, pos_tol=0.5, yaw_tol=0.5)
+    ref = sighting_reset_reference(rec, _settings(0.0), RECORDS, pos_tol=0.5, yaw_tol=0.5)
     assert (ref.records, ref.tracked) == (55, 55)
 
 
@@ -122,7 +102,7 @@ def test_a_sighting_inside_a_truth_gap_leaves_its_records_out() -> None:
     (30 s) are counted."""
     t = np.concatenate([np.arange(0.0, 3.0), np.arange(8.0, 61.0)])
     rec = _pair(_still(STILL_B, t, gap_s=5.0), np.zeros(4), np.array([5.0, 30.0]))
-    ref = sighting_reset_reference(rec, _settings(), RECORDS, pos_tol=0.5, yaw_tol=0.5)
+    ref = sighting_reset_reference(rec, _settings(0.0), RECORDS, pos_tol=0.5, yaw_tol=0.5)
     assert (ref.records, ref.tracked, ref.truth_missing) == (30, 30, 25)
     d = ref.to_dict()
     assert (d["records"], d["tracked"], d["truth_missing"]) == (30, 30, 25)
@@ -156,7 +136,7 @@ def _trio(azimuths: Array, origins: list[int], a_truth: GroundTruth | None = Non
 def test_each_truth_placed_track_takes_the_bearing_of_its_teammate() -> None:
     """Two scans, each with one exact bearing per teammate: B's track takes the first
     bearing row (azimuth 0), C's the second (π/2): 4 bearings used, all correct."""
-    bound = association_bound(_trio(np.array([0.0, np.pi / 2]), [1, 2]), _settings())
+    bound = association_bound(_trio(np.array([0.0, np.pi / 2]), [1, 2]), _settings(0.0))
     assert (bound.used, bound.correct, bound.accuracy) == (4, 4, 1.0)
 
 
@@ -164,7 +144,7 @@ def test_a_bearing_from_another_teammate_is_not_correct() -> None:
     """The same bearings with their origins swapped (the bearing at B's azimuth came from C
     and the other way round): the tracks take the same 4 bearings, none of them from the
     teammate the track is of."""
-    bound = association_bound(_trio(np.array([0.0, np.pi / 2]), [2, 1]), _settings())
+    bound = association_bound(_trio(np.array([0.0, np.pi / 2]), [2, 1]), _settings(0.0))
     assert (bound.used, bound.correct, bound.accuracy) == (4, 0, 0.0)
 
 
@@ -172,7 +152,7 @@ def test_a_scan_where_the_observer_truth_is_missing_is_skipped() -> None:
     """A's truth has a gap (0.5-9 s, bridged up to 1 s) over the scan at 2 s but a sample at
     1 s: only the first scan is placed, its 2 bearings used and correct."""
     a_truth = GroundTruth(t=np.array([0.0, 0.5, 1.0, 9.0, 10.0]), pose=np.zeros((5, 4)), gap_s=1.0)
-    bound = association_bound(_trio(np.array([0.0, np.pi / 2]), [1, 2], a_truth), _settings())
+    bound = association_bound(_trio(np.array([0.0, np.pi / 2]), [1, 2], a_truth), _settings(0.0))
     assert (bound.used, bound.correct) == (2, 2)
 
 

@@ -46,6 +46,28 @@ def recording() -> Recording:
     )
 
 
+def standing_pair(
+    truth_t: tuple[float, float] | None, a_pose: list[float], b_pose: list[float]
+) -> Recording:
+    """Robots ``a`` and ``b`` standing at ``a_pose`` and ``b_pose`` (x, y, z, yaw), with truth
+    from ``truth_t[0]`` to ``truth_t[1]`` only (none when ``truth_t`` is None) and no
+    odometry."""
+    still = Odometry(t=np.zeros(0), velocity=np.zeros((0, 4)), sigma=np.zeros(4))
+    truth = None
+    if truth_t is not None:
+        tt = np.array(truth_t)
+        truth = tuple(GroundTruth(t=tt, pose=np.array([pose] * 2)) for pose in (a_pose, b_pose))
+    return Recording(
+        robots=("a", "b"),
+        platforms=("ground", "ground"),
+        odometry=(still, still),
+        measurements=empty_measurements(),
+        truth=truth,
+        source="hand-made",
+        meta={},
+    )
+
+
 def _spd(rng: np.random.Generator, k: int, d: int) -> np.ndarray:
     a = rng.normal(size=(k, d, d))
     return a @ np.swapaxes(a, 1, 2) * 0.01 + 1e-3 * np.eye(d)

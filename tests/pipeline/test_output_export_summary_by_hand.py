@@ -5,9 +5,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from export_helpers import standing_pair
 
 from relloc.core.estimates import BeliefSeries, Estimates
-from relloc.core.recording import Odometry, Recording, empty_measurements
+from relloc.core.recording import Recording
 from relloc.errors import ConfigError
 from relloc.pipeline.export import ExportRequest, export_estimates
 
@@ -16,16 +17,7 @@ pytest.importorskip("rosbags", reason="extra 'ros' (rosbags) is not installed")
 
 
 def _recording() -> Recording:
-    still = Odometry(t=np.zeros(0), velocity=np.zeros((0, 4)), sigma=np.zeros(4))
-    return Recording(
-        robots=("a", "b"),
-        platforms=("ground", "ground"),
-        odometry=(still, still),
-        measurements=empty_measurements(),
-        truth=None,
-        source="hand-made",
-        meta={},
-    )
+    return standing_pair(None, [0.0, 0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0])
 
 
 def _world(track: str, mean: np.ndarray) -> BeliefSeries:

@@ -8,9 +8,9 @@ from collections import defaultdict
 
 import numpy as np
 import pytest
+from export_helpers import standing_pair
 
 from relloc.core.estimates import BeliefSeries, Estimates
-from relloc.core.recording import GroundTruth, Odometry, Recording, empty_measurements
 from relloc.pipeline.export.mcap_file import write_mcap
 from relloc.pipeline.export.poses import pose_set
 
@@ -22,20 +22,7 @@ S = 1_000_000_000  # ns per s
 
 def _write(tmp_path):  # type: ignore[no-untyped-def]
     """Robots ``a`` and ``b``, truth from 1 s to 3 s; the team's belief of ``b`` at 0.5, 1, 2 s."""
-    still = Odometry(t=np.zeros(0), velocity=np.zeros((0, 4)), sigma=np.zeros(4))
-    tt = np.array([1.0, 3.0])
-    rec = Recording(
-        robots=("a", "b"),
-        platforms=("ground", "ground"),
-        odometry=(still, still),
-        measurements=empty_measurements(),
-        truth=(
-            GroundTruth(t=tt, pose=np.array([[0.0, 0.0, 0.0, 0.0]] * 2)),
-            GroundTruth(t=tt, pose=np.array([[3.0, 4.0, 0.0, math.pi / 2]] * 2)),
-        ),
-        source="hand-made",
-        meta={},
-    )
+    rec = standing_pair((1.0, 3.0), [0.0, 0.0, 0.0, 0.0], [3.0, 4.0, 0.0, math.pi / 2])
     s = BeliefSeries(
         owner="team",
         subject="b",

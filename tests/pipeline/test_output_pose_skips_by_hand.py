@@ -5,29 +5,17 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from export_helpers import standing_pair
 
 from relloc.core.estimates import BeliefSeries, Estimates
-from relloc.core.recording import GroundTruth, Odometry, Recording, empty_measurements
+from relloc.core.recording import Recording
 from relloc.pipeline.export.poses import pose_set
 
 NAN = math.nan
 
 
 def _recording() -> Recording:
-    still = Odometry(t=np.zeros(0), velocity=np.zeros((0, 4)), sigma=np.zeros(4))
-    tt = np.array([0.0, 10.0])
-    return Recording(
-        robots=("a", "b"),
-        platforms=("ground", "ground"),
-        odometry=(still, still),
-        measurements=empty_measurements(),
-        truth=(
-            GroundTruth(t=tt, pose=np.array([[0.0, 0.0, 0.0, 0.0]] * 2)),
-            GroundTruth(t=tt, pose=np.array([[1.0, 0.0, 0.0, 0.0]] * 2)),
-        ),
-        source="hand-made",
-        meta={},
-    )
+    return standing_pair((0.0, 10.0), [0.0, 0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0])
 
 
 def _world(subject: str, mean: np.ndarray, cov: np.ndarray) -> BeliefSeries:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from export_helpers import standing_pair
 
 from relloc.core.estimates import BeliefSeries, Estimates
 from relloc.core.recording import GroundTruth, Odometry, Recording, empty_measurements
@@ -16,20 +17,7 @@ H = math.sqrt(0.5)
 
 def _recording() -> Recording:
     """Robots ``a`` and ``b`` standing still; truth known from 0 s to 2 s only."""
-    tt = np.array([0.0, 2.0])
-    still = Odometry(t=np.zeros(0), velocity=np.zeros((0, 4)), sigma=np.zeros(4))
-    return Recording(
-        robots=("a", "b"),
-        platforms=("ground", "ground"),
-        odometry=(still, still),
-        measurements=empty_measurements(),
-        truth=(
-            GroundTruth(t=tt, pose=np.array([[1.0, 2.0, 0.0, 0.0]] * 2)),
-            GroundTruth(t=tt, pose=np.array([[3.0, 4.0, 0.0, math.pi / 2]] * 2)),
-        ),
-        source="hand-made",
-        meta={},
-    )
+    return standing_pair((0.0, 2.0), [1.0, 2.0, 0.0, 0.0], [3.0, 4.0, 0.0, math.pi / 2])
 
 
 def _estimates(track: str = "") -> Estimates:
