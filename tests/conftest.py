@@ -41,12 +41,18 @@ def mrclam_run6_cut(mrclam_run6: Path) -> MrclamCut:
 
 
 @pytest.fixture(scope="session")
-def guler2023_short_plan() -> Plan:
+def shared_uwb_csv() -> Path:
+    """The shared UWB ranges file guler2023 fits on (the test is skipped where it is absent)."""
+    if not default_uwb_csv().is_file():
+        pytest.skip(f"shared UWB data not found at {default_uwb_csv()}")
+    return default_uwb_csv()
+
+
+@pytest.fixture(scope="session")
+def guler2023_short_plan(shared_uwb_csv: Path) -> Plan:
     """A guler2023 plan of one run per block at 5 % of the durations, one dwell time (4 s) and
     two drones (the test is skipped where the shared UWB data the experiment fits on is
     absent)."""
-    if not default_uwb_csv().is_file():
-        pytest.skip(f"shared UWB data not found at {default_uwb_csv()}")
     return Plan(
         one_drone_runs=1,
         two_drones_runs=1,

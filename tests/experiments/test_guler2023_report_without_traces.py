@@ -8,10 +8,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-import pytest
-
 from relloc.calibration.uwb import fit_uwb_noise
-from relloc.datasets.paths import default_uwb_csv
 from relloc.datasets.uwb import load_uwb_csv
 from relloc.experiments import guler2023
 
@@ -121,11 +118,9 @@ def test_a_report_without_any_traces_has_no_trace_figure_but_keeps_the_others() 
 
 
 def test_scenarios_without_traces_get_no_figures_but_sweeps_and_uwb_noise_are_drawn(
-    tmp_path: Path,
+    tmp_path: Path, shared_uwb_csv: Path
 ) -> None:
-    if not default_uwb_csv().is_file():
-        pytest.skip(f"shared UWB data not found at {default_uwb_csv()}")
-    rec = load_uwb_csv(default_uwb_csv())
+    rec = load_uwb_csv(shared_uwb_csv)
     fit = fit_uwb_noise(rec, guler2023.whole_recording(rec))
     traces: dict[str, Any] = {"one_drone": None, "two_drones": None, "formation": None}
     files = guler2023._figures(tmp_path, traces, _summary(), rec, fit)
