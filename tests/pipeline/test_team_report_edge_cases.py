@@ -116,12 +116,22 @@ def test_one_run_has_no_std_no_run_average_verdict_and_a_point_interval() -> Non
     assert _row(rows, "a->b")[1:5] == ["0.5 ± —", "0.5–0.5", "0.2 ± —", "0.2–0.2"]
 
 
-def test_two_runs_state_the_run_average_verdict() -> None:
-    """The run-averaged NEES's keys appear from two runs on (the other side of the above)."""
-    runs = [_one_run(_evaluation([0.1, 0.0, 0.0, 0.0])) for _ in range(2)]
+@pytest.mark.parametrize(
+    ("nees", "in_band", "verdict"),
+    [(4.0, 100.0, "consistent"), (20.0, 0.0, "over-confident"), (0.5, 0.0, "conservative")],
+)
+def test_two_runs_state_the_run_average_verdict(nees: float, in_band: float, verdict: str) -> None:
+    """From two runs on (the other side of the above) the run-averaged NEES has a band and a
+    verdict. The average of two χ²(4) draws is χ²(8)/2, so its 95 % band is
+    [χ²₈(0.025)/2, χ²₈(0.975)/2] = [2.1797/2, 17.5345/2]; a constant NEES of 4 lies inside it at
+    every record, 20 above it and 0.5 below. 11 records make the verdict's blocks short, and
+    the summary says so (blocks_short)."""
+    runs = [_one_run(_evaluation([0.1, 0.0, 0.0, 0.0], nees=nees)) for _ in range(2)]
     pair = summarise(runs, settle_s=0.0, record_rate_hz=2.0)["pairs"]["a->b"]
-    assert pair["nees_run_average_verdict"] in {"consistent", "conservative", "over-confident"}
-    assert isinstance(pair["nees_run_average_blocks_short"], bool)
+    assert pair["nees_run_average_band"] == pytest.approx([2.17973 / 2, 17.53455 / 2], rel=1e-5)
+    assert pair["nees_run_average_in_band_percent"] == in_band
+    assert pair["nees_run_average_verdict"] == verdict
+    assert pair["nees_run_average_blocks_short"] is True
 
 
 def test_a_track_that_never_settles_counts_no_converged_run() -> None:
