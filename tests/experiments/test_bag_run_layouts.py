@@ -60,6 +60,7 @@ def test_only_robots_linked_by_ranges_are_tracked_and_nothing_is_written(tmp_pat
     assert files == []
     assert list(summary["pairs"]) == ["alpha->beta"]
     assert summary["range_pairs_without_odometry"] == {}
+    assert summary["range_sigma_m"] == 0.1  # the mapping states no uwb.sigma
     assert not list(tmp_path.glob("*.json"))
 
 

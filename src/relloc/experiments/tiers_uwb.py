@@ -72,9 +72,10 @@ conservative, consistent or inconclusive, :func:`relloc.metrics.consistency.shar
 from the first record until every scored robot's error stays below 0.3 m for good; null if it
 never does), ``per_robot`` (anchored only: robot → ``pos_rmse_m``),
 ``baselines.uncalibrated`` / ``baselines.multilateration`` ``pos_rmse_m`` (the latter at
-5 Hz), ``anchors`` (robot names; empty when aligned), ``mode`` (``"aligned"``, ``"anchors"``
-or ``"leave-one-out"``), ``mirror_ambiguous`` (exactly two anchors), ``mirror_image_scored``
-(the mirror image in their line was the closer and was scored); where no record has every
+2 Hz), ``anchors`` (robot names; empty when aligned), ``mode`` (``"aligned"``, ``"anchors"``
+or ``"leave-one-out"``), ``mirror_ambiguous`` (exactly two anchors, or two for each robot
+of a leave-one-out of three), ``mirror_image_scored`` (the mirror image in their line was the
+closer and was scored; in a leave-one-out, for some robot); where no record has every
 scored robot's estimate, ``pos_rmse_m`` is null, ``records`` 0 and the NEES and convergence
 keys are absent; ``team.anchored`` is
 only ``skipped`` with its reason when the bag has fewer than two anchors), ``pairs.<a->b>``

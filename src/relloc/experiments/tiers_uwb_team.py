@@ -250,9 +250,10 @@ def score_positions(
         out["nees_pct_beyond"] = share.percent if share.samples else None
         out["nees_beyond_interval"] = share.to_dict()
         above = np.flatnonzero(ok & ~np.all(norm < CONVERGED_M, axis=1))
-        last = int(above[-1]) if above.size else -1
+        records = np.flatnonzero(ok)
+        settled = records[records > above[-1]] if above.size else records
         out["converged_after_s"] = (
-            None if last == grid.size - 1 else float(grid[last + 1] - grid[0]) if last >= 0 else 0.0
+            float(grid[settled[0]] - grid[records[0]]) if settled.size else None
         )
     return out
 
@@ -288,6 +289,21 @@ def _best_mirror(
     return TeamTrack(track.t, flip, M @ track.cov @ M.T), True
 
 
+def _best_mirrors(
+    rec: Recording, track: TeamTrack, anchors: list[int], scored: list[int], t0: float
+) -> tuple[TeamTrack, bool]:
+    """:func:`_best_mirror`; when every robot is an anchor (leave-one-out), each robot's track
+    against the line of the others, which is a line when they are two."""
+    if len(anchors) != rec.n_robots:
+        return _best_mirror(rec, track, anchors, scored, t0)
+    mean, cov, flipped = np.array(track.mean), np.array(track.cov), False
+    for i in anchors:
+        one, taken = _best_mirror(rec, track, [a for a in anchors if a != i], [i], t0)
+        mean[:, i], cov[:, i] = one.mean[:, i], one.cov[:, i]
+        flipped = flipped or taken
+    return TeamTrack(track.t, mean, cov), flipped
+
+
 def team_case(
     rec: Recording,
     raw: Recording,
@@ -311,7 +327,7 @@ def team_case(
         if every_anchor or not anchored
         else [i for i in range(n) if i not in anchors]
     )
-    track, flipped = _best_mirror(rec, runner(rec, t0, t1, use, settings), use, scored, t0)
+    track, flipped = _best_mirrors(rec, runner(rec, t0, t1, use, settings), use, scored, t0)
     truth = truth_xy(rec, track.t)
     out = score_positions(track.t, track.mean, track.cov, truth, scored, align=not anchored)
     out["per_robot"] = {
@@ -324,12 +340,12 @@ def team_case(
     }
     if not anchored:
         out.pop("per_robot")
-    uncal, _ = _best_mirror(rec, runner(raw, t0, t1, use, settings), use, scored, t0)
+    uncal, _ = _best_mirrors(rec, runner(raw, t0, t1, use, settings), use, scored, t0)
     every = max(1, int(RECORD_HZ // 2))
     lat_t = track.t[::every]
     no_cov = np.full((lat_t.size, n, 2, 2), np.nan)
     lat_track = TeamTrack(lat_t, multilateration(raw, lat_t, use), no_cov)
-    lat = _best_mirror(rec, lat_track, use, scored, t0)[0].mean
+    lat = _best_mirrors(rec, lat_track, use, scored, t0)[0].mean
     out["baselines"] = {
         "uncalibrated": {
             "pos_rmse_m": score_positions(
@@ -348,7 +364,7 @@ def team_case(
         },
     }
     out["anchors"] = [rec.robots[i] for i in use]
-    out["mirror_ambiguous"] = len(use) == 2
+    out["mirror_ambiguous"] = len(use) == 2 or (every_anchor and n == 3)
     out["mirror_image_scored"] = flipped
     out["mode"] = "leave-one-out" if every_anchor else ("anchors" if anchored else "aligned")
     return out
