@@ -99,6 +99,22 @@ def test_mrclam_cl_bad_calibration_window_is_a_config_error(synthetic_mrclam, tm
     assert "--calibration-window '500:'" in err and "strictly inside" in err
 
 
+def test_mrclam_cl_cut_after_the_last_output_time_is_a_config_error(
+    synthetic_mrclam, tmp_path, capsys
+):
+    """The 12 s folder is scored every 0.5 s up to 11.5 s: a cut at 11.75 s is inside the run's
+    span but leaves the scoring window [11.75, 12] s without an output time."""
+    args = ["reproduce", "mrclam-cl", "--out", str(tmp_path / "o"), "--dataset"]
+    code = main([*args, str(synthetic_mrclam), "--quiet", "--calibration-window", ":11.75"])
+    assert code == 2
+    err = capsys.readouterr().err
+    assert (
+        "--calibration-window ':11.75': the scoring window [11.75, 12.00] s holds no span of the "
+        "output times" in err
+    )
+    assert "(every 0.5 s from 0.00 to 11.50 s)" in err
+
+
 @pytest.mark.parametrize("split", ["first-half", "second-half"])
 def test_mrclam_cl_on_a_cut_of_run6_states_its_windows(mrclam_run6_cut, tmp_path, split):
     """Another run of the same layout: three of run 6's robots, its first 120 s."""
@@ -164,7 +180,8 @@ def test_mrclam_cl_on_a_cut_of_run6_states_its_windows(mrclam_run6_cut, tmp_path
     # the ratio to dead reckoning states the drift it divides and the window's end it grew to
     dr = summary["cases"]["dead_reckoning/none"]["heldout"]["pos_rmse_m"]
     assert f"held-out position RMSE of dead reckoning ({dr:.2f} m)" in report
-    assert f"the window ends {held['end_s']:.0f} s after it" in report
+    start = min(fitted["start_s"], held["start_s"])  # the run's start, where DR starts
+    assert f"the window ends {held['end_s'] - start:.0f} s after it" in report
 
 
 def test_mrclam_cl_scores_up_to_the_last_ground_truth_and_needs_two_landmarks(
