@@ -822,9 +822,10 @@ def _headline_text(headline: dict[str, Any]) -> str:
         f"{FILTER_LABELS[b]} {v:.1f} %" for b, v in headline["worst_nees_pct_beyond"].items()
     )
     verdict = "meets it" if headline["target_met"] else "does not meet it (no filter does)"
+    among = "of the filters meeting the target, " if headline["target_met"] else ""
     return (
-        f"Headline observability-aware filter: **{headline['filter']}**, the one with the "
-        f"smaller worst NEES share ({worst}); target: {headline['target']}; it {verdict}. "
+        f"Headline observability-aware filter: **{headline['filter']}**, {among}the one with "
+        f"the smaller worst NEES share ({worst}); target: {headline['target']}; it {verdict}. "
         "The target is judged on the shares themselves; their 95 % intervals (cluster means, "
         "each independent run one cluster) and verdicts: "
         + "; ".join(
