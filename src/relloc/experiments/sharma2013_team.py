@@ -61,7 +61,12 @@ from relloc.pipeline.replay import replay
 from relloc.runtime.faults import FaultSettings
 from relloc.runtime.launcher import Collected, ProcessTeam, TeamLauncher
 from relloc.runtime.outcomes import figure_difference, outcomes_of
-from relloc.runtime.summary import agreement, assemble_estimates, robot_messages
+from relloc.runtime.summary import (
+    agreement,
+    assemble_estimates,
+    robot_messages,
+    sum_counters,
+)
 
 AGREEMENT_TOLERANCE = 1e-9
 """Largest |difference| of an agent's belief entry from the in-process EIF's at a common record
@@ -123,7 +128,7 @@ def compare_agents(
             "max_abs_mean_diff": agree["max_abs_mean_diff"],
             "max_abs_cov_diff": agree["max_abs_cov_diff"],
             "records_missing": sum(p.get("only_in_process", 0) for p in agree["pairs"].values()),
-            **_late_counts(collected.stats.get(robot, [{}])[-1]),
+            **_late_counts(sum_counters(collected.stats.get(robot, []))),
         }
     return agents
 

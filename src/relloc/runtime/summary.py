@@ -65,7 +65,9 @@ def latest_of_each_time(estimates: Estimates) -> Estimates:
     return dataclasses.replace(estimates, beliefs=tuple(beliefs))
 
 
-def _sum_counters(incarnations: Sequence[Mapping[str, int]]) -> dict[str, int]:
+def sum_counters(incarnations: Sequence[Mapping[str, int]]) -> dict[str, int]:
+    """A robot's counters over every process incarnation it had (a restart starts them at 0),
+    summed key by key; the latency histograms' bins are left out."""
     total: dict[str, int] = {}
     for counters in incarnations:
         for key, value in counters.items():
@@ -87,7 +89,7 @@ def robot_messages(collected: Collected, roster: Sequence[str]) -> dict[str, dic
     out: dict[str, dict[str, Any]] = {}
     for robot in roster:
         lives = collected.stats.get(robot, [])
-        c = _sum_counters(lives)
+        c = sum_counters(lives)
         last = lives[-1] if lives else {}
         rejected = {k.split(".", 1)[1]: v for k, v in c.items() if k.startswith("rejected.")}
         out[robot] = {
