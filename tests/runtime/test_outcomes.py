@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from relloc.runtime.outcomes import figure_agreement, figure_difference
+from relloc.runtime.outcomes import difference_cell, figure_agreement, figure_difference
 
 
 @pytest.mark.parametrize(
@@ -19,6 +19,14 @@ from relloc.runtime.outcomes import figure_agreement, figure_difference
 )
 def test_figure_difference(a, b, expected):
     assert figure_difference(a, b) == expected
+
+
+@pytest.mark.parametrize(
+    ("difference", "cell"),
+    [(0.25, 0.25), (None, None), (math.nan, "differs"), (math.inf, "differs")],
+)
+def test_a_difference_that_is_not_finite_shows_as_differs(difference, cell):
+    assert difference_cell(difference) == cell
 
 
 def test_a_figure_undefined_in_one_run_only_is_a_disagreement():

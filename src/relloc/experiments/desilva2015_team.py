@@ -70,7 +70,12 @@ from relloc.experiments.team_sources import desilva_recording, desilva_scenario
 from relloc.pipeline.output import fmt, markdown_table, prepare_out_dir, write_report, write_summary
 from relloc.runtime.launcher import ProcessTeam, TeamLauncher
 from relloc.runtime.node import ACK_HOLD_S
-from relloc.runtime.outcomes import figure_agreement, figure_difference, outcomes_of
+from relloc.runtime.outcomes import (
+    difference_cell,
+    figure_agreement,
+    figure_difference,
+    outcomes_of,
+)
 from relloc.runtime.summary import (
     agreement,
     assemble_estimates,
@@ -237,7 +242,7 @@ def _who_senses(summary: Mapping[str, Any]) -> str:
 def report_markdown(summary: Mapping[str, Any]) -> str:
     """``report.md``: the figures side by side, the agreement, the messages."""
     d, r = summary["distributed"], summary["in_process"]
-    rows = [[k, d[k], r[k], summary["difference"][k]] for k in HEADLINE]
+    rows = [[k, d[k], r[k], difference_cell(summary["difference"][k])] for k in HEADLINE]
     agree = summary["agreement"]
     lines = [
         f"# relloc team up — {summary['experiment']} ({summary['runs']} run(s), seed "

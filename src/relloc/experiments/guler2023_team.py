@@ -77,7 +77,7 @@ from relloc.runtime.airground import (
 )
 from relloc.runtime.faults import FaultSettings
 from relloc.runtime.launcher import Collected, ProcessTeam, TeamLauncher, transport_arguments
-from relloc.runtime.outcomes import figure_agreement, outcomes_of
+from relloc.runtime.outcomes import difference_cell, figure_agreement, outcomes_of
 from relloc.runtime.summary import agreement, assemble_estimates
 from relloc.sim.airground import AirGroundRun, AirGroundWorld, FollowerAgent, robot_names
 from relloc.sim.scenario import MAX_SIMULATED_STEPS
@@ -462,6 +462,8 @@ def largest_difference(a: Any, b: Any) -> float | None:
     if isinstance(a, (int, float)) and isinstance(b, (int, float)):
         if np.isnan(a) and np.isnan(b):
             return None
+        if np.isnan(a) or np.isnan(b):  # a figure undefined in one only: they differ
+            return float("inf")
         return abs(float(a) - float(b))
     if isinstance(a, (list, tuple)) and isinstance(b, (list, tuple)):
         if len(a) != len(b):
@@ -517,7 +519,7 @@ def report_markdown(summary: Mapping[str, Any]) -> str:
     """``report.md``: the headline figures side by side, the agreement, the messages."""
     d, r = summary["distributed"], summary["in_process"]
     rows = [
-        [k, d[k], r[k], summary["difference"][k]]
+        [k, d[k], r[k], difference_cell(summary["difference"][k])]
         for k in ("rmse_m_mean", "rmse_m_worst", "formation_rmse_m_worst", "anees_position")
     ]
     rows += [

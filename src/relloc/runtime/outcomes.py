@@ -172,6 +172,15 @@ def figure_difference(a: float | None, b: float | None) -> float | None:
     return float(a) - float(b)
 
 
+def difference_cell(difference: float | None) -> float | str | None:
+    """A difference as a report's table shows it: a number, None (nothing to compare, shown as
+    ``—``), or ``"differs"`` where it is not finite — a figure undefined on one side only
+    (:func:`figure_difference`'s NaN) or of another shape or text (∞)."""
+    if difference is None or math.isfinite(difference):
+        return difference
+    return "differs"
+
+
 def figure_agreement(
     worst: float,
     perfect: bool,
