@@ -64,7 +64,8 @@ runs), ``heading_rmse_rad`` (follower → θ_i RMSE, mean over runs), ``mode_fra
 keys), ``anees_position`` (descriptive), ``gate_rejections`` (block kind ``range``,
 ``camera``, ``triangle``, ``leader_heading`` → ``rejected``, ``applied``: blocks summed over
 followers and runs), ``mean_nis_per_dof`` (block kind → NIS summed over every block of that
-kind, applied or gated out, divided by its dimension times their count), ``triangle_refusals``
+kind, applied or gated out, divided by its dimension times their count; null for a kind
+without blocks), ``triangle_refusals``
 (count over followers and runs) with up to three ``triangle_refusal_examples`` (texts), and
 ``paper``: ``one_drone``'s ``t_m_s`` and ``note`` (the paper gives no RMSE for it),
 ``two_drones``' ``rmse_bound_m`` (with ``meets_paper_bound``: ``rmse_m_worst`` below it),
@@ -446,7 +447,11 @@ def summarise(results: list[RunSummary]) -> dict[str, Any]:
         "nees_run_average": run_average_band(nees_runs, 2),
         "gate_rejections": {k: {"rejected": rejected[k], "applied": accepted[k]} for k in accepted},
         "mean_nis_per_dof": {
-            k: sum(r.nis_sums[k] for r in results) / (dim * max(1, accepted[k] + rejected[k]))
+            k: (
+                sum(r.nis_sums[k] for r in results) / (dim * (accepted[k] + rejected[k]))
+                if accepted[k] + rejected[k]
+                else None
+            )
             for k, dim in BLOCK_DIMS.items()
         },
         "triangle_refusals": sum(r.triangle_refusals for r in results),
