@@ -22,18 +22,19 @@ from relloc.runtime.faults import FaultSettings, RobotEvent
 TIMES = np.array([0.0, 0.5, 1.0, 1.5, 2.0])
 
 
-def _scores(tracked_p2: list[list[bool]]) -> LeaderRunScores:
-    """Leaders L1, L2 (robots 0, 1); ``tracked_p2[leader][scan]`` for pod P2 (robot 3)."""
-    tracked = np.zeros((2, TIMES.size, 5), dtype=bool)
+def _scores(tracked_p2: list[list[bool]], times: np.ndarray = TIMES) -> LeaderRunScores:
+    """Leaders L1, L2 (robots 0, 1); ``tracked_p2[leader][scan]`` for pod P2 (robot 3) at the
+    scan ``times``."""
+    tracked = np.zeros((2, times.size, 5), dtype=bool)
     tracked[:, :, 3] = tracked_p2
-    zeros = np.zeros((2, TIMES.size, 5))
+    zeros = np.zeros((2, times.size, 5))
     counts = np.zeros((2, 5), dtype=np.int64)
     return LeaderRunScores(
         observers=(0, 1),
-        times=TIMES,
+        times=times,
         pos_err=zeros,
         yaw_err=zeros,
-        components=np.ones((2, TIMES.size, 5), dtype=np.int64),
+        components=np.ones((2, times.size, 5), dtype=np.int64),
         confirmed=tracked,
         tracked=tracked,
         wrong=counts,
@@ -41,9 +42,9 @@ def _scores(tracked_p2: list[list[bool]]) -> LeaderRunScores:
         joint_wrong=counts,
         joint_used=counts,
         nees=zeros,
-        estimate_xy=np.zeros((2, TIMES.size, 5, 2)),
-        truth_xy=np.zeros((2, TIMES.size, 5, 2)),
-        world_xy=np.zeros((TIMES.size, 5, 2)),
+        estimate_xy=np.zeros((2, times.size, 5, 2)),
+        truth_xy=np.zeros((2, times.size, 5, 2)),
+        world_xy=np.zeros((times.size, 5, 2)),
     )
 
 
@@ -54,6 +55,15 @@ def test_tracked_in_the_last_second_counts_its_first_scan_and_weights_runs_alike
     # a second run never tracking it: the mean of the runs' shares, (2/3 + 0)/2
     lost = _scores([[False] * 5, [False] * 5])
     assert tracked_at_end([run, lost], 3) == 1.0 / 3.0
+
+
+def test_each_run_is_cut_at_its_own_last_scan() -> None:
+    """A distributed run whose scans end at 1.0 s: its last second is its scans 0, 0.5 and
+    1.0 s, where L1 tracks P2 in all three and L2 in none (1/2), beside the full run's 2/3."""
+    full = _scores([[False, False, True, False, True], [False, False, False, True, True]])
+    short = _scores([[True, True, True], [False, False, False]], TIMES[:3])
+    assert tracked_at_end([short], 3) == 0.5
+    assert tracked_at_end([full, short], 3) == (2.0 / 3.0 + 0.5) / 2
 
 
 def test_who_senses_names_the_paper_leaders_or_the_chosen_robots() -> None:

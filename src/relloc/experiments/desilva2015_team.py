@@ -172,10 +172,16 @@ def _names(sensing: tuple[int, ...]) -> list[str]:
 
 def tracked_at_end(results: list[LeaderRunScores], robot: int, window_s: float = 1.0) -> float:
     """Fraction of the scans of the last ``window_s`` in which the leaders track ``robot``
-    (over leaders and runs): a short run's view of "re-found and tracked to the end"."""
-    t = results[0].times
-    last = t >= t[-1] - window_s
-    return float(np.mean([tracked_by_others(r, robot)[:, last].mean() for r in results]))
+    (over leaders and runs): a short run's view of "re-found and tracked to the end". Each run
+    is cut at its own last scan (a distributed run's scans need not be the in-process run's)."""
+    return float(
+        np.mean(
+            [
+                tracked_by_others(r, robot)[:, r.times >= r.times[-1] - window_s].mean()
+                for r in results
+            ]
+        )
+    )
 
 
 def _headline(m: Mapping[str, Any]) -> dict[str, Any]:
