@@ -233,7 +233,13 @@ class Wanasinghe2014Config:
         duration = self.sim.scenario.duration_s
         number(self.steady_state_s, "steady_state_s", low=0.0, high=duration, open_high=True)
         positive(self.sweep_duration_s, "sweep_duration_s")
-        number(self.replay_steady_state_s, "replay_steady_state_s", low=0.0)
+        number(
+            self.replay_steady_state_s,
+            "replay_steady_state_s",
+            low=0.0,
+            high=self.replay.duration_s,
+            open_high=True,
+        )
 
     @classmethod
     def from_args(cls, args: ReproduceArgs) -> Wanasinghe2014Config:

@@ -759,7 +759,14 @@ def fit_noise_inflation(
             quiet=quiet,
         )
         beyond, samples = sum(c[0] for c in counts), sum(c[1] for c in counts)
-        return 100.0 * beyond / max(samples, 1)
+        if samples == 0:
+            raise response.window.too_little(
+                f"no stretch of robots {settings.observer} and {settings.observed} lasts past "
+                f"the {steady_state_s:g} s steady state (stretches "
+                + ", ".join(f"[{w.start_s:.2f}, {w.end_s:.2f}]" for w in stretches)
+                + " s): no update to fit the noise inflation on"
+            )
+        return 100.0 * beyond / samples
 
     k, met, tried = smallest_factor(
         settings.inflation_grid, settings.inflation_target_percent, percent_beyond
