@@ -55,7 +55,11 @@ def _summary(sweep: list[dict[str, Any]], bias: dict[str, Any]) -> dict[str, Any
         "odometry_noise": {"sweep": sweep},
         "table1": {"case4": _filters(12.34, 250.0), "case3": _filters(3.0, 9.0)},
         "table1_best": {
-            "case4": {"fixed": {"phi": {"worst": 7}}, "paper_rule": {"phi": {"mean": 4.24}}}
+            "case4": {
+                "fixed": {"phi": {"worst": 7}},
+                "paper_rule": {"phi": {"mean": 4.24}},
+                "not_converged": {"fixed": {"phi": 0}},
+            }
         },
         "table1_thresholds": {"PLKF": {"paper_rule": {"x": 0.0123, "phi": 0.0456}}},
         "bias_comparison": bias,
