@@ -47,7 +47,7 @@ def test_conditioning_reaching_the_bound_names_the_cases() -> None:
         return {
             "table4": {
                 "calibrated": {
-                    c: {"max_conditioning": {"P": v, "R": 1.0}} for c, v in worst.items()
+                    c: {"max_conditioning": {"P": v, "R": 1.0, "S": 2.0}} for c, v in worst.items()
                 }
             }
         }
@@ -55,6 +55,7 @@ def test_conditioning_reaching_the_bound_names_the_cases() -> None:
     text = conditioning_text(summary({"case1": 6.4, "case2": 3.0, "case3": 7.0}))
     assert "case1 6.40, case2 3.00, case3 7.00. " in text
     assert "In case1, case3 P reaches 6: the observed robot's height is constant" in text
+    assert text.endswith("the yaw variance stays large; R and S stay well conditioned.")
     assert "All stay below 6" not in text
     assert conditioning_text(summary({"case1": 5.9})).endswith("All stay below 6, as in the paper.")
 

@@ -159,6 +159,25 @@ def test_the_sweep_rows_state_the_scaled_sigma_and_score_after_a_third_of_the_ru
     assert cal["noise_inflation"]["k"] == 1.5
 
 
+def test_the_sweep_scales_the_observers_sigma_wherever_it_is_listed() -> None:
+    """The observer listed after aerial1, whose σ_v = σ_ω = 0.3: the sweep still scales the
+    observer's 0.05 (×2 → 0.1), not the first robot's."""
+    base = default_scenario()
+    observer, aerial1, *rest = base.robots
+    noisy = dataclasses.replace(
+        aerial1, odometry=dataclasses.replace(aerial1.odometry, sigma_v=0.3, sigma_w=0.3)
+    )
+    scenario = dataclasses.replace(base, robots=(noisy, observer, *rest))
+    config = Wanasinghe2014Config(
+        replay=REPLAY, sweep_scales=(2.0,), sim=SimSettings(scenario=scenario)
+    )
+    ev = _evaluation(T4, np.zeros(4), np.zeros(4), np.ones(4))
+    draw = dict.fromkeys(config.sim.targets, ev)
+    data = dict.fromkeys(("calibrated", "raw", "truth_velocity"), _replay_data())
+    (row,) = odometry_noise_summary(config, [[draw]], data)["sweep"]
+    assert (row["sigma_v"], row["sigma_w"]) == (0.1, 0.1)
+
+
 def test_the_replay_radial_bias_is_over_the_steady_state_and_the_share_clusters_two_ways() -> None:
     """Two draws of one recording, 40 updates 1 s apart, steady state from 30 s: radial errors
     1 m before it and 0.5 m (draw 0) / 0.3 m (draw 1) in it → bias 0.4 m, not pooled with the

@@ -236,7 +236,10 @@ def test_conditioning_at_exactly_six_counts_as_reaching_the_bound() -> None:
     s = summary()
     s["table4"]["calibrated"]["case2"]["max_conditioning"]["S"] = 6.0
     text = report.conditioning_text(s)
-    assert "the replay: case1 3.00, case2 6.00. In case2 P reaches 6:" in text
+    # S reached it, not P: no word of P's explanation; P and R are well conditioned
+    assert text.endswith(
+        "the replay: case1 3.00, case2 6.00. In case2 S reaches 6; P and R stay well conditioned."
+    )
 
 
 def test_the_nees_miss_blames_the_noisy_sensor_only_if_both_precise_cases_meet_it() -> None:

@@ -452,12 +452,13 @@ def odometry_noise_summary(
         for r in scenario.robots
     }
     steady = min(config.steady_state_s, config.sweep_duration_s / 3.0)
+    observer = used[config.sim.observer]
     rows = []
     for scale, runs in zip(config.sweep_scales, sweep, strict=True):
         row: dict[str, Any] = {
             "scale": scale,
-            "sigma_v": scenario.robots[0].odometry.sigma_v * scale,
-            "sigma_w": scenario.robots[0].odometry.sigma_w * scale,
+            "sigma_v": observer["sigma_v"] * scale,
+            "sigma_w": observer["sigma_w"] * scale,
             "position_rmse_m": {},
             "yaw_rmse_rad": {},
         }

@@ -630,21 +630,33 @@ def _replay_tables(s: dict[str, Any], kind: str) -> list[str]:
 
 
 def conditioning_text(s: dict[str, Any]) -> str:
-    """Covariance conditioning on the replay against the paper's bound of 6 (its Fig. 12)."""
-    worst = {c: max(t4["max_conditioning"].values()) for c, t4 in s["table4"]["calibrated"].items()}
-    above = [c for c, v in worst.items() if v >= 6.0]
+    """Covariance conditioning on the replay against the paper's bound of 6 (its Fig. 12),
+    naming each matrix that reaches it."""
+    cases = s["table4"]["calibrated"]
+    worst = {c: max(t4["max_conditioning"].values()) for c, t4 in cases.items()}
     text = (
         "- **Conditioning (paper: all below 6).** Max log10 condition numbers of P, R, S on "
         "the replay: " + ", ".join(f"{c} {v:.2f}" for c, v in worst.items()) + ". "
     )
-    if not above:
+    reached = {
+        m: [c for c, t4 in cases.items() if t4["max_conditioning"][m] >= 6.0]
+        for m in ("P", "R", "S")
+    }
+    if not any(reached.values()):
         return text + "All stay below 6, as in the paper."
-    return text + (
-        f"In {', '.join(above)} P reaches 6: the observed robot's height is constant (a "
-        "ground robot on a raised plane, no vertical velocity noise), so with the precise "
-        "elevation measurement the z variance keeps shrinking while the yaw variance stays "
-        "large; R and S stay well conditioned."
-    )
+    why = {
+        "P": ": the observed robot's height is constant (a ground robot on a raised plane, no "
+        "vertical velocity noise), so with the precise elevation measurement the z variance "
+        "keeps shrinking while the yaw variance stays large"
+    }
+    parts = [f"in {', '.join(cs)} {m} reaches 6{why.get(m, '')}" for m, cs in reached.items() if cs]
+    calm = [m for m, cs in reached.items() if not cs]
+    if calm:
+        parts.append(
+            f"{' and '.join(calm)} {'stay' if len(calm) > 1 else 'stays'} well conditioned"
+        )
+    sentence = "; ".join(parts)
+    return text + sentence[0].upper() + sentence[1:] + "."
 
 
 def _replay_yaw_cause(s: dict[str, Any]) -> str:
