@@ -64,6 +64,21 @@ def test_reproduce_desilva2015_smoke(
     assert set(summary["pd_sweep"]) == {"0.95", "0.8", "0.6"}
     assert 0.0 <= summary["success_rate"]["overall"] <= 1.0
     assert summary["consistency"]["anees"] > 0.0
+    # each sweep point is its own scenario: λ × k clutter, the given P_D
+    lam = summary["settings"]["expected_clutter_per_scan"]
+    for k, point in summary["clutter_sweep"].items():
+        assert point["expected_clutter_per_scan"] == pytest.approx(int(k) * lam), k
+    assert {k: p["p_detect"] for k, p in summary["pd_sweep"].items()} == {
+        "0.95": 0.95,
+        "0.8": 0.8,
+        "0.6": 0.6,
+    }
+    # the paper's constants as stated in the module docstring
+    settings = summary["settings"]
+    assert (settings["p_birth"], settings["p_gate"]) == (0.5, 0.95)
+    assert settings["rates_hz"] == {"filter": 20, "direct": 10, "mutual_indirect": 1}
+    assert summary["success_rate"]["paper"] == 1.0
+    assert summary["consistency"]["ideal"] == {"anees": 1.0, "nees_percent_beyond_chi2_95": 5.0}
     # what the RMSE is taken over: the scans with a dominant track, said as a share
     scored = summary["rmse_scored_percent"]
     assert set(scored["per_pair"]) == set(summary["success_rate"]["per_pair"])

@@ -615,27 +615,31 @@ def _figures(
 
     files: dict[str, str] = {}
     r0 = paper_res[0]
-    fig, axes = plt.subplots(1, 3, figsize=(15, 4.6))
+    observers = r0.observers
+    fig, axes = plt.subplots(1, 1 + len(observers), figsize=(5 * (1 + len(observers)), 4.6))
     plot_world_paths(axes[0], r0.world_xy, ROBOT_NAMES)
     axes[0].set_title("world paths (run 0)")
-    for li in range(2):
-        plot_relative_estimates(axes[li + 1], r0.estimate_xy[li], r0.truth_xy[li], ROBOT_NAMES, li)
-        axes[li + 1].set_title(f"dominant tracks in the {ROBOT_NAMES[li]} frame")
+    for li, i in enumerate(observers):
+        plot_relative_estimates(axes[li + 1], r0.estimate_xy[li], r0.truth_xy[li], ROBOT_NAMES, i)
+        axes[li + 1].set_title(f"dominant tracks in the {ROBOT_NAMES[i]} frame")
     files["fig4"] = save_figure(fig, out, "fig4_paths_and_estimates")
 
     t = r0.times
     for tag, results in (("fig5", paper_res), ("fig5_no_sharing", nosh_res)):
         ts = _time_series(results)
-        fig, axes = plt.subplots(3, 2, figsize=(12, 9), sharex=True)
-        for li in range(2):
-            pick = {k: v for k, v in ts["comp"].items() if k.startswith(ROBOT_NAMES[li])}
+        fig, axes = plt.subplots(
+            3, len(observers), figsize=(6 * len(observers), 9), sharex=True, squeeze=False
+        )
+        for li, i in enumerate(observers):
+            mine = f"{ROBOT_NAMES[i]}->"
+            pick = {k: v for k, v in ts["comp"].items() if k.startswith(mine)}
             plot_series(axes[0, li], t, pick, ylabel="mean hypotheses")
-            axes[0, li].set_title(f"{ROBOT_NAMES[li]} ({len(results)} runs)")
-            pick = {k: v for k, v in ts["pos"].items() if k.startswith(ROBOT_NAMES[li])}
+            axes[0, li].set_title(f"{ROBOT_NAMES[i]} ({len(results)} runs)")
+            pick = {k: v for k, v in ts["pos"].items() if k.startswith(mine)}
             plot_series(
                 axes[1, li], t, pick, ylabel="RMS position error (m)", log10=True, legend=False
             )
-            pick = {k: v for k, v in ts["yaw"].items() if k.startswith(ROBOT_NAMES[li])}
+            pick = {k: v for k, v in ts["yaw"].items() if k.startswith(mine)}
             plot_series(
                 axes[2, li], t, pick, ylabel="RMS yaw error (rad)", log10=True, legend=False
             )
@@ -714,6 +718,13 @@ def _band_verdict(band: dict[str, Any]) -> str:
 
 def _anees_text(m: dict[str, Any]) -> str:
     return f"{m['anees']:.2f} ({m['nees_percent_beyond_chi2_95']:.1f} %)"
+
+
+def _refind_text(delay_s: float | None) -> str:
+    """How long after the jump the kidnapped robot was re-found, or that it never was."""
+    if delay_s is None:
+        return "never re-found, so no time to re-find"
+    return f"on average {delay_s:.2f} s after the jump"
 
 
 def _report(summary: dict[str, Any], paper: dict[str, Any], no_sharing: dict[str, Any]) -> str:
@@ -922,7 +933,7 @@ Units as read: measurement variances α, β 0.0036 rad², h 5 mm², r 8 mm² (σ
 
 Kidnapped robot: {k["robot"]} moved by ({k["jump"]["dx_m"]} m, {k["jump"]["dy_m"]} m,
 {k["jump"]["dyaw_rad"]} rad) at t = {k["time_s"]} s; re-found and tracked to the end in
-{k["refound_rate"]:.2f} of the leader runs, on average {k["time_to_refind_s"]} s after the jump.
+{k["refound_rate"]:.2f} of the leader runs, {_refind_text(k["time_to_refind_s"])}.
 
 {figs}
 ## Differences from the paper
