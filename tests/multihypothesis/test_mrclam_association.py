@@ -106,6 +106,13 @@ def test_mrclam_association_on_any_mrclam_folder(
     acc = [r["association_accuracy"] for r in runs]
     assert s["association_accuracy"] == pytest.approx(np.mean(acc))
     assert s["spread"]["association_accuracy"]["min"] == min(acc)
+    # run0 is the spread's run 0: the same clutter draw, the same clock, direct fusion
+    keys = mrclam_association.HEADLINE_KEYS
+    assert {k: s["run0"][k] for k in keys} == {k: runs[0][k] for k in keys}
+    # every camera row of the folder is a robot or the landmark
+    assert s["bearings"]["unknown_subject"] == 0
+    # without injected clutter no bearing taken is clutter
+    assert s["unknown_no_clutter"]["wrong_clutter"] in (0.0, None)
     assert s["association_accuracy"] > 0.75
     assert s["pos_median_m"] is not None and s["pos_median_m"] < 0.3
     assert 0.0 < s["coverage"] <= 1.0
