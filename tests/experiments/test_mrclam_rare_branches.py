@@ -5,12 +5,12 @@ end of the recording, a ``--duration`` or ``--robot`` the run does not hold."""
 from __future__ import annotations
 
 import dataclasses
-import importlib.util
 from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from mrclam_synthetic import truth_ending_before, write_mrclam_folder
 
 from relloc.calibration.window import CalibrationWindow
 from relloc.datasets.mrclam import load_mrclam, to_recording
@@ -32,26 +32,12 @@ from relloc.experiments.wanasinghe2014_mrclam import (
 )
 
 
-def _write_mrclam_folder(folder: Path, duration: float) -> Path:
-    where = Path(__file__).parents[1] / "cooperative" / "conftest.py"
-    spec = importlib.util.spec_from_file_location("cooperative_conftest", where)
-    assert spec is not None and spec.loader is not None
-    helpers = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(helpers)
-    return Path(helpers.write_mrclam_folder(folder, duration=duration))
-
-
 @pytest.fixture(scope="module")
 def folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """12 s of five simulated robots among six landmarks, robot 5's ground truth ending at
     5.5 s (a robot that left the motion-capture volume)."""
-    out = _write_mrclam_folder(tmp_path_factory.mktemp("mrclam") / "Synthetic", 12.0)
-    gt = out / "Robot5_Groundtruth.dat"
-    lines = gt.read_text().splitlines(keepends=True)
-    head = [s for s in lines if s.startswith("#")]
-    data = [s for s in lines if not s.startswith("#")]
-    t0 = float(data[0].split()[0])
-    gt.write_text("".join(head + [s for s in data if float(s.split()[0]) - t0 < 5.5]))
+    out = write_mrclam_folder(tmp_path_factory.mktemp("mrclam") / "Synthetic", 12.0)
+    truth_ending_before(out, 5, 5.5)
     return out
 
 

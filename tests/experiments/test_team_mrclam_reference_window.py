@@ -4,11 +4,11 @@ that end included (``--duration`` picks it on the 0.5 s grid)."""
 
 from __future__ import annotations
 
-import importlib.util
 from pathlib import Path
 
 import numpy as np
 import pytest
+from mrclam_synthetic import write_mrclam_folder
 
 from relloc.calibration.camera import CameraFit
 from relloc.calibration.odometry import OdometryModelFit
@@ -17,15 +17,6 @@ from relloc.datasets.mrclam import load_mrclam
 from relloc.estimators.cooperative import CooperativeEstimator
 from relloc.experiments.mrclam_cl import FittedModels
 from relloc.experiments.mrclam_team import in_process, prepared_team, window_end
-
-
-def _write_mrclam_folder(folder: Path, duration: float) -> Path:
-    where = Path(__file__).parents[1] / "cooperative" / "conftest.py"
-    spec = importlib.util.spec_from_file_location("cooperative_conftest", where)
-    assert spec is not None and spec.loader is not None
-    cooperative = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(cooperative)
-    return Path(cooperative.write_mrclam_folder(folder, duration=duration))
 
 
 def _fit(folder: str) -> FittedModels:
@@ -63,7 +54,7 @@ def _fit(folder: str) -> FittedModels:
 
 
 def test_the_reference_is_recorded_on_the_grid_up_to_the_end_it_is_given(tmp_path: Path) -> None:
-    folder = _write_mrclam_folder(tmp_path / "Synthetic", 4.0)
+    folder = write_mrclam_folder(tmp_path / "Synthetic", 4.0)
     ds = load_mrclam(folder)
     # seed 381907: used nowhere else in the tests (robot 1's fixes; nothing statistical)
     prepared, settings = prepared_team(ds, _fit(str(folder)), 381907, "range_bearing/none")

@@ -9,7 +9,14 @@ import numpy as np
 import pytest
 from test_association_bound import _settings
 
-from relloc.core.recording import CLUTTER, GroundTruth, Odometry, Recording, measurement_rows
+from relloc.core.recording import (
+    CLUTTER,
+    GroundTruth,
+    Measurements,
+    Odometry,
+    Recording,
+    measurement_rows,
+)
 from relloc.experiments import mrclam_association as ma
 from relloc.experiments.multihypothesis_scores import NO_READING, LeaderScores
 
@@ -179,23 +186,36 @@ def test_scored_records_are_planar_after_the_warm_up() -> None:
     assert tracked.tolist() == [[False, False, False], [False, True, False], [False, False, False]]
 
 
-def _sightings() -> Recording:
-    """R1 reads a bearing of R2 at 108 s, a clutter bearing at 109 s and R3's at 125 s
-    (after its last record); R2 reads R1 at 111 s."""
-    span = np.array([0.0, 200.0])
+def _three_standing(end_s: float, measurements: Measurements, truth: bool) -> Recording:
+    """Robots 1, 2 and 3 standing from 0 to ``end_s`` s with ``measurements``, one landmark at
+    (0.5, 0.5), and each robot's ground truth at the origin when ``truth``."""
+    span = np.array([0.0, end_s])
     still = Odometry(t=span, velocity=np.zeros((2, 4)), sigma=np.zeros(4))
     return Recording(
         robots=("1", "2", "3"),
         platforms=("ground",) * 3,
         odometry=(still,) * 3,
-        measurements=measurement_rows(
+        measurements=measurements,
+        truth=tuple(GroundTruth(t=span, pose=np.zeros((2, 4))) for _ in range(3))
+        if truth
+        else None,
+        landmarks=np.array([[0.5, 0.5, 0.0]]),
+    )
+
+
+def _sightings() -> Recording:
+    """R1 reads a bearing of R2 at 108 s, a clutter bearing at 109 s and R3's at 125 s
+    (after its last record); R2 reads R1 at 111 s."""
+    return _three_standing(
+        200.0,
+        measurement_rows(
             "bearing",
             t=np.array([108.0, 109.0, 111.0, 125.0]),
             observer=np.array([0, 0, 1, 0]),
             origin=np.array([1, CLUTTER, 0, 2]),
             value=np.zeros((4, 1)),
         ),
-        truth=tuple(GroundTruth(t=span, pose=np.zeros((2, 4))) for _ in range(3)),
+        truth=True,
     )
 
 
@@ -264,13 +284,9 @@ def _camera_rows() -> Recording:
     R1 at 1 s reads R2 (2 m, 0.1 rad) and the landmark, at 2 s R2 (3 m, −0.2 rad) and R3
     (4 m, 0.3 rad); R2 at 1.5 s reads only the landmark, at 3 s R1 (the end of the window:
     left out)."""
-    span = np.array([0.0, 10.0])
-    still = Odometry(t=span, velocity=np.zeros((2, 4)), sigma=np.zeros(4))
-    return Recording(
-        robots=("1", "2", "3"),
-        platforms=("ground",) * 3,
-        odometry=(still,) * 3,
-        measurements=measurement_rows(
+    return _three_standing(
+        10.0,
+        measurement_rows(
             "range_bearing",
             t=np.array([1.0, 1.0, 1.5, 2.0, 2.0, 3.0]),
             observer=np.array([0, 0, 1, 0, 0, 1]),
@@ -280,7 +296,7 @@ def _camera_rows() -> Recording:
                 [[2.0, 0.1], [1.0, 0.0], [1.0, 0.0], [3.0, -0.2], [4.0, 0.3], [2.0, 0.0]]
             ),
         ),
-        landmarks=np.array([[0.5, 0.5, 0.0]]),
+        truth=False,
     )
 
 
