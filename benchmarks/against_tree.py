@@ -5,17 +5,19 @@ Usage::
     git worktree add ../relloc-base edd70d1      # the tree to compare with
     .venv/bin/python benchmarks/against_tree.py filters ../relloc-base/src [--rounds 6]
 
-Each round runs ``relloc.bench.<BENCH>.run(quiet=True)`` once per tree, each in its own
-process with the tree's ``src`` first on ``PYTHONPATH``. The order of the trees alternates
-between rounds so that a drift in machine load falls on both. Every run is pinned to one core
-with single-threaded BLAS, and ``time.perf_counter`` is replaced by ``time.process_time``
-(CPU time), so other work on a shared machine counts less. For every numeric leaf of the
-benchmark's result the best over rounds is printed per tree: the minimum of a time, the
-maximum of a rate (a name ending ``_per_s``, or with ``ratio``, ``speedup``, ``realtime``).
-The ratio is oriented so that > 1 means this checkout is faster: baseline time ÷ this time, or
-this rate ÷ baseline rate. ``setup``, ``machine``, ``targets`` and ``seed`` leaves are left
-out. Identical runs vary by up to ±25 % on a loaded 2-core machine: compare on a quiet one,
-with several rounds.
+Each round runs ``relloc.bench.<BENCH>.run(quiet=True)`` (``measure()`` where the module has
+one, as ``cooperative`` does: its ``run`` measures in a child of its own) once per tree, each
+in its own process with the tree's ``src`` first on ``PYTHONPATH``. The order of the trees
+alternates between rounds so that a drift in machine load falls on both. Every run is pinned to
+one core with single-threaded BLAS, and ``time.perf_counter`` is replaced by
+``time.process_time`` (CPU time), so other work on a shared machine counts less. For every
+numeric leaf of the benchmark's result the best over rounds is printed per tree: the minimum of
+a time, the maximum of a rate or any figure where larger is better (a name ending ``_per_s``,
+or with ``ratio``, ``speedup``, ``realtime``, ``largest`` or ``fraction``). The ratio is
+oriented so that > 1 means this checkout is faster: baseline time ÷ this time, or this rate ÷
+baseline rate. ``setup``, ``machine``, ``targets`` and ``seed`` blocks are left out, and so are
+the leaves that describe the machine (``load_average…``, ``cpu_count``). Identical runs vary by
+up to ±25 % on a loaded 2-core machine: compare on a quiet one, with several rounds.
 """
 
 from __future__ import annotations
@@ -34,11 +36,15 @@ import json, os, sys, time, importlib
 if hasattr(os, "sched_setaffinity"):
     os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
 time.perf_counter = time.process_time
-result = importlib.import_module("relloc.bench." + sys.argv[1]).run(quiet=True)
+bench = importlib.import_module("relloc.bench." + sys.argv[1])
+# a benchmark whose run() measures in a child of its own (cooperative) is measured here, where
+# perf_counter is CPU time (this process already has single-threaded BLAS, one core)
+result = bench.measure() if hasattr(bench, "measure") else bench.run(quiet=True)
 print(json.dumps(result, default=lambda o: o.tolist() if hasattr(o, "tolist") else str(o)))
 """
-RATE_WORDS = ("ratio", "speedup", "realtime")
+RATE_WORDS = ("ratio", "speedup", "realtime", "largest", "fraction")
 SKIPPED = ("setup", "machine", "targets", "seed")
+MACHINE_LEAVES = ("load_average", "cpu_count")
 
 
 def leaves(node: Any, prefix: str = "") -> Iterator[tuple[str, float]]:
@@ -65,24 +71,40 @@ def run_tree(bench: str, src: Path) -> dict[str, float]:
     return dict(leaves(json.loads(done.stdout.strip().splitlines()[-1])))
 
 
-def compare(bench: str, base: Path, this: Path, rounds: int) -> list[str]:
-    """The table lines: per leaf, the best of each tree over ``rounds`` and their ratio."""
-    runs: dict[str, list[dict[str, float]]] = {"baseline": [], "this": []}
-    trees = [("baseline", base), ("this", this)]
-    for r in range(rounds):
-        for name, src in trees if r % 2 == 0 else trees[::-1]:
-            runs[name].append(run_tree(bench, src))
+def round_order(rounds: int) -> list[tuple[str, str]]:
+    """Which tree runs first in each round: they alternate, so a drift in load falls on both."""
+    return [("baseline", "this") if r % 2 == 0 else ("this", "baseline") for r in range(rounds)]
+
+
+def table(bench: str, base: Path, this: Path, runs: dict[str, list[dict[str, float]]]) -> list[str]:
+    """The table lines from every run's leaves (``runs[tree]``, one per round): per leaf, the
+    best of each tree and their ratio."""
+    rounds = len(runs["baseline"])
     lines = [f"{bench}: {rounds} rounds; baseline {base}; this {this}; ratio > 1: this is faster"]
     for key in runs["baseline"][0]:
-        if key.split(".")[0] in SKIPPED or not all(key in r for rs in runs.values() for r in rs):
-            continue
         leaf = key.rsplit(".", 1)[-1]
+        if (
+            key.split(".")[0] in SKIPPED
+            or leaf.startswith(MACHINE_LEAVES)
+            or not all(key in r for rs in runs.values() for r in rs)
+        ):
+            continue
         rate = leaf.endswith("_per_s") or any(word in leaf for word in RATE_WORDS)
         best = max if rate else min
         b, t = best(r[key] for r in runs["baseline"]), best(r[key] for r in runs["this"])
         ratio = (t / b if rate else b / t) if b and t else float("nan")
         lines.append(f"{key:58s} baseline {b:11.4g}  this {t:11.4g}  ratio {ratio:5.2f}")
     return lines
+
+
+def compare(bench: str, base: Path, this: Path, rounds: int) -> list[str]:
+    """Run ``bench`` ``rounds`` times per tree (:func:`round_order`) and give :func:`table`."""
+    src = {"baseline": base, "this": this}
+    runs: dict[str, list[dict[str, float]]] = {"baseline": [], "this": []}
+    for order in round_order(rounds):
+        for name in order:
+            runs[name].append(run_tree(bench, src[name]))
+    return table(bench, base, this, runs)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -16,7 +16,8 @@ from relloc.cli import main
 def run_all(names: list[str]) -> int:
     results = Path(__file__).parent / "results"
     for name in names or list(BENCHMARKS):
-        if importlib.util.find_spec(BENCHMARKS[name]) is None:
+        module = BENCHMARKS.get(name)  # an unknown name is the CLI's error (it lists the names)
+        if module is not None and importlib.util.find_spec(module) is None:
             print(f"-- {name}: not installed, skipped")
             continue
         print(f"== {name}")
