@@ -315,11 +315,13 @@ def _print_table(result: dict[str, Any]) -> None:
         "",
     )
     table.add_row(
-        f"batched PLKF, {result['setup']['pairs']} pairs [pair-updates/s]",
+        f"batched PLKF, {result['setup']['pairs']} pairs \\[pair-updates/s]",
         f"{result['batched_pair_updates_per_s']:,.0f}",
         "≥ 100,000",
     )
-    table.add_row("one-pair loop [pair-updates/s]", f"{result['loop_pair_updates_per_s']:,.0f}", "")
+    table.add_row(
+        "one-pair loop \\[pair-updates/s]", f"{result['loop_pair_updates_per_s']:,.0f}", ""
+    )
     table.add_row("batched / loop", f"{result['batched_speedup_vs_loop']:.1f}x", "")
     console = Console()
     console.print(table)

@@ -340,6 +340,12 @@ def _run_bag(args: argparse.Namespace) -> int:
         export=export_request(args),
         plots=not args.no_plots and available("plot"),
     )
+    if summary["team"]["samples"] == 0:
+        print(
+            f"relloc: note: no steady-state results: no track reached the settle time "
+            f"({settle_s:g} s) in the bag, so accuracy and consistency are NaN; lower --settle",
+            file=sys.stderr,
+        )
     if summary["antenna_offset_not_modelled_m"] > 0:
         print(
             f"relloc: note: the mapping's antenna offsets (up to "

@@ -804,7 +804,7 @@ def _report(s: dict[str, Any], files: dict[str, str]) -> str:
         ),
         "",
         figure_md(files["uwb_noise"], "Within-link UWB residuals, fitted core and 3σ outlier gate"),
-        "## Estimation accuracy (Eq. 5), ours vs paper",
+        "## Estimation accuracy (Eq. 5)",
         "",
     ]
     rows = []

@@ -344,7 +344,7 @@ def report_markdown(summary: Mapping[str, Any]) -> str:
                     "",
                     "pos. RMSE (m)",
                     "heading RMSE (rad)",
-                    "max |Δ| vs in-process",
+                    "max \\|Δ\\| of a mean or covariance entry vs in-process",
                     "late readings",
                 ],
                 rows,

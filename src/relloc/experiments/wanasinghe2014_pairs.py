@@ -210,6 +210,11 @@ def run_pairs(
     figures = {"targets": plot_pairs(out, summary)} if rows else {}
     write_summary(out, summary)
     write_report(out, build_report(summary, figures, elapsed_s=time.perf_counter() - started))
+    if not rows:  # every pair skipped: an empty table is no result (the report says why)
+        raise DataError(
+            f"no pair of {dataset} could be replayed; "
+            + "; ".join(f"{s['observer']} → {s['observed']}: {s['reason']}" for s in skipped)
+        )
     return summary
 
 

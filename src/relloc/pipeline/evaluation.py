@@ -222,7 +222,8 @@ def accuracy_and_consistency(
     ``nees_beyond_interval`` (that share's interval by cluster means — time blocks of one
     run, the independent runs, or both ways for runs of one recording —,
     :func:`relloc.metrics.consistency.percent_beyond_interval`, with its verdict), ``anis``,
-    ``nis_bound`` (the bound of the most common NIS dof), ``nis_percent_beyond``.
+    ``nis_dof`` (the most common NIS dof; 0 without NIS), ``nis_bound`` (its χ² 0.95 bound),
+    ``nis_percent_beyond`` (each NIS against the bound of its own dof).
     """
     if not evaluations:
         raise ConfigError("accuracy_and_consistency: nothing to pool")
@@ -280,6 +281,7 @@ def accuracy_and_consistency(
         "nees_percent_beyond": nees_share.percent,
         "nees_beyond_interval": nees_share.to_dict(),
         "anis": _normalised_mean(ni, ni_dof),
+        "nis_dof": common_dof,
         "nis_bound": chi2_upper(common_dof, 0.95) if common_dof else nan,
         "nis_percent_beyond": _percent_beyond_bound(ni, ni_dof),
     }

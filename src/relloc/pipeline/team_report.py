@@ -41,7 +41,9 @@ computed over all runs on the *steady-state* samples (track age ≥ ``settle_s``
   ``nees_run_average_blocks_short``, whether those intervals' blocks of times last less than
   ten correlation times (:attr:`relloc.metrics.BeyondShare.blocks_short`; the intervals are
   then widened to the correlation-time interval);
-- ``anis`` (NIS/3, ideal 1) and ``nis_percent_beyond`` ``χ²(3, 0.95)`` (``nis_bound``);
+- ``anis`` (NIS per degree of freedom, ideal 1) and ``nis_percent_beyond`` (each NIS against
+  ``χ²(d, 0.95)`` of its reading's dimension ``d``; ``nis_dof`` is the most common ``d`` and
+  ``nis_bound`` its bound: 3 for range, bearing and elevation, 1 for a UWB range);
 - ``max_condition_log10`` of ``P``, ``R`` and ``S`` (seed 000 §7.3; > 6 is ill-conditioned);
 - ``track_events``: created / deleted / re-created counts over all runs;
 - ``position_rmse_over_runs``, ``yaw_rmse_over_runs``: the spread of the per-run steady-state
@@ -79,6 +81,7 @@ from relloc.errors import ConfigError
 from relloc.estimators.relative import FRAME, MEASUREMENT_DOF
 from relloc.estimators.track_manager import TrackManagerSettings, managers_for
 from relloc.metrics.conditioning import ILL_CONDITIONED_LOG10
+from relloc.metrics.consistency import chi2_upper
 from relloc.pipeline.evaluation import (
     SeriesEvaluation,
     accuracy_and_consistency,
@@ -682,6 +685,12 @@ def report_markdown(
 ) -> str:
     """``report.md``: settings, the per-robot table, track events, notes and figures."""
     headers, rows = summary_rows(summary)
+    nis_dof = (summary.get("team") or {}).get("nis_dof")  # 0 or absent: no NIS in the window
+    common = (
+        f": χ²({nis_dof}, 0.95) = {chi2_upper(nis_dof, 0.95):.2f} for the most common here"
+        if nis_dof
+        else ""
+    )
     lines = [f"# {title}", ""]
     for key in (
         "scenario",
@@ -710,7 +719,8 @@ def report_markdown(
         "",
         f"Steady state = samples at least {summary.get('settle_s')} s after a track was "
         "(re)created. A consistent filter has ANEES ≈ 1 and ANIS ≈ 1, about 5 % of NEES "
-        "(NIS) values above χ²(4, 0.95) = 9.49 (χ²(3, 0.95) = 7.81), and its run-averaged "
+        "(NIS) values above χ²(4, 0.95) = 9.49 (each NIS against χ² of its reading's "
+        f"dimension{common}), and its run-averaged "
         "NEES inside the 95 % band about 95 % of the time. Samples of one run are correlated "
         "in time, so these shares fluctuate more than independent draws would: the NEES "
         "share's 95 % interval is by cluster means (each independent run one cluster; one "
