@@ -330,3 +330,14 @@ def test_a_replay_without_heading_error_gives_every_bin_a_zero_share() -> None:
     )
     assert [b["squared_error_share"] for b in got.values()] == [0.0, 0.0, 0.0]
     assert [b["time_share"] for b in got.values()] == pytest.approx([1 / 3, 1 / 3, 1 / 3])
+
+
+def test_the_residual_correlations_read_as_text_not_a_dict() -> None:
+    fitted = {
+        "range": {"0.25s": 0.8184, "60s": 0.5346},
+        "bearing": {"0.25s": 0.4722, "60s": -0.1338},
+        "pair_spacing_s": {"median": 0.244},
+    }
+    assert mrclam_cl._correlation_text(fitted) == (
+        "range 0.82 at 0.25 s, 0.53 at 60 s; bearing 0.47 at 0.25 s, -0.13 at 60 s"
+    )

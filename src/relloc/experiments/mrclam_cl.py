@@ -841,6 +841,18 @@ def _heading_explanation(cases: dict[str, Any], fit: dict[str, Any]) -> str:
     )
 
 
+def _correlation_text(correlation: dict[str, Any]) -> str:
+    """The fit's residual correlation at each lag, per reading kind, for report.md: ``range
+    0.82 at 0.25 s, …; bearing …`` (a lag with too few pairs of readings shows 0, as fitted,
+    :func:`relloc.calibration.camera.lag_correlation`)."""
+    return "; ".join(
+        f"{kind} "
+        + ", ".join(f"{value:.2f} at {lag.removesuffix('s')} s" for lag, value in lags.items())
+        for kind, lags in correlation.items()
+        if kind in ("range", "bearing")
+    )
+
+
 def _improvement_text(cases: dict[str, Any], held: dict[str, Any], start_s: float) -> str:
     """What the "× better than DR" ratio measures, and why it depends on the run's length;
     ``start_s`` is the run's start (s, the recording's clock), where dead reckoning starts."""
@@ -975,8 +987,8 @@ def _report(summary: dict[str, Any], figures: list[tuple[str, str]]) -> str:
         f"ρη²) = ({', '.join(f'{c:.3f}' for c in f['range_bias_coeffs'])}), σ "
         f"{f['sigma_range_raw']:.3f} m (MAD) × √{f['range_inflation']:.1f} = "
         f"{f['sigma_range']:.3f} m, at most one range per pair every "
-        f"{f['range_interval_s']:g} s. Residual lag-correlations: {f['correlation']}."
-        + unfitted_note(f["unfitted_robots"])
+        f"{f['range_interval_s']:g} s. Residual lag-correlations: "
+        f"{_correlation_text(f['correlation'])}." + unfitted_note(f["unfitted_robots"])
     )
     missed = [
         f"{mode}: {name}"
