@@ -92,6 +92,13 @@ def test_a_team_source_that_is_nothing_and_a_negative_seed_are_refused(tmp_path)
 
     with pytest.raises(ConfigError, match=r"team source: '.*nowhere' is neither"):
         check_source(str(tmp_path / "nowhere"))
+    # a mistyped reproduction is told the ones there are
+    with pytest.raises(
+        ConfigError,
+        match=r"'desilva2016' is neither 'default', a reproduction \(desilva2015, "
+        r"desilva2015-kidnapped, sharma2013\), a scenario file nor a dataset folder",
+    ):
+        check_source("desilva2016")
     with pytest.raises(ConfigError, match=r"--seed: -1 must be ≥ 0"):
         run_seeds(-1)
 

@@ -48,7 +48,8 @@ def check_source(spec: str) -> str:
     :data:`REPRODUCTIONS`, else a ConfigError."""
     if spec != "default" and spec not in REPRODUCTIONS and not Path(spec).exists():
         raise ConfigError(
-            f"team source: {spec!r} is neither 'default', a scenario file nor a dataset folder"
+            f"team source: {spec!r} is neither 'default', a reproduction "
+            f"({', '.join(REPRODUCTIONS)}), a scenario file nor a dataset folder"
         )
     return spec
 
