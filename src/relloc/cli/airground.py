@@ -93,15 +93,18 @@ def run_robot(args: argparse.Namespace) -> int:
 
     from relloc.experiments.guler2023_team import role_of, run_seed, team_case
     from relloc.runtime.airground import RobotProcess, RobotSettings
+    from relloc.sim.airground import robot_names
 
     case = team_case(args.case, args.duration)
     seed_seq = run_seed(args.seed, args.case, args.run)
     role = role_of(case, args.robot, seed_seq)
+    faults = network_faults_from_args(args)
+    faults.check_robots(tuple(robot_names(case.scenario)))  # as relloc node: a typo
     settings = RobotSettings(
         team=args.team,
         robot=args.robot,
         transport=transport_from_args(args),
-        faults=network_faults_from_args(args),
+        faults=faults,
         fault_seed=int(np.random.SeedSequence([args.seed, args.run]).generate_state(1)[0]),
         input_timeout_s=args.input_timeout,
     )

@@ -24,12 +24,14 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
 
 
 def run(args: argparse.Namespace) -> int:
-    from relloc.pipeline.output import write_json_file
+    from relloc.pipeline.output import check_writable_file, write_json_file
 
     module_name = BENCHMARKS.get(args.name)
     if module_name is None or importlib.util.find_spec(module_name) is None:
         have = [n for n, m in BENCHMARKS.items() if importlib.util.find_spec(m) is not None]
         raise ConfigError(f"unknown benchmark {args.name!r}; available: {', '.join(have)}")
+    if args.json is not None:  # checked before the benchmark, not after it
+        check_writable_file(args.json, "--json")
     result = importlib.import_module(module_name).run(quiet=args.quiet)
     if args.json is not None:
         write_json_file(args.json, result, "--json")

@@ -21,9 +21,9 @@ certificates the old CA signed (copied to robots) stop working when it is replac
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
 from relloc.cli.console import plain_text
+from relloc.cli.flags import nonempty_path
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -33,7 +33,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         description=plain_text(__doc__),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p.add_argument("folder", type=Path, help="output folder")
+    p.add_argument("folder", type=nonempty_path, help="output folder")
     p.add_argument("--team", required=True, help="team id (key-expression prefix)")
     p.add_argument("--robots", required=True, help="comma-separated robot ids")
     p.add_argument(

@@ -4,8 +4,9 @@ estimates for ROS tools (Foxglove, ``ros2 bag play``) and evo (:mod:`relloc.pipe
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
+
+from relloc.cli.flags import nonempty_path
 
 if TYPE_CHECKING:
     from relloc.pipeline.export import ExportRequest
@@ -16,25 +17,18 @@ def add_export_arguments(p: argparse.ArgumentParser, which: str = "the estimates
     g = p.add_argument_group("ROS / evo output (extra 'ros')")
     g.add_argument(
         "--mcap",
-        type=_path,
+        type=nonempty_path,
         default=None,
         metavar="FILE",
         help=f"write {which} as a ROS 2 MCAP file (Foxglove, ros2 bag play)",
     )
     g.add_argument(
         "--tum",
-        type=_path,
+        type=nonempty_path,
         default=None,
         metavar="DIR",
         help=f"write {which} as TUM trajectory files per robot pair (evo_ape tum TRUTH EST)",
     )
-
-
-def _path(text: str) -> Path:
-    """A non-empty path (an empty one would silently mean the current folder)."""
-    if not text:
-        raise argparse.ArgumentTypeError("an empty path")
-    return Path(text)
 
 
 def export_request(args: argparse.Namespace) -> ExportRequest | None:

@@ -8,9 +8,11 @@ through :func:`flag_errors`, which rewrites that prefix into the flag
 
 from __future__ import annotations
 
+import argparse
 import re
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
+from pathlib import Path
 
 from relloc.errors import ConfigError
 
@@ -42,6 +44,14 @@ def flag_errors(fields: Mapping[str, str] = FIELD_FLAGS) -> Iterator[None]:
         yield
     except ConfigError as exc:
         raise ConfigError(as_flag_message(str(exc), fields)) from None
+
+
+def nonempty_path(text: str) -> Path:
+    """An argparse type: a non-empty path (an empty one would silently mean the current
+    folder)."""
+    if not text:
+        raise argparse.ArgumentTypeError("an empty path")
+    return Path(text)
 
 
 def integer_list(text: str | None, flag: str) -> list[int] | None:

@@ -18,7 +18,7 @@ import json
 from pathlib import Path
 
 from relloc.cli.export_args import add_export_arguments, export_request, print_export
-from relloc.cli.flags import integer_list
+from relloc.cli.flags import integer_list, nonempty_path
 from relloc.errors import ConfigError
 from relloc.experiments import registry
 
@@ -30,7 +30,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         description="Reproduce an experiment. Names: " + ", ".join(registry.EXPERIMENTS),
     )
     p.add_argument("name", help="experiment name: " + ", ".join(registry.EXPERIMENTS))
-    p.add_argument("--out", type=Path, required=True, help="output folder")
+    p.add_argument("--out", type=nonempty_path, required=True, help="output folder")
     p.add_argument("--runs", type=int, default=None, help="Monte-Carlo runs (default: the paper's)")
     p.add_argument(
         "--seed", type=int, default=None, help=f"master seed (default {registry.DEFAULT_SEED})"

@@ -26,6 +26,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from relloc.cli.export_args import add_export_arguments, export_request, print_export
+from relloc.cli.flags import nonempty_path
 
 if TYPE_CHECKING:
     from relloc.estimators.initialisation import FieldOfView
@@ -63,7 +64,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     p.add_argument(
         "--map", type=Path, default=None, help="the bag's topic mapping TOML (SCENARIO is a bag)"
     )
-    p.add_argument("--out", type=Path, default=DEFAULT_OUT, help=f"output folder ({DEFAULT_OUT})")
+    p.add_argument(
+        "--out", type=nonempty_path, default=DEFAULT_OUT, help=f"output folder ({DEFAULT_OUT})"
+    )
     p.add_argument("--seed", type=int, default=None, help=f"master seed (default {defaults.seed})")
     p.add_argument(
         "--runs",

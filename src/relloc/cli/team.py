@@ -39,6 +39,7 @@ from typing import Any
 
 from relloc.cli.console import plain_text
 from relloc.cli.export_args import add_export_arguments, export_request, print_export
+from relloc.cli.flags import nonempty_path
 from relloc.cli.node import (
     COOPERATIVE,
     TRACKS,
@@ -92,7 +93,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     up.add_argument(
         "--duration", type=float, default=None, help="a reproduction's simulated seconds per run"
     )
-    up.add_argument("--out", type=Path, required=True, help="output folder")
+    up.add_argument("--out", type=nonempty_path, required=True, help="output folder")
     up.add_argument(
         "--seed",
         type=int,
@@ -247,8 +248,11 @@ def run_up(args: argparse.Namespace) -> int:
 
 
 def run_clock(args: argparse.Namespace) -> int:
+    from relloc.pipeline.output import check_writable_file
     from relloc.runtime.clock import ClockSettings, run_clock
 
+    if args.report is not None:  # checked before the run, not after it
+        check_writable_file(args.report, "--report")
     events = _robot_events(args)
     settings = ClockSettings(
         team=args.team,
@@ -316,9 +320,13 @@ def run_reproduction(args: argparse.Namespace) -> int:
 
 def run_sharma(args: argparse.Namespace) -> int:
     """``team up sharma2013``: every agent's team EIF beside the in-process one."""
+    from relloc.errors import ConfigError
+    from relloc.experiments.sharma2013 import CASES
     from relloc.experiments.sharma2013_team import SharmaTeamSettings, run_sharma_team
     from relloc.pipeline.output import fmt
 
+    if args.case is not None and args.case not in CASES:  # before any process starts
+        raise ConfigError(f"--case: {args.case!r} is not one of {sorted(CASES)}")
     summary = run_sharma_team(
         SharmaTeamSettings(
             out_dir=args.out,

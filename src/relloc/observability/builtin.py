@@ -134,5 +134,8 @@ def resolve_models(name: str, opts: ModelOptions) -> list[S.SymbolicModel]:
             "or a user model 'package.module:function'"
         )
     if opts.inputs is not None:
-        models = [m.with_inputs(opts.inputs) for m in models]
+        try:
+            models = [m.with_inputs(opts.inputs) for m in models]
+        except ModelError as exc:
+            raise ConfigError(f"--inputs: {exc}") from None
     return models

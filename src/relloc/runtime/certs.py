@@ -87,6 +87,8 @@ def make_team_certs(
 ) -> TeamCerts:
     """Write a CA and one key/certificate per robot plus the launcher's into ``folder``."""
     robots = check_roster(team, robots, "--")
+    for name in hosts:  # a bad --host is refused before the CA is written
+        _alt_name(name)
     folder = prepare_out_dir(folder, "certs")
     ca_key, ca_cert = _certificate_authority(team)
     _write_key(folder / "ca.key", ca_key)
