@@ -14,10 +14,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from test_wanasinghe2014_replay_parts_by_hand import _replay_data as replay_parts_data
 
 from relloc.calibration.odometry import OdometryModelFit
 from relloc.calibration.window import CalibrationWindow
-from relloc.core.recording import GroundTruth, Odometry
 from relloc.experiments.wanasinghe2014 import (
     Wanasinghe2014Config,
     accuracy_summary,
@@ -91,9 +91,7 @@ def test_accuracy_share_inside_three_sigma_is_a_fraction_and_the_band_uses_every
 
 
 def _replay_data() -> ReplayData:
-    t = np.arange(5) * 0.01
-    od = Odometry(t=t[:-1], velocity=np.zeros((4, 4)), sigma=np.array([0.02, 0.01, 0.0, 0.03]))
-    truth = GroundTruth(t=t, pose=np.zeros((5, 4)))
+    """The replay-parts recording with a calibration and an inflation fit."""
     window = CalibrationWindow(200.0, 360.0, "hand")
     fit = InflationFit(
         k=1.5,
@@ -120,16 +118,8 @@ def _replay_data() -> ReplayData:
         k_wv=0.0,
         odometry_window_s=1.0,
     )
-    return ReplayData(
-        source="hand",
-        robots=("1", "3"),
-        t=t,
-        odometry=(od, od),
-        truth=(truth, truth),
-        valid=np.ones(5, dtype=bool),
-        fits={},
-        skipped_epochs={},
-        load_report={},
+    return dataclasses.replace(
+        replay_parts_data(),
         calibration=team,
         pair_scales=((1.1, 0.9), (1.0, 1.2)),
         inflation=fit,
