@@ -85,3 +85,10 @@ def test_tables_keep_their_section_and_aligned_separators():
 
 def test_figures_are_listed_once_in_order():
     assert figures(PAPER_REPORT) == ["a.png", "b.png"]
+
+
+def test_the_console_states_a_count_of_runs_or_each_blocks_count() -> None:
+    from relloc.cli.reproduce import _runs_text
+
+    assert _runs_text(30) == "30"
+    assert _runs_text({"one_drone": 3, "two_drones": 11}) == "one_drone 3, two_drones 11"

@@ -41,11 +41,11 @@ ROSTER = ("L1", "L2", "P1", "P2", "P3")
 
 
 def _agent_lines(printed, prefix):
-    """``{robot: (position RMSE, in-process RMSE, max |Δ|)}`` as ``team up`` prints them for a
-    team EIF's agents (lines starting ``{prefix}agent ROBOT:``)."""
+    """``{robot: (position RMSE, in-process RMSE, max |Δ| of a mean entry)}`` as ``team up``
+    prints them for a team EIF's agents (lines starting ``{prefix}agent ROBOT:``)."""
     found = re.findall(
         rf"^{re.escape(prefix)}agent (\S+): position RMSE (\S+) m \(in-process (\S+) m\), "
-        r"max \|Δ\| (\S+)$",
+        r"max \|Δ\| of a mean entry (\S+)$",
         printed,
         flags=re.M,
     )

@@ -108,10 +108,18 @@ def run(args: argparse.Namespace) -> int:
 
         seed = summary.get("seed")
         drawn = "no seed (nothing drawn at random)" if seed is None else f"seed {seed}"
-        print(f"{args.name}: {drawn}, runs {json.dumps(summary.get('runs'))}")
+        print(f"{args.name}: {drawn}, runs {_runs_text(summary.get('runs'))}")
         print(comparison_text(args.name, args.out, width=terminal_width()))
         print_export(summary.get("export"))
     return 0
+
+
+def _runs_text(runs: object) -> str:
+    """The runs of a summary for the console: a count, or each block's count (``one_drone 3,
+    two_drones 11``) where an experiment runs its blocks a different number of times."""
+    if isinstance(runs, dict):
+        return ", ".join(f"{block} {n}" for block, n in runs.items())
+    return json.dumps(runs)
 
 
 def robot_pairs(texts: list[str] | None) -> tuple[tuple[int, int], ...] | None:
