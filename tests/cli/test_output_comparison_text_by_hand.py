@@ -92,3 +92,14 @@ def test_the_console_states_a_count_of_runs_or_each_blocks_count() -> None:
 
     assert _runs_text(30) == "30"
     assert _runs_text({"one_drone": 3, "two_drones": 11}) == "one_drone 3, two_drones 11"
+
+
+def test_a_bag_with_readings_kept_out_of_the_recording_does_not_claim_them() -> None:
+    from relloc.pipeline.output import bag_rows_source, skipped_rows_line
+
+    assert bag_rows_source({}) == "the bag"
+    source = bag_rows_source({"to a static radio of unknown position": 2262, "between two": 878})
+    assert skipped_rows_line(0, {}, source) == (
+        "Input rows: every data row of the bag (less its 3140 UWB readings not in the "
+        "recording) was used."
+    )

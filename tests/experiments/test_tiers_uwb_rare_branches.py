@@ -52,6 +52,7 @@ def test_an_anchored_case_with_fewer_than_two_anchors_is_skipped_and_reported() 
                     "skips": {"rows_skipped": 0, "by_reason": {}},
                     "stamp_offset_s": {"bag": 0.0},
                     "unknown_topics": [],
+                    "uwb_readings_not_in_recording": {},
                 },
             }
         }

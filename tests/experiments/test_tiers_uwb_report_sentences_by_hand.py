@@ -59,6 +59,7 @@ def _summary() -> dict[str, Any]:
                     "skips": {"rows_skipped": 0, "by_reason": {}},
                     "stamp_offset_s": {"bag": 0.0},
                     "unknown_topics": [],
+                    "uwb_readings_not_in_recording": {},
                 },
             }
         }

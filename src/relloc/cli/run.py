@@ -319,7 +319,7 @@ def _run_bag(args: argparse.Namespace) -> int:
     from relloc.datasets.bag_mapping import load_mapping
     from relloc.errors import ConfigError
     from relloc.experiments.bag_run import run_bag
-    from relloc.pipeline.output import skipped_rows_line
+    from relloc.pipeline.output import bag_rows_source, skipped_rows_line
 
     if args.scenario is None:
         raise ConfigError("--map: give the bag to run as SCENARIO (relloc run BAG --map MAP)")
@@ -365,7 +365,8 @@ def _run_bag(args: argparse.Namespace) -> int:
     if not args.quiet:
         skips = summary["loader"]["skips"]
         print(console.team_summary_table(summary, width=console.terminal_width()))
-        line = skipped_rows_line(skips["rows_skipped"], skips["by_reason"], "the bag")
+        aside = summary["loader"]["uwb_readings_not_in_recording"]
+        line = skipped_rows_line(skips["rows_skipped"], skips["by_reason"], bag_rows_source(aside))
         print(console.wrap_line(line, console.terminal_width()))
         print(console.wrote_line(files, console.terminal_width()))
         print_export(summary.get("export"))

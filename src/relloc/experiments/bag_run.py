@@ -42,7 +42,7 @@ from relloc.errors import DataError
 from relloc.estimators.uwb_range import RangePairBank, RangePairSettings
 from relloc.models.motion import VelocityNoise
 from relloc.pipeline.export import ExportRequest, export_estimates
-from relloc.pipeline.output import skipped_rows_line
+from relloc.pipeline.output import bag_rows_source, skipped_rows_line
 from relloc.pipeline.replay import replay
 from relloc.pipeline.team_report import (
     RECORD_RATE_HZ,
@@ -157,7 +157,9 @@ def run_bag(
             f"{bag.ranges.t.size} UWB readings ({counts}), which no filter can use."
         )
     skips = bag.recording.skips
-    notes.append(skipped_rows_line(skips.n_skipped, skips.skipped_by_reason(), "the bag"))
+    notes.append(
+        skipped_rows_line(skips.n_skipped, skips.skipped_by_reason(), bag_rows_source(radio_only))
+    )
     estimates = replay(rec, estimators, record_rate_hz=record_rate_hz)
     result = score_run(estimates, rec, keep_paths=True)
     summary = summarise(

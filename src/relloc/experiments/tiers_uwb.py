@@ -106,6 +106,7 @@ from relloc.experiments.registry import ReproduceArgs
 from relloc.experiments.tiers_uwb_pairs import CONVERGED_M, CONVERGED_YAW, moving_pairs, pair_case
 from relloc.experiments.tiers_uwb_team import standing_robots, team_case
 from relloc.pipeline.output import (
+    bag_rows_source,
     interval_text,
     markdown_table,
     prepare_out_dir,
@@ -334,7 +335,11 @@ def report(summary: dict[str, Any]) -> str:
             f"Loader: header → bag time offset {b['loader']['stamp_offset_s']['bag']:.3f} s; "
             f"unknown topics: {len(b['loader']['unknown_topics'])}.",
             "",
-            skipped_rows_line(skips["rows_skipped"], skips["by_reason"], "the bag"),
+            skipped_rows_line(
+                skips["rows_skipped"],
+                skips["by_reason"],
+                bag_rows_source(b["loader"]["uwb_readings_not_in_recording"]),
+            ),
             "",
         ]
     lines += [

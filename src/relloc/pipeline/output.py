@@ -53,6 +53,14 @@ def skipped_rows_line(
     return f"{SKIPPED_ROWS_START} of {source} skipped (not used): {n_skipped} ({reasons})."
 
 
+def bag_rows_source(not_in_recording: Mapping[str, int]) -> str:
+    """How :func:`skipped_rows_line` names a ROS 2 bag: the UWB readings the loader kept out of
+    the recording (``uwb_readings_not_in_recording``, reason → count, reported on their own)
+    are set aside, so that "every data row was used" does not claim them."""
+    aside = sum(not_in_recording.values())
+    return f"the bag (less its {aside} UWB readings not in the recording)" if aside else "the bag"
+
+
 def prepare_out_dir(out_dir: Path | str, flag: str = "--out") -> Path:
     """Create the output folder (and parents); raise ConfigError naming ``flag`` if a file is
     in the way or the folder cannot be created."""
