@@ -13,6 +13,7 @@ import pytest
 
 from relloc.bench import cooperative, intervals, runtime, secure
 from relloc.errors import ConfigError, ModelError, RellocError
+from relloc.metrics.consistency import BeyondShare
 from relloc.runtime.keys import CLOCK_ID
 
 # -- cooperative: where the real-time factor crosses 1 (log-log interpolation) --------------
@@ -160,3 +161,30 @@ def test_an_interval_size_out_of_range_names_the_field() -> None:
         intervals.IntervalBenchSize(rhos=())
     full = intervals.IntervalBenchSize(subject_shares=(1.0,), rhos=(0.0,))  # both ends allowed
     assert full.subject_shares == (1.0,) and full.rhos == (0.0,)
+
+
+def _share(interval: tuple[float, float] | None, effective: float | None) -> BeyondShare:
+    return BeyondShare(
+        percent=5.0,
+        interval=interval,
+        samples=100,
+        effective_samples=effective,
+        clustering="runs",
+        clusters=10,
+        runs=10,
+        batch_s=None,
+        correlation_time_s=None,
+        correlation_samples=None,
+        expected_percent=5.0,
+        confidence=0.95,
+        batch_means_interval=interval,
+    )
+
+
+def test_a_draw_without_an_interval_is_left_out_of_the_mean_effective_samples() -> None:
+    """Two draws: one interval [2, 8] % from 40 effective samples, one share without an
+    interval (too few clusters): the mean is 40, not (40 + 0)/2; coverage counts both draws."""
+    draws = iter([(_share((2.0, 8.0), 40.0),) * 2, (_share(None, None),) * 2])
+    out = intervals._coverage(2, lambda: next(draws))
+    assert out["mean_effective_samples"] == 40.0
+    assert out["coverage"] == 0.5 and out["mean_width_pct"] == 6.0

@@ -125,6 +125,13 @@ def _independent_baseline(values: np.ndarray) -> BeyondShare:
     return percent_beyond_interval(v, np.zeros(v.size), chi2_upper(DOF), runs=np.arange(v.size))
 
 
+def _mean_of_known(values: list[float | None]) -> float | None:
+    """The mean of the values the draws gave (a share without an interval has no effective
+    sample size: left out, not counted as 0); None when no draw gave one."""
+    known = [v for v in values if v is not None]
+    return float(np.mean(known)) if known else None
+
+
 def _coverage(draws: int, draw: Callable[[], tuple[BeyondShare, BeyondShare]]) -> dict[str, Any]:
     """Coverage of the interval and of the baseline over ``draws`` draws, with the mean
     interval widths and, for time blocks, the correlation-time figures."""
@@ -141,7 +148,7 @@ def _coverage(draws: int, draw: Callable[[], tuple[BeyondShare, BeyondShare]]) -
         "baseline_mean_width_pct": float(
             np.mean([b.interval[1] - b.interval[0] for b in base if b.interval])
         ),
-        "mean_effective_samples": float(np.mean([s.effective_samples or 0.0 for s in ours])),
+        "mean_effective_samples": _mean_of_known([s.effective_samples for s in ours]),
     }
     if ours[0].batch_s is not None and ours[0].correlation_time_s is not None:
         short = np.array([bool(s.blocks_short) for s in ours])
