@@ -320,13 +320,9 @@ def run_reproduction(args: argparse.Namespace) -> int:
 
 def run_sharma(args: argparse.Namespace) -> int:
     """``team up sharma2013``: every agent's team EIF beside the in-process one."""
-    from relloc.errors import ConfigError
-    from relloc.experiments.sharma2013 import CASES
     from relloc.experiments.sharma2013_team import SharmaTeamSettings, run_sharma_team
     from relloc.pipeline.output import fmt
 
-    if args.case is not None and args.case not in CASES:  # before any process starts
-        raise ConfigError(f"--case: {args.case!r} is not one of {sorted(CASES)}")
     summary = run_sharma_team(
         SharmaTeamSettings(
             out_dir=args.out,

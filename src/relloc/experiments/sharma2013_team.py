@@ -54,7 +54,7 @@ import numpy as np
 from relloc.core.estimates import Estimates
 from relloc.core.recording import Recording
 from relloc.experiments.sharma2013 import OUTPUT_EVERY_S
-from relloc.experiments.team_sources import sharma_estimator, sharma_sim
+from relloc.experiments.team_sources import check_sharma_case, sharma_estimator, sharma_sim
 from relloc.pipeline.evaluation import evaluate
 from relloc.pipeline.output import fmt, markdown_table, prepare_out_dir, write_report, write_summary
 from relloc.pipeline.replay import replay
@@ -82,6 +82,10 @@ class SharmaTeamSettings(ProcessTeam):
     runs: int = 1
     duration_s: float | None = None
     case: str = "two_landmarks"
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        check_sharma_case(self.case)  # before any process starts
 
 
 def in_process(recording: Recording, sim: Any, scenario: Any, case: str) -> Estimates:

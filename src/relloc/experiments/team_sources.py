@@ -158,13 +158,20 @@ def sharma_sim(seed: int, run: int, duration_s: float | None) -> tuple[Any, Any]
     return scenario, simulate_cooperative(scenario, np.random.default_rng(run_seed(seed, run)))
 
 
-def sharma_estimator(sim: Any, scenario: Any, case: str) -> Any:
-    """The team EIF of one case of seed 001 (that of the in-process reproduction)."""
-    from relloc.estimators.cooperative import CooperativeEstimator
-    from relloc.experiments.sharma2013 import CASES, case_settings
+def check_sharma_case(case: str) -> None:
+    """ConfigError naming ``--case`` unless ``case`` is one of seed 001's cases."""
+    from relloc.experiments.sharma2013 import CASES
 
     if case not in CASES:
         raise ConfigError(f"--case: {case!r} is not one of {sorted(CASES)}")
+
+
+def sharma_estimator(sim: Any, scenario: Any, case: str) -> Any:
+    """The team EIF of one case of seed 001 (that of the in-process reproduction)."""
+    from relloc.estimators.cooperative import CooperativeEstimator
+    from relloc.experiments.sharma2013 import case_settings
+
+    check_sharma_case(case)
     rec = sim.recording
     settings = case_settings(scenario, case)
     # a teammate whose process died keeps driving: lost at the platform's speed and turn rate
