@@ -191,6 +191,12 @@ def test_relloc_run_on_a_bag(tmp_path, capsys, states_skipped_rows):
     for flag, value in (("--runs", "3"), ("--duration", "5"), ("--executor", "serial")):
         assert main([*argv[:5], str(tmp_path / "no"), flag, value, "--quiet"]) == 2
         assert f"{flag}:" in capsys.readouterr().err
+    # a settle time the 6 s cut never reaches: no steady-state sample, and the console says so
+    assert main([*argv[:5], str(tmp_path / "s"), "--settle", "100", "--no-plots", "--quiet"]) == 0
+    assert (
+        "relloc: note: no steady-state results: no track reached the settle time (100 s) in "
+        "the bag, so accuracy and consistency are NaN; lower --settle"
+    ) in capsys.readouterr().err
 
 
 def test_bag_inspect_on_a_real_bag(capsys):

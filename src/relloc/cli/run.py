@@ -202,11 +202,8 @@ def run(args: argparse.Namespace) -> int:
     summary, results = run_scenario(scenario, settings, export=export_request(args))
     files = write_run_report(scenario, summary, results, args.out, plots=plots)
     if summary["team"]["samples"] == 0:
-        print(
-            f"relloc: note: no steady-state results: no track reached the settle time "
-            f"({settings.settle_s:g} s) in the {scenario.duration_s:g} s run, so "
-            "accuracy and consistency are NaN; run longer or lower --settle",
-            file=sys.stderr,
+        _no_steady_state_note(
+            settings.settle_s, f"the {scenario.duration_s:g} s run", "run longer or lower --settle"
         )
     if not args.quiet:
         width = console.terminal_width()
@@ -311,6 +308,15 @@ def _refuse_bag_without_map(path: Path) -> None:
     )
 
 
+def _no_steady_state_note(settle_s: float, where: str, remedy: str) -> None:
+    """The note (stderr) of a run whose tracks never reached the settle time in ``where``."""
+    print(
+        f"relloc: note: no steady-state results: no track reached the settle time "
+        f"({settle_s:g} s) in {where}, so accuracy and consistency are NaN; {remedy}",
+        file=sys.stderr,
+    )
+
+
 def _run_bag(args: argparse.Namespace) -> int:
     """``relloc run BAG --map MAP.toml``: one replay of a recorded bag (no Monte Carlo)."""
     from relloc.cli import console
@@ -344,11 +350,7 @@ def _run_bag(args: argparse.Namespace) -> int:
         plots=not args.no_plots and available("plot"),
     )
     if summary["team"]["samples"] == 0:
-        print(
-            f"relloc: note: no steady-state results: no track reached the settle time "
-            f"({settle_s:g} s) in the bag, so accuracy and consistency are NaN; lower --settle",
-            file=sys.stderr,
-        )
+        _no_steady_state_note(settle_s, "the bag", "lower --settle")
     if summary["antenna_offset_not_modelled_m"] > 0:
         print(
             f"relloc: note: the mapping's antenna offsets (up to "
