@@ -77,7 +77,12 @@ from relloc.runtime.airground import (
 )
 from relloc.runtime.faults import FaultSettings
 from relloc.runtime.launcher import Collected, ProcessTeam, TeamLauncher, transport_arguments
-from relloc.runtime.outcomes import difference_cell, figure_agreement, outcomes_of
+from relloc.runtime.outcomes import (
+    difference_cell,
+    figure_agreement,
+    figure_difference,
+    outcomes_of,
+)
 from relloc.runtime.summary import agreement, assemble_estimates
 from relloc.sim.airground import AirGroundRun, AirGroundWorld, FollowerAgent, robot_names
 from relloc.sim.scenario import MAX_SIMULATED_STEPS
@@ -450,7 +455,8 @@ def _headline(block: Mapping[str, Any]) -> dict[str, Any]:
 
 def largest_difference(a: Any, b: Any) -> float | None:
     """Largest |a − b| over the numbers of two equally shaped JSON-like values (None: nothing
-    to compare, e.g. a verdict without enough runs); a differing string or shape is ∞."""
+    to compare, e.g. a verdict without enough runs); a differing string or shape, or a figure
+    undefined (NaN) in one only, is ∞ (the largest whatever the order it is met in)."""
     if isinstance(a, Mapping) and isinstance(b, Mapping):
         if set(a) != set(b):
             return float("inf")
@@ -460,11 +466,8 @@ def largest_difference(a: Any, b: Any) -> float | None:
     if isinstance(a, bool) or isinstance(b, bool) or isinstance(a, str) or a is None:
         return None if a == b else float("inf")
     if isinstance(a, (int, float)) and isinstance(b, (int, float)):
-        if np.isnan(a) and np.isnan(b):
-            return None
-        if np.isnan(a) or np.isnan(b):  # a figure undefined in one only: they differ
-            return float("inf")
-        return abs(float(a) - float(b))
+        d = figure_difference(a, b)  # None: undefined in both; NaN: in one only, they differ
+        return None if d is None else float("inf") if np.isnan(d) else abs(d)
     if isinstance(a, (list, tuple)) and isinstance(b, (list, tuple)):
         if len(a) != len(b):
             return float("inf")
