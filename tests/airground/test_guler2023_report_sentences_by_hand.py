@@ -9,6 +9,20 @@ from typing import Any
 
 from relloc.experiments.guler2023 import _band_text, _findings, _point_of, _report
 
+#: The UWB noise fit of a hand-built guler2023 summary (report tests).
+UWB_NOISE_FIT = {
+    "bias_m": 0.35,
+    "spread_m": 0.075,
+    "outlier_threshold_sigma": 3,
+    "outlier_rate": 0.04,
+    "outlier_excess_mean_m": 0.15,
+    "outlier_positive_fraction": 0.9,
+    "link_bias_std_m": 0.02,
+    "correlation_time_s": 1.2,
+    "n_rows": 1000,
+    "rows_skipped": 0,
+}
+
 
 def _band(
     verdict: str, inside: float, below: float, above: float, short: bool = False
@@ -50,18 +64,7 @@ def _summary() -> dict[str, Any]:
     return {
         "seed": 3,
         "runs": {"one_drone": 3, "two_drones": 11, "formation": 3, "sweep_point": 3},
-        "uwb_noise_fit": {
-            "bias_m": 0.35,
-            "spread_m": 0.075,
-            "outlier_threshold_sigma": 3,
-            "outlier_rate": 0.04,
-            "outlier_excess_mean_m": 0.15,
-            "outlier_positive_fraction": 0.9,
-            "link_bias_std_m": 0.02,
-            "correlation_time_s": 1.2,
-            "n_rows": 1000,
-            "rows_skipped": 0,
-        },
+        "uwb_noise_fit": UWB_NOISE_FIT,
         "one_drone": _block(0.09, 0.05),
         "two_drones": _block(0.087, 0.041, runs=11),
         "formation": _block(0.12, 0.06),

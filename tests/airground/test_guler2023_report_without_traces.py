@@ -8,6 +8,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from test_guler2023_report_sentences_by_hand import UWB_NOISE_FIT
+
 from relloc.calibration.uwb import fit_uwb_noise
 from relloc.datasets.uwb import load_uwb_csv
 from relloc.experiments import guler2023
@@ -54,18 +56,7 @@ def _summary() -> dict[str, Any]:
     return {
         "seed": 3,
         "runs": {"one_drone": 2, "two_drones": 2, "formation": 2, "sweep_point": 2},
-        "uwb_noise_fit": {
-            "bias_m": 0.35,
-            "spread_m": 0.075,
-            "outlier_threshold_sigma": 3,
-            "outlier_rate": 0.04,
-            "outlier_excess_mean_m": 0.15,
-            "outlier_positive_fraction": 0.9,
-            "link_bias_std_m": 0.02,
-            "correlation_time_s": 1.2,
-            "n_rows": 1000,
-            "rows_skipped": 0,
-        },
+        "uwb_noise_fit": UWB_NOISE_FIT,
         "one_drone": _block(),
         "two_drones": _block(),
         "formation": _block(),
