@@ -74,6 +74,7 @@ REQUIRED: dict[str, dict[str, Any]] = {
     },
     "relloc.experiments.guler2023_team.GulerTeamSettings": {"out_dir": _OUT},
     "relloc.experiments.registry.ReproduceArgs": {"out_dir": _OUT},
+    "relloc.experiments.sharma2013_team.SharmaTeamSettings": {"out_dir": _OUT},
     "relloc.models.measurement.RangeBearingNoise": {
         "sigma_r": 0.1,
         "sigma_azimuth": 0.1,

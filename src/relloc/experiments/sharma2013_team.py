@@ -51,6 +51,7 @@ from typing import Any
 
 import numpy as np
 
+from relloc.core.checks import count, positive
 from relloc.core.estimates import Estimates
 from relloc.core.recording import Recording
 from relloc.experiments.sharma2013 import OUTPUT_EVERY_S
@@ -85,6 +86,10 @@ class SharmaTeamSettings(ProcessTeam):
 
     def __post_init__(self) -> None:
         super().__post_init__()
+        count(self.runs, "--runs")
+        count(self.seed, "--seed", low=0)
+        if self.duration_s is not None:
+            positive(self.duration_s, "--duration")
         check_sharma_case(self.case)  # before any process starts
 
 
